@@ -1,0 +1,75 @@
+"""The root Typer app. Groups are modules of this package, imported only when used."""
+
+from __future__ import annotations
+
+import importlib
+from typing import Annotated, Any
+
+import typer
+from typer.core import TyperGroup
+
+from rostools import __version__
+from rostools.cli.common import Format, Settings
+
+#: name -> one-line help. Each group is the Typer app ``rostools.cli.<name>.app``.
+GROUPS: dict[str, str] = {
+    "msg": "Message and service types: show, md5, list, package, packages, proto.",
+}
+
+
+class LazyGroup(TyperGroup):
+    """A group whose subcommands are loaded from their module on first use."""
+
+    def list_commands(self, ctx: Any) -> list[str]:
+        """The group names, without importing them."""
+        return list(GROUPS)
+
+    def get_command(self, ctx: Any, cmd_name: str) -> Any:
+        """Import ``rostools.cli.<name>`` and convert its Typer app."""
+        if cmd_name not in GROUPS:
+            return None
+        module = importlib.import_module(f"rostools.cli.{cmd_name}")
+        command = typer.main.get_command(module.app)
+        command.name = cmd_name
+        return command
+
+
+app = typer.Typer(
+    cls=LazyGroup,
+    name="rostools",
+    help="The ROS 1 command-line tools in one CLI, no ROS installation needed.",
+    no_args_is_help=True,
+    pretty_exceptions_enable=False,
+    context_settings={"help_option_names": ["-h", "--help"]},
+)
+
+
+def _version(value: bool) -> None:
+    if value:
+        typer.echo(f"rostools {__version__}")
+        raise typer.Exit()
+
+
+@app.callback()
+def root(
+    ctx: typer.Context,
+    master_uri: Annotated[
+        str | None,
+        typer.Option(
+            "--master-uri",
+            help="Master XML-RPC URI. Default: ROS_MASTER_URI, then http://localhost:11311.",
+            show_default=False,
+        ),
+    ] = None,
+    fmt: Annotated[
+        Format,
+        typer.Option("--format", help="Output format for every command that prints data."),
+    ] = Format.text,
+    debug: Annotated[bool, typer.Option("--debug", help="Show tracebacks on errors.")] = False,
+    version: Annotated[
+        bool,
+        typer.Option("--version", callback=_version, is_eager=True, help="Print the version."),
+    ] = False,
+) -> None:
+    """rostools: rostopic, rosservice, rosparam, rosnode, rosmsg, rosbag and roscore in one."""
+    ctx.obj = Settings(master_uri=master_uri, format=fmt, debug=debug)

@@ -1,0 +1,182 @@
+"""``rostools msg``: rosmsg, rossrv and rosmsg-proto in one group, for messages and services."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+from typing import Annotated, Any
+
+import typer
+
+from rostools.cli.common import Format, FormatOpt, MsgPathOpt, emit, output_format, type_store
+from rostools.cli.lookup import Kind, matches, md5_text, md5sums, read_type
+from rostools.errors import NotFoundError, UsageError
+from rostools.msgs.store import TypeStore
+
+app = typer.Typer(
+    name="msg",
+    help="Message and service types: show, md5, list, package, packages, proto.",
+    no_args_is_help=True,
+)
+
+TypeArg = Annotated[
+    str | None,
+    typer.Argument(
+        help="pkg/Type, or a bare Type to search every package; read from stdin when omitted.",
+        show_default=False,
+    ),
+]
+SrvOpt = Annotated[bool, typer.Option("--srv", help="Services instead of messages.")]
+OneLineOpt = Annotated[bool, typer.Option("-s", help="All on one line, space-separated.")]
+
+
+@app.command()
+def show(
+    ctx: typer.Context,
+    type_name: TypeArg = None,
+    raw: Annotated[
+        bool, typer.Option("--raw", "-r", help="The file text, comments included.")
+    ] = False,
+    bag: Annotated[
+        Path | None,
+        typer.Option("--bag", "-b", help="Take the definition stored in this .bag or .mcap."),
+    ] = None,
+    fmt: FormatOpt = None,
+    msg_path: MsgPathOpt = None,
+) -> None:
+    """Show a message or service definition, nested types expanded (rosmsg/rossrv show)."""
+    from rostools.msgs import describe
+
+    name = read_type(type_name)
+    fmt = output_format(ctx, fmt)
+    store = type_store(msg_path)
+    if bag is not None:
+        store, name = _store_from_bag(store, bag, name)
+    results: list[tuple[str, str, dict[str, Any]]] = []
+    for kind, full in matches(store, name):
+        if kind == "msg":
+            spec = store.msg(full)
+            text = spec.text if raw else describe.show_text(store, spec)
+            data: dict[str, Any] = {"type": full, "kind": kind, "md5sum": store.md5(full)}
+            data |= describe.structure(store, spec)
+            data["definition"] = store.full_text(full)
+        else:
+            srv = store.srv(full)
+            text = srv.text if raw else describe.show_srv_text(store, srv)
+            data = {"type": full, "kind": kind, "md5sum": store.srv_md5(full)}
+            data["request"] = describe.structure(store, srv.request)
+            data["response"] = describe.structure(store, srv.response)
+            data["text"] = srv.text
+        results.append((full, text, data))
+    if fmt is Format.text:
+        for full, text, _ in results:
+            if "/" not in name:
+                sys.stdout.write(f"[{full}]:\n")
+            sys.stdout.write(text + "\n")
+    else:
+        emit(fmt, results[0][2] if "/" in name else [r[2] for r in results])
+
+
+def _store_from_bag(store: TypeStore, bag: Path, name: str) -> tuple[TypeStore, str]:
+    from rostools.bag.connections import read_connections
+
+    for conn in read_connections(bag):
+        if conn.type == name or conn.type.rpartition("/")[2] == name:
+            return store.with_definition(conn.type, conn.definition), conn.type
+    raise NotFoundError(f"no connection of type {name} in {bag}")
+
+
+@app.command()
+def md5(
+    ctx: typer.Context,
+    type_name: TypeArg = None,
+    fmt: FormatOpt = None,
+    msg_path: MsgPathOpt = None,
+) -> None:
+    """Print the md5sum of a message or service type (rosmsg/rossrv md5)."""
+    name = read_type(type_name)
+    found = md5sums(type_store(msg_path), name)
+    fmt = output_format(ctx, fmt)
+    if fmt is Format.text:
+        sys.stdout.write(md5_text(name, found))
+    else:
+        data = [{"type": t, "md5sum": m} for t, m in found]
+        emit(fmt, data[0] if "/" in name else data)
+
+
+def _emit_names(ctx: typer.Context, fmt: Format | None, names: list[str], one_line: bool) -> None:
+    emit(output_format(ctx, fmt), names, lambda n: (" " if one_line else "\n").join(n))
+
+
+@app.command("list")
+def list_types(
+    ctx: typer.Context, srv: SrvOpt = False, fmt: FormatOpt = None, msg_path: MsgPathOpt = None
+) -> None:
+    """List every message type (or service type with --srv), by package."""
+    store = type_store(msg_path)
+    _emit_names(ctx, fmt, store.types("srv" if srv else "msg"), False)
+
+
+@app.command()
+def package(
+    ctx: typer.Context,
+    name: Annotated[str, typer.Argument(help="A package name.")],
+    one_line: OneLineOpt = False,
+    srv: SrvOpt = False,
+    fmt: FormatOpt = None,
+    msg_path: MsgPathOpt = None,
+) -> None:
+    """List the message (or service) types of one package."""
+    store = type_store(msg_path)
+    kind: Kind = "srv" if srv else "msg"
+    if name not in store.packages(kind):
+        raise NotFoundError(f"no {'service' if srv else 'message'} types in a package named {name}")
+    _emit_names(ctx, fmt, store.types(kind, name), one_line)
+
+
+@app.command()
+def packages(
+    ctx: typer.Context, one_line: OneLineOpt = False, srv: SrvOpt = False, fmt: FormatOpt = None,
+    msg_path: MsgPathOpt = None,
+) -> None:  # fmt: skip
+    """List the packages that hold message (or service) types."""
+    store = type_store(msg_path)
+    _emit_names(ctx, fmt, store.packages("srv" if srv else "msg"), one_line)
+
+
+@app.command()
+def proto(
+    ctx: typer.Context,
+    type_name: TypeArg = None,
+    flow_style: Annotated[
+        bool, typer.Option("--flow-style", "-f", help="One line, in brackets.")
+    ] = False,
+    empty_arrays: Annotated[
+        bool,
+        typer.Option("--empty-arrays", "-e", help="Leave arrays empty instead of one element."),
+    ] = False,
+    no_quotes: Annotated[
+        bool, typer.Option("--no-quotes", help="Do not wrap the text in quotes.")
+    ] = False,
+    fmt: FormatOpt = None,
+    msg_path: MsgPathOpt = None,
+) -> None:
+    """Print a YAML template of a message, or of a service's request (rosmsg-proto)."""
+    from rostools.msgs import describe
+
+    name = read_type(type_name)
+    store = type_store(msg_path)
+    found = matches(store, name)
+    if len(found) > 1:
+        choices = ", ".join(full for _, full in found)
+        raise UsageError(f"{name} is ambiguous: {choices}", hint="give the package too")
+    kind, full = found[0]
+    spec = store.msg(full) if kind == "msg" else store.srv(full).request
+    text = describe.proto(store, spec, flow=flow_style, empty_arrays=empty_arrays)
+    fmt = output_format(ctx, fmt)
+    if fmt is not Format.text:
+        import yaml
+
+        emit(fmt, yaml.safe_load(text) or {})
+        return
+    sys.stdout.write((text if no_quotes else f'"{text}"') + "\n")

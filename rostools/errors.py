@@ -1,0 +1,66 @@
+"""The one exception hierarchy of rostools.
+
+Library code raises these; ``rostools.cli`` turns them into a one-line message and the exit
+code below. The README's table of exit codes is generated from ``EXIT_CODES``.
+"""
+
+from __future__ import annotations
+
+
+class RostoolsError(Exception):
+    """Base of every error rostools reports to a user: the operation failed."""
+
+    exit_code = 1
+
+    def __init__(self, message: str, *, hint: str | None = None) -> None:
+        super().__init__(message)
+        self.hint = hint
+
+
+class UsageError(RostoolsError):
+    """Bad arguments or values given by the user (a wrong field type, bad YAML, ...)."""
+
+    exit_code = 2
+
+
+class NotFoundError(RostoolsError):
+    """A topic, type, service, parameter, node or file that does not exist."""
+
+    exit_code = 3
+
+
+class UnreachableError(RostoolsError):
+    """The master or a peer node cannot be contacted."""
+
+    exit_code = 4
+
+
+class TimeoutExpired(RostoolsError):  # noqa: N818 - reads better than TimeoutError, a builtin
+    """A wait ran past its ``--timeout``."""
+
+    exit_code = 5
+
+
+class DataLossError(RostoolsError):
+    """Data was lost or could not be salvaged (recover, record drops)."""
+
+    exit_code = 6
+
+
+class InvalidDataError(RostoolsError):
+    """Malformed input data: a bad definition, a corrupt file, garbage from a peer."""
+
+    exit_code = 1
+
+
+#: Exit code, name and meaning, in the order the README lists them.
+EXIT_CODES: tuple[tuple[int, str, str], ...] = (
+    (0, "ok", "success; also Ctrl-C on a command that runs until stopped (echo, hz, pub, ...)"),
+    (1, "error", "the operation failed, or the input data is malformed"),
+    (2, "usage", "bad arguments or values: unknown option, wrong field type, bad YAML"),
+    (3, "not found", "unknown topic, type, service, parameter, node or file"),
+    (4, "unreachable", "the master or a peer node could not be contacted"),
+    (5, "timeout", "a wait ran past its --timeout"),
+    (6, "data loss", "data was lost: recovery could not salvage everything, or records dropped"),
+    (130, "interrupted", "Ctrl-C during a command that was not meant to run until stopped"),
+)

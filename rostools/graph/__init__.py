@@ -1,0 +1,1 @@
+"""The live ROS graph on asyncio: master proxy, Node, Publisher, Subscriber, services."""

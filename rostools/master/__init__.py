@@ -1,0 +1,1 @@
+"""The bundled ROS master and parameter server."""

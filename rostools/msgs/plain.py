@@ -1,0 +1,177 @@
+"""Messages as plain data (dicts and lists), JSON lines and ``rostopic echo -p`` CSV.
+
+``to_plain`` is generated per type like the text formatter. JSON has one object per message;
+times are ``{"secs", "nsecs"}`` objects and ``uint8[]`` is a list of numbers, as in the text
+output. CSV follows ``rostopic echo -p``: a ``%time,field.…`` header from the first message,
+arrays spread over ``field.name0, field.name1, …`` columns, bools as 1/0, times in
+nanoseconds; unlike rostopic it keeps ``uint8[]``/``char[]`` columns instead of dropping them.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+from rostools.msgs.codec import BYTE_TYPES, STRUCT_CODES, Codec, attr_name
+from rostools.msgs.message import Time
+from rostools.msgs.spec import Field
+
+Plain = Callable[[Any], Any]
+
+
+class _PlainGen:
+    def __init__(self, codec: Codec) -> None:
+        self.codec = codec
+        self.env: dict[str, Any] = {"_list": list}
+
+    def ref(self, obj: Any) -> str:
+        name = f"k{len(self.env)}"
+        self.env[name] = obj
+        return name
+
+    def value(self, f: Field, expr: str) -> str:
+        if f.is_array:
+            if f.base in BYTE_TYPES or f.base in STRUCT_CODES or f.base == "string":
+                return f"_list({expr})"
+            item = to_plain(self.codec, Field("_", f.base, f.base, False, None))
+            return f"[{self.ref(item)}(v) for v in {expr}]"
+        if f.base in ("time", "duration"):
+            return f"{{'secs': {expr}.secs, 'nsecs': {expr}.nsecs}}"
+        if f.base in STRUCT_CODES or f.base == "string":
+            return expr
+        spec = self.codec.store.msg(f.base)
+        items = ", ".join(
+            f"{f2.name!r}: {self.value(f2, f'{expr}.{attr_name(f2.name)}')}" for f2 in spec.fields
+        )
+        return "{" + items + "}"
+
+
+def to_plain(codec: Codec, value_type: Field) -> Plain:
+    """``plain(value)``: the value as dicts, lists and scalars (generated per type)."""
+    key = ("plain", value_type.type, value_type.is_array)
+    fn = codec.store.cache.get(key)
+    if fn is None:
+        gen = _PlainGen(codec)
+        source = f"def plain(m):\n    return {gen.value(value_type, 'm')}\n"
+        exec(compile(source, f"<rostools plain {value_type.type}>", "exec"), gen.env)  # noqa: S102
+        fn = codec.store.cache[key] = gen.env["plain"]
+    return fn  # type: ignore[no-any-return]
+
+
+def _finite(value: Any) -> Any:
+    """Non-finite floats as the strings "nan", "inf", "-inf": JSON has no other spelling."""
+    if isinstance(value, float) and not math.isfinite(value):
+        return "nan" if math.isnan(value) else ("inf" if value > 0 else "-inf")
+    if isinstance(value, dict):
+        return {k: _finite(v) for k, v in value.items()}
+    if isinstance(value, list | tuple):
+        return [_finite(v) for v in value]
+    return value
+
+
+def dumps(value: Any) -> str:
+    """Compact JSON text of plain data, always valid JSON."""
+    try:
+        return json.dumps(value, separators=(",", ":"), ensure_ascii=False, allow_nan=False)
+    except ValueError:
+        return json.dumps(_finite(value), separators=(",", ":"), ensure_ascii=False)
+
+
+@dataclass(frozen=True)
+class CsvOptions:
+    """``--nostr`` drops string columns, ``--noarr`` array columns (as ``rostopic echo -p``)."""
+
+    nostr: bool = False
+    noarr: bool = False
+
+    def keep(self, f: Field) -> bool:
+        """Whether a field's columns are printed."""
+        return not (self.noarr and "[" in f.type) and not (self.nostr and "string" in f.type)
+
+
+def csv_header(codec: Codec, value_type: Field, value: Any, options: CsvOptions) -> str:
+    """The ``%time,field.…`` header line, laid out after the arrays of ``value``."""
+    columns: list[str] = []
+
+    def walk(f: Field, v: Any, label: str) -> None:
+        if f.is_array:
+            element = Field("_", f.base, f.base, False, None)
+            for i, item in enumerate(v):
+                walk(element, item, f"{label}{i}")
+        elif f.base in STRUCT_CODES or f.base in ("string", "time", "duration"):
+            columns.append(label)
+        else:
+            for f2 in codec.store.msg(f.base).fields:
+                if options.keep(f2):
+                    walk(f2, getattr(v, attr_name(f2.name)), f"{label}.{f2.name}")
+
+    walk(value_type, value, "field")
+    return "%time," + ",".join(columns)
+
+
+class _CsvGen:
+    def __init__(self, codec: Codec, options: CsvOptions) -> None:
+        self.codec = codec
+        self.options = options
+        self.env: dict[str, Any] = {"_str": str, "_map": map}
+        self.lines: list[str] = []
+        self.counter = 0
+
+    def ref(self, obj: Any) -> str:
+        name = f"k{len(self.env)}"
+        self.env[name] = obj
+        return name
+
+    def emit(self, f: Field, expr: str, indent: str) -> None:
+        if f.is_array:
+            if f.base == "bool":
+                self.lines.append(f"{indent}x(['1' if v else '0' for v in {expr}])")
+            elif f.base in STRUCT_CODES:
+                self.lines.append(f"{indent}x(_map(_str, {expr}))")
+            elif f.base == "string":
+                self.lines.append(f"{indent}x({expr})")
+            else:
+                self.counter += 1
+                var = f"e{self.counter}"
+                self.lines.append(f"{indent}for {var} in {expr}:")
+                self.emit(Field("_", f.base, f.base, False, None), var, indent + "    ")
+        elif f.base == "bool":
+            self.lines.append(f"{indent}a('1' if {expr} else '0')")
+        elif f.base in STRUCT_CODES:
+            self.lines.append(f"{indent}a(_str({expr}))")
+        elif f.base == "string":
+            self.lines.append(f"{indent}a({expr})")
+        elif f.base == "time":
+            self.lines.append(f"{indent}a(_str({expr}.secs * 1000000000 + {expr}.nsecs - off))")
+        elif f.base == "duration":
+            self.lines.append(f"{indent}a(_str({expr}.secs * 1000000000 + {expr}.nsecs))")
+        else:
+            for f2 in self.codec.store.msg(f.base).fields:
+                if self.options.keep(f2):
+                    self.emit(f2, f"{expr}.{attr_name(f2.name)}", indent)
+
+
+def csv_row(codec: Codec, value_type: Field, options: CsvOptions) -> Callable[[Any, int], str]:
+    """``row(value, offset_ns) -> str``: the comma-joined values, time fields minus offset."""
+    key = ("csv", value_type.type, value_type.is_array, options)
+    fn = codec.store.cache.get(key)
+    if fn is None:
+        gen = _CsvGen(codec, options)
+        gen.emit(value_type, "m", "    ")
+        body = "\n".join(gen.lines) or "    pass"
+        source = f"def row(m, off=0):\n    r = []\n    a = r.append\n    x = r.extend\n{body}\n"
+        source += "    return ','.join(r)\n"
+        exec(compile(source, f"<rostools csv {value_type.type}>", "exec"), gen.env)  # noqa: S102
+        fn = codec.store.cache[key] = gen.env["row"]
+    return fn  # type: ignore[no-any-return]
+
+
+def stamp_ns(value: Any) -> int | None:
+    """``header.stamp`` in nanoseconds when the value is a message with a Header."""
+    if getattr(value, "_has_header", False):
+        stamp: Time = value.header.stamp
+        return stamp.to_nsec()
+    return None

@@ -1,0 +1,45 @@
+#!/usr/bin/env bash
+# Install the real ROS 1 (ros_comm 1.15, Noetic era) from Debian, as interop peers for the
+# tests and benchmarks. rostools itself never needs these. Idempotent and quiet when done.
+set -euo pipefail
+
+packages=(
+  ros-core
+  python3-rospy python3-rostopic python3-rosservice python3-rosparam python3-rosnode
+  python3-rosmsg python3-rosbag python3-rosmaster python3-genpy python3-genmsg
+  libroscpp-dev librosbag-dev
+  ros-std-msgs ros-geometry-msgs ros-sensor-msgs ros-std-srvs
+  python3-std-msgs python3-geometry-msgs python3-sensor-msgs python3-std-srvs
+  # more message packages, so the type-system interop covers hundreds of types
+  ros-nav-msgs ros-diagnostic-msgs ros-actionlib-msgs ros-shape-msgs ros-stereo-msgs
+  ros-trajectory-msgs ros-visualization-msgs ros-tf2-msgs ros-rosgraph-msgs ros-map-msgs
+  ros-roscpp-msg ros-topic-tools-srvs
+  python3-nav-msgs python3-diagnostic-msgs python3-actionlib-msgs python3-shape-msgs
+  python3-stereo-msgs python3-trajectory-msgs python3-visualization-msgs python3-tf2-msgs
+  python3-rosgraph-msgs python3-map-msgs python3-roscpp-msg
+  libstd-msgs-dev libgeometry-msgs-dev libsensor-msgs-dev libstd-srvs-dev
+  libnav-msgs-dev libdiagnostic-msgs-dev libactionlib-msgs-dev libshape-msgs-dev
+  libstereo-msgs-dev libtrajectory-msgs-dev libvisualization-msgs-dev libtf2-msgs-dev
+  libmap-msgs-dev libroscpp-msg-dev libros-rosgraph-msgs-dev
+  g++ make
+)
+
+missing=()
+for p in "${packages[@]}"; do
+  if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q 'install ok installed'; then
+    missing+=("$p")
+  fi
+done
+[ ${#missing[@]} -eq 0 ] && exit 0
+
+if [ "$(id -u)" -ne 0 ]; then
+  if command -v sudo >/dev/null 2>&1; then SUDO=sudo; else
+    echo "install-ros1-peers: need root to install: ${missing[*]}" >&2; exit 1
+  fi
+else
+  SUDO=
+fi
+echo "install-ros1-peers: installing ${#missing[@]} Debian packages" >&2
+export DEBIAN_FRONTEND=noninteractive
+$SUDO apt-get update -qq >/dev/null
+$SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null

@@ -61,7 +61,7 @@ class _Gen:
         for name, value in self.env.items():
             if value is obj:
                 return name
-        name = f"{prefix}{len(self.env)}"
+        name = f"_{prefix}{len(self.env)}"  # '_' keeps refs apart from fresh() locals
         self.env[name] = obj
         return name
 

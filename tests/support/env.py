@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 import shutil
 import subprocess
 import sys
@@ -60,3 +61,29 @@ def run_system_python(code: str, *args: str, input: str | None = None, timeout: 
     if proc.returncode != 0:
         raise AssertionError(f"system python failed:\n{proc.stderr[-3000:]}")
     return proc.stdout
+
+
+def ask_ros1(requests: list[dict[str, object]]) -> list[object]:
+    """Send requests to ``ros1_oracle.py`` on the system python; its answers, in order.
+
+    A request the reference stack fails on answers an ``{"error": ...}`` dict, so a test can
+    tell an unsupported type from a mismatch.
+    """
+    import json
+
+    oracle = Path(__file__).with_name("ros1_oracle.py")
+    env = {k: v for k, v in os.environ.items() if not k.startswith("ROS")}
+    proc = subprocess.run(
+        [SYSTEM_PYTHON, str(oracle)],
+        input="".join(json.dumps(r) + "\n" for r in requests),
+        capture_output=True,
+        text=True,
+        env=env,
+        timeout=600,
+        check=False,
+    )
+    if proc.returncode != 0:
+        raise AssertionError(f"ros1_oracle failed:\n{proc.stderr[-3000:]}")
+    answers = [json.loads(line) for line in proc.stdout.splitlines()]
+    assert len(answers) == len(requests)
+    return [a["ok"] if "ok" in a else a for a in answers]

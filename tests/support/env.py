@@ -86,4 +86,4 @@ def ask_ros1(requests: list[dict[str, object]]) -> list[object]:
         raise AssertionError(f"ros1_oracle failed:\n{proc.stderr[-3000:]}")
     answers = [json.loads(line) for line in proc.stdout.splitlines()]
     assert len(answers) == len(requests)
-    return [a["ok"] if "ok" in a else a for a in answers]
+    return [a.get("ok", a) for a in answers]

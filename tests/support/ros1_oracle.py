@@ -136,7 +136,7 @@ def main():
         req = json.loads(line)
         try:
             answer = {"ok": OPS[req["op"]](req)}
-        except Exception as err:  # report and go on: one bad type must not end the run
+        except Exception as err:  # noqa: BLE001 - one bad type must not end the run
             answer = {"error": f"{type(err).__name__}: {err}", "trace": traceback.format_exc()}
         sys.stdout.write(json.dumps(answer) + "\n")
         sys.stdout.flush()

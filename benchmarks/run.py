@@ -1,0 +1,62 @@
+"""Run the benchmarks side by side with the real ROS 1 tools; print ratios, write JSON.
+
+Usage: python -m benchmarks.run [NAME ...]   (names: see --list)
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import sys
+import time
+
+from benchmarks.common import ROOT, Result, write_report
+
+MODULES = ["benchmarks.bench_msg"]
+
+
+def collect() -> dict[str, object]:
+    found: dict[str, object] = {}
+    for name in MODULES:
+        found.update(importlib.import_module(name).BENCHMARKS)
+    return found
+
+
+def fmt(value: float | None) -> str:
+    if value is None:
+        return "-"
+    return f"{value:,.1f}" if value >= 100 else f"{value:.3g}"
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__)
+    parser.add_argument("names", nargs="*")
+    parser.add_argument("--list", action="store_true")
+    args = parser.parse_args()
+    benches = collect()
+    if args.list:
+        print("\n".join(benches))
+        return 0
+    chosen = args.names or list(benches)
+    results: list[Result] = []
+    for name in chosen:
+        print(f"running {name} ...", file=sys.stderr, flush=True)
+        out = benches[name]()  # type: ignore[operator]
+        results.extend(out if isinstance(out, list) else [out])
+    rows = [("benchmark", "unit", "rostools", "ROS 1", "ratio", "target", "met")]
+    for r in results:
+        met = "-" if r.met is None else ("yes" if r.met else "NO")
+        rows.append((r.name, r.unit, fmt(r.ours), fmt(r.theirs), fmt(r.ratio), r.target, met))
+    widths = [max(len(row[i]) for row in rows) for i in range(len(rows[0]))]
+    for row in rows:
+        print("  ".join(cell.ljust(w) for cell, w in zip(row, widths, strict=True)))
+    stamp = time.strftime("%Y%m%d-%H%M%S")
+    report = ROOT / "benchmarks" / "results" / f"{stamp}.json"
+    write_report(results, report)
+    write_report(results, ROOT / "benchmarks" / "results" / "latest.json")
+    print(f"\nwrote {report.relative_to(ROOT)}", file=sys.stderr)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

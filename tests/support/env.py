@@ -11,7 +11,11 @@ from pathlib import Path
 import pytest
 
 ROOT = Path(__file__).resolve().parent.parent.parent
-CORPUS = ROOT.parent / "shared" / "corpus"
+# Third-party bags live beside the project (../shared/corpus); ROSTOOLS_CORPUS overrides.
+CORPUS = Path(os.environ.get("ROSTOOLS_CORPUS", ROOT.parent / "shared" / "corpus"))
+needs_corpus = pytest.mark.skipif(
+    not (CORPUS / "MANIFEST.tsv").is_file(), reason=f"the shared corpus is not at {CORPUS}"
+)
 SYSTEM_PYTHON = "/usr/bin/python3"
 
 

@@ -7,7 +7,7 @@ from pathlib import Path
 
 import pytest
 
-from tests.support.env import CORPUS, run_cli
+from tests.support.env import CORPUS, needs_corpus, run_cli
 
 
 def test_show_expands_nested_types(cli_env: dict[str, str]) -> None:
@@ -100,6 +100,7 @@ def test_fast_path_matches_typer_path(cli_env: dict[str, str]) -> None:
         )  # fmt: skip
 
 
+@needs_corpus
 def test_show_from_bag(cli_env: dict[str, str]) -> None:
     bag = CORPUS / "ros1" / "matlab_rosbag" / "constants.bag"
     out = run_cli("msg", "show", "-b", str(bag), "test_roscpp_serialization/Constants", env=cli_env)

@@ -168,5 +168,27 @@ class Filler:
         )
 
 
+def parse_yaml_args(args: list[str]) -> list[Any]:
+    """Each command-line argument parsed as YAML 1.1 (``yaml.safe_load``), as rostopic does.
+
+    An empty argument is the empty string, as in rosservice.
+    """
+    import yaml
+
+    values: list[Any] = []
+    for arg in args:
+        if arg == "":
+            values.append("")
+            continue
+        try:
+            values.append(yaml.safe_load(arg))
+        except yaml.YAMLError as err:
+            mark = getattr(err, "problem_mark", None)
+            where = f" at column {mark.column + 1}" if mark is not None else ""
+            problem = getattr(err, "problem", None) or "not valid YAML"
+            raise UsageError(f"bad YAML in argument {arg!r}{where}: {problem}") from None
+    return values
+
+
 def _join(path: str, name: str) -> str:
     return f"{path}.{name}" if path else name

@@ -6,7 +6,8 @@ import pytest
 import yaml
 
 from rostools.msgs.codec import Codec
-from rostools.msgs.fill import FieldValueError, Filler
+from rostools.errors import UsageError
+from rostools.msgs.fill import FieldValueError, Filler, parse_yaml_args
 from rostools.msgs.message import Duration, Time
 from rostools.msgs.store import BuiltinSource, TypeStore
 
@@ -69,3 +70,15 @@ def test_errors_name_the_field_path(type_name: str, args: list[str], message: st
 def test_filled_messages_serialize() -> None:
     m = fill("sensor_msgs/Image", "{height: 1, width: 2, data: [1, 2, 3], encoding: mono8}")
     assert m.serialize()[-7:] == b"\x03\x00\x00\x00\x01\x02\x03"  # type: ignore[attr-defined]
+
+
+def test_yaml_arguments() -> None:
+    assert parse_yaml_args(["1", "{a: [1, 2]}", "", "'x'", "1e3"]) == [
+        1,
+        {"a": [1, 2]},
+        "",
+        "x",
+        "1e3",
+    ]
+    with pytest.raises(UsageError, match="bad YAML in argument '{a: 1' at column"):
+        parse_yaml_args(["{a: 1"])

@@ -5,8 +5,8 @@ from __future__ import annotations
 import pytest
 import yaml
 
-from rostools.msgs.codec import Codec
 from rostools.errors import UsageError
+from rostools.msgs.codec import Codec
 from rostools.msgs.fill import FieldValueError, Filler, parse_yaml_args
 from rostools.msgs.message import Duration, Time
 from rostools.msgs.store import BuiltinSource, TypeStore

@@ -13,7 +13,9 @@ from rostools.cli.common import Format, Settings
 
 #: name -> one-line help. Each group is the Typer app ``rostools.cli.<name>.app``.
 GROUPS: dict[str, str] = {
+    "param": "The parameter server: list, get, set, delete, load, dump.",
     "msg": "Message and service types: show, md5, list, package, packages, proto.",
+    "core": "Run the bundled master and parameter server (roscore).",
 }
 
 

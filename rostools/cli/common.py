@@ -15,6 +15,7 @@ import typer
 if TYPE_CHECKING:
     from collections.abc import Callable
 
+    from rostools.graph.masterapi import MasterProxy
     from rostools.msgs.store import TypeStore
 
 DEFAULT_MASTER_URI = "http://localhost:11311"
@@ -54,6 +55,15 @@ def output_format(ctx: typer.Context, local: Format | None) -> Format:
     return local if local is not None else settings(ctx).format
 
 
+def master(ctx: typer.Context, tool: str) -> MasterProxy:
+    """A master client for this invocation, named like rospy tools name themselves."""
+    from rostools.graph.masterapi import MasterProxy
+    from rostools.names import ros_namespace
+
+    caller_id = f"{ros_namespace()}{tool}_{os.getpid()}"
+    return MasterProxy(settings(ctx).resolved_master_uri(), caller_id)
+
+
 def type_store(msg_paths: list[Path] | None = None) -> TypeStore:
     """The type store for this invocation, over ``--msg-path`` folders and the environment."""
     from rostools.msgs.store import TypeStore
@@ -78,14 +88,17 @@ MsgPathOpt = Annotated[
 ]
 
 
-def emit(fmt: Format, data: Any, text: Callable[[Any], str] | None = None) -> None:
-    """Print one result: as text with ``text(data)``, or as one JSON/YAML document."""
+def render(fmt: Format, data: Any, text: Callable[[Any], str] | None = None) -> str:
+    """One result as text (``text(data)``), or as one JSON or YAML document."""
     if fmt is Format.json:
-        out = json.dumps(data, indent=2, ensure_ascii=False)
-    elif fmt is Format.yaml:
+        return json.dumps(data, indent=2, ensure_ascii=False)
+    if fmt is Format.yaml:
         import yaml
 
-        out = yaml.safe_dump(data, sort_keys=False, allow_unicode=True).rstrip("\n")
-    else:
-        out = text(data) if text is not None else str(data)
-    sys.stdout.write(out + "\n")
+        return str(yaml.safe_dump(data, sort_keys=False, allow_unicode=True)).rstrip("\n")
+    return text(data) if text is not None else str(data)
+
+
+def emit(fmt: Format, data: Any, text: Callable[[Any], str] | None = None) -> None:
+    """Print one result (see ``render``) and a newline."""
+    sys.stdout.write(render(fmt, data, text) + "\n")

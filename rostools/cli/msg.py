@@ -17,6 +17,7 @@ app = typer.Typer(
     name="msg",
     help="Message and service types: show, md5, list, package, packages, proto.",
     no_args_is_help=True,
+    add_completion=False,
 )
 
 TypeArg = Annotated[

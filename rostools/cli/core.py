@@ -1,0 +1,66 @@
+"""``rostools core``: the roscore replacement."""
+
+from __future__ import annotations
+
+import asyncio
+import json
+import sys
+from typing import Annotated
+
+import typer
+
+from rostools import __version__
+from rostools.cli.common import Format, FormatOpt, output_format
+from rostools.errors import RostoolsError
+
+app = typer.Typer(
+    name="core", help="Run the bundled master and parameter server (roscore).", add_completion=False
+)
+
+
+@app.command()
+def core(
+    ctx: typer.Context,
+    port: Annotated[
+        int | None,
+        typer.Option("--port", "-p", help="Port. Default: the port of ROS_MASTER_URI, else 11311."),
+    ] = None,
+    host: Annotated[
+        str | None,
+        typer.Option(
+            "--host", help="Address to listen on. Default: ROS_IP, ROS_HOSTNAME, else loopback."
+        ),
+    ] = None,
+    fmt: FormatOpt = None,
+) -> None:
+    """Run a ROS master and parameter server until Ctrl-C (SIGINT) or SIGTERM."""
+    from rostools.graph.masterapi import probe
+    from rostools.master.core import choose_address, run_core
+    from rostools.master.server import Master
+
+    address = choose_address(host, port)
+    local = "127.0.0.1" if address.bind == "0.0.0.0" else address.bind  # noqa: S104
+    probe_uri = f"http://{local}:{address.port}/"
+    if probe(probe_uri, timeout=1.0):
+        raise RostoolsError(
+            f"a master is already running at {probe_uri}",
+            hint="stop it first, or use another --port",
+        )
+    fmt = output_format(ctx, fmt)
+
+    def ready(master: Master, run_id: str) -> None:
+        if fmt is Format.text:
+            sys.stdout.write(
+                f"rostools core {__version__}: master and parameter server\n"
+                f"ROS_MASTER_URI={master.uri}\n"
+                f"listening on {address.bind}:{master.port}\n"
+                f"setting /run_id to {run_id}\n"
+                "parameters: /rosdistro, /rosversion, /run_id\n"
+                "press Ctrl-C to stop\n"
+            )
+        else:
+            info = {"uri": master.uri, "bind": address.bind, "port": master.port, "run_id": run_id}
+            sys.stdout.write(json.dumps(info) + "\n")
+        sys.stdout.flush()
+
+    asyncio.run(run_core(address, ready))

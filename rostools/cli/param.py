@@ -1,0 +1,182 @@
+"""``rostools param``: rosparam's list, get, set, delete, load and dump."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+from typing import Annotated, Any
+
+import typer
+
+from rostools.cli import paramyaml
+from rostools.cli.common import Format, FormatOpt, emit, master, output_format, render
+from rostools.errors import NotFoundError, UsageError
+from rostools.names import GLOBAL_NS, join, make_global_ns, script_resolve
+
+app = typer.Typer(
+    name="param",
+    help="The parameter server: list, get, set, delete, load, dump.",
+    no_args_is_help=True,
+    add_completion=False,
+)
+
+VerboseOpt = Annotated[bool, typer.Option("-v", "--verbose", help="Say what is done, on stderr.")]
+NameArg = Annotated[str, typer.Argument(help="Parameter name; relative names join ROS_NAMESPACE.")]
+
+
+def _say(verbose: bool, text: str) -> None:
+    if verbose:
+        sys.stderr.write(text + "\n")
+
+
+def _set_tree(proxy: Any, name: str, value: Any, verbose: bool) -> None:
+    """Rosparam's set: a mapping updates key by key; anything else is set as it is."""
+    if isinstance(value, dict):
+        for key, item in value.items():
+            if not isinstance(key, str):
+                raise UsageError(f"parameter names must be strings, not {key!r} under {name}")
+            _set_tree(proxy, join(name if name.endswith("/") else name + "/", key), item, verbose)
+        return
+    proxy.set_param(name, value)
+    _say(verbose, f"set parameter [{name}] to [{value}]")
+
+
+@app.command("list")
+def list_params(
+    ctx: typer.Context,
+    namespace: Annotated[str, typer.Argument(help="Only names under this namespace.")] = "/",
+    fmt: FormatOpt = None,
+) -> None:
+    """List parameter names, sorted."""
+    ns = make_global_ns(script_resolve(namespace, "rosparam"))
+    names = sorted(n for n in master(ctx, "rosparam").param_names() if n.startswith(ns))
+    emit(output_format(ctx, fmt), names, "\n".join)
+
+
+@app.command()
+def get(
+    ctx: typer.Context,
+    name: NameArg,
+    pretty: Annotated[
+        bool, typer.Option("-p", "--pretty", help="Keys sorted; still YAML.")
+    ] = False,
+    verbose: VerboseOpt = False,
+    fmt: FormatOpt = None,
+) -> None:
+    """Print a parameter, or a whole namespace, as YAML."""
+    key = script_resolve(name, "rosparam")
+    _say(verbose, f"getting parameter [{key}]")
+    value = master(ctx, "rosparam").get_param(key)
+    fmt = output_format(ctx, fmt)
+    if fmt is Format.text:
+        sys.stdout.write(paramyaml.dump(value, sort_keys=pretty) + "\n")  # rosparam's blank line
+    else:
+        emit(fmt, paramyaml.to_plain(value))
+
+
+@app.command(context_settings={"ignore_unknown_options": True})
+def set(
+    ctx: typer.Context,
+    name: NameArg,
+    value: Annotated[
+        str | None,
+        typer.Argument(
+            help="A YAML value; a mapping updates the keys it names.", show_default=False
+        ),
+    ] = None,
+    textfile: Annotated[
+        Path | None, typer.Option("--textfile", "-t", help="Set to the text of this file.")
+    ] = None,
+    binfile: Annotated[
+        Path | None, typer.Option("--binfile", "-b", help="Set to the bytes of this file.")
+    ] = None,
+    verbose: VerboseOpt = False,
+) -> None:
+    """Set a parameter from YAML (negative numbers need no ``--``)."""
+    import xmlrpc.client
+
+    key = script_resolve(name, "rosparam")
+    given = [v is not None for v in (value, textfile, binfile)]
+    if sum(given) != 1:
+        raise UsageError("give exactly one of a value, --textfile or --binfile")
+    if textfile is not None:
+        parsed: Any = _read(textfile).decode("utf-8", "replace")
+    elif binfile is not None:
+        parsed = xmlrpc.client.Binary(_read(binfile))
+    else:
+        assert value is not None
+        parsed = "" if value == "" else paramyaml.load(value)
+        if parsed is None:
+            raise UsageError("a parameter cannot be null", hint="quote it to set a string")
+    paramyaml.check_ints(parsed, key)
+    _set_tree(master(ctx, "rosparam"), key, parsed, verbose)
+
+
+def _read(path: Path) -> bytes:
+    try:
+        return path.read_bytes()
+    except FileNotFoundError:
+        raise NotFoundError(f"file {path} does not exist") from None
+    except OSError as err:
+        raise UsageError(f"cannot read {path}: {err.strerror}") from None
+
+
+@app.command()
+def delete(ctx: typer.Context, name: NameArg, verbose: VerboseOpt = False) -> None:
+    """Delete a parameter or a namespace; ``/`` empties the whole server."""
+    key = script_resolve(name, "rosparam")
+    proxy = master(ctx, "rosparam")
+    if key == GLOBAL_NS:
+        proxy.set_param(GLOBAL_NS, {})
+    else:
+        proxy.delete_param(key)
+    _say(verbose, f"deleted parameter [{key}]")
+
+
+@app.command()
+def load(
+    ctx: typer.Context,
+    file: Annotated[str, typer.Argument(help="A YAML file; - reads stdin.")],
+    namespace: Annotated[str, typer.Argument(help="Load under this namespace.")] = "",
+    verbose: VerboseOpt = False,
+) -> None:
+    """Load parameters from a YAML file (every document; a ``_ns`` key picks a namespace)."""
+    text = sys.stdin.read() if file == "-" else _read(Path(file)).decode("utf-8", "replace")
+    base = script_resolve(namespace, "rosparam")
+    proxy = master(ctx, "rosparam")
+    for doc in paramyaml.load_all(text, "stdin" if file == "-" else file):
+        if doc is None:
+            continue
+        ns = base
+        if isinstance(doc, dict) and "_ns" in doc:
+            ns = join(make_global_ns(base), str(doc.pop("_ns")))
+        if ns == GLOBAL_NS and not isinstance(doc, dict):
+            raise UsageError("a document loaded into / must be a mapping")
+        paramyaml.check_ints(doc, ns)
+        _say(verbose, f"reading parameters into namespace [{ns}]")
+        _set_tree(proxy, ns, doc, verbose)
+
+
+@app.command()
+def dump(
+    ctx: typer.Context,
+    file: Annotated[
+        str | None, typer.Argument(help="Write here; stdout when omitted or -.")
+    ] = None,
+    namespace: Annotated[str, typer.Argument(help="Only this namespace.")] = "",
+    verbose: VerboseOpt = False,
+    fmt: FormatOpt = None,
+) -> None:
+    """Write parameters as YAML, to a file or stdout."""
+    key = script_resolve(namespace, "rosparam")
+    value = master(ctx, "rosparam").get_param(key)
+    _say(verbose, f"dumping namespace [{key}] to file [{file or 'stdout'}]")
+    fmt = output_format(ctx, fmt)
+    if fmt is Format.text:
+        text = paramyaml.dump(value)
+    else:
+        text = render(fmt, paramyaml.to_plain(value)) + "\n"
+    if file in (None, "-"):
+        sys.stdout.write(text)
+    else:
+        Path(file).write_text(text)

@@ -1,0 +1,154 @@
+"""YAML for parameters, with rosparam's conventions (ROS1_PROTOCOL.md §3.6).
+
+YAML 1.1 (``1e3`` stays a string), ``!!binary`` as XML-RPC binary, ``!degrees``/``!radians``
+and bare ``deg(...)``/``rad(...)`` as radians. Unlike rosparam, ``rad()`` expressions are
+evaluated by a small arithmetic evaluator, never by ``eval``.
+"""
+
+from __future__ import annotations
+
+import ast
+import base64
+import math
+import operator
+import re
+import xmlrpc.client
+from collections.abc import Callable
+from typing import Any
+
+import yaml
+
+from rostools.errors import UsageError
+
+INT32_MIN, INT32_MAX = -(2**31), 2**31 - 1
+_OPS: dict[type, Callable[..., float]] = {
+    ast.Add: operator.add, ast.Sub: operator.sub, ast.Mult: operator.mul, ast.Div: operator.truediv,
+    ast.Pow: operator.pow, ast.USub: operator.neg, ast.UAdd: operator.pos,
+}  # fmt: skip
+
+
+def _arith(text: str) -> float:
+    """An arithmetic expression of numbers and ``pi``."""
+
+    def value(node: ast.AST) -> float:
+        if isinstance(node, ast.Expression):
+            return value(node.body)
+        if isinstance(node, ast.Constant) and isinstance(node.value, int | float):
+            return float(node.value)
+        if isinstance(node, ast.Name) and node.id == "pi":
+            return math.pi
+        if isinstance(node, ast.BinOp) and type(node.op) in _OPS:
+            return _OPS[type(node.op)](value(node.left), value(node.right))
+        if isinstance(node, ast.UnaryOp) and type(node.op) in _OPS:
+            return _OPS[type(node.op)](value(node.operand))
+        raise ValueError(text)
+
+    try:
+        return value(ast.parse(text.strip(), mode="eval"))
+    except (SyntaxError, ValueError, ZeroDivisionError, OverflowError):
+        raise UsageError(f"invalid radian expression: {text}") from None
+
+
+def _radians(loader: yaml.SafeLoader, node: yaml.Node) -> float:
+    text = str(loader.construct_scalar(node)).strip()  # type: ignore[arg-type]
+    if text.startswith("rad(") and text.endswith(")"):
+        text = text[4:-1]
+    return _arith(text)
+
+
+def _degrees(loader: yaml.SafeLoader, node: yaml.Node) -> float:
+    text = str(loader.construct_scalar(node)).strip()  # type: ignore[arg-type]
+    if text.startswith("deg(") and text.endswith(")"):
+        text = text[4:-1]
+    return _arith(text) * math.pi / 180.0
+
+
+def _binary(loader: yaml.SafeLoader, node: yaml.Node) -> xmlrpc.client.Binary:
+    return xmlrpc.client.Binary(loader.construct_yaml_binary(node))  # type: ignore[arg-type]
+
+
+class ParamLoader(yaml.SafeLoader):
+    """safe_load plus rosparam's tags."""
+
+
+ParamLoader.add_constructor("tag:yaml.org,2002:binary", _binary)
+ParamLoader.add_constructor("!radians", _radians)
+ParamLoader.add_constructor("!degrees", _degrees)
+ParamLoader.add_implicit_resolver("!degrees", re.compile(r"^deg\([^)]*\)$"), ["d"])
+ParamLoader.add_implicit_resolver("!radians", re.compile(r"^rad\([^)]*\)$"), ["r"])
+
+
+class ParamDumper(yaml.SafeDumper):
+    """safe_dump plus ``!!binary`` for XML-RPC binaries and dates as text."""
+
+
+def _represent_binary(dumper: yaml.SafeDumper, data: xmlrpc.client.Binary) -> yaml.Node:
+    text = base64.b64encode(data.data).decode()
+    return dumper.represent_scalar("tag:yaml.org,2002:binary", text, style="|")
+
+
+def _represent_date(dumper: yaml.SafeDumper, data: xmlrpc.client.DateTime) -> yaml.Node:
+    return dumper.represent_str(str(data))
+
+
+ParamDumper.add_representer(xmlrpc.client.Binary, _represent_binary)
+ParamDumper.add_representer(xmlrpc.client.DateTime, _represent_date)
+
+
+def load(text: str) -> Any:
+    """One YAML value."""
+    try:
+        return yaml.load(text, Loader=ParamLoader)  # noqa: S506 - a SafeLoader subclass
+    except yaml.YAMLError as err:
+        raise UsageError(f"bad YAML: {_problem(err)}") from None
+
+
+def load_all(text: str, source: str) -> list[Any]:
+    """Every document of a YAML stream."""
+    try:
+        return list(yaml.load_all(text, Loader=ParamLoader))
+    except yaml.YAMLError as err:
+        raise UsageError(f"bad YAML in {source}: {_problem(err)}") from None
+
+
+def _problem(err: yaml.YAMLError) -> str:
+    mark = getattr(err, "problem_mark", None)
+    where = f" (line {mark.line + 1}, column {mark.column + 1})" if mark is not None else ""
+    return f"{getattr(err, 'problem', None) or err}{where}"
+
+
+def dump(value: Any, *, sort_keys: bool = False) -> str:
+    """Block-style YAML as rosparam get/dump print it, without the ``...`` end marker."""
+    text = yaml.dump(value, Dumper=ParamDumper, default_flow_style=False, sort_keys=sort_keys)
+    return text.removesuffix("\n...\n")
+
+
+def check_ints(value: Any, name: str) -> None:
+    """Refuse integers XML-RPC cannot carry (it has 32-bit ints only)."""
+    if isinstance(value, bool):
+        return
+    if isinstance(value, int) and not INT32_MIN <= value <= INT32_MAX:
+        raise UsageError(
+            f"{name}: {value} does not fit in 32 bits; the parameter server only stores "
+            f"integers from {INT32_MIN} to {INT32_MAX}",
+            hint="write it as a float (append .0) or a string",
+        )
+    if isinstance(value, dict):
+        for k, v in value.items():
+            check_ints(v, f"{name}/{k}")
+    elif isinstance(value, list):
+        for i, v in enumerate(value):
+            check_ints(v, f"{name}[{i}]")
+
+
+def to_plain(value: Any) -> Any:
+    """Parameters as JSON-able data: binaries as base64 text, dates as ISO text."""
+    if isinstance(value, xmlrpc.client.Binary):
+        return base64.b64encode(value.data).decode()
+    if isinstance(value, xmlrpc.client.DateTime):
+        return str(value)
+    if isinstance(value, dict):
+        return {k: to_plain(v) for k, v in value.items()}
+    if isinstance(value, list):
+        return [to_plain(v) for v in value]
+    return value

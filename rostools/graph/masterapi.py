@@ -1,0 +1,174 @@
+"""A blocking client of the Master and Parameter APIs, for commands.
+
+The standard library's ``xmlrpc.client`` costs 30 ms less to import than asyncio, which
+commands like ``topic list`` and ``param get`` never need. Every call has a timeout, and a
+master that cannot be reached is one ``UnreachableError`` with the URI in it.
+"""
+
+from __future__ import annotations
+
+import http.client
+import os
+import xmlrpc.client
+from typing import Any
+
+from rostools.errors import NotFoundError, RostoolsError, TimeoutExpired, UnreachableError
+
+#: Seconds to wait for the master before giving up; ``ROSTOOLS_MASTER_TIMEOUT`` changes it.
+DEFAULT_TIMEOUT = 3.0
+
+
+def master_timeout() -> float:
+    """The timeout for master calls from the environment, else the default."""
+    try:
+        return float(os.environ.get("ROSTOOLS_MASTER_TIMEOUT", DEFAULT_TIMEOUT))
+    except ValueError:
+        return DEFAULT_TIMEOUT
+
+
+class _Transport(xmlrpc.client.Transport):
+    """Keep-alive HTTP with a socket timeout."""
+
+    def __init__(self, timeout: float) -> None:
+        super().__init__()
+        self.timeout = timeout
+
+    def make_connection(self, host: Any) -> http.client.HTTPConnection:
+        conn = super().make_connection(host)
+        conn.timeout = self.timeout
+        return conn
+
+
+class MasterError(RostoolsError):
+    """The master answered a call with a failure code."""
+
+    def __init__(self, method: str, code: int, message: str) -> None:
+        super().__init__(message or f"{method} failed")
+        self.method = method
+        self.code = code
+
+
+class XmlRpcNode:
+    """Calls to one XML-RPC server (a master or a node) on behalf of ``caller_id``."""
+
+    def __init__(
+        self, uri: str, caller_id: str, timeout: float | None = None, what: str = "master"
+    ):
+        self.uri = uri
+        self.caller_id = caller_id
+        self.what = what
+        self.timeout = master_timeout() if timeout is None else timeout
+        self.proxy = xmlrpc.client.ServerProxy(
+            uri, transport=_Transport(self.timeout), allow_none=False
+        )
+
+    def raw(self, method: str, *args: Any) -> Any:
+        """Call ``method(caller_id, *args)`` and return the whole answer."""
+        try:
+            return getattr(self.proxy, method)(self.caller_id, *args)
+        except TimeoutError:
+            raise TimeoutExpired(
+                f"the {self.what} at {self.uri} did not answer {method} within {self.timeout:g} s"
+            ) from None
+        except (OSError, http.client.HTTPException) as err:
+            reason = getattr(err, "strerror", None) or str(err) or type(err).__name__
+            raise UnreachableError(
+                f"cannot reach the {self.what} at {self.uri}: {reason}",
+                hint="is roscore (or 'rostools core') running? check ROS_MASTER_URI or --master-uri"
+                if self.what == "master"
+                else None,
+            ) from None
+        except xmlrpc.client.Fault as fault:
+            raise RostoolsError(
+                f"the {self.what} at {self.uri} failed {method}: {fault.faultString}"
+            ) from None
+        except OverflowError:
+            raise RostoolsError(
+                "integers must fit in 32 bits (XML-RPC has no larger type)"
+            ) from None
+        except (xmlrpc.client.ResponseError, xmlrpc.client.ProtocolError) as err:
+            raise RostoolsError(f"bad answer from the {self.what} at {self.uri}: {err}") from None
+
+    def call(self, method: str, *args: Any) -> Any:
+        """Call a ROS API method and return its value; a failure code raises ``MasterError``."""
+        answer = self.raw(method, *args)
+        if not isinstance(answer, list | tuple) or len(answer) != 3:
+            raise RostoolsError(f"bad answer from the {self.what} to {method}: {answer!r}")
+        code, message, value = answer
+        if code != 1:
+            raise MasterError(method, code, message)
+        return value
+
+
+class MasterProxy(XmlRpcNode):
+    """The master's graph and parameter calls, with ROS errors turned into ours."""
+
+    def __init__(self, uri: str, caller_id: str, timeout: float | None = None) -> None:
+        super().__init__(uri, caller_id, timeout, "master")
+
+    def get_param(self, key: str) -> Any:
+        """A parameter's value; NotFoundError when unset."""
+        try:
+            return self.call("getParam", key)
+        except MasterError as err:
+            if err.code == -1:
+                raise NotFoundError(f"parameter {key} is not set") from None
+            raise
+
+    def set_param(self, key: str, value: Any) -> None:
+        """Set a parameter."""
+        self.call("setParam", key, value)
+
+    def delete_param(self, key: str) -> None:
+        """Delete a parameter; NotFoundError when unset."""
+        try:
+            self.call("deleteParam", key)
+        except MasterError as err:
+            if err.code == -1:
+                raise NotFoundError(f"parameter {key} is not set") from None
+            raise
+
+    def param_names(self) -> list[str]:
+        """Every parameter name."""
+        names: list[str] = self.call("getParamNames")
+        return names
+
+    def system_state(self) -> tuple[list[Any], list[Any], list[Any]]:
+        """Publishers, subscribers and services."""
+        pubs, subs, srvs = self.call("getSystemState")
+        return pubs, subs, srvs
+
+    def topic_types(self) -> dict[str, str]:
+        """Topic -> type, for every topic the master has seen typed."""
+        return dict(self.call("getTopicTypes"))
+
+    def lookup_node(self, name: str) -> str:
+        """A node's XML-RPC URI; NotFoundError for an unknown node."""
+        try:
+            uri: str = self.call("lookupNode", name)
+        except MasterError as err:
+            if err.code == -1:
+                raise NotFoundError(f"unknown node {name}") from None
+            raise
+        return uri
+
+    def lookup_service(self, name: str) -> str:
+        """A service's rosrpc URI; NotFoundError for an unknown service."""
+        try:
+            uri: str = self.call("lookupService", name)
+        except MasterError as err:
+            if err.code == -1:
+                raise NotFoundError(f"unknown service {name}") from None
+            raise
+        return uri
+
+
+def probe(uri: str, timeout: float = 1.0) -> bool:
+    """Whether an XML-RPC server (a master) answers at ``uri``."""
+    try:
+        XmlRpcNode(uri, "/rostools_probe", timeout).raw("getPid")
+    except (UnreachableError, TimeoutExpired):
+        return False
+    except RostoolsError:
+        return True  # something answered, if oddly
+    return True

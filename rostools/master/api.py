@@ -1,0 +1,340 @@
+"""The Master and Parameter APIs: argument checks, ROS return triples, outgoing calls.
+
+Sans-IO: ``MasterAPI.call(method, params)`` returns the XML-RPC result and queues the node
+calls the change requires (``publisherUpdate``, ``paramUpdate``, ``shutdown``) in
+``outgoing``, for the server to send. Messages and error values follow rosmaster exactly
+(ROS1_PROTOCOL.md §§1.3, 2, 3).
+"""
+
+from __future__ import annotations
+
+import os
+import xmlrpc.client
+from collections.abc import Callable
+from typing import Any
+
+from rostools.master.params import ParamTree, subscription_key
+from rostools.master.registry import Outgoing, Registry
+from rostools.names import ANYTYPE, GLOBAL_NS, resolve
+from rostools.wire.xmlrpc import multicall
+
+Triple = tuple[int, str, Any]
+Check = Callable[[Any, str], Any]
+
+
+class ArgumentError(Exception):
+    """An argument that fails its check; answered as ``[-1, message, error value]``."""
+
+
+def _string(name: str, value: Any) -> str:
+    if not value or not isinstance(value, str):
+        raise ArgumentError(f"ERROR: parameter [{name}] must be a non-empty string")
+    return value
+
+
+def _graph_name(name: str) -> Callable[[Any, str], str]:
+    def check(value: Any, caller_id: str) -> str:
+        value = _string(name, value)
+        if ":" in value or " " in value:
+            raise ArgumentError(f"ERROR: parameter [{name}] contains illegal chars")
+        if value == GLOBAL_NS:
+            raise ArgumentError(f"ERROR: parameter [{name}] cannot be the global namespace")
+        return resolve(value, caller_id)
+
+    return check
+
+
+def _node_name(name: str) -> Callable[[Any, str], str]:
+    def check(value: Any, caller_id: str) -> str:
+        value = _string(name, value)
+        if ":" in value or " " in value:
+            raise ArgumentError(f"ERROR: parameter [{name}] contains illegal chars")
+        return resolve(value, caller_id)
+
+    return check
+
+
+def _subgraph(value: Any, caller_id: str) -> str:
+    if not isinstance(value, str):
+        raise ArgumentError("ERROR: parameter [subgraph] must be a string")
+    return resolve(value, caller_id) if value else ""
+
+
+def _type(value: Any, caller_id: str) -> str:
+    if value == ANYTYPE:
+        return ANYTYPE
+    text = _string("topic_type", value)
+    if len(text.split("/")) != 2:
+        raise ArgumentError("ERROR: parameter [topic_type] is not a valid package resource name")
+    return text
+
+
+def _api(name: str) -> Callable[[Any, str], str]:
+    def check(value: Any, caller_id: str) -> str:
+        if not value or not isinstance(value, str):
+            raise ArgumentError(f"ERROR: parameter [{name}] is not an XMLRPC URI")
+        if not value.startswith(("http://", "rosrpc://")):
+            raise ArgumentError(f"ERROR: parameter [{name}] is not an RPC URI")
+        return value
+
+    return check
+
+
+def _key(value: Any, caller_id: str) -> str:
+    if not value:
+        raise ArgumentError("ERROR: parameter [key] must be specified and non-empty")
+    if not isinstance(value, str):
+        raise ArgumentError("ERROR: parameter [key] must be a string")
+    return value
+
+
+def _any(value: Any, caller_id: str) -> Any:
+    return value
+
+
+def _not_none(value: Any, caller_id: str) -> Any:
+    if value is None:
+        raise ArgumentError("ERROR: parameter [value] must be specified")
+    return value
+
+
+class MasterAPI:
+    """The state of one master and the handlers of every API method."""
+
+    def __init__(self, uri: str, pid: int | None = None) -> None:
+        self.uri = uri
+        self.pid = os.getpid() if pid is None else pid
+        self.registry = Registry()
+        self.params = ParamTree(self.registry.param_subscribers)
+        self.outgoing: list[Outgoing] = []
+        self.shutdown_requested: str | None = None
+        # method -> (handler, error value, argument checks after caller_id)
+        self.methods: dict[str, tuple[Callable[..., Triple], Any, tuple[Check, ...]]] = {
+            "getUri": (self.getUri, "", ()),
+            "getPid": (self.getPid, -1, ()),
+            "shutdown": (self.shutdown, 0, (_any,)),
+            "registerService": (
+                self.registerService, 0,
+                (_graph_name("service"), _api("service_api"), _api("caller_api")),
+            ),
+            "unregisterService": (
+                self.unregisterService, 0, (_graph_name("service"), _api("service_api")),
+            ),
+            "registerSubscriber": (
+                self.registerSubscriber, [], (_graph_name("topic"), _type, _api("caller_api")),
+            ),
+            "unregisterSubscriber": (
+                self.unregisterSubscriber, 0, (_graph_name("topic"), _api("caller_api")),
+            ),
+            "registerPublisher": (
+                self.registerPublisher, [], (_graph_name("topic"), _type, _api("caller_api")),
+            ),
+            "unregisterPublisher": (
+                self.unregisterPublisher, 0, (_graph_name("topic"), _api("caller_api")),
+            ),
+            "lookupNode": (self.lookupNode, "", (_node_name("node"),)),
+            "lookupService": (self.lookupService, "", (_graph_name("service"),)),
+            "getPublishedTopics": (self.getPublishedTopics, 0, (_subgraph,)),
+            "getTopicTypes": (self.getTopicTypes, [], ()),
+            "getSystemState": (self.getSystemState, [[], [], []], ()),
+            "setParam": (self.setParam, 0, (_key, _not_none)),
+            "getParam": (self.getParam, 0, (_key,)),
+            "deleteParam": (self.deleteParam, 0, (_key,)),
+            "hasParam": (self.hasParam, False, (_key,)),
+            "searchParam": (self.searchParam, 0, (_key,)),
+            "subscribeParam": (self.subscribeParam, 0, (_api("caller_api"), _key)),
+            "unsubscribeParam": (self.unsubscribeParam, 0, (_api("caller_api"), _key)),
+            "getParamNames": (self.getParamNames, [], ()),
+        }  # fmt: skip
+
+    # dispatch -------------------------------------------------------------------------
+
+    def call(self, method: str, params: tuple[Any, ...]) -> Any:
+        """Run one XML-RPC call; raises ``xmlrpc.client.Fault`` for an unknown method."""
+        if method == "system.multicall":
+            return multicall(self.call, params[0] if params else None)
+        entry = self.methods.get(method)
+        if entry is None:
+            raise xmlrpc.client.Fault(
+                1, f"<class 'Exception'>:method \"{method}\" is not supported"
+            )
+        handler, error_value, checks = entry
+        if not params:
+            return [-1, "missing required caller_id parameter", error_value]
+        if len(params) != len(checks) + 1:
+            return [-1, "Error: bad call arity", error_value]
+        caller_id = params[0]
+        if not isinstance(caller_id, str):
+            return [-1, "caller_id must be a string", error_value]
+        try:
+            args = [
+                check(value, caller_id) for check, value in zip(checks, params[1:], strict=True)
+            ]
+            code, message, value = handler(caller_id, *args)
+        except ArgumentError as err:
+            return [-1, str(err), error_value]
+        except Exception as err:  # noqa: BLE001 - rosmaster answers any internal error this way
+            return [0, f"Internal failure: {err}", error_value]
+        return [code, message, value]
+
+    def _notify_publishers(self, topic: str) -> None:
+        pub_uris = self.registry.apis("pub", topic)
+        for api in self.registry.apis("sub", topic):
+            self.outgoing.append(Outgoing(api, "publisherUpdate", ("/master", topic, pub_uris)))
+
+    def _notify_params(self, updates: list[tuple[str, str, str, Any]]) -> None:
+        for _, api, key, value in updates:
+            self.outgoing.append(Outgoing(api, "paramUpdate", ("/master", key, value)))
+
+    # master API -----------------------------------------------------------------------
+
+    def getUri(self, caller_id: str) -> Triple:  # noqa: N802 - ROS API names
+        """The master's URI."""
+        return 1, "", self.uri
+
+    def getPid(self, caller_id: str) -> Triple:  # noqa: N802
+        """The master's process id."""
+        return 1, "", self.pid
+
+    def shutdown(self, caller_id: str, msg: Any) -> Triple:
+        """Stop the master."""
+        self.shutdown_requested = f"{msg}" if msg else "external shutdown request"
+        return 1, "shutdown", 0
+
+    def registerService(  # noqa: N802
+        self, caller_id: str, service: str, service_api: str, caller_api: str
+    ) -> Triple:
+        """Register a service provider; the last one wins."""
+        self.outgoing += self.registry.register("srv", service, caller_id, caller_api, service_api)
+        return 1, f"Registered [{caller_id}] as provider of [{service}]", 1
+
+    def unregisterService(self, caller_id: str, service: str, service_api: str) -> Triple:  # noqa: N802
+        """Unregister a service provider, if it is still the current one."""
+        return self.registry.unregister("srv", service, caller_id, service_api=service_api)
+
+    def lookupService(self, caller_id: str, service: str) -> Triple:  # noqa: N802
+        """The rosrpc URI of a service."""
+        entry = self.registry.services.get(service)
+        if entry is None:
+            return -1, "no provider", ""
+        return 1, f"rosrpc URI: [{entry[2]}]", entry[2]
+
+    def registerSubscriber(  # noqa: N802
+        self, caller_id: str, topic: str, topic_type: str, caller_api: str
+    ) -> Triple:
+        """Register a subscriber; the current publishers' URIs."""
+        self.outgoing += self.registry.register("sub", topic, caller_id, caller_api)
+        if topic not in self.registry.topic_types and topic_type != ANYTYPE:
+            self.registry.topic_types[topic] = topic_type
+        return 1, f"Subscribed to [{topic}]", self.registry.apis("pub", topic)
+
+    def unregisterSubscriber(self, caller_id: str, topic: str, caller_api: str) -> Triple:  # noqa: N802
+        """Unregister a subscriber."""
+        return self.registry.unregister("sub", topic, caller_id, caller_api)
+
+    def registerPublisher(  # noqa: N802
+        self, caller_id: str, topic: str, topic_type: str, caller_api: str
+    ) -> Triple:
+        """Register a publisher, tell the subscribers; the current subscribers' URIs."""
+        self.outgoing += self.registry.register("pub", topic, caller_id, caller_api)
+        if topic_type != ANYTYPE or topic not in self.registry.topic_types:
+            self.registry.topic_types[topic] = topic_type
+        self._notify_publishers(topic)
+        return (
+            1,
+            f"Registered [{caller_id}] as publisher of [{topic}]",
+            self.registry.apis("sub", topic),
+        )
+
+    def unregisterPublisher(self, caller_id: str, topic: str, caller_api: str) -> Triple:  # noqa: N802
+        """Unregister a publisher and, if it was one, tell the subscribers."""
+        answer = self.registry.unregister("pub", topic, caller_id, caller_api)
+        if answer[2]:
+            self._notify_publishers(topic)
+        return answer
+
+    def lookupNode(self, caller_id: str, node: str) -> Triple:  # noqa: N802
+        """A node's XML-RPC URI."""
+        ref = self.registry.nodes.get(node)
+        if ref is None:
+            return -1, f"unknown node [{node}]", ""
+        return 1, "node api", ref.api
+
+    def getPublishedTopics(self, caller_id: str, subgraph: str) -> Triple:  # noqa: N802
+        """Topics with at least one publisher, under ``subgraph``."""
+        if subgraph and not subgraph.endswith("/"):
+            subgraph += "/"
+        types = self.registry.topic_types
+        topics = [[t, types[t]] for t in self.registry.publishers if t.startswith(subgraph)]
+        return 1, "current topics", topics
+
+    def getTopicTypes(self, caller_id: str) -> Triple:  # noqa: N802
+        """Every topic ever typed, with its type."""
+        return 1, "current system state", [[t, ty] for t, ty in self.registry.topic_types.items()]
+
+    def getSystemState(self, caller_id: str) -> Triple:  # noqa: N802
+        """Publishers, subscribers and services, by node name."""
+        return 1, "current system state", self.registry.state()
+
+    # parameter API --------------------------------------------------------------------
+
+    def setParam(self, caller_id: str, key: str, value: Any) -> Triple:  # noqa: N802
+        """Set a parameter; a dict replaces the subtree."""
+        key = resolve(key, caller_id)
+        try:
+            updates = self.params.set(key, value, caller_id)
+        except TypeError as err:
+            return -1, f"Error: invalid arguments: {err}", 0
+        self._notify_params(updates)
+        return 1, f"parameter {key} set", 0
+
+    def getParam(self, caller_id: str, key: str) -> Triple:  # noqa: N802
+        """A parameter's value, or a dict for a namespace."""
+        key = resolve(key, caller_id)
+        try:
+            return 1, f"Parameter [{key}]", self.params.get(key)
+        except KeyError:
+            return -1, f"Parameter [{key}] is not set", 0
+
+    def deleteParam(self, caller_id: str, key: str) -> Triple:  # noqa: N802
+        """Delete a parameter or namespace."""
+        key = resolve(key, caller_id)
+        try:
+            updates = self.params.delete(key)
+        except KeyError:
+            return -1, f"parameter [{key}] is not set", 0
+        self._notify_params(updates)
+        return 1, f"parameter {key} deleted", 0
+
+    def hasParam(self, caller_id: str, key: str) -> Triple:  # noqa: N802
+        """Whether a parameter is set."""
+        key = resolve(key, caller_id)
+        return 1, key, self.params.has(key)
+
+    def searchParam(self, caller_id: str, key: str) -> Triple:  # noqa: N802
+        """Search upwards from the caller's namespace."""
+        found = self.params.search(caller_id, key)
+        if found is None:
+            return -1, f"Cannot find parameter [{key}] in an upwards search", ""
+        return 1, f"Found [{found}]", found
+
+    def subscribeParam(self, caller_id: str, caller_api: str, key: str) -> Triple:  # noqa: N802
+        """Subscribe to a parameter; its value, or ``{}`` when unset."""
+        key = resolve(key, caller_id)
+        skey = subscription_key(key)
+        self.outgoing += self.registry.register("param", skey, caller_id, caller_api)
+        try:
+            value = self.params.get(skey)
+        except KeyError:
+            value = {}
+        return 1, f"Subscribed to parameter [{key}]", value
+
+    def unsubscribeParam(self, caller_id: str, caller_api: str, key: str) -> Triple:  # noqa: N802
+        """Unsubscribe from a parameter (always answers 1)."""
+        key = resolve(key, caller_id)
+        self.registry.unregister("param", subscription_key(key), caller_id, caller_api)
+        return 1, f"Unsubscribe to parameter [{key}]", 1
+
+    def getParamNames(self, caller_id: str) -> Triple:  # noqa: N802
+        """Every parameter leaf name."""
+        return 1, "Parameter names", self.params.names()

@@ -1,0 +1,88 @@
+"""``roscore`` done by rostools: the master, the parameters roscore sets, and clean stops."""
+
+from __future__ import annotations
+
+import asyncio
+import ipaddress
+import os
+import signal
+import uuid
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
+from urllib.parse import urlsplit
+
+from rostools.errors import RostoolsError
+from rostools.master.server import Master
+
+DEFAULT_PORT = 11311
+#: What roscore publishes about itself; values end in a newline as ``rosversion`` prints them.
+ROSDISTRO = "noetic\n"
+ROSVERSION = "1.16.0\n"
+
+
+@dataclass(frozen=True)
+class Address:
+    """Where the master listens and the host name it gives out."""
+
+    bind: str
+    port: int
+    advertise: str
+
+    @property
+    def uri(self) -> str:
+        """The master URI nodes use."""
+        return f"http://{self.advertise}:{self.port}/"
+
+
+def choose_address(
+    host: str | None, port: int | None, env: Mapping[str, str] | None = None
+) -> Address:
+    """Apply ``--host``/``--port``, ``ROS_IP``, ``ROS_HOSTNAME`` and ``ROS_MASTER_URI``.
+
+    Loopback unless told otherwise. A host name (not an address) listens on every interface,
+    as a master that others must reach by name has to.
+    """
+    if env is None:
+        env = os.environ
+    if port is None:
+        uri_port = (
+            urlsplit(env.get("ROS_MASTER_URI", "")).port if env.get("ROS_MASTER_URI") else None
+        )
+        port = uri_port or DEFAULT_PORT
+    name = host or env.get("ROS_IP") or env.get("ROS_HOSTNAME") or "127.0.0.1"
+    if name == "localhost":
+        bind = "127.0.0.1"
+    else:
+        try:
+            ipaddress.ip_address(name)
+            bind = name
+        except ValueError:
+            bind = "0.0.0.0"  # noqa: S104 - a named host must be reachable by that name
+    advertise = env.get("ROS_HOSTNAME") or ("localhost" if name == "127.0.0.1" else name)
+    return Address(bind, port, advertise)
+
+
+async def run_core(address: Address, ready: Callable[[Master, str], None]) -> None:
+    """Serve until SIGINT, SIGTERM or a ``shutdown`` call."""
+    master = Master(address.bind, address.port, address.advertise)
+    try:
+        await master.start()
+    except OSError as err:
+        raise RostoolsError(
+            f"cannot listen on {address.bind}:{address.port}: {err.strerror or err}",
+            hint="another program holds the port; pick one with --port",
+        ) from None
+    assert master.api is not None
+    run_id = str(uuid.uuid1())
+    for key, value in (("/run_id", run_id), ("/rosdistro", ROSDISTRO), ("/rosversion", ROSVERSION)):
+        master.api.params.set(key, value)
+    loop = asyncio.get_running_loop()
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        loop.add_signal_handler(sig, master.stopped.set)
+    try:
+        ready(master, run_id)
+        await master.wait()
+    finally:
+        for sig in (signal.SIGINT, signal.SIGTERM):
+            loop.remove_signal_handler(sig)
+        await master.stop()

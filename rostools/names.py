@@ -1,0 +1,140 @@
+"""ROS graph resource names: canonical form, resolution, remapping, anonymous names.
+
+Pure functions over strings (ROS1_PROTOCOL.md §9), standard library only.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+import time
+
+SEP = "/"
+GLOBAL_NS = "/"
+PRIVATE = "~"
+ANYTYPE = "*"
+
+_LEGAL_NAME = re.compile(r"^[~/A-Za-z][\w/]*$")
+_LEGAL_BASE = re.compile(r"^[A-Za-z][\w]*$")
+
+
+def canonicalize(name: str) -> str:
+    """Drop duplicate and trailing slashes: ``//a//b/`` -> ``/a/b``; ``/`` stays ``/``."""
+    if not name or name == SEP:
+        return name
+    if name[0] == SEP:
+        return SEP + SEP.join(p for p in name.split(SEP) if p)
+    return SEP.join(p for p in name.split(SEP) if p)
+
+
+def is_global(name: str) -> bool:
+    """``/a/b``."""
+    return name.startswith(SEP)
+
+
+def is_private(name: str) -> bool:
+    """``~a``."""
+    return name.startswith(PRIVATE)
+
+
+def is_legal(name: str) -> bool:
+    """A legal graph resource name (empty is legal: it means the namespace itself)."""
+    if name == "":
+        return True
+    return bool(_LEGAL_NAME.match(name)) and "//" not in name
+
+
+def is_legal_base(name: str) -> bool:
+    """A legal base name, such as a node name without namespace."""
+    return bool(_LEGAL_BASE.match(name))
+
+
+def namespace(name: str) -> str:
+    """The namespace of a name, with a trailing slash: ``/wg/node1`` -> ``/wg/``."""
+    name = canonicalize(name)
+    if name in ("", SEP):
+        return SEP
+    head = name.rsplit(SEP, 1)[0]
+    return head + SEP if head else SEP
+
+
+def make_global_ns(ns: str) -> str:
+    """A namespace as a global name with a trailing slash."""
+    if is_private(ns):
+        raise ValueError(f"cannot turn the private name {ns} into a global namespace")
+    if not is_global(ns):
+        ns = SEP + ns
+    return ns if ns.endswith(SEP) else ns + SEP
+
+
+def join(ns: str, name: str) -> str:
+    """``join('/a', 'b')`` -> ``/a/b``; a global or private name is returned as it is."""
+    if is_global(name) or is_private(name):
+        return name
+    if ns == PRIVATE:
+        return PRIVATE + name
+    if not ns:
+        return name
+    return ns + name if ns.endswith(SEP) else ns + SEP + name
+
+
+def resolve(name: str, caller_id: str, remappings: dict[str, str] | None = None) -> str:
+    """Resolve ``name`` for the node ``caller_id`` (a global node name), as rosgraph does.
+
+    Global names stay; relative names join the caller's namespace; ``~private`` names join
+    the caller itself. Remappings apply to the resolved name.
+    """
+    if not name:
+        return namespace(caller_id)
+    if is_global(name):
+        resolved = canonicalize(name)
+    elif is_private(name):
+        resolved = canonicalize(caller_id + SEP + name[1:])
+    else:
+        resolved = canonicalize(namespace(caller_id) + name)
+    if remappings and resolved in remappings:
+        return remappings[resolved]
+    return resolved
+
+
+def ros_namespace(env: dict[str, str] | None = None) -> str:
+    """The default namespace from ``ROS_NAMESPACE``, global with a trailing slash."""
+    value = (env if env is not None else os.environ).get("ROS_NAMESPACE", "")
+    return make_global_ns(value) if value else GLOBAL_NS
+
+
+def script_resolve(name: str, tool: str = "rostools", env: dict[str, str] | None = None) -> str:
+    """How a command-line tool resolves a name the user typed, as rosgraph does.
+
+    Relative names join ``ROS_NAMESPACE``; ``~private`` names join the tool's own name there.
+    """
+    ns = ros_namespace(env)
+    if not name:
+        return ns
+    if is_global(name):
+        return canonicalize(name)
+    if is_private(name):
+        return canonicalize(ns + tool + SEP + name[1:])
+    return canonicalize(ns + name)
+
+
+def anonymous(base: str) -> str:
+    """Rospy's anonymous node name: ``<base>_<pid>_<epoch ms>``."""
+    return f"{base}_{os.getpid()}_{int(time.time() * 1000)}"
+
+
+def split_remappings(argv: list[str]) -> tuple[list[str], dict[str, str]]:
+    """Separate ``name:=value`` arguments (remappings, ``__ns:=``, ``_param:=``) from the rest.
+
+    Returns the remaining arguments and the raw ``{name: value}`` mapping, as rospy's
+    ``myargv`` does for tools.
+    """
+    rest: list[str] = []
+    mapping: dict[str, str] = {}
+    for arg in argv:
+        name, sep, value = arg.partition(":=")
+        if sep and name and (name[0] in "/~_" or name[0].isalpha()):
+            mapping[name] = value
+        else:
+            rest.append(arg)
+    return rest, mapping

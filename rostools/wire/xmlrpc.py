@@ -1,0 +1,156 @@
+"""XML-RPC over HTTP/1.1 as ROS speaks it, sans-IO: parsers fed with bytes, bytes out.
+
+Both ends are here: a request parser and response formatter for servers (master, slave
+API), and a request formatter and response parser for clients. Marshalling is the standard
+library's, which handles XmlRpc++'s untyped ``<value>text</value>`` strings and ``<i4>``.
+"""
+
+from __future__ import annotations
+
+import xmlrpc.client
+from dataclasses import dataclass, field
+from typing import Any
+
+#: The largest request or response body we buffer. rosmaster has no limit; a parameter tree
+#: with a big URDF is a few MB, so 64 MiB leaves room and still bounds a hostile peer.
+MAX_BODY = 64 * 1024 * 1024
+#: The largest HTTP header block: real clients send about 150 bytes.
+MAX_HEADERS = 64 * 1024
+
+ROS_SUCCESS, ROS_FAILURE, ROS_ERROR = 1, 0, -1
+
+
+class HttpError(Exception):
+    """A request or response that is not acceptable HTTP; ``status`` is the reply to send."""
+
+    def __init__(self, status: int, reason: str) -> None:
+        super().__init__(f"{status} {reason}")
+        self.status = status
+        self.reason = reason
+
+
+@dataclass
+class Message:
+    """A parsed HTTP request or response."""
+
+    start_line: str
+    headers: dict[str, str]
+    body: bytes
+    keep_alive: bool
+
+
+@dataclass
+class HttpParser:
+    """Splits a byte stream into HTTP messages with a ``Content-Length`` body.
+
+    Feed it whatever arrives; ``messages()`` returns the complete ones. One parser serves a
+    whole keep-alive connection.
+    """
+
+    buffer: bytearray = field(default_factory=bytearray)
+
+    def feed(self, data: bytes) -> None:
+        """Add received bytes."""
+        self.buffer += data
+
+    def next_message(self) -> Message | None:
+        """The next complete message, or None until more bytes arrive."""
+        end = self.buffer.find(b"\r\n\r\n")
+        if end < 0:
+            if len(self.buffer) > MAX_HEADERS:
+                raise HttpError(431, "Request Header Fields Too Large")
+            return None
+        head = bytes(self.buffer[:end]).decode("latin-1")
+        lines = head.split("\r\n")
+        headers: dict[str, str] = {}
+        for line in lines[1:]:
+            name, sep, value = line.partition(":")
+            if not sep:
+                raise HttpError(400, "Bad Request")
+            headers[name.strip().lower()] = value.strip()
+        if "chunked" in headers.get("transfer-encoding", "").lower():
+            raise HttpError(411, "Length Required")
+        try:
+            length = int(headers.get("content-length", "0"))
+        except ValueError:
+            raise HttpError(400, "Bad Request") from None
+        if length < 0 or length > MAX_BODY:
+            raise HttpError(413, "Payload Too Large")
+        total = end + 4 + length
+        if len(self.buffer) < total:
+            return None
+        body = bytes(self.buffer[end + 4 : total])
+        del self.buffer[:total]
+        start = lines[0]
+        connection = headers.get("connection", "").lower()
+        http10 = start.endswith("HTTP/1.0") or start.startswith("HTTP/1.0")
+        keep_alive = connection == "keep-alive" if http10 else connection != "close"
+        return Message(start, headers, body, keep_alive)
+
+
+def decode_call(body: bytes) -> tuple[str, tuple[Any, ...]]:
+    """The method name and parameters of an XML-RPC request body."""
+    try:
+        params, method = xmlrpc.client.loads(body, use_builtin_types=False)
+    except Exception as err:
+        raise HttpError(400, f"Bad Request: malformed XML-RPC ({type(err).__name__})") from err
+    if not method:
+        raise HttpError(400, "Bad Request: no methodName")
+    return method, params
+
+
+def encode_result(value: Any) -> bytes:
+    """An XML-RPC method response carrying ``value``."""
+    return xmlrpc.client.dumps((value,), methodresponse=True, allow_none=False).encode()
+
+
+def encode_fault(code: int, message: str) -> bytes:
+    """An XML-RPC fault response."""
+    return xmlrpc.client.dumps(xmlrpc.client.Fault(code, message), methodresponse=True).encode()
+
+
+def format_response(body: bytes, keep_alive: bool, status: str = "200 OK") -> bytes:
+    """A complete HTTP response. XmlRpc++ keeps the connection only after ``HTTP/1.1 200 OK``."""
+    connection = "keep-alive" if keep_alive else "close"
+    head = (
+        f"HTTP/1.1 {status}\r\nServer: rostools\r\nContent-Type: text/xml\r\n"
+        f"Content-Length: {len(body)}\r\nConnection: {connection}\r\n\r\n"
+    )
+    return head.encode("latin-1") + body
+
+
+def format_request(host: str, path: str, method: str, params: tuple[Any, ...]) -> bytes:
+    """A complete HTTP POST of an XML-RPC call."""
+    body = xmlrpc.client.dumps(params, method, allow_none=False).encode()
+    head = (
+        f"POST {path or '/'} HTTP/1.1\r\nHost: {host}\r\nUser-Agent: rostools\r\n"
+        f"Content-Type: text/xml\r\nContent-Length: {len(body)}\r\n\r\n"
+    )
+    return head.encode("latin-1") + body
+
+
+def decode_response(body: bytes) -> Any:
+    """The value of an XML-RPC response body; raises ``xmlrpc.client.Fault`` for a fault."""
+    (value,), _ = xmlrpc.client.loads(body, use_builtin_types=False)
+    return value
+
+
+def multicall(dispatch: Any, calls: Any) -> list[Any]:
+    """Run a ``system.multicall`` list through ``dispatch(method, params)``.
+
+    Each result is wrapped in a one-element list; a failing call becomes a fault struct.
+    """
+    if not isinstance(calls, list):
+        return [{"faultCode": 1, "faultString": "system.multicall expects a list"}]
+    results: list[Any] = []
+    for call in calls:
+        try:
+            if not isinstance(call, dict):
+                raise xmlrpc.client.Fault(1, "multicall entries must be structs")
+            method, params = call.get("methodName"), call.get("params", [])
+            if method == "system.multicall":
+                raise xmlrpc.client.Fault(1, "recursive system.multicall forbidden")
+            results.append([dispatch(method, tuple(params))])
+        except xmlrpc.client.Fault as fault:
+            results.append({"faultCode": fault.faultCode, "faultString": fault.faultString})
+    return results

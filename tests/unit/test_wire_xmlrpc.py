@@ -1,0 +1,88 @@
+"""XML-RPC over HTTP, sans-IO."""
+
+from __future__ import annotations
+
+import pytest
+
+from rostools.wire.xmlrpc import (
+    MAX_BODY,
+    HttpError,
+    HttpParser,
+    decode_call,
+    encode_result,
+    format_request,
+    format_response,
+)
+
+ROSCPP_CALL = (
+    b'<?xml version="1.0"?>\r\n<methodCall><methodName>registerPublisher</methodName>\r\n'
+    b"<params><param><value>/rosout</value></param><param><value>/rosout_agg</value></param>"
+    b"<param><value>rosgraph_msgs/Log</value></param><param><value><i4>7</i4></value></param>"
+    b"<param><value></value></param></params></methodCall>\r\n"
+)
+
+
+def _request(body: bytes, extra: str = "", version: str = "HTTP/1.1") -> bytes:
+    head = f"POST / {version}\r\nContent-length: {len(body)}\r\n{extra}\r\n"
+    return head.encode() + body
+
+
+def test_xmlrpcpp_untyped_strings_and_i4() -> None:
+    method, params = decode_call(ROSCPP_CALL)
+    assert method == "registerPublisher"
+    assert params == ("/rosout", "/rosout_agg", "rosgraph_msgs/Log", 7, "")
+
+
+def test_parser_splits_pipelined_requests_in_any_chunks() -> None:
+    stream = _request(b"a" * 10) + _request(b"b" * 5, "Connection: close\r\n")
+    parser = HttpParser()
+    got = []
+    for i in range(len(stream)):
+        parser.feed(stream[i : i + 1])
+        while (m := parser.next_message()) is not None:
+            got.append((m.body, m.keep_alive))
+    assert got == [(b"a" * 10, True), (b"b" * 5, False)]
+
+
+def test_http10_closes_unless_asked() -> None:
+    parser = HttpParser()
+    parser.feed(_request(b"x", version="HTTP/1.0"))
+    message = parser.next_message()
+    assert message is not None and not message.keep_alive
+    parser.feed(_request(b"x", "Connection: keep-alive\r\n", version="HTTP/1.0"))
+    message = parser.next_message()
+    assert message is not None and message.keep_alive
+
+
+@pytest.mark.parametrize(
+    ("data", "status"),
+    [
+        (f"POST / HTTP/1.1\r\nContent-Length: {MAX_BODY + 1}\r\n\r\n".encode(), 413),
+        (b"POST / HTTP/1.1\r\nX: " + b"y" * 70000, 431),
+        (b"POST / HTTP/1.1\r\nTransfer-Encoding: chunked\r\n\r\n", 411),
+        (b"POST / HTTP/1.1\r\nContent-Length: x\r\n\r\n", 400),
+    ],
+)
+def test_limits_and_bad_requests(data: bytes, status: int) -> None:
+    parser = HttpParser()
+    parser.feed(data)
+    with pytest.raises(HttpError) as err:
+        parser.next_message()
+    assert err.value.status == status
+
+
+def test_bad_xml_is_a_400() -> None:
+    with pytest.raises(HttpError, match="400"):
+        decode_call(b"<methodCall><methodName>x</methodName><params><param>")
+
+
+def test_big_ints_cannot_be_encoded() -> None:
+    with pytest.raises(OverflowError):
+        encode_result([1, "", 2**40])
+
+
+def test_response_and_request_format() -> None:
+    assert format_response(b"<x/>", True).startswith(b"HTTP/1.1 200 OK\r\n")
+    assert b"Content-Length: 4\r\n" in format_response(b"<x/>", True)
+    request = format_request("h:1", "/", "getPid", ("/me",))
+    assert request.startswith(b"POST / HTTP/1.1\r\nHost: h:1\r\n")

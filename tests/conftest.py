@@ -17,3 +17,50 @@ def cli_env(tmp_path: Path) -> dict[str, str]:
     env.pop("ROSTOOLS_MSG_PATH", None)
     env["ROS_PACKAGE_PATH"] = ""  # the built-in types only, whatever this machine has
     return env
+
+
+@pytest.fixture
+def rostools_master(cli_env: dict[str, str], tmp_path: Path):  # type: ignore[no-untyped-def]
+    """``rostools core`` on a free port; ``cli_env`` points at it. Yields its URI."""
+    from tests.support.procs import free_port, start_rostools_core
+
+    port = free_port()
+    cli_env["ROS_MASTER_URI"] = f"http://127.0.0.1:{port}"
+    proc = start_rostools_core(port, cli_env)
+    try:
+        yield cli_env["ROS_MASTER_URI"]
+    finally:
+        proc.stop()
+
+
+class MasterInfo:
+    """A running master for a test: its kind, URI, and environments for peers."""
+
+    def __init__(self, kind: str, uri: str, ros_env: dict[str, str], cli_env: dict[str, str]):
+        self.kind = kind
+        self.uri = uri
+        self.ros_env = ros_env
+        self.cli_env = cli_env
+
+
+@pytest.fixture(params=["rostools", "roscore"])
+def any_master(request, cli_env: dict[str, str], tmp_path: Path):  # type: ignore[no-untyped-def]
+    """Each test runs twice: on ``rostools core`` and on a real ``roscore``."""
+    from tests.support.env import ros1_missing
+    from tests.support.procs import free_port, ros_env, start_roscore, start_rostools_core
+
+    if request.param == "roscore" and (reason := ros1_missing()):
+        pytest.skip(reason)
+    port = free_port()
+    uri = f"http://127.0.0.1:{port}"
+    cli_env["ROS_MASTER_URI"] = uri
+    env = ros_env(uri, tmp_path / "ros_home")
+    proc = (
+        start_rostools_core(port, cli_env)
+        if request.param == "rostools"
+        else start_roscore(port, env)
+    )
+    try:
+        yield MasterInfo(request.param, uri, env, cli_env)
+    finally:
+        proc.stop()

@@ -58,7 +58,7 @@ def get(
     ctx: typer.Context,
     name: NameArg,
     pretty: Annotated[
-        bool, typer.Option("-p", "--pretty", help="Keys sorted; still YAML.")
+        bool, typer.Option("-p", "--pretty", help="Multi-line strings as blocks; still YAML.")
     ] = False,
     verbose: VerboseOpt = False,
     fmt: FormatOpt = None,
@@ -69,7 +69,7 @@ def get(
     value = master(ctx, "rosparam").get_param(key)
     fmt = output_format(ctx, fmt)
     if fmt is Format.text:
-        sys.stdout.write(paramyaml.dump(value, sort_keys=pretty) + "\n")  # rosparam's blank line
+        sys.stdout.write(paramyaml.dump(value, pretty=pretty) + "\n")  # rosparam's blank line
     else:
         emit(fmt, paramyaml.to_plain(value))
 

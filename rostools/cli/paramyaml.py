@@ -117,9 +117,23 @@ def _problem(err: yaml.YAMLError) -> str:
     return f"{getattr(err, 'problem', None) or err}{where}"
 
 
-def dump(value: Any, *, sort_keys: bool = False) -> str:
-    """Block-style YAML as rosparam get/dump print it, without the ``...`` end marker."""
-    text = yaml.dump(value, Dumper=ParamDumper, default_flow_style=False, sort_keys=sort_keys)
+class PrettyDumper(ParamDumper):
+    """``get -p``: multi-line strings as literal blocks; still valid YAML, unlike rosparam's."""
+
+
+def _represent_text(dumper: yaml.SafeDumper, data: str) -> yaml.Node:
+    return dumper.represent_scalar(
+        "tag:yaml.org,2002:str", data, style="|" if "\n" in data else None
+    )
+
+
+PrettyDumper.add_representer(str, _represent_text)
+
+
+def dump(value: Any, *, pretty: bool = False) -> str:
+    """Block-style YAML, keys sorted, as rosparam get/dump print it, without ``...``."""
+    dumper = PrettyDumper if pretty else ParamDumper
+    text = yaml.dump(value, Dumper=dumper, default_flow_style=False)
     return text.removesuffix("\n...\n")
 
 

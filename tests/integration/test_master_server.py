@@ -1,0 +1,152 @@
+"""The bundled master over real sockets: keep-alive, hostile clients, notifications."""
+
+from __future__ import annotations
+
+import http.client
+import socket
+import threading
+import time
+import xmlrpc.client
+from collections.abc import Iterator
+from xmlrpc.server import SimpleXMLRPCServer
+
+import pytest
+
+from rostools.master.server import MasterThread
+from tests.support.procs import wait_for
+
+
+@pytest.fixture
+def master() -> Iterator[MasterThread]:
+    with MasterThread() as m:
+        yield m
+
+
+def _post(port: int, body: bytes, path: str = "/", version: str = "HTTP/1.1") -> bytes:
+    with socket.create_connection(("127.0.0.1", port), timeout=5) as s:
+        s.sendall(f"POST {path} {version}\r\nContent-Length: {len(body)}\r\n\r\n".encode() + body)
+        chunks = []
+        while data := s.recv(65536):
+            chunks.append(data)
+            if version == "HTTP/1.1" and b"</methodResponse>" in b"".join(chunks):
+                break
+        return b"".join(chunks)
+
+
+def test_keep_alive_many_calls_on_one_connection(master: MasterThread) -> None:
+    port = master.master.port  # type: ignore[union-attr]
+    conn = http.client.HTTPConnection("127.0.0.1", port, timeout=5)
+    for i in range(20):
+        body = xmlrpc.client.dumps(("/c", f"/p{i}", i), "setParam").encode()
+        conn.request("POST", "/RPC2", body, {"Content-Type": "text/xml"})
+        response = conn.getresponse()
+        assert response.status == 200
+        assert xmlrpc.client.loads(response.read())[0][0] == [1, f"parameter /p{i} set", 0]
+    conn.close()
+
+
+def test_any_path_and_http10(master: MasterThread) -> None:
+    port = master.master.port  # type: ignore[union-attr]
+    body = xmlrpc.client.dumps(("/c",), "getUri").encode()
+    reply = _post(port, body, path="/some/odd/path", version="HTTP/1.0")
+    assert reply.startswith(b"HTTP/1.1 200 OK") and b"Connection: close" in reply
+    assert master.uri.encode() in reply
+
+
+def test_hostile_clients_get_errors_and_the_master_keeps_serving(master: MasterThread) -> None:
+    port = master.master.port  # type: ignore[union-attr]
+    assert _post(port, b"<not xml").startswith(b"HTTP/1.1 400")
+    huge = f"POST / HTTP/1.1\r\nContent-Length: {1 << 30}\r\n\r\n".encode()
+    with socket.create_connection(("127.0.0.1", port), timeout=5) as s:
+        s.sendall(huge)
+        assert s.recv(100).startswith(b"HTTP/1.1 413")
+    # Half-open clients: one sends half a request, one sends nothing; others still get served.
+    stalled = [socket.create_connection(("127.0.0.1", port)) for _ in range(2)]
+    stalled[0].sendall(b"POST / HTTP/1.1\r\nContent-Length: 100\r\n\r\n<?xml")
+    proxy = xmlrpc.client.ServerProxy(master.uri)
+    assert proxy.getParam("/c", "/nope") == [-1, "Parameter [/nope] is not set", 0]
+    assert proxy.getPid(1)[:2] == [-1, "caller_id must be a string"]
+    assert proxy.registerPublisher("/c", "/t")[:2] == [-1, "Error: bad call arity"]
+    for s in stalled:
+        s.close()
+    assert proxy.getUri("/c")[0] == 1
+
+
+def test_concurrent_clients(master: MasterThread) -> None:
+    errors: list[BaseException] = []
+
+    def client(n: int) -> None:
+        try:
+            proxy = xmlrpc.client.ServerProxy(master.uri)
+            for i in range(50):
+                node = f"http://127.0.0.1:{20000 + n}/"
+                assert proxy.registerPublisher(f"/n{n}", f"/t{i}", "a/B", node)[0] == 1
+        except BaseException as err:  # noqa: BLE001
+            errors.append(err)
+
+    threads = [threading.Thread(target=client, args=(n,)) for n in range(6)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    assert not errors
+    pubs = xmlrpc.client.ServerProxy(master.uri).getSystemState("/c")[2][0]
+    assert len(pubs) == 50 and all(len(nodes) == 6 for _, nodes in pubs)
+
+
+class FakeNode:
+    """An XML-RPC server recording what the master sends a node."""
+
+    def __init__(self) -> None:
+        self.calls: list[tuple[str, tuple[object, ...]]] = []
+        self.server = SimpleXMLRPCServer(("127.0.0.1", 0), logRequests=False, allow_none=False)
+        self.server.register_function(self._record("publisherUpdate"), "publisherUpdate")
+        self.server.register_function(self._record("paramUpdate"), "paramUpdate")
+        self.server.register_function(self._record("shutdown"), "shutdown")
+        self.uri = f"http://127.0.0.1:{self.server.server_address[1]}/"
+        self.thread = threading.Thread(target=self.server.serve_forever, daemon=True)
+        self.thread.start()
+
+    def _record(self, name: str):  # type: ignore[no-untyped-def]
+        def handler(*args: object) -> list[object]:
+            self.calls.append((name, args))
+            return [1, "", 0]
+
+        return handler
+
+    def close(self) -> None:
+        self.server.shutdown()
+        self.server.server_close()
+
+
+def test_notifications_reach_nodes(master: MasterThread) -> None:
+    sub, old = FakeNode(), FakeNode()
+    try:
+        proxy = xmlrpc.client.ServerProxy(master.uri)
+        proxy.registerSubscriber("/listener", "/chatter", "std_msgs/String", sub.uri)
+        proxy.registerPublisher("/talker", "/chatter", "std_msgs/String", "http://127.0.0.1:1/")
+        proxy.subscribeParam("/listener", sub.uri, "/gain")
+        proxy.setParam("/other", "/gain", 2.5)
+        proxy.registerPublisher("/old", "/x", "a/B", old.uri)
+        proxy.registerPublisher("/old", "/y", "a/B", "http://127.0.0.1:2/")
+        wait_for(lambda: len(sub.calls) >= 2 and old.calls, 5, "notifications")
+        assert ("publisherUpdate", ("/master", "/chatter", ["http://127.0.0.1:1/"])) in sub.calls
+        assert ("paramUpdate", ("/master", "/gain/", 2.5)) in sub.calls
+        assert old.calls == [
+            ("shutdown", ("/master", "[/old] Reason: new node registered with same name"))
+        ]
+    finally:
+        sub.close()
+        old.close()
+
+
+def test_shutdown_call_stops_the_master() -> None:
+    m = MasterThread().start()
+    proxy = xmlrpc.client.ServerProxy(m.uri)
+    assert proxy.shutdown("/c", "done") == [1, "shutdown", 0]
+    assert m._thread is not None
+    m._thread.join(5)
+    assert not m._thread.is_alive()
+    time.sleep(0.1)
+    with pytest.raises(OSError):
+        proxy.getPid("/c")

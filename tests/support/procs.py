@@ -7,6 +7,7 @@ rosmaster and rosout) go with it.
 
 from __future__ import annotations
 
+import contextlib
 import os
 import queue
 import re
@@ -100,10 +101,8 @@ class Proc:
 
     def signal(self, sig: int) -> None:
         """Send ``sig`` to the process group."""
-        try:
+        with contextlib.suppress(ProcessLookupError):
             os.killpg(self.pid, sig)
-        except ProcessLookupError:
-            pass
 
     def stop(self, timeout: float = 5.0) -> int:
         """SIGINT, then SIGTERM, then SIGKILL, until it exits; its return code."""

@@ -37,11 +37,21 @@ CALL_TIMEOUT = 5.0
 Dispatch = Callable[[str, tuple[Any, ...]], Any]
 
 
+class Encoded:
+    """A result that is already an encoded XML-RPC response body (cached by the handler)."""
+
+    __slots__ = ("body",)
+
+    def __init__(self, body: bytes) -> None:
+        self.body = body
+
+
 def handle_body(dispatch: Dispatch, body: bytes) -> bytes:
     """Decode a call, run it, encode the answer; every failure becomes a fault."""
     method, params = decode_call(body)
     try:
-        return encode_result(dispatch(method, params))
+        result = dispatch(method, params)
+        return result.body if isinstance(result, Encoded) else encode_result(result)
     except xmlrpc.client.Fault as fault:
         return encode_fault(fault.faultCode, fault.faultString)
     except OverflowError:

@@ -11,8 +11,11 @@ import threading
 from types import TracebackType
 from typing import Any
 
-from rostools.graph.xmlrpc import Notifier, XmlRpcServer
+from rostools.graph.xmlrpc import Encoded, Notifier, XmlRpcServer
 from rostools.master.api import MasterAPI
+from rostools.wire.xmlrpc import encode_result
+
+_READ_ONLY = frozenset(("getSystemState", "getTopicTypes", "getPublishedTopics", "getUri"))
 
 
 class Master:
@@ -26,6 +29,9 @@ class Master:
         self.server: XmlRpcServer | None = None
         self.notifier: Notifier | None = None
         self.stopped = asyncio.Event()
+        # Encoded answers to read-only calls: busy graphs poll getSystemState a lot, and
+        # marshalling a big state is most of the cost of answering it.
+        self._cache: dict[tuple[str, tuple[Any, ...]], Encoded] = {}
 
     @property
     def uri(self) -> str:
@@ -44,8 +50,19 @@ class Master:
         self.notifier = Notifier()
 
     def _dispatch(self, method: str, params: tuple[Any, ...]) -> Any:
-        assert self.api is not None
-        return self.api.call(method, params)
+        api = self.api
+        assert api is not None
+        if method not in _READ_ONLY:
+            self._cache.clear()  # anything else may change the state the cache was made from
+            return api.call(method, params)
+        key = (method, params[1:])
+        cached = self._cache.get(key)
+        if cached is None:
+            result = api.call(method, params)
+            if not isinstance(params[0] if params else None, str) or result[0] != 1:
+                return result  # errors depend on the caller; never cache them
+            cached = self._cache[key] = Encoded(encode_result(result))
+        return cached
 
     def _after_call(self) -> None:
         api, notifier = self.api, self.notifier

@@ -1,0 +1,152 @@
+"""The master: XML-RPC calls per second and memory, beside the real rosmaster in one run."""
+
+from __future__ import annotations
+
+import os
+import signal
+import socket
+import subprocess
+import sys
+import time
+import xmlrpc.client
+from pathlib import Path
+
+from benchmarks.common import BENCH_VENV, Result, have, rostools_cmd
+
+LOAD = Path(__file__).with_name("xmlrpc_load.py")
+SECONDS = 4.0
+
+
+def _free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        port: int = s.getsockname()[1]
+        return port
+
+
+def _start(argv: list[str], port: int, env: dict[str, str]) -> subprocess.Popen[bytes]:
+    proc = subprocess.Popen(
+        argv, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True
+    )
+    proxy = xmlrpc.client.ServerProxy(f"http://127.0.0.1:{port}/")
+    deadline = time.monotonic() + 20
+    while time.monotonic() < deadline:
+        try:
+            proxy.getPid("/bench")
+            return proc
+        except OSError:
+            time.sleep(0.05)
+    _stop(proc)
+    raise RuntimeError(f"{argv[0]} did not start")
+
+
+def _stop(proc: subprocess.Popen[bytes]) -> None:
+    for sig in (signal.SIGINT, signal.SIGKILL):
+        if proc.poll() is None:
+            os.killpg(proc.pid, sig)
+            try:
+                proc.wait(5)
+            except subprocess.TimeoutExpired:
+                continue
+
+
+def _populate(port: int, topics: int, services: int) -> None:
+    proxy = xmlrpc.client.ServerProxy(f"http://127.0.0.1:{port}/")
+    multi = xmlrpc.client.MultiCall(proxy)
+    for i in range(topics):
+        node = f"/node{i % 10}"
+        api = f"http://127.0.0.1:{30000 + i % 10}/"
+        multi.registerPublisher(node, f"/topic{i}", "std_msgs/String", api)
+        multi.registerSubscriber(node, f"/topic{(i + 1) % topics}", "std_msgs/String", api)
+    for i in range(services):
+        multi.registerService(
+            f"/node{i % 10}",
+            f"/srv{i}",
+            f"rosrpc://127.0.0.1:{31000 + i}",
+            f"http://127.0.0.1:{30000 + i % 10}/",
+        )
+    multi()
+
+
+def _rate(port: int, clients: int, workload: str) -> float:
+    procs = [
+        subprocess.Popen(
+            [sys.executable, str(LOAD), str(port), str(SECONDS), f"/c{i}", workload],
+            stdout=subprocess.PIPE,
+            text=True,
+        )
+        for i in range(clients)
+    ]
+    total = sum(int(p.communicate()[0].strip()) for p in procs)
+    return total / SECONDS
+
+
+def _rss_kb(pid: int) -> int:
+    for line in Path(f"/proc/{pid}/status").read_text().splitlines():
+        if line.startswith("VmRSS:"):
+            return int(line.split()[1])
+    return 0
+
+
+def _masters() -> dict[str, list[str]]:
+    masters = {"rostools": [*rostools_cmd(), "core", "--port"]}
+    if have("rosmaster"):
+        masters["rosmaster"] = ["rosmaster", "--core", "-p"]
+    return masters
+
+
+def bench_master_rates() -> list[Result]:
+    env = {k: v for k, v in os.environ.items() if not k.startswith("ROS")}
+    env["ROS_HOME"] = str(BENCH_VENV.parent / "build" / "ros_home")
+    rates: dict[tuple[str, str, int], float] = {}
+    rss: dict[str, int] = {}
+    for name, argv in _masters().items():
+        port = _free_port()
+        proc = _start([*argv, str(port)], port, env)
+        try:
+            _populate(port, 50, 20)
+            for workload in ("state", "register"):
+                for clients in (1, 4):
+                    rates[(name, workload, clients)] = _rate(port, clients, workload)
+        finally:
+            _stop(proc)
+        port = _free_port()
+        proc = _start([*argv, str(port)], port, env)
+        try:
+            _populate(port, 1000, 0)
+            time.sleep(0.5)
+            rss[name] = _rss_kb(proc.pid)
+        finally:
+            _stop(proc)
+    results = []
+    labels = {"state": "getSystemState", "register": "registerPublisher+unregisterPublisher"}
+    for workload in ("state", "register"):
+        for clients in (1, 4):
+            ours = rates[("rostools", workload, clients)]
+            theirs = rates.get(("rosmaster", workload, clients))
+            met = None if theirs is None else ours >= 2 * theirs
+            results.append(
+                Result(
+                    f"master {labels[workload]}, {clients} client(s)",
+                    "calls/s",
+                    ours,
+                    theirs,
+                    ">= 2x rosmaster",
+                    met,
+                    "same raw-socket client for both",
+                )
+            )
+    results.append(
+        Result(
+            "master resident memory, 1000 topics registered",
+            "MB",
+            rss["rostools"] / 1024,
+            rss.get("rosmaster", 0) / 1024 or None,
+            "report",
+            None,
+        )
+    )
+    return results
+
+
+BENCHMARKS = {"master_rates": bench_master_rates}

@@ -105,3 +105,18 @@ def test_unreachable_master_fails_fast(cli_env: dict[str, str]) -> None:
     assert out.returncode == 5, out.stderr
     assert "did not answer getParam within 0.5 s" in out.stderr
     assert time.monotonic() - start < 5
+
+
+def test_namespace_and_master_uri_option(rostools_master: str, cli_env: dict[str, str]) -> None:
+    cli_env["ROS_NAMESPACE"] = "/robot"
+    assert run_cli("param", "set", "speed", "3", env=cli_env).returncode == 0
+    del cli_env["ROS_NAMESPACE"]
+    master_uri = cli_env.pop("ROS_MASTER_URI")
+    out = run_cli("--master-uri", master_uri, "param", "get", "/robot/speed", env=cli_env)
+    assert out.stdout == "3\n", out.stderr
+    assert (
+        run_cli(
+            "--master-uri", master_uri, "param", "list", "-F", "json", env=cli_env
+        ).stdout.count("/robot/speed")
+        == 1
+    )

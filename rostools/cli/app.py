@@ -13,6 +13,7 @@ from rostools.cli.common import Format, Settings
 
 #: name -> one-line help. Each group is the Typer app ``rostools.cli.<name>.app``.
 GROUPS: dict[str, str] = {
+    "topic": "Topics: list, info, type, find, echo, hz, bw, delay, pub.",
     "param": "The parameter server: list, get, set, delete, load, dump.",
     "msg": "Message and service types: show, md5, list, package, packages, proto.",
     "core": "Run the bundled master and parameter server (roscore).",

@@ -12,6 +12,8 @@ from dataclasses import dataclass
 from urllib.parse import urlsplit
 
 from rostools.errors import RostoolsError
+from rostools.graph.connection import Frame
+from rostools.graph.node import Node
 from rostools.master.server import Master
 
 DEFAULT_PORT = 11311
@@ -79,10 +81,31 @@ async def run_core(address: Address, ready: Callable[[Master, str], None]) -> No
     loop = asyncio.get_running_loop()
     for sig in (signal.SIGINT, signal.SIGTERM):
         loop.add_signal_handler(sig, master.stopped.set)
+    rosout = await start_rosout(f"http://127.0.0.1:{master.port}/", address.advertise)
     try:
         ready(master, run_id)
         await master.wait()
     finally:
         for sig in (signal.SIGINT, signal.SIGTERM):
             loop.remove_signal_handler(sig)
+        await rosout.close()
         await master.stop()
+
+
+async def start_rosout(master_uri: str, host: str) -> Node:
+    """roscore's /rosout node: every node's /rosout messages, republished on /rosout_agg."""
+    from rostools.graph.topic import TopicType
+    from rostools.msgs.store import BuiltinSource, TypeStore
+
+    log_type = TopicType.of(TypeStore([BuiltinSource()]), "rosgraph_msgs/Log")
+    node = await Node(
+        "/rosout", master_uri, host="127.0.0.1" if host == "localhost" else host
+    ).start()
+    agg = await node.advertise("/rosout_agg", log_type, queue_size=1000)
+
+    def forward(frames: list[Frame], conn: object, now: float) -> None:
+        for frame in frames:
+            agg.publish(frame)
+
+    await node.subscribe("/rosout", forward, log_type)
+    return node

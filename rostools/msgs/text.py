@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Protocol
 
 from rostools.msgs.codec import BYTE_TYPES, STRUCT_CODES, Codec, attr_name
 from rostools.msgs.message import Time
@@ -17,6 +17,13 @@ from rostools.msgs.spec import Field, MsgSpec
 
 # Below this length PyYAML never folds a double-quoted scalar (its best_width is 80).
 _INLINE_QUOTE_MAX = 70
+
+
+class TextFormatter(Protocol):
+    """A generated formatter: ``fmt(value, offset=None) -> str``."""
+
+    def __call__(self, value: Any, offset: Time | None = None) -> str:
+        """The text of ``value``."""
 
 
 @dataclass(frozen=True)
@@ -180,16 +187,16 @@ class _TextGen:
             item = formatter(self.codec, element, self.options, indent + "  ")
             self.expr(f"_items({expr}, {self.ref(indent + '- ')}, {self.ref(item)}, offset)")
 
-    def compile(self, name: str) -> Callable[[Any, Time | None], str]:
+    def compile(self, name: str) -> TextFormatter:
         source = 'def fmt(m, offset=None):\n    return f"' + "".join(self.parts) + '"\n'
         exec(compile(source, f"<rostools text {name}>", "exec"), self.env)  # noqa: S102
-        fn: Callable[[Any, Time | None], str] = self.env["fmt"]
+        fn: TextFormatter = self.env["fmt"]
         return fn
 
 
 def formatter(
     codec: Codec, value_type: Field, options: TextOptions = TextOptions(), indent: str = ""
-) -> Callable[[Any, Time | None], str]:
+) -> TextFormatter:
     """``fmt(value, offset=None) -> str`` for values of ``value_type`` at ``indent``.
 
     ``value_type`` describes a message (``Field('', 'pkg/T', 'pkg/T', False, None)``), a

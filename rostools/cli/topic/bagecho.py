@@ -1,0 +1,34 @@
+"""``topic echo --bag``: the same printing, from a ``.bag`` or MCAP file (no master needed)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+from rostools.errors import NotFoundError
+
+if TYPE_CHECKING:
+    from rostools.cli.topic.echo import EchoOptions
+    from rostools.msgs.store import TypeStore
+
+
+def echo_bag(path: Path, name: str | None, store: TypeStore, opts: EchoOptions) -> None:
+    """Print the messages of ``name`` (a topic, maybe with a field path), or of every topic."""
+    from rostools.bag.api import open_bag
+    from rostools.cli.topic.echo import Echo
+    from rostools.graph.topics import split_field
+
+    with open_bag(path) as bag:
+        types = {c.topic: c.type for c in bag.connections}
+        topics = None
+        if name is not None:
+            ref = split_field(name, types, store)
+            if ref is None:
+                raise NotFoundError(f"topic {name} is not in {path}")
+            opts.field = ref.field
+            topics = [ref.topic]
+        echo = Echo(store, opts)
+        for conn, t_ns, data in bag.messages(topics=topics):
+            printer = echo.printer(conn.type, conn.md5sum, conn.definition, conn.topic)
+            if not echo.emit(printer, [data], t_ns):
+                return

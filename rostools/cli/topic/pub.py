@@ -1,0 +1,217 @@
+"""``rostools topic pub``: publish from YAML, positional values, a file or stdin."""
+
+from __future__ import annotations
+
+import asyncio
+import sys
+import time
+from collections.abc import Callable, Iterator
+from pathlib import Path
+from typing import Annotated, Any
+
+import typer
+
+from rostools.cli.common import MsgPathOpt, settings, type_store
+from rostools.cli.topic import TopicArg, app
+from rostools.cli.topic.echo import TimeoutOpt
+from rostools.errors import NotFoundError, UsageError
+from rostools.names import script_resolve
+
+#: How long ``-1`` stays up so that late subscribers still get the latched message (rostopic).
+ONCE_LINGER = 3.0
+#: Rate for messages from a file or stdin when none is given (rostopic).
+STREAM_RATE = 10.0
+#: How long messages from a file or stdin wait for a first subscriber (rostopic).
+SUBSCRIBER_WAIT = 5.0
+#: At most this many messages per event-loop turn, so that sockets keep being served.
+MAX_BURST = 5000
+
+
+def _message_source(
+    filler: Any, type_name: str, args: list[str], file: Path | None, substitute: bool
+) -> tuple[Callable[[], Iterator[Any]], bool]:
+    """A generator of messages, and whether it is one message repeated."""
+    from rostools.msgs.fill import parse_yaml_args
+
+    spec = filler.codec.store.msg(type_name)
+    if file is not None:
+        if args:
+            raise UsageError("give message values or --file, not both")
+        try:
+            text = file.read_text()
+        except OSError as err:
+            raise NotFoundError(f"cannot read {file}: {err.strerror}") from None
+        docs = _yaml_docs(text, str(file))
+        return (lambda: (filler.message(type_name, [d]) for d in docs)), len(docs) == 1
+    if args:
+        values = parse_yaml_args(args)
+        if substitute:
+            return (lambda: _forever(lambda: _refill(filler, type_name, values))), True
+        msg = filler.message(type_name, values)
+        return (lambda: _forever(lambda: msg)), True
+    if not spec.fields:
+        msg = filler.message(type_name, [])
+        return (lambda: _forever(lambda: msg)), True
+    if sys.stdin.isatty():
+        raise UsageError("give message values (YAML), --file, or pipe YAML documents on stdin")
+    return (lambda: (filler.message(type_name, [d]) for d in _stdin_docs())), False
+
+
+def _refill(filler: Any, type_name: str, values: list[Any]) -> Any:
+    from rostools.msgs.message import Time
+
+    filler.now = Time.now()
+    return filler.message(type_name, values)
+
+
+def _forever(make: Callable[[], Any]) -> Iterator[Any]:
+    while True:
+        yield make()
+
+
+def _yaml_docs(text: str, source: str) -> list[Any]:
+    import yaml
+
+    try:
+        return [d for d in yaml.safe_load_all(text) if d is not None]
+    except yaml.YAMLError as err:
+        raise UsageError(f"bad YAML in {source}: {err}") from None
+
+
+def _stdin_docs() -> Iterator[Any]:
+    """YAML documents from stdin, each as soon as its ``---`` (or EOF) arrives."""
+    lines: list[str] = []
+    for line in sys.stdin:
+        if line.rstrip() == "---":
+            if lines:
+                yield from _yaml_docs("".join(lines), "stdin")
+            lines = []
+        else:
+            lines.append(line)
+    if lines:
+        yield from _yaml_docs("".join(lines), "stdin")
+
+
+@app.command(context_settings={"ignore_unknown_options": True})
+def pub(
+    ctx: typer.Context,
+    topic: TopicArg,
+    msg_type: Annotated[str, typer.Argument(help="Message type, pkg/Type.")],
+    args: Annotated[
+        list[str] | None,
+        typer.Argument(help="Values: one YAML mapping, or one YAML value per field in order."),
+    ] = None,
+    rate: Annotated[
+        float | None, typer.Option("--rate", "-r", help="Publish repeatedly at this rate (Hz).")
+    ] = None,
+    once: Annotated[
+        bool, typer.Option("--once", "-1", help="Publish once, stay 3 s, exit.")
+    ] = False,
+    latch: Annotated[
+        bool, typer.Option("--latch", "-l", help="Latch (with -r, -f or stdin).")
+    ] = False,
+    file: Annotated[
+        Path | None, typer.Option("--file", "-f", help="YAML documents, one message each.")
+    ] = None,
+    substitute: Annotated[
+        bool,
+        typer.Option("--substitute-keywords", "-s", help="Re-evaluate now/auto for each message."),
+    ] = False,
+    verbose: Annotated[
+        bool, typer.Option("--verbose", "-v", help="Print each message published.")
+    ] = False,
+    timeout: TimeoutOpt = None,
+    msg_path: MsgPathOpt = None,
+) -> None:
+    """Publish messages (rostopic pub). By default: once, latched, until Ctrl-C."""
+    from rostools.graph.session import run_node
+    from rostools.graph.topic import TopicType
+    from rostools.msgs.codec import Codec
+    from rostools.msgs.fill import Filler
+
+    if rate is not None and rate <= 0:
+        raise UsageError("--rate must be above 0")
+    if once and rate is not None:
+        raise UsageError("-1 and -r cannot be combined")
+    name = script_resolve(topic, "rostopic")
+    store = type_store(msg_path)
+    if not store.has_msg(msg_type):
+        from rostools.cli.topic.probe import learn_type
+
+        try:
+            store = learn_type(ctx, name, store)
+        except Exception:  # noqa: BLE001 - no publisher to learn from: the type is unknown
+            raise NotFoundError(
+                f"invalid message type: {msg_type}", hint="add it with --msg-path"
+            ) from None
+        if not store.has_msg(msg_type):
+            raise NotFoundError(f"invalid message type: {msg_type}")
+    codec = Codec.of(store)
+    filler = Filler(codec)
+    source, repeated = _message_source(filler, msg_type, args or [], file, substitute)
+    streamed = file is not None or (not args and not repeated)
+    if streamed and rate is None:
+        rate = STREAM_RATE
+    if file is not None and not (repeated and rate is not None):
+        repeated = False
+    latched = latch or (rate is None and not streamed) or once
+    ttype = TopicType.of(store, msg_type)
+
+    async def main(node: Any, stop: asyncio.Event) -> None:
+        from rostools.graph.session import first
+        from rostools.msgs.text import formatter, message_type
+
+        publisher = await node.advertise(name, ttype, latch=latched, queue_size=1000)
+        show = formatter(codec, message_type(msg_type)) if verbose else None
+        deadline = time.monotonic() + timeout if timeout is not None else None
+
+        def left() -> float | None:
+            return None if deadline is None else max(deadline - time.monotonic(), 0)
+
+        messages = source()
+        if rate is None:  # one latched message, then wait
+            msg = next(messages)
+            publisher.publish(msg.serialize())
+            if show is not None:
+                sys.stdout.write(f"publishing {show(msg)}\n")
+            linger = ONCE_LINGER if once else None
+            if linger is not None and deadline is not None:
+                linger = min(linger, left() or 0)
+            note = f" for {ONCE_LINGER} seconds" if once else ". Press ctrl-C to terminate"
+            sys.stderr.write(f"publishing and latching message{note}\n")
+            await first(stop.wait(), timeout=linger if once else left())
+            return
+        if streamed:  # rostopic waits up to 5 s for a subscriber before a file or stdin
+            give_up = time.monotonic() + SUBSCRIBER_WAIT
+            while publisher.subscriber_count == 0 and time.monotonic() < give_up:
+                if await first(stop.wait(), timeout=0.05) == 0:
+                    return
+        cached: bytes | None = None
+        start, sent = time.monotonic(), 0
+        while not stop.is_set():
+            due = int((time.monotonic() - start) * rate) + 1 - sent
+            for _ in range(min(due, MAX_BURST)):
+                if repeated and cached is not None and not substitute:
+                    publisher.publish(cached)
+                else:
+                    try:
+                        msg = next(messages)
+                    except StopIteration:
+                        return
+                    cached = msg.serialize()
+                    publisher.publish(cached)
+                    if show is not None:
+                        sys.stdout.write(f"publishing {show(msg)}\n")
+                sent += 1
+            wait = start + sent / rate - time.monotonic()
+            limit = left()
+            if limit is not None:
+                if limit <= 0:
+                    return
+                wait = min(wait, limit)
+            if wait > 0:
+                await first(stop.wait(), timeout=wait)
+            else:
+                await asyncio.sleep(0)
+
+    run_node(main, settings(ctx).resolved_master_uri(), "rostools_pub")

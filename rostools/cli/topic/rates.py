@@ -1,0 +1,245 @@
+"""``rostools topic hz|bw|delay``: rate meters that never decode what they only count."""
+
+from __future__ import annotations
+
+import asyncio
+import json
+import struct
+import sys
+import time
+from collections.abc import Callable
+from typing import Annotated, Any
+
+import typer
+
+from rostools.cli.common import Format, FormatOpt, output_format, settings
+from rostools.cli.topic import app
+from rostools.cli.topic.echo import FilterOpt, TimeoutOpt, _resolve
+from rostools.errors import NotFoundError, RostoolsError, TimeoutExpired, UsageError
+from rostools.names import script_resolve
+
+_STAMP = struct.Struct("<II")
+WindowOpt = Annotated[int | None, typer.Option("--window", "-w", help="Messages to average over.")]
+REPORT_PERIOD = 1.0
+
+
+class Meter:
+    """Resolves topics, subscribes, feeds a per-topic sink, reports every second."""
+
+    def __init__(self, topics: list[str], timeout: float | None, fmt: Format) -> None:
+        self.topics = topics
+        self.timeout = timeout
+        self.fmt = fmt
+        self.received = 0
+        self.error: BaseException | None = None
+
+    async def run(
+        self,
+        node: Any,
+        stop: asyncio.Event,
+        sink: Callable[[str, list[Any], Any, float], None],
+        report: Callable[[], None],
+    ) -> str:
+        """Subscribe to every topic and report until stopped or timed out."""
+        from rostools.graph.session import first
+        from rostools.msgs.store import TypeStore
+
+        deadline = time.monotonic() + self.timeout if self.timeout is not None else None
+        store = TypeStore.default()
+        for topic in self.topics:
+            ref = await _resolve(node, topic, store, deadline, stop)
+            if ref is None:
+                return "stopped" if stop.is_set() else "timeout"
+            if ref.field:
+                raise UsageError(f"{topic}: field paths do not apply here; give the topic itself")
+
+            def on_frames(frames: list[Any], conn: Any, now: float, t: str = ref.topic) -> None:
+                self.received += len(frames)
+                try:
+                    sink(t, frames, conn, now)
+                except Exception as err:  # noqa: BLE001 - re-raised by run(), not in asyncio's IO
+                    self.error = err
+                    stop.set()
+
+            await node.subscribe(ref.topic, on_frames)
+            sys.stderr.write(f"subscribed to [{ref.topic}]\n")
+        next_report = time.monotonic() + REPORT_PERIOD
+        while True:
+            now = time.monotonic()
+            wait = next_report - now
+            if deadline is not None:
+                wait = min(wait, deadline - now)
+            if await first(stop.wait(), timeout=max(wait, 0)) == 0:
+                if self.error is not None:
+                    raise self.error
+                return "stopped"
+            if time.monotonic() >= next_report:
+                report()
+                sys.stdout.flush()
+                next_report += REPORT_PERIOD
+            if deadline is not None and time.monotonic() >= deadline:
+                return "done" if self.received else "timeout"
+
+
+def _run(ctx: typer.Context, meter: Meter, sink: Any, report: Any) -> None:
+    from rostools.graph.session import run_node
+
+    result = run_node(
+        lambda node, stop: meter.run(node, stop, sink, report),
+        settings(ctx).resolved_master_uri(),
+        "rostools_rates",
+    )
+    if result == "timeout":
+        raise TimeoutExpired(f"no message on {', '.join(meter.topics)} within {meter.timeout:g} s")
+
+
+def _json(row: dict[str, Any]) -> None:
+    sys.stdout.write(json.dumps(row) + "\n")
+
+
+@app.command()
+def hz(
+    ctx: typer.Context,
+    topics: Annotated[list[str], typer.Argument(help="One or more topics.")],
+    window: WindowOpt = None,
+    filter_expr: FilterOpt = None,
+    wall_time: Annotated[
+        bool, typer.Option("--wall-time", help="Wall-clock time even with /use_sim_time.")
+    ] = False,
+    timeout: TimeoutOpt = None,
+    fmt: FormatOpt = None,
+) -> None:
+    """The publishing rate of topics (rostopic hz); counts raw frames, decodes only for --filter."""
+    from rostools.graph.rates import DEFAULT_WINDOW, RateMeter, format_rate, rate_table
+
+    fmt = output_format(ctx, fmt)
+    names = [script_resolve(t, "rostopic") for t in topics]
+    meters = {n: RateMeter(window or DEFAULT_WINDOW) for n in names}
+    check = _filter(filter_expr)
+
+    def sink(topic: str, frames: list[Any], conn: Any, now: float) -> None:
+        if check is not None:
+            frames = check(frames, conn, topic)
+        meters[topic].add(len(frames), now)
+
+    def report() -> None:
+        rows = [(n, s) for n in names if (s := meters[n].report()) is not None]
+        if fmt is not Format.text:
+            for n, s in rows:
+                _json({"topic": n, "rate": s.value, "min": s.min, "max": s.max,
+                       "std_dev": s.std_dev, "window": s.window})  # fmt: skip
+        elif not rows:
+            sys.stdout.write("no new messages\n")
+        elif len(names) == 1:
+            sys.stdout.write(format_rate(rows[0][1]) + "\n")
+        else:
+            sys.stdout.write(rate_table(rows))
+
+    del wall_time  # arrival times are always taken from the wall clock
+    _run(ctx, Meter(names, timeout, fmt), sink, report)
+
+
+def _filter(expr: str | None) -> Callable[[list[Any], Any, str], list[Any]] | None:
+    """A frames filter that decodes and evaluates ``expr``, or None."""
+    if not expr:
+        return None
+    try:
+        code = compile(expr, "<--filter>", "eval")
+    except SyntaxError as err:
+        raise UsageError(f"--filter is not a Python expression: {err.msg}") from None
+    from rostools.msgs.codec import Codec
+    from rostools.msgs.store import TypeStore
+
+    base = TypeStore.default()
+    decoders: dict[tuple[str, str], Any] = {}
+
+    def keep(frames: list[Any], conn: Any, topic: str) -> list[Any]:
+        header = conn.header or {}
+        key = (header.get("type", ""), header.get("message_definition", ""))
+        decode = decoders.get(key)
+        if decode is None:
+            store = base.with_definition(*key)
+            decode = decoders[key] = Codec.of(store).decoder(key[0])
+        out = []
+        for data in frames:
+            try:
+                if eval(code, {"m": decode(data, 0)[0], "topic": topic}):  # noqa: S307
+                    out.append(data)
+            except Exception as err:  # noqa: BLE001 - the user's expression
+                raise RostoolsError(f"--filter failed: {type(err).__name__}: {err}") from None
+        return out
+
+    return keep
+
+
+@app.command()
+def bw(
+    ctx: typer.Context,
+    topic: Annotated[str, typer.Argument(help="A topic.")],
+    window: WindowOpt = None,
+    timeout: TimeoutOpt = None,
+    fmt: FormatOpt = None,
+) -> None:
+    """The bandwidth a topic uses (rostopic bw), from the size of each raw frame."""
+    from rostools.graph.rates import BandwidthMeter, format_bandwidth
+
+    fmt = output_format(ctx, fmt)
+    name = script_resolve(topic, "rostopic")
+    meter = BandwidthMeter(window or 100)
+
+    def sink(t: str, frames: list[Any], conn: Any, now: float) -> None:
+        meter.add([len(f) for f in frames], now)
+
+    def report() -> None:
+        stats = meter.report()
+        if stats is None:
+            return
+        if fmt is not Format.text:
+            _json({"topic": name, "bytes_per_s": stats.rate, "mean": stats.mean, "min": stats.min,
+                   "max": stats.max, "window": stats.window})  # fmt: skip
+        else:
+            sys.stdout.write(format_bandwidth(stats) + "\n")
+
+    _run(ctx, Meter([name], timeout, fmt), sink, report)
+
+
+@app.command()
+def delay(
+    ctx: typer.Context,
+    topic: Annotated[str, typer.Argument(help="A topic whose messages start with a Header.")],
+    window: WindowOpt = None,
+    timeout: TimeoutOpt = None,
+    fmt: FormatOpt = None,
+) -> None:
+    """Now minus ``header.stamp`` of each message (rostopic delay); reads only the stamp."""
+    from rostools.graph.rates import DEFAULT_WINDOW, DelayMeter, format_delay
+    from rostools.msgs.store import TypeStore
+
+    fmt = output_format(ctx, fmt)
+    name = script_resolve(topic, "rostopic")
+    meter = DelayMeter(window or DEFAULT_WINDOW)
+    base = TypeStore.default()
+    checked: dict[str, bool] = {}
+
+    def sink(t: str, frames: list[Any], conn: Any, now: float) -> None:
+        header = conn.header or {}
+        kind = header.get("type", "")
+        if kind not in checked:
+            store = base.with_definition(kind, header.get("message_definition", ""))
+            checked[kind] = store.msg(kind).has_header
+        if not checked[kind]:
+            raise NotFoundError(f"{t} carries {kind}, which has no Header to take a stamp from")
+        wall = time.time()
+        meter.add([wall - (s + ns * 1e-9) for s, ns in (_STAMP.unpack_from(f, 4) for f in frames)])
+
+    def report() -> None:
+        stats = meter.report()
+        if stats is None:
+            return
+        if fmt is not Format.text:
+            _json({"topic": name, "delay": stats.value, "min": stats.min, "max": stats.max,
+                   "std_dev": stats.std_dev, "window": stats.window})  # fmt: skip
+        else:
+            sys.stdout.write(format_delay(stats) + "\n")
+
+    _run(ctx, Meter([name], timeout, fmt), sink, report)

@@ -1,0 +1,296 @@
+"""TCPROS connections on asyncio: the thin IO layer over ``rostools.wire.tcpros``.
+
+``ServerConnection`` is what a node's TCPROS server accepts; its first frame (the header) says
+whether it is a subscriber (then an ``Outbound`` link sends it messages) or a service client.
+``InboundConnection`` is a subscriber's connection to a publisher.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import collections
+import contextlib
+import logging
+import socket
+import time
+from collections.abc import Callable
+from typing import TYPE_CHECKING, Any, Protocol
+
+from rostools.wire.header import MAX_HEADER_LENGTH
+from rostools.wire.tcpros import BIG_FRAME, FrameError, FrameReader, frame_prefix, parse_header
+
+if TYPE_CHECKING:
+    from rostools.graph.subscriber import Subscriber
+
+log = logging.getLogger(__name__)
+
+Frame = bytes | memoryview
+#: Outgoing bytes buffered per connection before we stop writing and queue messages instead.
+WRITE_HIGH_WATER = 4 * 1024 * 1024
+WRITE_LOW_WATER = 1024 * 1024
+
+
+def set_nodelay(transport: asyncio.BaseTransport) -> None:
+    """TCP_NODELAY, as ROS sets it on topic connections that ask for it."""
+    sock = transport.get_extra_info("socket")
+    if sock is not None:
+        with contextlib.suppress(OSError):
+            sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+
+
+class Handler(Protocol):
+    """What an accepted connection hands its traffic to after the header."""
+
+    def frames_received(self, frames: list[Frame]) -> None:
+        """Frames after the header."""
+
+    def connection_lost(self) -> None:
+        """The peer went away."""
+
+    def pause_writing(self) -> None:
+        """Our send buffer is full."""
+
+    def resume_writing(self) -> None:
+        """Our send buffer drained."""
+
+
+class ServerConnection(asyncio.BufferedProtocol):
+    """A connection accepted by a node's TCPROS server."""
+
+    def __init__(
+        self, accept: Callable[[dict[str, str], ServerConnection], Handler | None]
+    ) -> None:
+        self.accept = accept
+        self.reader = FrameReader(MAX_HEADER_LENGTH)
+        self.transport: asyncio.Transport | None = None
+        self.handler: Handler | None = None
+        self.peer = "?"
+
+    def connection_made(self, transport: asyncio.BaseTransport) -> None:
+        """Asyncio: connected."""
+        assert isinstance(transport, asyncio.Transport)
+        self.transport = transport
+        transport.set_write_buffer_limits(WRITE_HIGH_WATER, WRITE_LOW_WATER)
+        peer = transport.get_extra_info("peername")
+        self.peer = f"{peer[0]}:{peer[1]}" if peer else "?"
+
+    def get_buffer(self, sizehint: int) -> memoryview:
+        """Asyncio: where to receive into."""
+        return self.reader.get_buffer()
+
+    def buffer_updated(self, nbytes: int) -> None:
+        """Asyncio: bytes arrived."""
+        try:
+            frames = self.reader.buffer_updated(nbytes)
+        except FrameError as err:
+            log.warning("TCPROS connection from %s: %s; closing it", self.peer, err)
+            self.close()
+            return
+        if self.handler is None and frames:
+            try:
+                fields = parse_header(frames[0])
+            except FrameError as err:
+                log.warning("TCPROS connection from %s: %s; closing it", self.peer, err)
+                self.close()
+                return
+            self.handler = self.accept(fields, self)
+            frames = frames[1:]
+            if self.handler is None:
+                return
+        if frames and self.handler is not None:
+            self.handler.frames_received(frames)
+
+    def write(self, data: Frame) -> None:
+        """Send bytes as they are."""
+        if self.transport is not None and not self.transport.is_closing():
+            self.transport.write(data)
+
+    def close(self) -> None:
+        """Close after what is buffered is sent."""
+        if self.transport is not None:
+            self.transport.close()
+
+    def connection_lost(self, exc: Exception | None) -> None:
+        """Asyncio: the connection closed."""
+        if self.handler is not None:
+            self.handler.connection_lost()
+
+    def pause_writing(self) -> None:
+        """Asyncio: the send buffer is full."""
+        if self.handler is not None:
+            self.handler.pause_writing()
+
+    def resume_writing(self) -> None:
+        """Asyncio: the send buffer drained."""
+        if self.handler is not None:
+            self.handler.resume_writing()
+
+
+class Outbound:
+    """A publisher's link to one subscriber: coalesced writes and a bounded backlog.
+
+    Small frames published in one event-loop turn go out in one write (one syscall for many
+    messages). While the socket is backed up, messages wait in a queue of ``queue_size``
+    whose oldest entries are dropped, so a slow subscriber never stalls the others.
+    """
+
+    def __init__(self, conn: ServerConnection, conn_id: int, peer: str, queue_size: int) -> None:
+        self.conn = conn
+        self.id = conn_id
+        self.peer = peer  # the subscriber's caller id
+        self.backlog: collections.deque[tuple[bytes, Frame]] = collections.deque(
+            maxlen=max(queue_size, 1)
+        )
+        self.pending: list[Frame] = []
+        self.paused = False
+        self.scheduled = False
+        self.closed = False
+        self.bytes_sent = 0
+        self.messages_sent = 0
+        self.dropped = 0
+        self.on_close: Callable[[Outbound], None] | None = None
+
+    def send(self, payload: Frame) -> None:
+        """Queue one message."""
+        if self.closed:
+            return
+        prefix = frame_prefix(len(payload))
+        if self.paused:
+            if len(self.backlog) == self.backlog.maxlen:
+                self.dropped += 1
+            self.backlog.append((prefix, payload))
+            return
+        self._write(prefix, payload)
+
+    def _write(self, prefix: bytes, payload: Frame) -> None:
+        self.bytes_sent += len(payload)
+        self.messages_sent += 1
+        if len(payload) >= BIG_FRAME:
+            self.flush()
+            self.conn.write(prefix)
+            self.conn.write(payload)  # no join: a big payload is written without a copy
+            return
+        self.pending += (prefix, payload)
+        if not self.scheduled:
+            self.scheduled = True
+            asyncio.get_running_loop().call_soon(self.flush)
+
+    def flush(self) -> None:
+        """Write what this loop turn queued, in one write."""
+        self.scheduled = False
+        if self.pending:
+            self.conn.write(b"".join(self.pending))
+            self.pending.clear()
+
+    def frames_received(self, frames: list[Frame]) -> None:
+        """Subscribers send nothing after their header; ignore it."""
+
+    def pause_writing(self) -> None:
+        """The socket is backed up: queue from now on."""
+        self.paused = True
+
+    def resume_writing(self) -> None:
+        """The socket drained: send the queue."""
+        self.paused = False
+        while self.backlog and not self.paused:
+            self._write(*self.backlog.popleft())
+
+    def connection_lost(self) -> None:
+        """The subscriber went away."""
+        self.closed = True
+        if self.on_close is not None:
+            self.on_close(self)
+
+    def close(self) -> None:
+        """Close the link."""
+        self.flush()
+        self.closed = True
+        self.conn.close()
+
+
+class InboundConnection(asyncio.BufferedProtocol):
+    """A subscriber's connection to one publisher."""
+
+    def __init__(self, subscriber: Subscriber, publisher_uri: str, conn_id: int, header: bytes):
+        self.subscriber = subscriber
+        self.publisher_uri = publisher_uri
+        self.id = conn_id
+        self.request = header
+        self.reader = FrameReader(MAX_HEADER_LENGTH)
+        self.transport: asyncio.Transport | None = None
+        self.header: dict[str, str] | None = None
+        self.closed: asyncio.Future[None] = asyncio.get_running_loop().create_future()
+        self.bytes_received = 0
+        self.messages_received = 0
+        self.peer = "?"
+
+    def connection_made(self, transport: asyncio.BaseTransport) -> None:
+        """Asyncio: connected."""
+        assert isinstance(transport, asyncio.Transport)
+        self.transport = transport
+        set_nodelay(transport)
+        peer = transport.get_extra_info("peername")
+        self.peer = f"{peer[0]}:{peer[1]}" if peer else "?"
+        transport.write(self.request)
+
+    def get_buffer(self, sizehint: int) -> memoryview:
+        """Asyncio: where to receive into."""
+        return self.reader.get_buffer()
+
+    def buffer_updated(self, nbytes: int) -> None:
+        """Asyncio: bytes arrived."""
+        now = time.monotonic()
+        try:
+            frames = self.reader.buffer_updated(nbytes)
+        except FrameError as err:
+            self._drop(f"{err}")
+            return
+        if not frames:
+            return
+        if self.header is None:
+            try:
+                header = parse_header(frames[0])
+            except FrameError as err:
+                self._drop(str(err))
+                return
+            if "error" in header:
+                self._drop(f"refused: {header['error']}")
+                return
+            if "md5sum" not in header or "type" not in header:
+                self._drop("reply header lacks md5sum or type")
+                return
+            self.header = header
+            self.reader.max_frame = self.subscriber.max_frame
+            self.subscriber.header_received(self)
+            frames = frames[1:]
+            if not frames:
+                return
+        self.messages_received += len(frames)
+        self.bytes_received += sum(len(f) for f in frames)
+        self.subscriber.frames_received(frames, self, now)
+
+    def _drop(self, reason: str) -> None:
+        log.warning(
+            "subscription to %s from %s: %s", self.subscriber.topic, self.publisher_uri, reason
+        )
+        self.close()
+
+    def close(self) -> None:
+        """Close the connection."""
+        if self.transport is not None:
+            self.transport.close()
+
+    def connection_lost(self, exc: Exception | None) -> None:
+        """Asyncio: the connection closed."""
+        if not self.closed.done():
+            self.closed.set_result(None)
+        self.subscriber.connection_closed(self)
+
+    @property
+    def latching(self) -> bool:
+        """Whether the publisher latches."""
+        return (self.header or {}).get("latching") == "1"
+
+    def info(self) -> dict[str, Any]:
+        """The publisher's header fields."""
+        return dict(self.header or {})

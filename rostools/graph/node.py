@@ -1,0 +1,314 @@
+"""A ROS node on asyncio: its slave API, its TCPROS server, registration and clean exit.
+
+The node answers the whole slave API as rospy does (ROS1_PROTOCOL.md §4), accepts topic
+subscribers and service clients on one TCPROS port, and registers everything it offers
+with the master. ``close()`` unregisters all of it.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import ipaddress
+import logging
+import os
+import socket
+import xmlrpc.client
+from collections.abc import Callable, Mapping
+from typing import Any
+from urllib.parse import urlsplit
+
+from rostools.errors import RostoolsError, UnreachableError
+from rostools.graph.connection import Handler, ServerConnection
+from rostools.graph.publisher import Publisher
+from rostools.graph.subscriber import FramesCallback, Subscriber
+from rostools.graph.topic import ANY, TopicType
+from rostools.graph.xmlrpc import XmlRpcServer, call
+from rostools.names import anonymous, canonicalize, resolve, ros_namespace
+from rostools.wire.tcpros import error_header
+
+log = logging.getLogger(__name__)
+
+#: How long registration calls to the master may take.
+MASTER_TIMEOUT = 5.0
+
+
+def choose_host(master_uri: str, env: Mapping[str, str] | None = None) -> str:
+    """The host this node gives out, by ROS's rules, kept on loopback for a local master.
+
+    ``ROS_HOSTNAME``, then ``ROS_IP``; else, when the master is on this machine, 127.0.0.1
+    (nothing remote needs to reach us); else the machine's host name.
+    """
+    env = os.environ if env is None else env
+    if env.get("ROS_HOSTNAME"):
+        return env["ROS_HOSTNAME"]
+    if env.get("ROS_IP"):
+        return env["ROS_IP"]
+    master_host = urlsplit(master_uri).hostname or "localhost"
+    if master_host == "localhost" or master_host.startswith("127."):
+        return "127.0.0.1"
+    name = socket.gethostname()
+    return "127.0.0.1" if name == "localhost" or name.startswith("127.") else name
+
+
+def bind_address(host: str) -> str:
+    """Loopback hosts bind loopback; anything else binds every interface."""
+    try:
+        if ipaddress.ip_address(host).is_loopback:
+            return host
+    except ValueError:
+        if host == "localhost":
+            return "127.0.0.1"
+    return "0.0.0.0"  # noqa: S104 - others must reach a node that gives out a public host
+
+
+class Node:
+    """A ROS node: ``await Node(...).start()``, then advertise and subscribe."""
+
+    def __init__(
+        self,
+        name: str,
+        master_uri: str,
+        *,
+        anonymous_name: bool = False,
+        ns: str | None = None,
+        remappings: dict[str, str] | None = None,
+        host: str | None = None,
+    ) -> None:
+        base = anonymous(name.strip("/")) if anonymous_name else name.strip("/")
+        ns = ns if ns is not None else ros_namespace()
+        self.name = (
+            canonicalize(ns + "/" + base) if not name.startswith("/") else canonicalize(name)
+        )
+        self.master_uri = master_uri
+        self.host = host or choose_host(master_uri)
+        self.remappings = remappings or {}
+        self.publishers: dict[str, Publisher] = {}
+        self.subscribers: dict[str, Subscriber] = {}
+        self.services: dict[str, Any] = {}
+        self.shutdown_requested = asyncio.Event()
+        self.shutdown_reason = ""
+        self._xmlrpc: XmlRpcServer | None = None
+        self._tcpros: asyncio.base_events.Server | None = None
+        self._conn_ids = 0
+        self.tcpros_port = 0
+
+    # life cycle -----------------------------------------------------------------------
+
+    async def start(self) -> Node:
+        """Start the slave API and TCPROS servers."""
+        bind = bind_address(self.host)
+        self._xmlrpc = XmlRpcServer(self._dispatch, bind, 0)
+        await self._xmlrpc.start()
+        loop = asyncio.get_running_loop()
+        self._tcpros = await loop.create_server(lambda: ServerConnection(self._accept), bind, 0)
+        self.tcpros_port = self._tcpros.sockets[0].getsockname()[1]
+        return self
+
+    @property
+    def uri(self) -> str:
+        """The slave API URI this node registers with."""
+        assert self._xmlrpc is not None, "start() the node first"
+        return f"http://{self.host}:{self._xmlrpc.port}/"
+
+    def resolve(self, name: str) -> str:
+        """A topic or service name as this node sees it (namespace, remappings)."""
+        return resolve(name, self.name, self.remappings)
+
+    def next_connection_id(self) -> int:
+        """A connection id unique within this node."""
+        self._conn_ids += 1
+        return self._conn_ids
+
+    async def close(self) -> None:
+        """Unregister everything, close every connection and server."""
+        calls: list[tuple[str, tuple[Any, ...]]] = []
+        for topic in self.publishers:
+            calls.append(("unregisterPublisher", (self.name, topic, self.uri)))
+        for topic in self.subscribers:
+            calls.append(("unregisterSubscriber", (self.name, topic, self.uri)))
+        for service, server in self.services.items():
+            calls.append(("unregisterService", (self.name, service, server.uri)))
+        if calls:
+            multi = [{"methodName": m, "params": list(p)} for m, p in calls]
+            try:
+                await call(self.master_uri, "system.multicall", (multi,), timeout=2.0)
+            except Exception as err:  # noqa: BLE001 - leaving anyway; the master may be gone
+                log.debug("unregistering from %s failed: %s", self.master_uri, err)
+        for sub in list(self.subscribers.values()):
+            await sub.close()
+        for pub in self.publishers.values():
+            pub.close()
+        for server in self.services.values():
+            server.close()
+        if self._tcpros is not None:
+            self._tcpros.close()
+        if self._xmlrpc is not None:
+            await self._xmlrpc.close()
+
+    # master calls ---------------------------------------------------------------------
+
+    async def master_call(self, method: str, *args: Any) -> Any:
+        """Call the master as this node; a failure code raises ``RostoolsError``."""
+        try:
+            answer = await call(self.master_uri, method, (self.name, *args), timeout=MASTER_TIMEOUT)
+        except (OSError, asyncio.TimeoutError) as err:
+            reason = getattr(err, "strerror", None) or err or "timed out"
+            raise UnreachableError(
+                f"cannot reach the master at {self.master_uri}: {reason}",
+                hint="is roscore (or 'rostools core') running? check ROS_MASTER_URI",
+            ) from None
+        except xmlrpc.client.Fault as fault:
+            raise RostoolsError(f"the master failed {method}: {fault.faultString}") from None
+        code, message, value = answer
+        if code != 1:
+            raise RostoolsError(f"the master refused {method}: {message}")
+        return value
+
+    async def advertise(
+        self, topic: str, topic_type: TopicType, latch: bool = False, queue_size: int = 100
+    ) -> Publisher:
+        """Publish on ``topic`` (registered with the master)."""
+        topic = self.resolve(topic)
+        pub = self.publishers.get(topic)
+        if pub is None:
+            pub = self.publishers[topic] = Publisher(self, topic, topic_type, latch, queue_size)
+            await self.master_call("registerPublisher", topic, topic_type.type, self.uri)
+        return pub
+
+    async def unadvertise(self, topic: str) -> None:
+        """Stop publishing on ``topic``."""
+        pub = self.publishers.pop(self.resolve(topic), None)
+        if pub is not None:
+            pub.close()
+            await self.master_call("unregisterPublisher", pub.topic, self.uri)
+
+    async def subscribe(
+        self,
+        topic: str,
+        callback: FramesCallback,
+        topic_type: TopicType = ANY,
+        tcp_nodelay: bool = True,
+        on_header: Callable[[Any], None] | None = None,
+    ) -> Subscriber:
+        """Subscribe to ``topic``; ``topic_type`` ``ANY`` learns it from the publisher."""
+        topic = self.resolve(topic)
+        sub = Subscriber(self, topic, topic_type, callback, tcp_nodelay)
+        sub.on_header = on_header
+        self.subscribers[topic] = sub
+        uris = await self.master_call("registerSubscriber", topic, topic_type.type, self.uri)
+        sub.update(list(uris))
+        return sub
+
+    # TCPROS ---------------------------------------------------------------------------
+
+    def _accept(self, fields: dict[str, str], conn: ServerConnection) -> Handler | None:
+        if "topic" in fields:
+            pub = self.publishers.get(fields["topic"])
+            if pub is None:
+                topics = sorted(self.publishers)
+                problem = (
+                    f"[{self.name}] is not a publisher of [{fields['topic']}]. Topics are {topics}"
+                )
+                conn.write(error_header(problem))
+                conn.close()
+                return None
+            return pub.accept(fields, conn)
+        if "service" in fields:
+            server = self.services.get(fields["service"])
+            if server is None:
+                conn.write(
+                    error_header(f"[{self.name}] is not a provider of  [{fields['service']}]")
+                )
+                conn.close()
+                return None
+            handler: Handler | None = server.accept(fields, conn)
+            return handler
+        conn.write(error_header("no topic or service name detected"))
+        conn.close()
+        return None
+
+    # slave API ------------------------------------------------------------------------
+
+    def _dispatch(self, method: str, params: tuple[Any, ...]) -> Any:
+        handlers: dict[str, tuple[Callable[..., Any], int]] = {
+            "getBusStats": (self._bus_stats, 0),
+            "getBusInfo": (self._bus_info, 0),
+            "getMasterUri": (lambda: [1, self.master_uri, self.master_uri], 0),
+            "shutdown": (self._shutdown, 1),
+            "getPid": (lambda: [1, "", os.getpid()], 0),
+            "getSubscriptions": (self._subscriptions, 0),
+            "getPublications": (self._publications, 0),
+            "paramUpdate": (lambda key, value: [-1, "not subscribed", 0], 2),
+            "publisherUpdate": (self._publisher_update, 2),
+            "requestTopic": (self._request_topic, 2),
+            "getUri": (lambda: [1, "", self.uri], 0),
+            "getName": (lambda: [1, "", self.name], 0),
+        }
+        if method == "system.multicall":
+            from rostools.wire.xmlrpc import multicall
+
+            return multicall(self._dispatch, params[0] if params else None)
+        entry = handlers.get(method)
+        if entry is None:
+            raise xmlrpc.client.Fault(
+                1, f"<class 'Exception'>:method \"{method}\" is not supported"
+            )
+        handler, arity = entry
+        if not params:
+            return [-1, "missing required caller_id parameter", 0]
+        if len(params) != arity + 1:
+            return [-1, "Error: bad call arity", 0]
+        if not isinstance(params[0], str):
+            return [-1, "caller_id must be a string", 0]
+        return handler(*params[1:])
+
+    def _shutdown(self, reason: Any) -> list[Any]:
+        self.shutdown_reason = str(reason)
+        self.shutdown_requested.set()
+        return [1, "shutdown", 0]
+
+    def _subscriptions(self) -> list[Any]:
+        return [1, "subscriptions", [[t, s.type.type] for t, s in self.subscribers.items()]]
+
+    def _publications(self) -> list[Any]:
+        return [1, "publications", [[t, p.type.type] for t, p in self.publishers.items()]]
+
+    def _publisher_update(self, topic: Any, uris: Any) -> list[Any]:
+        sub = self.subscribers.get(self.resolve(str(topic)))
+        if sub is not None and isinstance(uris, list):
+            sub.update([u for u in uris if isinstance(u, str)])
+        return [1, "", 0]
+
+    def _request_topic(self, topic: Any, protocols: Any) -> list[Any]:
+        topic = self.resolve(str(topic))
+        if topic not in self.publishers:
+            return [-1, f"Not a publisher of [{topic}]", []]
+        for proto in protocols if isinstance(protocols, list) else []:
+            if isinstance(proto, list) and proto and proto[0] == "TCPROS":
+                return [
+                    1,
+                    f"ready on {self.host}:{self.tcpros_port}",
+                    ["TCPROS", self.host, self.tcpros_port],
+                ]
+        return [0, "no supported protocol implementations", []]
+
+    def _bus_stats(self) -> list[Any]:
+        pubs = [
+            [t, sum(link.bytes_sent for link in p.links),
+             [[link.id, link.bytes_sent, link.messages_sent, True] for link in p.links]]
+            for t, p in self.publishers.items()
+        ]  # fmt: skip
+        subs = [[t, s.stats()] for t, s in self.subscribers.items()]
+        return [1, "", [pubs, subs, []]]
+
+    def _bus_info(self) -> list[Any]:
+        info: list[Any] = []
+        for topic, pub in self.publishers.items():
+            for link in pub.links:
+                text = f"TCPROS connection on port {self.tcpros_port} to [{link.conn.peer}]"
+                info.append([link.id, link.peer, "o", "TCPROS", topic, True, text])
+        for topic, sub in self.subscribers.items():
+            for uri, conn in sub.connections.items():
+                text = f"TCPROS connection to [{conn.peer}]"
+                info.append([conn.id, uri, "i", "TCPROS", topic, True, text])
+        return [1, "bus info", info]

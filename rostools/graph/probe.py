@@ -1,0 +1,33 @@
+"""Learning a topic's type from its publishers: subscribe with ``*`` and read the header.
+
+This is how rostools handles types it has never seen: the publisher's connection header
+carries the full definition.
+"""
+
+from __future__ import annotations
+
+import asyncio
+
+from rostools.errors import TimeoutExpired
+from rostools.graph.connection import InboundConnection
+from rostools.graph.node import Node
+from rostools.graph.topic import TopicType
+
+
+async def probe_topic(node: Node, topic: str, timeout: float) -> TopicType:
+    """The type one publisher of ``topic`` announces."""
+    found: asyncio.Future[TopicType] = asyncio.get_running_loop().create_future()
+
+    def on_header(conn: InboundConnection) -> None:
+        if not found.done() and conn.header is not None:
+            found.set_result(TopicType.from_header(conn.header))
+
+    sub = await node.subscribe(topic, lambda *_: None, on_header=on_header)
+    try:
+        return await asyncio.wait_for(found, timeout)
+    except asyncio.TimeoutError:
+        raise TimeoutExpired(f"no publisher of {topic} answered within {timeout:g} s") from None
+    finally:
+        await sub.close()
+        node.subscribers.pop(sub.topic, None)
+        await node.master_call("unregisterSubscriber", sub.topic, node.uri)

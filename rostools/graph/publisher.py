@@ -1,0 +1,96 @@
+"""A topic publisher: links to its subscribers, latching, ``header.seq`` as rospy sets it."""
+
+from __future__ import annotations
+
+import struct
+from typing import TYPE_CHECKING
+
+from rostools.graph.connection import Frame, Outbound, ServerConnection, set_nodelay
+from rostools.graph.topic import TopicType
+from rostools.wire.tcpros import check_subscription, error_header, publisher_header
+
+if TYPE_CHECKING:
+    from rostools.graph.node import Node
+
+_SEQ = struct.Struct("<I")
+
+
+class Publisher:
+    """Publishes on one topic to every connected subscriber."""
+
+    def __init__(
+        self,
+        node: Node,
+        topic: str,
+        topic_type: TopicType,
+        latch: bool = False,
+        queue_size: int = 100,
+    ) -> None:
+        self.node = node
+        self.topic = topic
+        self.type = topic_type
+        self.latch = latch
+        self.queue_size = queue_size
+        self.links: list[Outbound] = []
+        self.latched: Frame | None = None
+        self.seq = 0
+        self.closed = False
+
+    @property
+    def subscriber_count(self) -> int:
+        """How many subscribers are connected."""
+        return len(self.links)
+
+    def publish(self, payload: Frame) -> None:
+        """Send serialised message bytes; a Header's ``seq`` is rewritten as rospy does.
+
+        rospy counts only publishes that reach at least one subscriber, starting at 1.
+        """
+        if self.type.has_header and self.links and len(payload) >= 4:
+            self.seq = (self.seq + 1) & 0xFFFFFFFF
+            data = bytearray(payload)
+            _SEQ.pack_into(data, 0, self.seq)
+            payload = bytes(data)
+        self.publish_raw(payload)
+
+    def publish_raw(self, payload: Frame) -> None:
+        """Send bytes exactly as given (bag play, relays)."""
+        if self.latch:
+            self.latched = payload
+        for link in self.links:
+            link.send(payload)
+
+    def accept(self, fields: dict[str, str], conn: ServerConnection) -> Outbound | None:
+        """A subscriber's header arrived: check it, answer, and start sending."""
+        problem = check_subscription(fields, self.topic, self.type.md5sum, self.type.type)
+        if problem is not None:
+            conn.write(error_header(problem))
+            conn.close()
+            return None
+        if fields.get("tcp_nodelay") == "1" and conn.transport is not None:
+            set_nodelay(conn.transport)
+        conn.write(
+            publisher_header(
+                self.node.name, self.topic, self.type.md5sum, self.type.type, self.type.definition,
+                self.latch,
+            )
+        )  # fmt: skip
+        link = Outbound(
+            conn, self.node.next_connection_id(), fields.get("callerid", "?"), self.queue_size
+        )
+        link.on_close = self._lost
+        self.links.append(link)
+        if self.latched is not None:
+            link.send(self.latched)
+        return link
+
+    def _lost(self, link: Outbound) -> None:
+        if link in self.links:
+            self.links.remove(link)
+
+    def close(self) -> None:
+        """Close every link."""
+        self.closed = True
+        for link in list(self.links):
+            link.close()
+        self.links.clear()

@@ -1,0 +1,74 @@
+"""Running a command as a short-lived node: start, stop on Ctrl-C/SIGTERM/shutdown, clean up.
+
+``run_node(main, ...)`` gives ``main`` a started ``Node`` and a ``stop`` event that is set by
+SIGINT, SIGTERM or a ``shutdown`` call (``rosnode kill``); whatever happens, the node
+unregisters from the master before the process exits.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import signal
+from collections.abc import Awaitable, Callable
+from typing import TypeVar
+
+from rostools.errors import RostoolsError
+from rostools.graph.node import Node
+
+T = TypeVar("T")
+
+
+async def first(*aws: Awaitable[object], timeout: float | None = None) -> int | None:
+    """Wait for the first of several awaitables; its index, or None on timeout.
+
+    The others are cancelled.
+    """
+    tasks = [asyncio.ensure_future(a) for a in aws]
+    try:
+        done, _ = await asyncio.wait(tasks, timeout=timeout, return_when=asyncio.FIRST_COMPLETED)
+    finally:
+        for task in tasks:
+            if not task.done():
+                task.cancel()
+                with contextlib.suppress(asyncio.CancelledError):
+                    await task
+    for i, task in enumerate(tasks):
+        if task in done:
+            return i
+    return None
+
+
+def run_node(
+    main: Callable[[Node, asyncio.Event], Awaitable[T]],
+    master_uri: str,
+    name: str = "rostools",
+    anonymous_name: bool = True,
+) -> T:
+    """Run ``main(node, stop)`` on a fresh event loop; the node is closed afterwards."""
+
+    async def runner() -> T:
+        node = Node(name, master_uri, anonymous_name=anonymous_name)
+        try:
+            await node.start()
+        except OSError as err:
+            raise RostoolsError(f"cannot open the node's sockets: {err.strerror or err}") from None
+        loop = asyncio.get_running_loop()
+        stop = asyncio.Event()
+        for sig in (signal.SIGINT, signal.SIGTERM):
+            loop.add_signal_handler(sig, stop.set)
+
+        async def on_shutdown() -> None:
+            await node.shutdown_requested.wait()
+            stop.set()
+
+        watcher = loop.create_task(on_shutdown())
+        try:
+            return await main(node, stop)
+        finally:
+            watcher.cancel()
+            for sig in (signal.SIGINT, signal.SIGTERM):
+                loop.remove_signal_handler(sig)
+            await node.close()
+
+    return asyncio.run(runner())

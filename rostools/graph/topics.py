@@ -1,0 +1,85 @@
+"""What the master knows about topics, for the topic commands (blocking calls)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+from urllib.parse import urlsplit
+
+from rostools.errors import RostoolsError
+from rostools.graph.masterapi import MasterProxy
+from rostools.msgs.store import TypeStore
+from rostools.names import ANYTYPE, make_global_ns
+
+
+@dataclass
+class TopicInfo:
+    """A topic: its type and the nodes on each end."""
+
+    name: str
+    type: str
+    publishers: list[str] = field(default_factory=list)
+    subscribers: list[str] = field(default_factory=list)
+
+    def as_dict(self) -> dict[str, Any]:
+        """As plain data."""
+        return {
+            "topic": self.name,
+            "type": self.type,
+            "publishers": self.publishers,
+            "subscribers": self.subscribers,
+        }
+
+
+def topic_table(master: MasterProxy, namespace: str | None = None) -> dict[str, TopicInfo]:
+    """Every topic with a publisher or subscriber, optionally under ``namespace``."""
+    pubs, subs, _ = master.system_state()
+    types = master.topic_types()
+    table: dict[str, TopicInfo] = {}
+    for rows, attr in ((pubs, "publishers"), (subs, "subscribers")):
+        for topic, nodes in rows:
+            info = table.setdefault(topic, TopicInfo(topic, types.get(topic, "unknown type")))
+            getattr(info, attr).extend(nodes)
+    if namespace and namespace != "/":
+        prefix = make_global_ns(namespace)
+        table = {t: i for t, i in table.items() if t == namespace or t.startswith(prefix)}
+    return dict(sorted(table.items()))
+
+
+def host_of(uri: str) -> str:
+    """The host part of a node's XML-RPC URI."""
+    return urlsplit(uri).hostname or "unknown"
+
+
+@dataclass(frozen=True)
+class TopicRef:
+    """A topic as the user named it: the real topic, its type, and a field path after it."""
+
+    topic: str
+    type: str | None
+    field: str
+
+
+def split_field(name: str, types: dict[str, str], store: TypeStore | None) -> TopicRef | None:
+    """Find the topic in ``/topic/field/path`` as rostopic does.
+
+    An exact match first, else the longest advertised prefix whose type has the field (types
+    unknown here are accepted).
+    """
+    name = name.rstrip("/") or "/"
+    if name in types:
+        kind = types[name]
+        return TopicRef(name, None if kind == ANYTYPE else kind, "")
+    candidates = sorted((t for t in types if name.startswith(t + "/")), key=len, reverse=True)
+    for topic in candidates:
+        kind = types[topic]
+        path = name[len(topic) + 1 :]
+        if store is not None and kind != ANYTYPE and store.has_msg(kind):
+            from rostools.msgs import fieldpath  # only when a path has to be checked
+
+            try:
+                fieldpath.resolve(store, kind, path)
+            except RostoolsError:
+                continue
+        return TopicRef(topic, None if kind == ANYTYPE else kind, path)
+    return None

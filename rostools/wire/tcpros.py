@@ -1,0 +1,160 @@
+"""TCPROS, sans-IO: connection headers, frame splitting into reusable buffers, validation.
+
+``FrameReader`` is the receive half of every TCPROS connection. It follows the asyncio
+``BufferedProtocol`` shape (``get_buffer``/``buffer_updated``) without doing any IO: small
+frames are received many at a time into one scratch buffer and copied out once; a large
+frame gets a buffer of exactly its size, filled in place and handed over without a copy.
+That is what lets Python receive at the speed the socket allows (LIBRARIES.md §5).
+"""
+
+from __future__ import annotations
+
+import struct
+
+from rostools.wire.header import HeaderError, decode_fields, encode_header
+
+_U32 = struct.Struct("<I")
+
+#: roscpp drops a connection whose frame length exceeds 1e9 bytes (``Connection::read``).
+MAX_FRAME = 1_000_000_000
+#: Frames at least this big are received into a buffer of their own, not the scratch buffer.
+BIG_FRAME = 64 * 1024
+#: The scratch buffer: many small frames per recv; several times BIG_FRAME so it never fills
+#: with a partial small frame.
+SCRATCH = 256 * 1024
+
+
+class FrameError(ValueError):
+    """A frame the peer should not have sent (too long, a bad header)."""
+
+
+def frame_prefix(length: int) -> bytes:
+    """The 4-byte length that precedes every TCPROS frame."""
+    return _U32.pack(length)
+
+
+class FrameReader:
+    """Splits a byte stream into frames, receiving into reusable buffers."""
+
+    __slots__ = ("_big", "_big_filled", "_buf", "_end", "_start", "_view", "max_frame")
+
+    def __init__(self, max_frame: int = MAX_FRAME) -> None:
+        self.max_frame = max_frame
+        self._buf = bytearray(SCRATCH)
+        self._view = memoryview(self._buf)
+        self._start = 0
+        self._end = 0
+        self._big: bytearray | None = None
+        self._big_filled = 0
+
+    def get_buffer(self) -> memoryview:
+        """Where the next bytes from the socket go."""
+        if self._big is not None:
+            return memoryview(self._big)[self._big_filled :]
+        if self._end == SCRATCH:
+            # Compact: the partial frame left at the end moves to the front.
+            pending = self._end - self._start
+            self._view[:pending] = self._view[self._start : self._end]
+            self._start, self._end = 0, pending
+        return self._view[self._end :]
+
+    def buffer_updated(self, nbytes: int) -> list[bytes | memoryview]:
+        """Account for ``nbytes`` received; every frame now complete, in order.
+
+        Small frames come out as ``bytes`` copies; a big frame comes out as a view of a buffer
+        that is never reused. Either stays valid after the call.
+        """
+        if self._big is not None:
+            self._big_filled += nbytes
+            if self._big_filled < len(self._big):
+                return []
+            done = memoryview(self._big)
+            self._big = None
+            return [done]
+        self._end += nbytes
+        frames: list[bytes | memoryview] = []
+        view, start, end = self._view, self._start, self._end
+        while end - start >= 4:
+            (length,) = _U32.unpack_from(view, start)
+            if length > self.max_frame:
+                raise FrameError(f"frame of {length} bytes exceeds the limit of {self.max_frame}")
+            if end - start - 4 >= length:
+                frames.append(bytes(view[start + 4 : start + 4 + length]))
+                start += 4 + length
+            elif length >= BIG_FRAME:
+                have = end - start - 4
+                self._big = bytearray(length)
+                self._big[:have] = view[start + 4 : end]
+                self._big_filled = have
+                start = end
+                break
+            else:
+                break
+        if start == end:
+            start = end = 0
+        self._start, self._end = start, end
+        return frames
+
+
+def parse_header(frame: bytes | memoryview) -> dict[str, str]:
+    """A connection header's fields (the frame after its length prefix)."""
+    try:
+        return decode_fields(frame)
+    except HeaderError as err:
+        raise FrameError(f"bad connection header: {err}") from err
+
+
+def error_header(message: str) -> bytes:
+    """The header that refuses a connection: a lone ``error`` field."""
+    return encode_header({"error": message})
+
+
+def subscriber_header(
+    caller_id: str, topic: str, md5sum: str, type_name: str, definition: str, tcp_nodelay: bool
+) -> bytes:
+    """What a subscriber sends first (rospy's fields)."""
+    return encode_header(
+        {
+            "callerid": caller_id,
+            "topic": topic,
+            "md5sum": md5sum,
+            "type": type_name,
+            "message_definition": definition,
+            "tcp_nodelay": "1" if tcp_nodelay else "0",
+        }
+    )
+
+
+def publisher_header(
+    caller_id: str, topic: str, md5sum: str, type_name: str, definition: str, latching: bool
+) -> bytes:
+    """A publisher's reply: exactly the fields rospy and roscpp send."""
+    return encode_header(
+        {
+            "callerid": caller_id,
+            "latching": "1" if latching else "0",
+            "md5sum": md5sum,
+            "message_definition": definition,
+            "topic": topic,
+            "type": type_name,
+        }
+    )
+
+
+def check_subscription(
+    fields: dict[str, str], topic: str, md5sum: str, type_name: str
+) -> str | None:
+    """Why a publisher refuses this subscriber's header, or None when it accepts it."""
+    for required in ("topic", "md5sum", "callerid"):
+        if required not in fields:
+            return f"header missing required field [{required}]"
+    theirs = fields["md5sum"]
+    if theirs == "*" or md5sum == "*" or theirs == md5sum:
+        return None
+    wanted_type = fields.get("type", "*")
+    if wanted_type not in ("*", type_name):
+        return f"topic types do not match: [{wanted_type}] vs. [{type_name}]"
+    return (
+        f"Client [{fields['callerid']}] wants topic [{topic}] to have datatype/md5sum "
+        f"[{wanted_type}/{theirs}], but our version has [{type_name}/{md5sum}] Dropping connection."
+    )

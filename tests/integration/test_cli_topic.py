@@ -1,0 +1,194 @@
+"""``rostools topic`` as a user runs it, on ``rostools core``, with rostools on both ends."""
+
+from __future__ import annotations
+
+import json
+import signal
+import sys
+import time
+from pathlib import Path
+
+from tests.support.env import run_cli
+from tests.support.procs import Proc, wait_for
+
+
+def rostools(*args: str, env: dict[str, str]) -> Proc:
+    return Proc([sys.executable, "-m", "rostools", *args], env=env)
+
+
+def wait_listed(topic: str, env: dict[str, str]) -> None:
+    wait_for(
+        lambda: topic in run_cli("topic", "list", env=env).stdout.split(), 15, f"{topic} listed"
+    )
+
+
+def test_pub_then_echo_in_every_format(rostools_master: str, cli_env: dict[str, str]) -> None:
+    pub = rostools("topic", "pub", "/pt", "geometry_msgs/PointStamped",
+                   "{header: {frame_id: map}, point: {x: 1.5}}", env=cli_env)  # fmt: skip
+    try:
+        wait_listed("/pt", cli_env)
+        text = run_cli("topic", "echo", "/pt", "-n", "1", "--timeout", "10", env=cli_env)
+        assert text.returncode == 0, text.stderr
+        assert '  frame_id: "map"\npoint: \n  x: 1.5\n' in text.stdout and text.stdout.endswith(
+            "---\n"
+        )
+        data = json.loads(
+            run_cli("topic", "echo", "/pt", "-n", "1", "-F", "json", env=cli_env).stdout
+        )
+        assert data["point"] == {"x": 1.5, "y": 0.0, "z": 0.0}
+        field = run_cli("topic", "echo", "/pt/point/x", "-n", "1", env=cli_env)
+        assert field.stdout == "1.5\n---\n"
+        csv = run_cli("topic", "echo", "/pt", "-p", "-n", "1", env=cli_env).stdout.splitlines()
+        assert csv[0] == (
+            "%time,field.header.seq,field.header.stamp,field.header.frame_id,"
+            "field.point.x,field.point.y,field.point.z"
+        )
+        assert csv[1].endswith(",map,1.5,0.0,0.0")
+        typ = run_cli("topic", "type", "/pt/point/x", env=cli_env).stdout
+        assert typ == "geometry_msgs/PointStamped point/x float64\n"
+        info = run_cli("topic", "info", "/pt", env=cli_env).stdout
+        assert info.startswith(
+            "Type: geometry_msgs/PointStamped\n\nPublishers: \n * /rostools_pub_"
+        )
+        assert "/pt" in run_cli("topic", "find", "geometry_msgs/PointStamped", env=cli_env).stdout
+    finally:
+        pub.stop()
+
+
+def test_rate_meters(rostools_master: str, cli_env: dict[str, str]) -> None:
+    pub = rostools("topic", "pub", "-r", "50", "/pt", "geometry_msgs/PointStamped", "{header: auto}", "-s",
+                   env=cli_env)  # fmt: skip
+    try:
+        wait_listed("/pt", cli_env)
+        hz = run_cli(
+            "topic", "hz", "/pt", "--timeout", "3.5", "-F", "json", env=cli_env, timeout=30
+        )
+        rows = [json.loads(line) for line in hz.stdout.splitlines()]
+        assert hz.returncode == 0 and rows, hz.stderr
+        assert abs(rows[-1]["rate"] - 50) < 2.5
+        bw = run_cli("topic", "bw", "/pt", "--timeout", "2.5", env=cli_env, timeout=30).stdout
+        assert bw.startswith("average: ") and "mean: 0.04KB min: 0.04KB" in bw  # 40-byte messages
+        delay = run_cli(
+            "topic", "delay", "/pt", "--timeout", "2.5", "-F", "json", env=cli_env, timeout=30
+        )
+        assert 0 <= json.loads(delay.stdout.splitlines()[-1])["delay"] < 0.5
+    finally:
+        pub.stop()
+
+
+def test_filter_sees_m_and_topic(rostools_master: str, cli_env: dict[str, str]) -> None:
+    pub = rostools("topic", "pub", "-r", "20", "/nums", "std_msgs/Int32", "7", env=cli_env)
+    try:
+        wait_listed("/nums", cli_env)
+        out = run_cli("topic", "echo", "/nums", "-n", "2", "--filter", "m.data == 7 and topic == '/nums'",
+                      env=cli_env)  # fmt: skip
+        assert out.stdout == "data: 7\n---\ndata: 7\n---\n"
+        none = run_cli(
+            "topic", "echo", "/nums", "--filter", "m.data > 7", "--timeout", "1.5", env=cli_env
+        )
+        assert none.returncode == 5
+        bad = run_cli("topic", "echo", "/nums", "--filter", "m.data ==", env=cli_env)
+        assert bad.returncode == 2 and "not a Python expression" in bad.stderr
+    finally:
+        pub.stop()
+
+
+def test_unknown_topic_waits_only_as_long_as_asked(
+    rostools_master: str, cli_env: dict[str, str]
+) -> None:
+    start = time.monotonic()
+    out = run_cli("topic", "echo", "/nobody", "--timeout", "1", env=cli_env)
+    assert out.returncode == 5
+    assert "does not appear to be published yet" in out.stderr
+    assert "did not deliver a message within 1 s" in out.stderr
+    assert time.monotonic() - start < 8
+    assert run_cli("topic", "info", "/nobody", env=cli_env).returncode == 3
+    assert run_cli("topic", "hz", "/nobody", "--timeout", "1", env=cli_env).returncode == 5
+
+
+def test_types_are_learnt_from_the_publisher(
+    rostools_master: str, cli_env: dict[str, str], tmp_path: Path
+) -> None:
+    (tmp_path / "my_robot" / "msg").mkdir(parents=True)
+    (tmp_path / "my_robot" / "msg" / "Battery.msg").write_text(
+        "# custom\nfloat32 volts\nstring[] cells\n"
+    )
+    pub = rostools("topic", "pub", "/battery", "my_robot/Battery", "{volts: 12.5, cells: [a, b]}",
+                   "--msg-path", str(tmp_path), env=cli_env)  # fmt: skip
+    try:
+        wait_listed("/battery", cli_env)
+        out = run_cli("topic", "echo", "/battery", "-n", "1", env=cli_env)  # no --msg-path here
+        assert out.stdout == "volts: 12.5\ncells: \n  - a\n  - b\n---\n", out.stderr
+        typ = run_cli("topic", "type", "/battery/volts", env=cli_env)
+        assert typ.stdout == "my_robot/Battery volts float32\n", typ.stderr
+    finally:
+        pub.stop()
+
+
+def test_pub_from_file_and_stdin(
+    rostools_master: str, cli_env: dict[str, str], tmp_path: Path
+) -> None:
+    docs = tmp_path / "msgs.yaml"
+    docs.write_text("data: one\n---\ndata: two\n---\ndata: three\n")
+    echo = rostools(
+        "topic", "echo", "/words", "-n", "3", "-F", "json", "--timeout", "20", env=cli_env
+    )
+    try:
+        out = run_cli(
+            "topic", "pub", "/words", "std_msgs/String", "-f", str(docs), "-r", "5", env=cli_env
+        )
+        assert out.returncode == 0, out.stderr
+        assert echo.popen.wait(20) == 0
+        assert [json.loads(x)["data"] for x in echo.output()[0].splitlines()] == [
+            "one",
+            "two",
+            "three",
+        ]
+    finally:
+        echo.stop()
+    piped = run_cli(
+        "topic", "pub", "/words2", "std_msgs/String", env=cli_env, input="data: a\n---\ndata: b\n"
+    )
+    assert piped.returncode == 0, piped.stderr
+
+
+def test_echo_follows_a_restarted_publisher(rostools_master: str, cli_env: dict[str, str]) -> None:
+    echo = rostools("topic", "echo", "/beat", "-F", "json", env=cli_env)
+    try:
+        for text in ("first", "second"):
+            pub = rostools(
+                "topic", "pub", "-r", "10", "/beat", "std_msgs/String", f"data: {text}", env=cli_env
+            )
+            echo.expect(text, timeout=20)
+            pub.signal(signal.SIGKILL)  # no clean unregistration
+            pub.stop()
+    finally:
+        echo.stop()
+
+
+def test_echo_stops_cleanly_when_its_node_is_shut_down(
+    rostools_master: str, cli_env: dict[str, str]
+) -> None:
+    import xmlrpc.client
+
+    pub = rostools("topic", "pub", "/quiet", "std_msgs/Empty", env=cli_env)
+    echo = rostools("topic", "echo", "/quiet", env=cli_env)
+    try:
+        proxy = xmlrpc.client.ServerProxy(rostools_master)
+        wait_for(lambda: any(
+            n.startswith("/rostools_echo") for _, nodes in proxy.getSystemState("/t")[2][1] for n in nodes
+        ), 15, "echo registered")  # fmt: skip
+        node = next(
+            n
+            for _, nodes in proxy.getSystemState("/t")[2][1]
+            for n in nodes
+            if n.startswith("/rostools_echo")
+        )
+        uri = proxy.lookupNode("/t", node)[2]
+        xmlrpc.client.ServerProxy(uri).shutdown("/t", "test")
+        assert echo.popen.wait(10) == 0
+        state = proxy.getSystemState("/t")[2]
+        assert not any(t == "/quiet" for t, _ in state[1])  # it unregistered on its way out
+    finally:
+        echo.stop()
+        pub.stop()

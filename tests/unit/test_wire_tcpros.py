@@ -1,0 +1,110 @@
+"""TCPROS framing and headers, sans-IO."""
+
+from __future__ import annotations
+
+import struct
+
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from rostools.wire.header import decode_fields, encode_header
+from rostools.wire.tcpros import (
+    BIG_FRAME,
+    FrameError,
+    FrameReader,
+    check_subscription,
+    publisher_header,
+    subscriber_header,
+)
+
+
+def feed(reader: FrameReader, data: bytes, chunk: int) -> list[bytes]:
+    out: list[bytes] = []
+    pos = 0
+    while pos < len(data):
+        buf = reader.get_buffer()
+        n = min(chunk, len(buf), len(data) - pos)
+        buf[:n] = data[pos : pos + n]
+        pos += n
+        out += [bytes(f) for f in reader.buffer_updated(n)]
+    return out
+
+
+def framed(payloads: list[bytes]) -> bytes:
+    return b"".join(struct.pack("<I", len(p)) + p for p in payloads)
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    st.lists(
+        st.one_of(
+            st.binary(max_size=300), st.integers(BIG_FRAME, 3 * BIG_FRAME).map(lambda n: b"x" * n)
+        ),
+        max_size=20,
+    ),
+    st.sampled_from([3, 4096, 1 << 20]),
+)
+def test_frames_survive_any_chunking(payloads: list[bytes], chunk: int) -> None:
+    assert feed(FrameReader(), framed(payloads), chunk) == payloads
+
+
+def test_scratch_buffer_compacts_without_losing_bytes() -> None:
+    payloads = [bytes([i % 256]) * (1000 + i) for i in range(600)]  # > many scratch buffers
+    assert feed(FrameReader(), framed(payloads), 65536) == payloads
+
+
+def test_oversized_frame_is_refused() -> None:
+    reader = FrameReader(max_frame=100)
+    buf = reader.get_buffer()
+    buf[:4] = struct.pack("<I", 101)
+    with pytest.raises(FrameError, match="exceeds the limit"):
+        reader.buffer_updated(4)
+
+
+def test_rostopic_echo_header_bytes() -> None:
+    """The captured rospy subscriber header (ROS1_PROTOCOL.md §14.2), field for field."""
+    raw = subscriber_header(
+        "/rostopic_17831_1795329627298", "/chatter", "992ce8a1687cec8c8bd883ec73ca41d1",
+        "std_msgs/String", "string data\n", False,
+    )  # fmt: skip
+    assert raw[:4] == bytes.fromhex("b3000000")
+    assert raw[4:8] == bytes.fromhex("26000000")
+    assert raw.endswith(b"type=std_msgs/String")
+
+
+def test_latched_publisher_reply_bytes() -> None:
+    """The captured latched rospy publisher reply (§14.3)."""
+    raw = publisher_header(
+        "/talker", "/chatter", "992ce8a1687cec8c8bd883ec73ca41d1", "std_msgs/String",
+        "string data\n", True,
+    )  # fmt: skip
+    assert raw[:4] == bytes.fromhex("9a000000") and len(raw) == 4 + 0x9A
+    assert decode_fields(raw[4:])["latching"] == "1"
+
+
+@pytest.mark.parametrize(
+    ("fields", "problem"),
+    [
+        ({"topic": "/t", "md5sum": "*", "callerid": "/a"}, None),
+        ({"topic": "/t", "md5sum": "abc", "callerid": "/a", "type": "x/Y"}, None),
+        (
+            {"topic": "/t", "md5sum": "zzz", "callerid": "/a", "type": "x/Z"},
+            "topic types do not match",
+        ),
+        (
+            {"topic": "/t", "md5sum": "zzz", "callerid": "/a"},
+            "wants topic [/t] to have datatype/md5sum",
+        ),
+        ({"topic": "/t", "md5sum": "abc"}, "missing required field [callerid]"),
+    ],
+)
+def test_subscription_checks(fields: dict[str, str], problem: str | None) -> None:
+    found = check_subscription(fields, "/t", "abc", "x/Y")
+    assert (found is None) if problem is None else (problem in (found or ""))
+
+
+def test_header_fields_are_sorted_and_split_at_first_equals() -> None:
+    raw = encode_header({"b": "1=2", "a": "x\ny"})
+    assert decode_fields(raw[4:]) == {"a": "x\ny", "b": "1=2"}
+    assert raw[8:13] == b"a=x\ny"

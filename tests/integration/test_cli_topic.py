@@ -23,8 +23,14 @@ def wait_listed(topic: str, env: dict[str, str]) -> None:
 
 
 def test_pub_then_echo_in_every_format(rostools_master: str, cli_env: dict[str, str]) -> None:
-    pub = rostools("topic", "pub", "/pt", "geometry_msgs/PointStamped",
-                   "{header: {frame_id: map}, point: {x: 1.5}}", env=cli_env)  # fmt: skip
+    pub = rostools(
+        "topic",
+        "pub",
+        "/pt",
+        "geometry_msgs/PointStamped",
+        "{header: {frame_id: map}, point: {x: 1.5}}",
+        env=cli_env,
+    )
     try:
         wait_listed("/pt", cli_env)
         text = run_cli("topic", "echo", "/pt", "-n", "1", "--timeout", "10", env=cli_env)
@@ -56,8 +62,17 @@ def test_pub_then_echo_in_every_format(rostools_master: str, cli_env: dict[str, 
 
 
 def test_rate_meters(rostools_master: str, cli_env: dict[str, str]) -> None:
-    pub = rostools("topic", "pub", "-r", "50", "/pt", "geometry_msgs/PointStamped", "{header: auto}", "-s",
-                   env=cli_env)  # fmt: skip
+    pub = rostools(
+        "topic",
+        "pub",
+        "-r",
+        "50",
+        "/pt",
+        "geometry_msgs/PointStamped",
+        "{header: auto}",
+        "-s",
+        env=cli_env,
+    )
     try:
         wait_listed("/pt", cli_env)
         hz = run_cli(
@@ -80,8 +95,16 @@ def test_filter_sees_m_and_topic(rostools_master: str, cli_env: dict[str, str]) 
     pub = rostools("topic", "pub", "-r", "20", "/nums", "std_msgs/Int32", "7", env=cli_env)
     try:
         wait_listed("/nums", cli_env)
-        out = run_cli("topic", "echo", "/nums", "-n", "2", "--filter", "m.data == 7 and topic == '/nums'",
-                      env=cli_env)  # fmt: skip
+        out = run_cli(
+            "topic",
+            "echo",
+            "/nums",
+            "-n",
+            "2",
+            "--filter",
+            "m.data == 7 and topic == '/nums'",
+            env=cli_env,
+        )
         assert out.stdout == "data: 7\n---\ndata: 7\n---\n"
         none = run_cli(
             "topic", "echo", "/nums", "--filter", "m.data > 7", "--timeout", "1.5", env=cli_env
@@ -113,8 +136,16 @@ def test_types_are_learnt_from_the_publisher(
     (tmp_path / "my_robot" / "msg" / "Battery.msg").write_text(
         "# custom\nfloat32 volts\nstring[] cells\n"
     )
-    pub = rostools("topic", "pub", "/battery", "my_robot/Battery", "{volts: 12.5, cells: [a, b]}",
-                   "--msg-path", str(tmp_path), env=cli_env)  # fmt: skip
+    pub = rostools(
+        "topic",
+        "pub",
+        "/battery",
+        "my_robot/Battery",
+        "{volts: 12.5, cells: [a, b]}",
+        "--msg-path",
+        str(tmp_path),
+        env=cli_env,
+    )
     try:
         wait_listed("/battery", cli_env)
         out = run_cli("topic", "echo", "/battery", "-n", "1", env=cli_env)  # no --msg-path here
@@ -175,9 +206,15 @@ def test_echo_stops_cleanly_when_its_node_is_shut_down(
     echo = rostools("topic", "echo", "/quiet", env=cli_env)
     try:
         proxy = xmlrpc.client.ServerProxy(rostools_master)
-        wait_for(lambda: any(
-            n.startswith("/rostools_echo") for _, nodes in proxy.getSystemState("/t")[2][1] for n in nodes
-        ), 15, "echo registered")  # fmt: skip
+        wait_for(
+            lambda: any(
+                n.startswith("/rostools_echo")
+                for _, nodes in proxy.getSystemState("/t")[2][1]
+                for n in nodes
+            ),
+            15,
+            "echo registered",
+        )
         node = next(
             n
             for _, nodes in proxy.getSystemState("/t")[2][1]

@@ -96,8 +96,10 @@ def test_fast_path_matches_typer_path(cli_env: dict[str, str]) -> None:
         fast = run_cli("msg", "md5", name, env=cli_env)
         slow = run_cli("--format", "text", "msg", "md5", name, env=cli_env)
         assert (fast.returncode, fast.stdout, fast.stderr) == (
-            slow.returncode, slow.stdout, slow.stderr,
-        )  # fmt: skip
+            slow.returncode,
+            slow.stdout,
+            slow.stderr,
+        )
 
 
 @needs_corpus

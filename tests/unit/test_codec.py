@@ -46,12 +46,19 @@ def test_point_stamped_frame() -> None:
 @pytest.mark.parametrize(
     "name",
     [
-        "sensor_msgs/Image", "sensor_msgs/PointCloud2", "sensor_msgs/JointState",
-        "visualization_msgs/MarkerArray", "nav_msgs/Odometry", "sensor_msgs/NavSatFix",
-        "diagnostic_msgs/DiagnosticArray", "rosgraph_msgs/Log", "std_msgs/Empty",
-        "sensor_msgs/CameraInfo", "trajectory_msgs/JointTrajectory",
+        "sensor_msgs/Image",
+        "sensor_msgs/PointCloud2",
+        "sensor_msgs/JointState",
+        "visualization_msgs/MarkerArray",
+        "nav_msgs/Odometry",
+        "sensor_msgs/NavSatFix",
+        "diagnostic_msgs/DiagnosticArray",
+        "rosgraph_msgs/Log",
+        "std_msgs/Empty",
+        "sensor_msgs/CameraInfo",
+        "trajectory_msgs/JointTrajectory",
     ],
-)  # fmt: skip
+)
 def test_random_round_trips(name: str) -> None:
     rand = RandomMessages(CODEC, seed=hash(name) & 0xFFFF)
     for _ in range(20):

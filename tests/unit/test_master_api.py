@@ -22,14 +22,19 @@ def test_argument_checks(api: MasterAPI) -> None:
     assert api.call("getPid", ("/a", 1)) == [-1, "Error: bad call arity", -1]
     assert api.call("getPid", (5,)) == [-1, "caller_id must be a string", -1]
     assert api.call("registerPublisher", ("/a", "/t", "bad", NODE_A)) == [
-        -1, "ERROR: parameter [topic_type] is not a valid package resource name", [],
-    ]  # fmt: skip
+        -1,
+        "ERROR: parameter [topic_type] is not a valid package resource name",
+        [],
+    ]
     assert api.call("registerPublisher", ("/a", "/t", "a/B", "ftp://x")) == [
-        -1, "ERROR: parameter [caller_api] is not an RPC URI", [],
-    ]  # fmt: skip
+        -1,
+        "ERROR: parameter [caller_api] is not an RPC URI",
+        [],
+    ]
     assert api.call("registerPublisher", ("/a", 5, "a/B", NODE_A))[:2] == [
-        -1, "ERROR: parameter [topic] must be a non-empty string",
-    ]  # fmt: skip
+        -1,
+        "ERROR: parameter [topic] must be a non-empty string",
+    ]
     assert api.call("shutdown", ("/a",)) == [-1, "Error: bad call arity", 0]
     with pytest.raises(xmlrpc.client.Fault, match='method "nope" is not supported'):
         api.call("nope", ("/a",))
@@ -37,32 +42,46 @@ def test_argument_checks(api: MasterAPI) -> None:
 
 def test_publish_subscribe_and_updates(api: MasterAPI) -> None:
     assert api.call("registerSubscriber", ("/listener", "chatter", "std_msgs/String", NODE_B)) == [
-        1, "Subscribed to [/chatter]", [],
-    ]  # fmt: skip
+        1,
+        "Subscribed to [/chatter]",
+        [],
+    ]
     answer = api.call("registerPublisher", ("/talker", "/chatter", "std_msgs/String", NODE_A))
     assert answer == [1, "Registered [/talker] as publisher of [/chatter]", [NODE_B]]
     [update] = api.outgoing
     assert (update.uri, update.method, update.args) == (
-        NODE_B, "publisherUpdate", ("/master", "/chatter", [NODE_A]),
-    )  # fmt: skip
+        NODE_B,
+        "publisherUpdate",
+        ("/master", "/chatter", [NODE_A]),
+    )
     api.outgoing.clear()
     assert api.call("getSystemState", ("/x",)) == [
-        1, "current system state", [[["/chatter", ["/talker"]]], [["/chatter", ["/listener"]]], []],
-    ]  # fmt: skip
+        1,
+        "current system state",
+        [[["/chatter", ["/talker"]]], [["/chatter", ["/listener"]]], []],
+    ]
     assert api.call("getPublishedTopics", ("/x", "")) == [
-        1, "current topics", [["/chatter", "std_msgs/String"]],
-    ]  # fmt: skip
+        1,
+        "current topics",
+        [["/chatter", "std_msgs/String"]],
+    ]
     assert api.call("unregisterPublisher", ("/talker", "/chatter", NODE_A)) == [
-        1, "Unregistered [/talker] as provider of [/chatter]", 1,
-    ]  # fmt: skip
+        1,
+        "Unregistered [/talker] as provider of [/chatter]",
+        1,
+    ]
     assert api.outgoing[0].args == ("/master", "/chatter", [])
     assert api.call("unregisterPublisher", ("/talker", "/chatter", NODE_A)) == [
-        1, "[/talker] is not a registered node", 0,
-    ]  # fmt: skip
+        1,
+        "[/talker] is not a registered node",
+        0,
+    ]
     assert api.call("lookupNode", ("/x", "/talker")) == [-1, "unknown node [/talker]", ""]
     assert api.call("getTopicTypes", ("/x",)) == [
-        1, "current system state", [["/chatter", "std_msgs/String"]],
-    ]  # fmt: skip
+        1,
+        "current system state",
+        [["/chatter", "std_msgs/String"]],
+    ]
 
 
 def test_topic_type_rules(api: MasterAPI) -> None:
@@ -96,11 +115,15 @@ def test_services(api: MasterAPI) -> None:
         "rosrpc://h:2",
     ]
     assert api.call("unregisterService", ("/a", "/add", "rosrpc://h:1")) == [
-        1, "[rosrpc://h:1] is no longer the current service api handle for [/add]", 0,
-    ]  # fmt: skip
+        1,
+        "[rosrpc://h:1] is no longer the current service api handle for [/add]",
+        0,
+    ]
     assert api.call("unregisterService", ("/b", "/add", "rosrpc://h:2")) == [
-        1, "Unregistered [/b] as provider of [/add]", 1,
-    ]  # fmt: skip
+        1,
+        "Unregistered [/b] as provider of [/add]",
+        1,
+    ]
     assert api.call("lookupService", ("/x", "/add")) == [-1, "no provider", ""]
 
 
@@ -113,18 +136,24 @@ def test_parameters(api: MasterAPI) -> None:
     assert api.call("searchParam", ("/n", "~p"))[:2] == [0, "Internal failure: invalid key"]
     assert api.call("deleteParam", ("/x", "/nope")) == [-1, "parameter [/nope] is not set", 0]
     assert api.call("setParam", ("/x", "/", 3)) == [
-        -1, "Error: invalid arguments: cannot set root of parameter tree to non-dictionary", 0,
-    ]  # fmt: skip
+        -1,
+        "Error: invalid arguments: cannot set root of parameter tree to non-dictionary",
+        0,
+    ]
     assert api.call("subscribeParam", ("/n", NODE_A, "/unset")) == [
-        1, "Subscribed to parameter [/unset]", {},
-    ]  # fmt: skip
+        1,
+        "Subscribed to parameter [/unset]",
+        {},
+    ]
     api.call("setParam", ("/other", "/unset", 5))
     assert [(c.method, c.args) for c in api.outgoing] == [
         ("paramUpdate", ("/master", "/unset/", 5)),
-    ]  # fmt: skip
+    ]
     assert api.call("unsubscribeParam", ("/n", NODE_A, "/unset")) == [
-        1, "Unsubscribe to parameter [/unset]", 1,
-    ]  # fmt: skip
+        1,
+        "Unsubscribe to parameter [/unset]",
+        1,
+    ]
     assert api.call("lookupNode", ("/x", "/n")) == [-1, "unknown node [/n]", ""]
 
 

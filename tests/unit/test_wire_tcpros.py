@@ -65,9 +65,13 @@ def test_oversized_frame_is_refused() -> None:
 def test_rostopic_echo_header_bytes() -> None:
     """The captured rospy subscriber header (ROS1_PROTOCOL.md §14.2), field for field."""
     raw = subscriber_header(
-        "/rostopic_17831_1795329627298", "/chatter", "992ce8a1687cec8c8bd883ec73ca41d1",
-        "std_msgs/String", "string data\n", False,
-    )  # fmt: skip
+        "/rostopic_17831_1795329627298",
+        "/chatter",
+        "992ce8a1687cec8c8bd883ec73ca41d1",
+        "std_msgs/String",
+        "string data\n",
+        False,
+    )
     assert raw[:4] == bytes.fromhex("b3000000")
     assert raw[4:8] == bytes.fromhex("26000000")
     assert raw.endswith(b"type=std_msgs/String")
@@ -76,9 +80,13 @@ def test_rostopic_echo_header_bytes() -> None:
 def test_latched_publisher_reply_bytes() -> None:
     """The captured latched rospy publisher reply (§14.3)."""
     raw = publisher_header(
-        "/talker", "/chatter", "992ce8a1687cec8c8bd883ec73ca41d1", "std_msgs/String",
-        "string data\n", True,
-    )  # fmt: skip
+        "/talker",
+        "/chatter",
+        "992ce8a1687cec8c8bd883ec73ca41d1",
+        "std_msgs/String",
+        "string data\n",
+        True,
+    )
     assert raw[:4] == bytes.fromhex("9a000000") and len(raw) == 4 + 0x9A
     assert decode_fields(raw[4:])["latching"] == "1"
 

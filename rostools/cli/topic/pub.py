@@ -150,10 +150,10 @@ def pub(
     filler = Filler(codec)
     source, repeated = _message_source(filler, msg_type, args or [], file, substitute)
     streamed = file is not None or (not args and not repeated)
+    if file is not None and rate is None:
+        repeated = False  # a file's documents are sent once each unless a rate is given
     if streamed and rate is None:
         rate = STREAM_RATE
-    if file is not None and not (repeated and rate is not None):
-        repeated = False
     latched = latch or (rate is None and not streamed) or once
     ttype = TopicType.of(store, msg_type)
 

@@ -1,0 +1,185 @@
+"""``rostools topic`` with real rospy and roscpp nodes and real rostopic, on both masters."""
+
+from __future__ import annotations
+
+import base64
+import hashlib
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from tests.conftest import MasterInfo
+from tests.support.env import needs_ros1, run_cli
+from tests.support.procs import Proc, start_ros1_node, wait_for
+
+pytestmark = [pytest.mark.interop, needs_ros1]
+
+
+def rostools(info: MasterInfo, *args: str) -> Proc:
+    return Proc([sys.executable, "-m", "rostools", *args], env=info.cli_env)
+
+
+def ros(info: MasterInfo, *argv: str, timeout: float = 30) -> subprocess.CompletedProcess[str]:
+    return subprocess.run(
+        list(argv), env=info.ros_env, capture_output=True, text=True, timeout=timeout, check=False
+    )
+
+
+def test_rospy_talker_seen_by_every_topic_command(any_master: MasterInfo) -> None:
+    talker = start_ros1_node("talker.py", ["/chatter", "20"], any_master.ros_env)
+    env = any_master.cli_env
+    try:
+        wait_for(lambda: "/chatter" in run_cli("topic", "list", env=env).stdout, 20, "talker")
+        echo = run_cli("topic", "echo", "/chatter", "-n", "2", "-F", "json", env=env)
+        assert [json.loads(x)["data"].startswith("hello") for x in echo.stdout.splitlines()] == [
+            True,
+            True,
+        ]
+        hz = run_cli(
+            "topic", "hz", "/chatter", "--timeout", "3.5", "-F", "json", env=env, timeout=30
+        )
+        assert abs(json.loads(hz.stdout.splitlines()[-1])["rate"] - 20) < 1.0
+        bw = run_cli("topic", "bw", "/chatter", "--timeout", "2.5", env=env, timeout=30)
+        assert "average: " in bw.stdout
+        assert run_cli("topic", "type", "/chatter", env=env).stdout == "std_msgs/String\n"
+        assert (
+            run_cli("topic", "type", "/chatter/data", env=env).stdout
+            == "std_msgs/String data string\n"
+        )
+        info = run_cli("topic", "info", "/chatter", env=env).stdout
+        assert "Publishers: \n * /talker (http://" in info
+        theirs = ros(any_master, "rostopic", "info", "/chatter").stdout
+        assert info == theirs
+        assert (
+            run_cli("topic", "list", env=env).stdout == ros(any_master, "rostopic", "list").stdout
+        )
+    finally:
+        talker.stop()
+
+
+def test_real_subscribers_receive_from_rostools_pub(any_master: MasterInfo, tmp_path: Path) -> None:
+    pub = rostools(
+        any_master, "topic", "pub", "-r", "20", "/from_rostools", "std_msgs/String", "data: hi"
+    )
+    bag = tmp_path / "cpp.bag"
+    recorder = Proc(
+        ["/usr/lib/rosbag/record", "-O", str(bag), "/from_rostools", "__name:=cpp_recorder"],
+        env=any_master.ros_env,
+    )
+    try:
+        echo = ros(any_master, "rostopic", "echo", "-n", "2", "/from_rostools")
+        assert echo.stdout == 'data: "hi"\n---\ndata: "hi"\n---\n', echo.stderr
+        wait_for(lambda: bag.with_suffix(".bag.active").exists(), 20, "roscpp recorder")
+        wait_for(
+            lambda: bag.with_suffix(".bag.active").stat().st_size > 5000, 20, "roscpp recording"
+        )
+    finally:
+        recorder.stop()
+        pub.stop()
+    info = subprocess.run(
+        ["rosbag", "info", "-y", "-k", "messages", str(bag)], capture_output=True, text=True
+    )
+    assert int(info.stdout.strip() or 0) > 0, info.stderr
+
+
+def test_latching_both_ways(any_master: MasterInfo) -> None:
+    ours = rostools(any_master, "topic", "pub", "/latched_ours", "std_msgs/String", "data: kept")
+    theirs = Proc(
+        ["rostopic", "pub", "-l", "/latched_theirs", "std_msgs/String", "data: also kept"],
+        env=any_master.ros_env,
+    )
+    try:
+        env = any_master.cli_env
+        wait_for(
+            lambda: "/latched_theirs" in run_cli("topic", "list", env=env).stdout, 20, "their pub"
+        )
+        wait_for(lambda: "/latched_ours" in run_cli("topic", "list", env=env).stdout, 20, "our pub")
+        late = ros(any_master, "rostopic", "echo", "-n", "1", "/latched_ours")
+        assert late.stdout == 'data: "kept"\n---\n'
+        mine = run_cli("topic", "echo", "-n", "1", "/latched_theirs", "--timeout", "10", env=env)
+        assert mine.stdout == 'data: "also kept"\n---\n'
+    finally:
+        ours.stop()
+        theirs.stop()
+
+
+def test_one_megabyte_images_arrive_byte_exact(any_master: MasterInfo, tmp_path: Path) -> None:
+    env = any_master.cli_env
+    sender = start_ros1_node("image_pub.py", [], any_master.ros_env)
+    try:
+        sent = {sender.expect("sent ", 30).split()[1] for _ in range(3)}
+        out = run_cli(
+            "topic", "echo", "/image/data", "-n", "2", "-F", "json", "--timeout", "20", env=env
+        )
+        received = [
+            hashlib.md5(bytes(json.loads(line))).hexdigest() for line in out.stdout.splitlines()
+        ]
+        sent |= {line.split()[1] for line in sender.seen if line.startswith("sent")}
+        for _ in range(4):
+            sent.add(sender.expect("sent ", 5).split()[1])
+        assert len(received) == 2 and set(received) <= sent
+    finally:
+        sender.stop()
+    data = bytes((i * 13) % 256 for i in range(1_000_000))
+    doc = tmp_path / "image.yaml"
+    doc.write_text(
+        "height: 500\nwidth: 500\nencoding: rgba8\nstep: 2000\ndata: !!binary |\n  "
+        + base64.b64encode(data).decode()
+        + "\n"
+    )
+    checker = start_ros1_node("image_check.py", [], any_master.ros_env)
+    try:
+        checker.expect("ready", 20)
+        pub = run_cli(
+            "topic", "pub", "/image", "sensor_msgs/Image", "-f", str(doc), env=env, timeout=60
+        )
+        assert pub.returncode == 0, pub.stderr
+        line = checker.expect("got ", 20)
+        assert line.split() == ["got", hashlib.md5(data).hexdigest(), "1000000", "rgba8"]
+    finally:
+        checker.stop()
+
+
+def test_echo_follows_a_killed_and_restarted_publisher(any_master: MasterInfo) -> None:
+    echo = rostools(any_master, "topic", "echo", "/chatter", "-F", "json")
+    try:
+        for _ in range(2):
+            talker = start_ros1_node("talker.py", ["/chatter", "20"], any_master.ros_env)
+            echo.expect("hello", 30)
+            talker.signal(9)  # SIGKILL: no unregistration
+            talker.stop()
+            seen = len(echo.seen)
+            echo.seen.clear()
+            assert seen > 0
+    finally:
+        echo.stop()
+
+
+def test_real_rosnode_works_on_our_nodes(any_master: MasterInfo) -> None:
+    pub = rostools(any_master, "topic", "pub", "-r", "5", "/ours", "std_msgs/String", "data: x")
+    sub = start_ros1_node(
+        "listener.py", ["/ours", "std_msgs/String", "__name:=listener"], any_master.ros_env
+    )
+    try:
+        sub.expect("got x", 30)
+        nodes = ros(any_master, "rosnode", "list").stdout.split()
+        ours = next(n for n in nodes if n.startswith("/rostools_pub"))
+        info = ros(any_master, "rosnode", "info", ours).stdout
+        assert "Publications: \n * /ours [std_msgs/String]" in info
+        assert "* to: /listener" in info and "* direction: outbound" in info
+        ping = ros(any_master, "rosnode", "ping", "-c", "2", ours).stdout
+        assert ping.count("xmlrpc reply from") == 2
+        kill = ros(any_master, "rosnode", "kill", ours)
+        assert "killed" in kill.stdout
+        assert pub.popen.wait(10) == 0
+        wait_for(
+            lambda: ours not in ros(any_master, "rosnode", "list").stdout.split(),
+            10,
+            "unregistered",
+        )
+    finally:
+        pub.stop()
+        sub.stop()

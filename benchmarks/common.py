@@ -2,14 +2,18 @@
 
 from __future__ import annotations
 
+import contextlib
 import json
 import os
 import shutil
+import signal
+import socket
 import statistics
 import subprocess
 import sys
 import time
-from collections.abc import Callable, Sequence
+import xmlrpc.client
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
@@ -116,3 +120,77 @@ def write_report(results: list[Result], path: Path) -> None:
         "results": [r.as_dict() for r in results],
     }
     path.write_text(json.dumps(payload, indent=2) + "\n")
+
+
+def free_port() -> int:
+    """A loopback TCP port that was free a moment ago."""
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        port: int = s.getsockname()[1]
+        return port
+
+
+def ros_env(master_uri: str) -> dict[str, str]:
+    """An environment for benchmark processes: loopback, the given master, a scratch ROS home."""
+    env = {k: v for k, v in os.environ.items() if not k.startswith("ROS")}
+    home = BENCH_VENV.parent / "build" / "ros_home"
+    home.mkdir(parents=True, exist_ok=True)
+    env.update(
+        ROS_MASTER_URI=master_uri, ROS_IP="127.0.0.1", ROS_HOME=str(home), PYTHONUNBUFFERED="1"
+    )
+    return env
+
+
+def start(argv: Sequence[str], env: dict[str, str], **kwargs: object) -> subprocess.Popen[bytes]:
+    """A process in its own group, stopped later by ``stop`` through its PID."""
+    return subprocess.Popen(list(argv), env=env, start_new_session=True, **kwargs)  # type: ignore[call-overload,no-any-return]
+
+
+def stop(proc: subprocess.Popen[bytes]) -> None:
+    """SIGINT, then SIGKILL, to the process group."""
+    for sig in (signal.SIGINT, signal.SIGKILL):
+        if proc.poll() is None:
+            with contextlib.suppress(ProcessLookupError):
+                os.killpg(proc.pid, sig)
+            try:
+                proc.wait(5)
+            except subprocess.TimeoutExpired:
+                continue
+
+
+def wait_master(uri: str, timeout: float = 20.0) -> None:
+    """Until a master answers at ``uri``."""
+    proxy = xmlrpc.client.ServerProxy(uri)
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        try:
+            proxy.getPid("/bench")
+            return
+        except OSError:
+            time.sleep(0.05)
+    raise RuntimeError(f"no master at {uri}")
+
+
+@contextlib.contextmanager
+def master() -> Iterator[str]:
+    """A neutral master for data-path benchmarks: the real rosmaster, else rostools core."""
+    port = free_port()
+    uri = f"http://127.0.0.1:{port}/"
+    argv = (
+        ["rosmaster", "--core", "-p", str(port)]
+        if have("rosmaster")
+        else [*rostools_cmd(), "core", "-p", str(port)]
+    )
+    proc = start(argv, ros_env(uri), stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    try:
+        wait_master(uri)
+        yield uri
+    finally:
+        stop(proc)
+
+
+def cpu_seconds(pid: int) -> float:
+    """User + system CPU time a process (and its reaped children) has used so far."""
+    fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
+    ticks = os.sysconf("SC_CLK_TCK")
+    return (int(fields[11]) + int(fields[12])) / ticks

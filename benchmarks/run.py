@@ -12,7 +12,7 @@ import time
 
 from benchmarks.common import ROOT, Result, write_report
 
-MODULES = ["benchmarks.bench_msg", "benchmarks.bench_master"]
+MODULES = ["benchmarks.bench_msg", "benchmarks.bench_master", "benchmarks.bench_topic"]
 
 
 def collect() -> dict[str, object]:

@@ -1,8 +1,8 @@
 """The hottest commands, answered without importing typer (about 40 ms of start-up).
 
-Only argument lists with no options take this path; anything else goes through the Typer app,
-which runs the same functions. ``tests/unit/test_fast_path.py`` checks both give the same
-output.
+Only argument lists with no options take this path (``msg md5 T``, ``topic list [ns]``);
+anything else goes through the Typer app, which runs the same functions. Tests run both paths
+and compare.
 """
 
 from __future__ import annotations
@@ -20,4 +20,26 @@ def dispatch(argv: Sequence[str]) -> int | None:
         name = read_type(argv[2])
         sys.stdout.write(md5_text(name, md5sums(TypeStore.default(), name)))
         return 0
+    if (
+        argv[:2] == ["topic", "list"]
+        and len(argv) <= 3
+        and not any(a.startswith("-") for a in argv)
+    ):
+        return _topic_list(argv[2] if len(argv) == 3 else None)
     return None
+
+
+def _topic_list(namespace: str | None) -> int:
+    import os
+
+    from rostools.cli.common import DEFAULT_MASTER_URI
+    from rostools.cli.topiclist import list_text
+    from rostools.graph.masterapi import MasterProxy
+    from rostools.graph.topics import topic_table
+    from rostools.names import ros_namespace, script_resolve
+
+    uri = os.environ.get("ROS_MASTER_URI") or DEFAULT_MASTER_URI
+    proxy = MasterProxy(uri, f"{ros_namespace()}rostopic_{os.getpid()}")
+    ns = script_resolve(namespace, "rostopic") if namespace else None
+    sys.stdout.write(list_text(topic_table(proxy, ns), False, False, False) + "\n")
+    return 0

@@ -229,3 +229,18 @@ def test_echo_stops_cleanly_when_its_node_is_shut_down(
     finally:
         echo.stop()
         pub.stop()
+
+
+def test_topic_list_fast_path_matches_typer_path(
+    rostools_master: str, cli_env: dict[str, str]
+) -> None:
+    pub = rostools("topic", "pub", "/ns/a", "std_msgs/Empty", env=cli_env)
+    try:
+        wait_listed("/ns/a", cli_env)
+        for args in ([], ["/ns"], ["ns"]):
+            fast = run_cli("topic", "list", *args, env=cli_env)
+            slow = run_cli("--format", "text", "topic", "list", *args, env=cli_env)
+            assert (fast.returncode, fast.stdout) == (slow.returncode, slow.stdout)
+        assert run_cli("topic", "list", "/ns", env=cli_env).stdout == "/ns/a\n"
+    finally:
+        pub.stop()

@@ -21,6 +21,7 @@ from rostools.cli.common import (
     output_format,
     type_store,
 )
+from rostools.cli.topiclist import list_text
 from rostools.errors import NotFoundError, UsageError
 from rostools.names import script_resolve
 
@@ -32,35 +33,6 @@ app = typer.Typer(
 )
 
 TopicArg = Annotated[str, typer.Argument(help="Topic name; relative names join ROS_NAMESPACE.")]
-
-
-def _list_text(
-    table: dict[str, Any], verbose: bool, pubs_only: bool, subs_only: bool, indent: str = ""
-) -> str:
-    infos = list(table.values())
-    if not verbose:
-        if pubs_only:
-            names = [i.name for i in infos if i.publishers]
-        elif subs_only:
-            names = [i.name for i in infos if i.subscribers]
-        else:
-            names = [i.name for i in infos]
-        return "\n".join(indent + n for n in sorted(names))
-    lines: list[str] = []
-    if not subs_only:
-        lines += ["", f"{indent}Published topics:"]
-        for i in infos:
-            if i.publishers:
-                n = len(i.publishers)
-                lines.append(f"{indent} * {i.name} [{i.type}] {n} publisher{'s' if n > 1 else ''}")
-    if not pubs_only:
-        lines += [indent, f"{indent}Subscribed topics:"]
-        for i in infos:
-            if i.subscribers:
-                n = len(i.subscribers)
-                lines.append(f"{indent} * {i.name} [{i.type}] {n} subscriber{'s' if n > 1 else ''}")
-    lines.append("")
-    return "\n".join(lines)
 
 
 @app.command("list")
@@ -103,7 +75,7 @@ def list_topics(
         emit(fmt, rows)
         return
     if not host:
-        sys.stdout.write(_list_text(table, verbose, pubs_only, subs_only) + "\n")
+        sys.stdout.write(list_text(table, verbose, pubs_only, subs_only) + "\n")
         return
     uris: dict[str, str] = {}
     by_host: dict[str, dict[str, Any]] = {}
@@ -119,7 +91,7 @@ def list_topics(
                 getattr(item, attr).append(node)
     for hostname in sorted(by_host):
         sys.stdout.write(f"Host [{hostname}]:\n")
-        sys.stdout.write(_list_text(by_host[hostname], verbose, pubs_only, subs_only, "  ") + "\n")
+        sys.stdout.write(list_text(by_host[hostname], verbose, pubs_only, subs_only, "  ") + "\n")
 
 
 @app.command()

@@ -2,13 +2,12 @@
 
 from __future__ import annotations
 
-import asyncio
 import contextlib
 import sys
 import time
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Annotated, Any
+from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
@@ -16,6 +15,9 @@ from rostools.cli.common import Format, FormatOpt, MsgPathOpt, output_format, se
 from rostools.cli.topic import app
 from rostools.errors import RostoolsError, TimeoutExpired, UsageError
 from rostools.names import script_resolve
+
+if TYPE_CHECKING:
+    import asyncio
 
 CountOpt = Annotated[int | None, typer.Option("-n", help="Exit after this many messages.")]
 TimeoutOpt = Annotated[
@@ -231,6 +233,8 @@ async def _resolve(
     node: Any, name: str, store: Any, deadline: float | None, stop: asyncio.Event
 ) -> Any:
     """Wait until the topic is advertised; the topic and field path."""
+    import asyncio
+
     from rostools.graph.topics import split_field
 
     warned = False
@@ -251,6 +255,8 @@ async def _resolve(
 async def _live(
     node: Any, stop: asyncio.Event, name: str, store: Any, opts: EchoOptions, timeout: float | None
 ) -> str:
+    import asyncio
+
     from rostools.graph.session import first
 
     deadline = time.monotonic() + timeout if timeout is not None else None

@@ -2,12 +2,11 @@
 
 from __future__ import annotations
 
-import asyncio
 import sys
 import time
 from collections.abc import Callable, Iterator
 from pathlib import Path
-from typing import Annotated, Any
+from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
@@ -16,6 +15,9 @@ from rostools.cli.topic import TopicArg, app
 from rostools.cli.topic.echo import TimeoutOpt
 from rostools.errors import NotFoundError, UsageError
 from rostools.names import script_resolve
+
+if TYPE_CHECKING:
+    import asyncio
 
 #: How long ``-1`` stays up so that late subscribers still get the latched message (rostopic).
 ONCE_LINGER = 3.0
@@ -158,6 +160,8 @@ def pub(
     ttype = TopicType.of(store, msg_type)
 
     async def main(node: Any, stop: asyncio.Event) -> None:
+        import asyncio
+
         from rostools.graph.session import first
         from rostools.msgs.text import formatter, message_type
 

@@ -2,13 +2,12 @@
 
 from __future__ import annotations
 
-import asyncio
 import json
 import struct
 import sys
 import time
 from collections.abc import Callable
-from typing import Annotated, Any
+from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
@@ -17,6 +16,9 @@ from rostools.cli.topic import app
 from rostools.cli.topic.echo import FilterOpt, TimeoutOpt, _resolve
 from rostools.errors import NotFoundError, RostoolsError, TimeoutExpired, UsageError
 from rostools.names import script_resolve
+
+if TYPE_CHECKING:
+    import asyncio
 
 _STAMP = struct.Struct("<II")
 WindowOpt = Annotated[int | None, typer.Option("--window", "-w", help="Messages to average over.")]

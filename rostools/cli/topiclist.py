@@ -1,0 +1,35 @@
+"""rostopic list's output, shared by ``topic list`` and its typer-free fast path."""
+
+from __future__ import annotations
+
+from typing import Any
+
+
+def list_text(
+    table: dict[str, Any], verbose: bool, pubs_only: bool, subs_only: bool, indent: str = ""
+) -> str:
+    """rostopic list's text: names, or with ``verbose`` the published/subscribed blocks."""
+    infos = list(table.values())
+    if not verbose:
+        if pubs_only:
+            names = [i.name for i in infos if i.publishers]
+        elif subs_only:
+            names = [i.name for i in infos if i.subscribers]
+        else:
+            names = [i.name for i in infos]
+        return "\n".join(indent + n for n in sorted(names))
+    lines: list[str] = []
+    if not subs_only:
+        lines += ["", f"{indent}Published topics:"]
+        for i in infos:
+            if i.publishers:
+                n = len(i.publishers)
+                lines.append(f"{indent} * {i.name} [{i.type}] {n} publisher{'s' if n > 1 else ''}")
+    if not pubs_only:
+        lines += [indent, f"{indent}Subscribed topics:"]
+        for i in infos:
+            if i.subscribers:
+                n = len(i.subscribers)
+                lines.append(f"{indent} * {i.name} [{i.type}] {n} subscriber{'s' if n > 1 else ''}")
+    lines.append("")
+    return "\n".join(lines)

@@ -34,9 +34,12 @@ def main(argv: Sequence[str] | None = None) -> None:
         status = dispatch(args)
         if status is not None:
             sys.exit(status)
-        from rostools.cli.app import app
+        from rostools.cli import app as root
+        from rostools.names import split_remappings
 
-        app(args=args, prog_name="rostools")
+        args, remappings = split_remappings(args)
+        root.REMAPPINGS.update(remappings)
+        root.app(args=args, prog_name="rostools")
     except SystemExit:
         raise
     except KeyboardInterrupt:

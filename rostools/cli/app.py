@@ -11,6 +11,9 @@ from typer.core import TyperGroup
 from rostools import __version__
 from rostools.cli.common import Format, Settings
 
+#: ``name:=value`` arguments that ``rostools.cli.main`` took off the command line.
+REMAPPINGS: dict[str, str] = {}
+
 #: name -> one-line help. Each group is the Typer app ``rostools.cli.<name>.app``.
 GROUPS: dict[str, str] = {
     "topic": "Topics: list, info, type, find, echo, hz, bw, delay, pub.",
@@ -75,4 +78,4 @@ def root(
     ] = False,
 ) -> None:
     """rostools: rostopic, rosservice, rosparam, rosnode, rosmsg, rosbag and roscore in one."""
-    ctx.obj = Settings(master_uri=master_uri, format=fmt, debug=debug)
+    ctx.obj = Settings(master_uri=master_uri, format=fmt, debug=debug, remappings=REMAPPINGS)

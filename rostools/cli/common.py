@@ -6,14 +6,16 @@ import enum
 import json
 import os
 import sys
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING, Annotated, Any
+from typing import TYPE_CHECKING, Annotated, Any, TypeVar
 
 import typer
 
+T = TypeVar("T")
+
 if TYPE_CHECKING:
-    from collections.abc import Callable
+    from collections.abc import Awaitable, Callable
 
     from rostools.graph.masterapi import MasterProxy
     from rostools.msgs.store import TypeStore
@@ -36,6 +38,8 @@ class Settings:
     master_uri: str | None = None
     format: Format = Format.text
     debug: bool = False
+    #: ``name:=value`` arguments taken off the command line (remaps, ``__name``, ...).
+    remappings: dict[str, str] = field(default_factory=dict)
 
     def resolved_master_uri(self) -> str:
         """``--master-uri``, then ``ROS_MASTER_URI``, then the ROS default."""
@@ -62,6 +66,17 @@ def master(ctx: typer.Context, tool: str) -> MasterProxy:
 
     caller_id = f"{ros_namespace()}{tool}_{os.getpid()}"
     return MasterProxy(settings(ctx).resolved_master_uri(), caller_id)
+
+
+def node_session(ctx: typer.Context, main: Callable[[Any, Any], Awaitable[T]], name: str) -> T:
+    """Run ``main(node, stop)`` as an anonymous node named after ``name``.
+
+    The command line's remapping arguments (``__name:=``, ``a:=b``, ...) apply to it.
+    """
+    from rostools.graph.session import run_node
+
+    s = settings(ctx)
+    return run_node(main, s.resolved_master_uri(), name, remappings=s.remappings)
 
 
 def type_store(msg_paths: list[Path] | None = None) -> TypeStore:

@@ -23,7 +23,7 @@ from rostools.graph.publisher import Publisher
 from rostools.graph.subscriber import FramesCallback, Subscriber
 from rostools.graph.topic import ANY, TopicType
 from rostools.graph.xmlrpc import XmlRpcServer, call
-from rostools.names import anonymous, canonicalize, resolve, ros_namespace
+from rostools.names import anonymous, canonicalize, make_global_ns, resolve, ros_namespace
 from rostools.wire.tcpros import error_header
 
 log = logging.getLogger(__name__)
@@ -74,14 +74,32 @@ class Node:
         remappings: dict[str, str] | None = None,
         host: str | None = None,
     ) -> None:
+        """A node named ``name`` in ``ns`` (default: ``ROS_NAMESPACE``).
+
+        ``remappings`` are command-line ``name:=value`` pairs: ``__name``, ``__ns``,
+        ``__master``, ``__ip``/``__hostname``, ``_private`` parameters and topic remaps.
+        """
+        args = dict(remappings or {})
+        if "__name" in args:
+            name, anonymous_name = args.pop("__name"), False
+        ns = args.pop("__ns", ns)
+        master_uri = args.pop("__master", master_uri)
+        host = args.pop("__hostname", None) or args.pop("__ip", None) or host
+        args.pop("__log", None)
         base = anonymous(name.strip("/")) if anonymous_name else name.strip("/")
-        ns = ns if ns is not None else ros_namespace()
+        ns = make_global_ns(ns) if ns else ros_namespace()
         self.name = (
             canonicalize(ns + "/" + base) if not name.startswith("/") else canonicalize(name)
         )
         self.master_uri = master_uri
         self.host = host or choose_host(master_uri)
-        self.remappings = remappings or {}
+        #: ``_param:=value`` arguments, set as private parameters when the node starts.
+        self.private_params = {k[1:]: v for k, v in args.items() if k.startswith("_")}
+        self.remappings = {
+            resolve(k, self.name): resolve(v, self.name)
+            for k, v in args.items()
+            if not k.startswith("_")
+        }
         self.publishers: dict[str, Publisher] = {}
         self.subscribers: dict[str, Subscriber] = {}
         self.services: dict[str, Any] = {}
@@ -102,6 +120,12 @@ class Node:
         loop = asyncio.get_running_loop()
         self._tcpros = await loop.create_server(lambda: ServerConnection(self._accept), bind, 0)
         self.tcpros_port = self._tcpros.sockets[0].getsockname()[1]
+        if self.private_params:
+            import yaml
+
+            for key, text in self.private_params.items():
+                value = yaml.safe_load(text) if text else ""
+                await self.master_call("setParam", f"{self.name}/{key}", value)
         return self
 
     @property

@@ -44,11 +44,12 @@ def run_node(
     master_uri: str,
     name: str = "rostools",
     anonymous_name: bool = True,
+    remappings: dict[str, str] | None = None,
 ) -> T:
     """Run ``main(node, stop)`` on a fresh event loop; the node is closed afterwards."""
 
     async def runner() -> T:
-        node = Node(name, master_uri, anonymous_name=anonymous_name)
+        node = Node(name, master_uri, anonymous_name=anonymous_name, remappings=remappings)
         try:
             await node.start()
         except OSError as err:

@@ -244,3 +244,27 @@ def test_topic_list_fast_path_matches_typer_path(
         assert run_cli("topic", "list", "/ns", env=cli_env).stdout == "/ns/a\n"
     finally:
         pub.stop()
+
+
+def test_remapping_arguments(rostools_master: str, cli_env: dict[str, str]) -> None:
+    pub = rostools("topic", "pub", "/other", "std_msgs/String", "data: remapped", env=cli_env)
+    try:
+        wait_listed("/other", cli_env)
+        out = run_cli(
+            "topic",
+            "echo",
+            "/chatter",
+            "-n",
+            "1",
+            "/chatter:=/other",
+            "__name:=watcher",
+            env=cli_env,
+        )
+        assert out.stdout == 'data: "remapped"\n---\n', out.stderr
+        private = run_cli(
+            "topic", "echo", "/other", "-n", "1", "__name:=probe", "_gain:=2.5", env=cli_env
+        )
+        assert private.returncode == 0
+        assert run_cli("param", "get", "/probe/gain", env=cli_env).stdout == "2.5\n"
+    finally:
+        pub.stop()

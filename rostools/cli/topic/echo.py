@@ -11,7 +11,14 @@ from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
-from rostools.cli.common import Format, FormatOpt, MsgPathOpt, output_format, settings, type_store
+from rostools.cli.common import (
+    Format,
+    FormatOpt,
+    MsgPathOpt,
+    node_session,
+    output_format,
+    type_store,
+)
 from rostools.cli.topic import app
 from rostools.errors import RostoolsError, TimeoutExpired, UsageError
 from rostools.names import script_resolve
@@ -217,12 +224,8 @@ def echo(
         echo_bag(bag, name if not all_topics else None, store, opts)
         return
     opts = _options(fmt, "", count, filter_expr, plot, nostr, noarr, clear, offset, width)
-    from rostools.graph.session import run_node
-
-    result = run_node(
-        lambda node, stop: _live(node, stop, name, store, opts, timeout),
-        settings(ctx).resolved_master_uri(),
-        "rostools_echo",
+    result = node_session(
+        ctx, lambda node, stop: _live(node, stop, name, store, opts, timeout), "rostools_echo"
     )
     if result == "timeout":
         wanted = f"{count} message(s)" if count else "a message"
@@ -237,6 +240,7 @@ async def _resolve(
 
     from rostools.graph.topics import split_field
 
+    name = node.resolve(name)  # command-line remappings apply
     warned = False
     while True:
         types = dict(await node.master_call("getTopicTypes"))

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import typer
 
-from rostools.cli.common import settings
+from rostools.cli.common import node_session
 from rostools.msgs.store import TypeStore
 
 PROBE_TIMEOUT = 5.0
@@ -13,10 +13,9 @@ PROBE_TIMEOUT = 5.0
 def learn_type(ctx: typer.Context, topic: str, store: TypeStore) -> TypeStore:
     """``store`` plus the definition a publisher of ``topic`` sends."""
     from rostools.graph.probe import probe_topic
-    from rostools.graph.session import run_node
 
     async def main(node, stop):  # type: ignore[no-untyped-def]
         return await probe_topic(node, topic, PROBE_TIMEOUT)
 
-    learnt = run_node(main, settings(ctx).resolved_master_uri(), "rostools_probe")
+    learnt = node_session(ctx, main, "rostools_probe")
     return store.with_definition(learnt.type, learnt.definition)

@@ -10,7 +10,7 @@ from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
-from rostools.cli.common import MsgPathOpt, settings, type_store
+from rostools.cli.common import MsgPathOpt, node_session, type_store
 from rostools.cli.topic import TopicArg, app
 from rostools.cli.topic.echo import TimeoutOpt
 from rostools.errors import NotFoundError, UsageError
@@ -126,7 +126,6 @@ def pub(
     msg_path: MsgPathOpt = None,
 ) -> None:
     """Publish messages (rostopic pub). By default: once, latched, until Ctrl-C."""
-    from rostools.graph.session import run_node
     from rostools.graph.topic import TopicType
     from rostools.msgs.codec import Codec
     from rostools.msgs.fill import Filler
@@ -218,4 +217,4 @@ def pub(
             else:
                 await asyncio.sleep(0)
 
-    run_node(main, settings(ctx).resolved_master_uri(), "rostools_pub")
+    node_session(ctx, main, "rostools_pub")

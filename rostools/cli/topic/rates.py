@@ -11,7 +11,7 @@ from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
-from rostools.cli.common import Format, FormatOpt, output_format, settings
+from rostools.cli.common import Format, FormatOpt, node_session, output_format
 from rostools.cli.topic import app
 from rostools.cli.topic.echo import FilterOpt, TimeoutOpt, _resolve
 from rostools.errors import NotFoundError, RostoolsError, TimeoutExpired, UsageError
@@ -84,12 +84,8 @@ class Meter:
 
 
 def _run(ctx: typer.Context, meter: Meter, sink: Any, report: Any) -> None:
-    from rostools.graph.session import run_node
-
-    result = run_node(
-        lambda node, stop: meter.run(node, stop, sink, report),
-        settings(ctx).resolved_master_uri(),
-        "rostools_rates",
+    result = node_session(
+        ctx, lambda node, stop: meter.run(node, stop, sink, report), "rostools_rates"
     )
     if result == "timeout":
         raise TimeoutExpired(f"no message on {', '.join(meter.topics)} within {meter.timeout:g} s")

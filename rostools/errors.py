@@ -47,6 +47,12 @@ class DataLossError(RostoolsError):
     exit_code = 6
 
 
+class ServiceError(RostoolsError):
+    """A service answered a call with a failure; the message carries the server's text."""
+
+    exit_code = 1
+
+
 class InvalidDataError(RostoolsError):
     """Malformed input data: a bad definition, a corrupt file, garbage from a peer."""
 

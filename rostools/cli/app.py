@@ -17,6 +17,7 @@ REMAPPINGS: dict[str, str] = {}
 #: name -> one-line help. Each group is the Typer app ``rostools.cli.<name>.app``.
 GROUPS: dict[str, str] = {
     "topic": "Topics: list, info, type, find, echo, hz, bw, delay, pub.",
+    "service": "Services: list, info, type, find, uri, args, call.",
     "param": "The parameter server: list, get, set, delete, load, dump.",
     "msg": "Message and service types: show, md5, list, package, packages, proto.",
     "core": "Run the bundled master and parameter server (roscore).",

@@ -20,6 +20,8 @@ from urllib.parse import urlsplit
 from rostools.errors import RostoolsError, UnreachableError
 from rostools.graph.connection import Handler, ServerConnection
 from rostools.graph.publisher import Publisher
+from rostools.graph.service import Handler as ServiceHandler
+from rostools.graph.service import ServiceServer, ServiceType
 from rostools.graph.subscriber import FramesCallback, Subscriber
 from rostools.graph.topic import ANY, TopicType
 from rostools.graph.xmlrpc import XmlRpcServer, call
@@ -102,7 +104,7 @@ class Node:
         }
         self.publishers: dict[str, Publisher] = {}
         self.subscribers: dict[str, Subscriber] = {}
-        self.services: dict[str, Any] = {}
+        self.services: dict[str, ServiceServer] = {}
         self.shutdown_requested = asyncio.Event()
         self.shutdown_reason = ""
         self._xmlrpc: XmlRpcServer | None = None
@@ -222,6 +224,15 @@ class Node:
         uris = await self.master_call("registerSubscriber", topic, topic_type.type, self.uri)
         sub.update(list(uris))
         return sub
+
+    async def advertise_service(
+        self, name: str, srv_type: ServiceType, handler: ServiceHandler
+    ) -> ServiceServer:
+        """Serve ``name`` (registered with the master)."""
+        name = self.resolve(name)
+        server = self.services[name] = ServiceServer(self, name, srv_type, handler)
+        await self.master_call("registerService", name, server.uri, self.uri)
+        return server
 
     # TCPROS ---------------------------------------------------------------------------
 

@@ -15,6 +15,7 @@ from rostools.errors import RostoolsError
 from rostools.graph.connection import Frame
 from rostools.graph.node import Node
 from rostools.master.server import Master
+from rostools.msgs.store import BuiltinSource, TypeStore
 
 DEFAULT_PORT = 11311
 #: What roscore publishes about itself; values end in a newline as ``rosversion`` prints them.
@@ -95,9 +96,9 @@ async def run_core(address: Address, ready: Callable[[Master, str], None]) -> No
 async def start_rosout(master_uri: str, host: str) -> Node:
     """roscore's /rosout node: every node's /rosout messages, republished on /rosout_agg."""
     from rostools.graph.topic import TopicType
-    from rostools.msgs.store import BuiltinSource, TypeStore
 
-    log_type = TopicType.of(TypeStore([BuiltinSource()]), "rosgraph_msgs/Log")
+    store = TypeStore([BuiltinSource()])
+    log_type = TopicType.of(store, "rosgraph_msgs/Log")
     node = await Node(
         "/rosout", master_uri, host="127.0.0.1" if host == "localhost" else host
     ).start()
@@ -108,4 +109,31 @@ async def start_rosout(master_uri: str, host: str) -> Node:
             agg.publish(frame)
 
     await node.subscribe("/rosout", forward, log_type)
+    await add_logger_services(node, store)
     return node
+
+
+async def add_logger_services(node: Node, store: TypeStore) -> None:
+    """``~get_loggers`` and ``~set_logger_level``, which every rospy and roscpp node offers."""
+    from rostools.graph.service import ServiceType
+    from rostools.msgs.codec import Codec
+
+    codec = Codec.of(store)
+    levels = {"ros": "info"}
+    get_type, set_type = (
+        ServiceType.of(store, "roscpp/GetLoggers"),
+        ServiceType.of(store, "roscpp/SetLoggerLevel"),
+    )
+
+    def get_loggers(request: bytes) -> bytes:
+        logger = codec.message_class("roscpp/Logger")
+        loggers = [logger(name, level) for name, level in sorted(levels.items())]
+        return codec.message_class("roscpp/GetLoggersResponse")(loggers).serialize()
+
+    def set_level(request: bytes) -> bytes:
+        msg = codec.decode("roscpp/SetLoggerLevelRequest", request)
+        levels[msg.logger] = msg.level.lower()
+        return b""
+
+    await node.advertise_service("~get_loggers", get_type, get_loggers)
+    await node.advertise_service("~set_logger_level", set_type, set_level)

@@ -121,6 +121,10 @@ class Message:
     _slot_types: ClassVar[tuple[str, ...]] = ()
     _fields: ClassVar[tuple[str, ...]] = ()  # ROS field names (slots may carry a '_' suffix)
 
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        """Field values in order or by name (generated per class; defaults for the rest)."""
+        raise TypeError("Message is abstract; use a class from rostools.msgs.codec")
+
     def __eq__(self, other: object) -> bool:
         if type(other) is not type(self):
             return NotImplemented

@@ -7,6 +7,7 @@ record headers carry their length in the record instead and have binary values.
 from __future__ import annotations
 
 import struct
+from collections.abc import Mapping
 
 _U32 = struct.Struct("<I")
 #: roscpp refuses a header field longer than this (``Header::parse``), and so do we.
@@ -51,7 +52,7 @@ def decode_fields(data: bytes | memoryview) -> dict[str, str]:
     return {k: v.decode("utf-8", "replace") for k, v in split_fields(data).items()}
 
 
-def encode_fields(fields: dict[str, str | bytes]) -> bytes:
+def encode_fields(fields: Mapping[str, str | bytes]) -> bytes:
     """Header field bytes, sorted by key as rospy and roscpp write them (no total length)."""
     out = bytearray()
     for key in sorted(fields):
@@ -62,7 +63,7 @@ def encode_fields(fields: dict[str, str | bytes]) -> bytes:
     return bytes(out)
 
 
-def encode_header(fields: dict[str, str | bytes]) -> bytes:
+def encode_header(fields: Mapping[str, str | bytes]) -> bytes:
     """A complete TCPROS connection header: total length, then the sorted fields."""
     body = encode_fields(fields)
     return _U32.pack(len(body)) + body

@@ -158,3 +158,88 @@ def check_subscription(
         f"Client [{fields['callerid']}] wants topic [{topic}] to have datatype/md5sum "
         f"[{wanted_type}/{theirs}], but our version has [{type_name}/{md5sum}] Dropping connection."
     )
+
+
+# services ---------------------------------------------------------------------------------
+
+
+def service_request_header(
+    caller_id: str, service: str, md5sum: str, *, persistent: bool = False, probe: bool = False
+) -> bytes:
+    """What a service client sends first; md5sum ``*`` to probe for the type."""
+    fields = {"callerid": caller_id, "service": service, "md5sum": md5sum}
+    if persistent:
+        fields["persistent"] = "1"
+    if probe:
+        fields["probe"] = "1"
+    return encode_header(fields)
+
+
+def service_reply_header(caller_id: str, service: str, md5sum: str, type_name: str) -> bytes:
+    """A service server's reply: rospy's fields plus roscpp's request/response types."""
+    return encode_header(
+        {
+            "callerid": caller_id,
+            "md5sum": md5sum,
+            "request_type": f"{type_name}Request",
+            "response_type": f"{type_name}Response",
+            "service": service,
+            "type": type_name,
+        }
+    )
+
+
+def check_service_request(fields: dict[str, str], service: str, md5sum: str) -> str | None:
+    """Why a server refuses this client's header, or None when it accepts it."""
+    for required in ("callerid", "service", "md5sum"):
+        if required not in fields:
+            return f"header missing required field [{required}]"
+    theirs = fields["md5sum"]
+    if theirs not in ("*", md5sum):
+        return (
+            f"request from [{fields['callerid']}]: md5sums do not match: [{theirs}] vs. [{md5sum}]"
+        )
+    return None
+
+
+def service_response(ok: bool, payload: bytes) -> bytes:
+    """A response: one ok byte, then a length-prefixed payload (the error text when not ok)."""
+    return (b"\x01" if ok else b"\x00") + _U32.pack(len(payload)) + payload
+
+
+class ResponseReader:
+    """A service client's receive side: the reply header, then ``ok ; u32 len ; payload``."""
+
+    def __init__(self, max_frame: int = MAX_FRAME) -> None:
+        self.buffer = bytearray()
+        self.max_frame = max_frame
+        self.header: dict[str, str] | None = None
+
+    def feed(self, data: bytes) -> list[tuple[bool, bytes]]:
+        """Add received bytes; the responses now complete, as (ok, payload)."""
+        self.buffer += data
+        out: list[tuple[bool, bytes]] = []
+        while True:
+            if self.header is None:
+                if len(self.buffer) < 4:
+                    return out
+                (length,) = _U32.unpack_from(self.buffer, 0)
+                if length > self.max_frame:
+                    raise FrameError(f"reply header of {length} bytes exceeds the limit")
+                if len(self.buffer) < 4 + length:
+                    return out
+                self.header = parse_header(bytes(self.buffer[4 : 4 + length]))
+                del self.buffer[: 4 + length]
+                continue
+            if len(self.buffer) < 5:
+                return out
+            ok = self.buffer[0]
+            if ok not in (0, 1):
+                raise FrameError(f"bad service response status byte {ok}")
+            (length,) = _U32.unpack_from(self.buffer, 1)
+            if length > self.max_frame:
+                raise FrameError(f"service response of {length} bytes exceeds the limit")
+            if len(self.buffer) < 5 + length:
+                return out
+            out.append((ok == 1, bytes(self.buffer[5 : 5 + length])))
+            del self.buffer[: 5 + length]

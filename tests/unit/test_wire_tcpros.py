@@ -116,3 +116,50 @@ def test_header_fields_are_sorted_and_split_at_first_equals() -> None:
     raw = encode_header({"b": "1=2", "a": "x\ny"})
     assert decode_fields(raw[4:]) == {"a": "x\ny", "b": "1=2"}
     assert raw[8:13] == b"a=x\ny"
+
+
+def test_service_response_reader_in_any_chunks() -> None:
+    from rostools.wire.tcpros import ResponseReader, service_reply_header, service_response
+
+    stream = (
+        service_reply_header("/srv_node", "/add", "6a2e34150c00229791cc89ff309fff21", "p/Add")
+        + service_response(True, b"\x07" + bytes(7))
+        + service_response(False, b"bad logger")
+        + service_response(True, b"")
+    )
+    for chunk in (1, 3, len(stream)):
+        reader = ResponseReader()
+        got = []
+        for i in range(0, len(stream), chunk):
+            got += reader.feed(stream[i : i + chunk])
+        assert reader.header is not None and reader.header["type"] == "p/Add"
+        assert reader.header["request_type"] == "p/AddRequest"
+        assert got == [(True, b"\x07" + bytes(7)), (False, b"bad logger"), (True, b"")]
+
+
+def test_captured_service_bytes() -> None:
+    """ROS1_PROTOCOL.md §14.5: empty success, roscpp false, rospy ServiceException."""
+    from rostools.wire.tcpros import FrameError, ResponseReader, service_response
+
+    assert service_response(True, b"") == bytes.fromhex("0100000000")
+    assert service_response(False, b"") == bytes.fromhex("0000000000")
+    text = b"service cannot process request: bad logger"
+    assert service_response(False, text)[:5] == bytes.fromhex("002a000000")
+    reader = ResponseReader()
+    reader.header = {}
+    with pytest.raises(FrameError, match="status byte"):
+        reader.feed(b"\x07\x00\x00\x00\x00")
+
+
+def test_service_request_checks() -> None:
+    from rostools.wire.tcpros import check_service_request
+
+    ok = {"callerid": "/c", "service": "/s", "md5sum": "*"}
+    assert check_service_request(ok, "/s", "abc") is None
+    bad = {**ok, "md5sum": "zzz"}
+    assert "md5sums do not match: [zzz] vs. [abc]" in (
+        check_service_request(bad, "/s", "abc") or ""
+    )
+    assert "missing required field [callerid]" in (
+        check_service_request({"service": "/s", "md5sum": "*"}, "/s", "abc") or ""
+    )

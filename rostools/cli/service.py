@@ -1,0 +1,279 @@
+"""``rostools service``: all of rosservice, with timeouts and one set of exit codes."""
+
+from __future__ import annotations
+
+import os
+import sys
+import time
+from typing import TYPE_CHECKING, Annotated, Any
+
+import typer
+
+from rostools.cli.common import (
+    Format,
+    FormatOpt,
+    MsgPathOpt,
+    emit,
+    master,
+    output_format,
+    type_store,
+)
+from rostools.errors import NotFoundError, TimeoutExpired, UsageError
+from rostools.names import make_global_ns, ros_namespace, script_resolve
+
+if TYPE_CHECKING:
+    from rostools.graph.blocking import BlockingServiceClient
+    from rostools.graph.masterapi import MasterProxy
+    from rostools.msgs.store import TypeStore
+
+app = typer.Typer(
+    name="service",
+    help="Services: list, info, type, find, uri, args, call.",
+    no_args_is_help=True,
+    add_completion=False,
+)
+
+ServiceArg = Annotated[str, typer.Argument(help="Service name; relative names join ROS_NAMESPACE.")]
+TimeoutOpt = Annotated[float, typer.Option("--timeout", help="Seconds to wait for the service.")]
+DEFAULT_TIMEOUT = 10.0
+
+
+def _caller() -> str:
+    return f"{ros_namespace()}rosservice_{os.getpid()}"
+
+
+def _client(proxy: MasterProxy, name: str, timeout: float) -> BlockingServiceClient:
+    from rostools.graph.blocking import BlockingServiceClient
+
+    return BlockingServiceClient(proxy, name, timeout)
+
+
+def _services(proxy: MasterProxy) -> dict[str, list[str]]:
+    _, _, services = proxy.system_state()
+    return {name: list(nodes) for name, nodes in sorted(services)}
+
+
+def _type_of(proxy: MasterProxy, name: str, timeout: float) -> tuple[str, str]:
+    """(type, md5sum) of a service, from a probe of its server."""
+    fields = _client(proxy, name, timeout).probe(_caller())
+    return fields.get("type", ""), fields.get("md5sum", "")
+
+
+def _srv(store: TypeStore, type_name: str, name: str) -> Any:
+    try:
+        return store.srv(type_name)
+    except NotFoundError:
+        raise NotFoundError(
+            f"{name} is a {type_name}, a service type not installed here",
+            hint="add its package with --msg-path",
+        ) from None
+
+
+@app.command("list")
+def list_services(
+    ctx: typer.Context,
+    namespace: Annotated[
+        str | None, typer.Argument(help="Only services under this namespace.")
+    ] = None,
+    nodes: Annotated[
+        bool, typer.Option("--nodes", "-n", help="Show the node of each service.")
+    ] = False,
+    fmt: FormatOpt = None,
+) -> None:
+    """List services (rosservice list)."""
+    services = _services(master(ctx, "rosservice"))
+    if namespace:
+        ns = script_resolve(namespace, "rosservice")
+        services = {
+            s: n for s, n in services.items() if s == ns or s.startswith(make_global_ns(ns))
+        }
+    fmt = output_format(ctx, fmt)
+    if fmt is not Format.text:
+        emit(fmt, [{"service": s, "nodes": n} for s, n in services.items()])
+    elif nodes:
+        sys.stdout.write("".join(f"{s} {','.join(n)}\n" for s, n in services.items()))
+    else:
+        sys.stdout.write("".join(f"{s}\n" for s in services))
+
+
+@app.command()
+def uri(ctx: typer.Context, service: ServiceArg, fmt: FormatOpt = None) -> None:
+    """The rosrpc URI of a service."""
+    name = script_resolve(service, "rosservice")
+    found = master(ctx, "rosservice").lookup_service(name)
+    emit(output_format(ctx, fmt), {"service": name, "uri": found}, lambda d: d["uri"])
+
+
+@app.command("type")
+def type_(
+    ctx: typer.Context,
+    service: ServiceArg,
+    timeout: TimeoutOpt = DEFAULT_TIMEOUT,
+    fmt: FormatOpt = None,
+) -> None:
+    """A service's type, asked of its server (rosservice type)."""
+    name = script_resolve(service, "rosservice")
+    kind, md5 = _type_of(master(ctx, "rosservice"), name, timeout)
+    emit(
+        output_format(ctx, fmt), {"service": name, "type": kind, "md5sum": md5}, lambda d: d["type"]
+    )
+
+
+@app.command()
+def args(
+    ctx: typer.Context,
+    service: ServiceArg,
+    timeout: TimeoutOpt = DEFAULT_TIMEOUT,
+    fmt: FormatOpt = None,
+    msg_path: MsgPathOpt = None,
+) -> None:
+    """The request fields of a service (rosservice args)."""
+    name = script_resolve(service, "rosservice")
+    kind, _ = _type_of(master(ctx, "rosservice"), name, timeout)
+    fields = [f.name for f in _srv(type_store(msg_path), kind, name).request.fields]
+    emit(output_format(ctx, fmt), fields, " ".join)
+
+
+@app.command()
+def info(
+    ctx: typer.Context,
+    service: ServiceArg,
+    timeout: TimeoutOpt = DEFAULT_TIMEOUT,
+    fmt: FormatOpt = None,
+    msg_path: MsgPathOpt = None,
+) -> None:
+    """Node, URI, type and request fields of a service (rosservice info)."""
+    name = script_resolve(service, "rosservice")
+    proxy = master(ctx, "rosservice")
+    providers = _services(proxy).get(name)
+    if not providers:
+        raise NotFoundError(f"unknown service {name}")
+    found_uri = proxy.lookup_service(name)
+    kind, md5 = _type_of(proxy, name, timeout)
+    store = type_store(msg_path)
+    request = [f.name for f in store.srv(kind).request.fields] if _has_srv(store, kind) else None
+    data = {
+        "service": name,
+        "node": providers[0],
+        "uri": found_uri,
+        "type": kind,
+        "md5sum": md5,
+        "args": request,
+    }
+    text = f"Node: {providers[0]}\nURI: {found_uri}\nType: {kind}\nArgs: {' '.join(request or [])}"
+    emit(output_format(ctx, fmt), data, lambda _: text)
+
+
+def _has_srv(store: TypeStore, kind: str) -> bool:
+    try:
+        store.srv(kind)
+    except NotFoundError:
+        return False
+    return True
+
+
+@app.command()
+def find(
+    ctx: typer.Context,
+    srv_type: Annotated[str, typer.Argument(help="A service type, pkg/Type.")],
+    timeout: TimeoutOpt = 2.0,
+    fmt: FormatOpt = None,
+) -> None:
+    """Services of a given type, found by probing each (rosservice find)."""
+    from rostools.errors import RostoolsError
+
+    proxy = master(ctx, "rosservice")
+    found = []
+    for name in _services(proxy):
+        try:
+            if _type_of(proxy, name, timeout)[0] == srv_type:
+                found.append(name)
+        except RostoolsError:
+            continue  # a dead or slow server is simply not a match
+    emit(output_format(ctx, fmt), found, "\n".join)
+
+
+@app.command(context_settings={"ignore_unknown_options": True})
+def call(
+    ctx: typer.Context,
+    service: ServiceArg,
+    values: Annotated[
+        list[str] | None,
+        typer.Argument(help="Request: one YAML mapping, or one YAML value per field in order."),
+    ] = None,
+    verbose: Annotated[
+        bool, typer.Option("--verbose", "-v", help="Print the request too.")
+    ] = False,
+    wait: Annotated[
+        bool, typer.Option("--wait", help="Wait for the service to appear (up to --timeout).")
+    ] = False,
+    timeout: TimeoutOpt = DEFAULT_TIMEOUT,
+    fmt: FormatOpt = None,
+    msg_path: MsgPathOpt = None,
+) -> None:
+    """Call a service (rosservice call); stdin YAML documents make one call each."""
+    from rostools.msgs.codec import Codec
+    from rostools.msgs.fill import Filler, parse_yaml_args
+
+    name = script_resolve(service, "rosservice")
+    proxy = master(ctx, "rosservice")
+    if wait:
+        _wait_for(proxy, name, timeout)
+    kind, md5 = _type_of(proxy, name, timeout)
+    store = type_store(msg_path)
+    spec = _srv(store, kind, name)
+    codec = Codec.of(store)
+    filler = Filler(codec)
+    if values:
+        requests = [parse_yaml_args(values)]
+    elif spec.request.fields and not sys.stdin.isatty():
+        import yaml
+
+        try:
+            requests = [[doc] for doc in yaml.safe_load_all(sys.stdin.read()) if doc is not None]
+        except yaml.YAMLError as err:
+            raise UsageError(f"bad YAML on stdin: {err}") from None
+    else:
+        requests = [[]]
+    fmt = output_format(ctx, fmt)
+    client = _client(proxy, name, timeout)
+    for arguments in requests:
+        try:
+            request = filler.message(spec.request.name, arguments)
+        except UsageError as err:
+            fields = " ".join(f.name for f in spec.request.fields) or "(none)"
+            raise UsageError(f"{err}", hint=f"{name} takes: {fields}") from None
+        answer = client.call(_caller(), md5, request.serialize())
+        response = codec.decode(spec.response.name, answer)
+        _print(codec, spec, request, response, verbose, fmt)
+
+
+def _wait_for(proxy: MasterProxy, name: str, timeout: float) -> None:
+    deadline = time.monotonic() + timeout
+    while name not in _services(proxy):
+        if time.monotonic() > deadline:
+            raise TimeoutExpired(f"service {name} did not appear within {timeout:g} s")
+        time.sleep(0.1)
+
+
+def _print(codec: Any, spec: Any, request: Any, response: Any, verbose: bool, fmt: Format) -> None:
+    from rostools.msgs import plain, text
+
+    if fmt is Format.text:
+        out = ""
+        if verbose:
+            out = text.formatter(codec, text.message_type(spec.request.name))(request) + "\n---\n"
+        out += text.formatter(codec, text.message_type(spec.response.name))(response)
+        sys.stdout.write(out + "\n")
+    else:
+        data = plain.to_plain(codec, text.message_type(spec.response.name))(response)
+        if verbose:
+            data = {
+                "request": plain.to_plain(codec, text.message_type(spec.request.name))(request),
+                "response": data,
+            }
+        if fmt is Format.json:
+            sys.stdout.write(plain.dumps(data) + "\n")
+        else:
+            emit(fmt, data)
+    sys.stdout.flush()

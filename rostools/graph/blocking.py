@@ -43,10 +43,9 @@ class BlockingServiceClient:
                 f"cannot connect to service {self.name} at {host}:{port}: {err.strerror or err}"
             ) from None
         reader = ResponseReader()
+        sent_request = False
         try:
             sock.sendall(header)
-            if request is not None:
-                sock.sendall(len(request).to_bytes(4, "little") + request)
             while True:
                 sock.settimeout(max(deadline - time.monotonic(), 0.001))
                 data = sock.recv(65536)
@@ -57,14 +56,19 @@ class BlockingServiceClient:
                     raise RostoolsError(f"service {self.name} closed the connection without {what}")
                 responses = reader.feed(data)
                 fields = reader.header
-                if fields is not None and ("error" in fields or request is None):
+                if fields is None:
+                    continue
+                if "error" in fields or request is None:
                     break
+                if not sent_request:
+                    # Only after the reply header: rospy drops bytes that come with the header.
+                    sock.sendall(len(request).to_bytes(4, "little") + request)
+                    sent_request = True
                 if responses:
                     ok, payload = responses[0]
                     if not ok:
                         text = payload.decode("utf-8", "replace") or "(no reason given)"
                         raise ServiceError(f"service {self.name} failed: {text}")
-                    assert fields is not None
                     return fields, payload
         except TimeoutError:
             raise TimeoutExpired(

@@ -12,7 +12,12 @@ import time
 
 from benchmarks.common import ROOT, Result, write_report
 
-MODULES = ["benchmarks.bench_msg", "benchmarks.bench_master", "benchmarks.bench_topic"]
+MODULES = [
+    "benchmarks.bench_msg",
+    "benchmarks.bench_master",
+    "benchmarks.bench_topic",
+    "benchmarks.bench_service",
+]
 
 
 def collect() -> dict[str, object]:

@@ -20,7 +20,7 @@ from rostools.errors import (
     TimeoutExpired,
     UnreachableError,
 )
-from rostools.graph.connection import Frame, ServerConnection
+from rostools.graph.connection import Frame, ServerConnection, set_nodelay
 from rostools.msgs.store import TypeStore
 from rostools.wire.tcpros import (
     FrameError,
@@ -143,17 +143,25 @@ class _ServiceLink:
 
 
 class _ClientProtocol(asyncio.Protocol):
+    """A client connection: the reply header, then one response per request, in order."""
+
     def __init__(self) -> None:
+        loop = asyncio.get_running_loop()
         self.reader = ResponseReader()
-        self.header: asyncio.Future[dict[str, str]] = asyncio.get_running_loop().create_future()
-        self.responses: asyncio.Queue[tuple[bool, bytes] | BaseException] = asyncio.Queue()
+        self.header: asyncio.Future[dict[str, str]] = loop.create_future()
+        self.ready: list[tuple[bool, bytes]] = []
+        self.waiter: asyncio.Future[tuple[bool, bytes]] | None = None
+        self.failure: BaseException | None = None
         self.transport: asyncio.Transport | None = None
 
     def connection_made(self, transport: asyncio.BaseTransport) -> None:
+        """Asyncio: connected."""
         assert isinstance(transport, asyncio.Transport)
         self.transport = transport
+        set_nodelay(transport)
 
     def data_received(self, data: bytes) -> None:
+        """Asyncio: bytes arrived."""
         try:
             responses = self.reader.feed(data)
         except FrameError as err:
@@ -161,17 +169,32 @@ class _ClientProtocol(asyncio.Protocol):
             return
         if self.reader.header is not None and not self.header.done():
             self.header.set_result(self.reader.header)
-        for response in responses:
-            self.responses.put_nowait(response)
+        self.ready += responses
+        if self.ready and self.waiter is not None and not self.waiter.done():
+            self.waiter.set_result(self.ready.pop(0))
+
+    def next_response(self) -> asyncio.Future[tuple[bool, bytes]]:
+        """The next response (already here, or when it arrives)."""
+        future: asyncio.Future[tuple[bool, bytes]] = asyncio.get_running_loop().create_future()
+        if self.ready:
+            future.set_result(self.ready.pop(0))
+        elif self.failure is not None:
+            future.set_exception(self.failure)
+        else:
+            self.waiter = future
+        return future
 
     def _fail(self, err: BaseException) -> None:
+        self.failure = err
         if not self.header.done():
             self.header.set_exception(err)
-        self.responses.put_nowait(err)
+        if self.waiter is not None and not self.waiter.done():
+            self.waiter.set_exception(err)
         if self.transport is not None:
             self.transport.close()
 
     def connection_lost(self, exc: Exception | None) -> None:
+        """Asyncio: the connection closed."""
         self._fail(ConnectionError("the service closed the connection"))
 
 
@@ -247,25 +270,33 @@ class ServiceClient:
         if proto is None or proto.transport is None or proto.transport.is_closing():
             proto, _ = await self._connect(False, timeout)
         assert proto.transport is not None
+        response = proto.next_response()
         proto.transport.write(len(request).to_bytes(4, "little") + request)
+        # A timer, not wait_for: wait_for makes a task per call, a third of a fast call's cost.
+        timer = asyncio.get_running_loop().call_later(timeout, response.cancel)
         try:
-            answer = await asyncio.wait_for(proto.responses.get(), timeout)
-        except asyncio.TimeoutError:
+            ok, payload = await response
+        except asyncio.CancelledError:
             proto.transport.close()
+            self._proto = None
+            if not response.cancelled():
+                raise
             raise TimeoutExpired(
                 f"service {self.name} did not respond within {timeout:g} s"
             ) from None
+        except ConnectionError:
+            self._proto = None
+            raise RostoolsError(
+                f"service {self.name} closed the connection without responding"
+            ) from None
+        except RostoolsError:
+            self._proto = None
+            raise
         finally:
+            timer.cancel()
             if not self.persistent:
                 proto.transport.close()
-        if isinstance(answer, ConnectionError):
-            self._proto = None
-            raise RostoolsError(f"service {self.name} closed the connection without responding")
-        if isinstance(answer, BaseException):
-            self._proto = None
-            raise answer
         self._proto = proto if self.persistent else None
-        ok, payload = answer
         if not ok:
             text = payload.decode("utf-8", "replace")
             raise ServiceError(f"service {self.name} failed: {text or '(no reason given)'}")

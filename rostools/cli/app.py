@@ -15,6 +15,7 @@ from rostools.cli.common import Format, Settings
 GROUPS: dict[str, str] = {
     "param": "The parameter server: list, get, set, delete, load, dump.",
     "msg": "Message and service types: show, md5, list, package, packages, proto.",
+    "node": "ROS nodes: list, info, ping, kill, machine, cleanup, and graph.",
     "core": "Run the bundled master and parameter server (roscore).",
 }
 

@@ -16,6 +16,7 @@ import http.client
 import re
 import socket
 import time
+import xmlrpc.client
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
@@ -161,12 +162,39 @@ def _went_away(err: BaseException) -> bool:
     )
 
 
+class _OneShotTransport(xmlrpc.client.Transport):
+    """HTTP with a socket timeout that sends each request once.
+
+    The standard transport sends a request again when the connection drops before the
+    answer. A node told to shut down may drop it so, and the second try is then refused:
+    that would turn a node that did as asked into one that could not be reached.
+    """
+
+    def __init__(self, timeout: float) -> None:
+        super().__init__()
+        self.timeout = timeout
+
+    def make_connection(self, host: Any) -> http.client.HTTPConnection:
+        conn = super().make_connection(host)
+        conn.timeout = self.timeout
+        return conn
+
+    def request(
+        self, host: Any, handler: str, request_body: Any, verbose: bool = False
+    ) -> tuple[Any, ...]:
+        result: tuple[Any, ...] = self.single_request(host, handler, request_body, verbose)
+        return result
+
+
 class NodeApi(XmlRpcNode):
-    """Calls to one node's slave API, each with a timeout."""
+    """Calls to one node's slave API, each with a timeout, each sent once."""
 
     def __init__(self, name: str, uri: str, caller_id: str, timeout: float) -> None:
         super().__init__(uri, caller_id, timeout, what=f"node {name}")
         self.name = name
+        self.proxy = xmlrpc.client.ServerProxy(
+            uri, transport=_OneShotTransport(timeout), allow_none=False
+        )
 
     def get_pid(self) -> int:
         """The node's process id."""

@@ -438,3 +438,36 @@ def test_master_unreachable(cli_env: dict[str, str]) -> None:
         err = fails(cli_env, *args, code=4)
         assert err.startswith("rostools: cannot reach the master at http://127.0.0.1:9"), err
         assert len(err.splitlines()) == 1
+
+
+def test_kill_counts_a_node_that_drops_the_connection_as_killed(
+    rostools_master: str, cli_env: dict[str, str]
+) -> None:
+    """A node may exit before its answer to shutdown is out (seen with rospy): that is a kill."""
+    server = socket.socket()
+    server.bind(("127.0.0.1", 0))
+    server.listen(4)
+    uri = f"http://127.0.0.1:{server.getsockname()[1]}/"
+    register(rostools_master, "/dropper", uri, pubs=(("/d", "std_msgs/Empty"),))
+    requests: list[bytes] = []
+
+    def serve_once() -> None:
+        conn, _ = server.accept()
+        with conn:
+            conn.settimeout(10)
+            data = b""
+            while b"</methodCall>" not in data and (chunk := conn.recv(65536)):
+                data += chunk
+            requests.append(data)
+        server.close()  # gone: a second try would be refused
+
+    thread = threading.Thread(target=serve_once, daemon=True)
+    thread.start()
+    try:
+        assert cli(cli_env, "kill", "/dropper") == "killing /dropper\nkilled\n"
+        thread.join(10)
+        assert len(requests) == 1 and b"<methodName>shutdown</methodName>" in requests[0]
+        # now nothing listens there: a refused connection is a failure (exit 4)
+        assert "Connection refused" in fails(cli_env, "kill", "/dropper", code=4)
+    finally:
+        server.close()

@@ -471,3 +471,27 @@ def test_kill_counts_a_node_that_drops_the_connection_as_killed(
         assert "Connection refused" in fails(cli_env, "kill", "/dropper", code=4)
     finally:
         server.close()
+
+
+def test_cleanup_asks_on_a_terminal(
+    dead_uri: str, cli_env: dict[str, str], rostools_master: str
+) -> None:
+    import os
+    import pty
+
+    for answer, purged in (("n", False), ("y", True)):
+        terminal, stdin = pty.openpty()
+        proc = Proc([sys.executable, "-m", "rostools", "node", "cleanup"], env=cli_env, stdin=stdin)
+        os.close(stdin)
+        try:
+            os.write(terminal, f"{answer}\n".encode())
+            assert proc.popen.wait(60) == 0
+            out, err = proc.output()
+        finally:
+            proc.stop()
+            os.close(terminal)
+        assert out.startswith("Unable to contact the following nodes:\n * /dead (")
+        assert "Please type y or n to continue: " in err
+        assert ("/dead" not in json.dumps(state(rostools_master))) is purged
+        assert out.endswith("Unregistering /dead\ndone\n") is purged
+        assert ("aborted: nothing was changed" in err) is not purged

@@ -38,6 +38,8 @@ app = typer.Typer(
 )
 
 TOOL = "rosnode"
+#: Seconds to wait for a node's answer: rosnode's ping timeout.
+NODE_TIMEOUT = 3.0
 #: Seconds between two pings of one node, as rosnode.
 PING_INTERVAL = 1.0
 
@@ -52,7 +54,7 @@ TimeoutOpt = Annotated[
 ]
 
 
-def _graph(ctx: typer.Context, timeout: float = 3.0) -> Graph:
+def _graph(ctx: typer.Context, timeout: float = NODE_TIMEOUT) -> Graph:
     from rostools.graph.introspect import Graph
 
     return Graph(master(ctx, TOOL), timeout)
@@ -136,7 +138,9 @@ def connection_text(conn: BusConnection, peer_name: str | None) -> str:
 def info_text(info: NodeInfo) -> str:
     """A node's info as rosnode prints it, with the node's own part when it was contacted."""
     text = "-" * 80 + "\n" + master_info_text(info) + "\n"
-    if info.pid is not None and info.connections is not None:
+    if info.error is not None:
+        text += f"\ncontacting node {info.uri} ...\n"  # the error follows on stderr
+    elif info.pid is not None and info.connections is not None:
         text += f"\ncontacting node {info.uri} ...\nPid: {info.pid}\n"
         if info.connections:
             text += "Connections:\n" + "".join(
@@ -154,7 +158,7 @@ def info(
         bool,
         typer.Option("-q", "--quiet", help="Only what the master knows; do not contact the nodes."),
     ] = False,
-    timeout: TimeoutOpt = 3.0,
+    timeout: TimeoutOpt = NODE_TIMEOUT,
     fmt: FormatOpt = None,
 ) -> None:
     """Publications, subscriptions and services of nodes, and their pid and live connections."""
@@ -172,17 +176,12 @@ def info(
     results: list[dict[str, Any]] = []
     errors: list[RostoolsError] = []
     for name in names:
-        try:
-            found = node_info(graph, name, contact=not quiet)
-        except (UnreachableError, TimeoutExpired) as err:
-            found = node_info(graph, name, contact=False)
-            errors.append(err)
-            if fmt is Format.text:
-                sys.stdout.write(info_text(found) + f"\ncontacting node {found.uri} ...\n")
-            results.append(found.to_data() | {"error": str(err)})
-            continue
+        found = node_info(graph, name, contact=not quiet)
+        if found.error is not None:
+            errors.append(found.error)
         if fmt is Format.text:
             sys.stdout.write(info_text(found))
+            sys.stdout.flush()
         results.append(found.to_data())
     if fmt is not Format.text:
         emit(fmt, results[0] if len(results) == 1 else results)
@@ -257,7 +256,7 @@ def ping(
         ),
     ] = None,
     all_: Annotated[bool, typer.Option("-a", "--all", help="Ping every node once.")] = False,
-    timeout: TimeoutOpt = 3.0,
+    timeout: TimeoutOpt = NODE_TIMEOUT,
     fmt: FormatOpt = None,
 ) -> None:
     """Call a node's getPid once a second and print the round-trip times."""
@@ -331,7 +330,7 @@ def kill(
         list[str] | None, typer.Argument(help="Node names.", show_default=False)
     ] = None,
     all_: Annotated[bool, typer.Option("-a", "--all", help="Kill every node.")] = False,
-    timeout: TimeoutOpt = 3.0,
+    timeout: TimeoutOpt = NODE_TIMEOUT,
     fmt: FormatOpt = None,
 ) -> None:
     """Ask nodes to shut down (their shutdown call, reason "user request")."""
@@ -436,7 +435,7 @@ def cleanup(
     dry_run: Annotated[
         bool, typer.Option("-n", "--dry-run", help="Only list the unreachable nodes.")
     ] = False,
-    timeout: TimeoutOpt = 3.0,
+    timeout: TimeoutOpt = NODE_TIMEOUT,
     fmt: FormatOpt = None,
 ) -> None:
     """Purge the registrations of nodes that do not answer a ping from the master."""
@@ -568,11 +567,9 @@ def graph_cmd(
     ] = None,
 ) -> None:
     """Nodes and the topics between them, like rqt_graph, from the master's registrations."""
-    from rostools.graph.introspect import build_graph
+    from rostools.graph.introspect import build_graph, system_state
 
     proxy = master(ctx, TOOL)
-    from rostools.graph.introspect import system_state
-
     graph = build_graph(system_state(proxy), proxy.topic_types(), include_debug=all_)
     chosen = fmt if fmt is not None else GraphFormat(settings(ctx).format.value)
     if chosen is GraphFormat.dot:

@@ -288,6 +288,7 @@ class NodeInfo:
     services: list[str]
     pid: int | None = None
     connections: list[tuple[BusConnection, str | None]] | None = None  # with the peer's name
+    error: RostoolsError | None = None  # why the node could not be contacted
 
     def to_data(self) -> dict[str, Any]:
         """Plain data for JSON and YAML."""
@@ -302,6 +303,8 @@ class NodeInfo:
             data["pid"] = self.pid
         if self.connections is not None:
             data["connections"] = [connection_data(c, name) for c, name in self.connections]
+        if self.error is not None:
+            data["error"] = str(self.error)
         return data
 
 
@@ -324,7 +327,10 @@ def connection_data(conn: BusConnection, peer_name: str | None) -> dict[str, Any
 
 
 def node_info(graph: Graph, node: str, contact: bool = True) -> NodeInfo:
-    """Registrations of a known node and, if ``contact``, its pid and connections."""
+    """Registrations of a known node and, if ``contact``, its pid and connections.
+
+    A node that cannot be contacted does not raise: its info carries the ``error``.
+    """
     uri = graph.require_uri(node)
     regs = graph.state().registrations(node)
     types = graph.master.topic_types()
@@ -335,8 +341,13 @@ def node_info(graph: Graph, node: str, contact: bool = True) -> NodeInfo:
     info = NodeInfo(node, uri, typed(regs.publications), typed(regs.subscriptions), regs.services)
     if contact:
         api = graph.api(node, uri)
-        info.pid = api.get_pid()
-        info.connections = [(c, graph.peer_node(c.topic, c.peer)) for c in api.bus_info()]
+        try:
+            pid, bus = api.get_pid(), api.bus_info()
+        except (UnreachableError, TimeoutExpired) as err:
+            info.error = err
+        else:
+            info.pid = pid
+            info.connections = [(c, graph.peer_node(c.topic, c.peer)) for c in bus]
     return info
 
 

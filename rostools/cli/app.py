@@ -20,6 +20,7 @@ GROUPS: dict[str, str] = {
     "service": "Services: list, info, type, find, uri, args, call.",
     "param": "The parameter server: list, get, set, delete, load, dump.",
     "msg": "Message and service types: show, md5, list, package, packages, proto.",
+    "node": "ROS nodes: list, info, ping, kill, machine, cleanup, and graph.",
     "core": "Run the bundled master and parameter server (roscore).",
 }
 

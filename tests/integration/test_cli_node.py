@@ -98,6 +98,16 @@ def state(master_uri: str) -> list[Any]:
 
 
 @pytest.fixture
+def rostools_master(cli_env: dict[str, str]) -> Iterator[str]:
+    """A bare master in-process: no /rosout node, so the graph is only the fake nodes."""
+    from rostools.master.server import MasterThread
+
+    with MasterThread() as master:
+        cli_env["ROS_MASTER_URI"] = master.uri.rstrip("/")
+        yield cli_env["ROS_MASTER_URI"]
+
+
+@pytest.fixture
 def nodes(rostools_master: str) -> Iterator[dict[str, FakeNode]]:
     """/talker publishes /chatter to /ns/listener; both report their connection."""
     talker = FakeNode(

@@ -2,7 +2,8 @@
 
 Both tools look at the same live graph, so their text must agree; only round-trip times are
 hidden. ``any_master`` runs each test on ``rostools core`` and on a real ``roscore``; on ours,
-the roscpp ``rosout`` node is started too so that both graphs hold the same nodes.
+both cores run a ``/rosout`` node (roscore's roscpp one, rostools core's own), so both graphs
+hold the same nodes.
 """
 
 from __future__ import annotations
@@ -65,11 +66,9 @@ def agree(info: MasterInfo, *args: str, tries: int = 4) -> str:
 
 @pytest.fixture
 def graph(any_master: MasterInfo) -> Iterator[dict[str, Proc]]:
-    """A rospy talker and listener exchanging messages, and a roscpp rosout on both masters."""
+    """A rospy talker and listener exchanging messages; both masters run a /rosout node."""
     env = any_master.ros_env
     procs: dict[str, Proc] = {}
-    if any_master.kind == "rostools":
-        procs["rosout"] = Proc(["/usr/lib/rosout/rosout"], env=env)  # roscore runs its own
     procs["talker"] = start_ros1_node("talker.py", ["/chatter", "20"], env)
     procs["listener"] = start_ros1_node(
         "listener.py", ["/chatter", "std_msgs/String", "__name:=listener"], env

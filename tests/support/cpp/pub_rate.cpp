@@ -8,7 +8,7 @@
 //   DURATION  seconds; at RATE > 0 exactly round(RATE * DURATION) messages are published
 //   --count N          stop after N messages even if DURATION has not passed
 //   --wait-subscribers start the clock only once N subscribers are connected
-//   --queue Q          publisher queue (default: as many messages as fit in 256 MiB, 1000..100000)
+//   --queue Q          publisher queue (default: as many messages as fit in 256 MiB, 10..100000)
 //   --linger S         stay up S seconds after the run so queued messages reach subscribers
 //                      (default 1; negative = until SIGINT, e.g. for a latched last message)
 // stdout: "ready" once advertised, "subscribers N" after --wait-subscribers, "started" when the
@@ -108,7 +108,7 @@ int main(int argc, char** argv) {
   // Deep enough that the publisher never drops while the subscriber keeps up on average, yet
   // bounded in memory for big messages.
   const double fit = (256.0 * 1024 * 1024) / double(size + 64);
-  const auto queue = uint32_t(args.number("--queue", std::clamp(fit, 1000.0, 100000.0)));
+  const auto queue = uint32_t(args.number("--queue", std::clamp(fit, 10.0, 100000.0)));
   const bool latch = args.flag("--latch");
 
   ros::NodeHandle nh;

@@ -41,7 +41,7 @@ LIBS = [
     "-lcpp_common",
     "-lboost_system",
 ]
-# Programs that can use topic_tools::ShapeShifter get -DHAVE_TOPIC_TOOLS=1 when it is installed.
+# Added when topic_tools is installed: sub_count then subscribes with topic_tools::ShapeShifter.
 TOPIC_TOOLS = ["-DHAVE_TOPIC_TOOLS=1", "-ltopic_tools"]
 PROGRAMS = ("pub_rate", "sub_count", "listener", "talker", "add_two_ints_server")
 
@@ -100,7 +100,8 @@ def cpp_missing() -> str | None:
 
 
 @functools.cache
-def _has_topic_tools() -> bool:
+def has_topic_tools() -> bool:
+    """Whether topic_tools (ShapeShifter, for sub_count's --type any) is installed."""
     return _has_header("topic_tools/shape_shifter.h")
 
 
@@ -113,7 +114,7 @@ def _compiler_id() -> str:
 
 def command(name: str, output: Path) -> list[str]:
     """The g++ command line that builds ``name`` into ``output``."""
-    extra = TOPIC_TOOLS if _has_topic_tools() else []
+    extra = TOPIC_TOOLS if has_topic_tools() else []
     source = SOURCES / f"{name}.cpp"
     return [CXX, *CXXFLAGS, f"-I{SOURCES}", str(source), "-o", str(output), *extra, *LIBS]
 

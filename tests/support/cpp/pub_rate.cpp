@@ -110,6 +110,10 @@ int main(int argc, char** argv) {
   const double fit = (256.0 * 1024 * 1024) / double(size + 64);
   const auto queue = uint32_t(args.number("--queue", std::clamp(fit, 10.0, 100000.0)));
   const bool latch = args.flag("--latch");
+  // Before the NodeHandle: its constructor starts the node and would wait for a master.
+  if (type != "std_msgs/String" && type != "sensor_msgs/Image") {
+    args.fail("TYPE must be std_msgs/String or sensor_msgs/Image, not " + type);
+  }
 
   ros::NodeHandle nh;
   std_msgs::String text;
@@ -125,8 +129,6 @@ int main(int argc, char** argv) {
     image.step = uint32_t(size);
     image.data.assign(size, 0x5a);
     pub = nh.advertise<sensor_msgs::Image>(topic, queue, latch);
-  } else {
-    args.fail("TYPE must be std_msgs/String or sensor_msgs/Image, not " + type);
   }
   peer::say("ready");
 

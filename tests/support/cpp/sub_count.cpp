@@ -95,6 +95,10 @@ int main(int argc, char** argv) {
   const auto queue = uint32_t(args.number("--queue", 100000));
   tally.print = args.flag("--print");
   const auto hints = ros::TransportHints().tcpNoDelay(args.flag("--tcp-nodelay"));
+  const std::set<std::string> types = {"std_msgs/String", "sensor_msgs/Image",
+                                       HAVE_TOPIC_TOOLS ? "any" : "std_msgs/String"};
+  // Before the NodeHandle: its constructor starts the node and would wait for a master.
+  if (!types.count(type)) args.fail("unsupported --type " + type);
 
   ros::NodeHandle nh;
   ros::Subscriber sub;
@@ -106,8 +110,6 @@ int main(int argc, char** argv) {
   } else if (type == "any") {
     sub = nh.subscribe<topic_tools::ShapeShifter>(topic, queue, on_any, hints);
 #endif
-  } else {
-    args.fail("unsupported --type " + type);
   }
   seen_type = type;
   peer::say("ready");

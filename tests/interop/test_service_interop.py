@@ -74,3 +74,32 @@ def test_real_clients_reach_a_rostools_server(any_master: MasterInfo) -> None:
             proxy.stop()
     finally:
         server.stop()
+
+
+@pytest.mark.parametrize(
+    ("mode", "code", "text"),
+    [
+        ("ok", 0, ""),
+        ("fail", 1, "failed: (no reason given)"),
+        ("throw", 1, "failed: add_two_ints_server was told to throw"),
+    ],
+)
+def test_rostools_calls_a_roscpp_server(
+    any_master: MasterInfo, mode: str, code: int, text: str
+) -> None:
+    from tests.support.cppbuild import build, cpp_missing
+
+    if (reason := cpp_missing()) is not None:
+        pytest.skip(reason)
+    server = Proc([str(build("add_two_ints_server")), "--mode", mode], env=any_master.ros_env)
+    try:
+        server.expect("ready", 30)
+        out = run_cli("service", "call", "/add_two_ints", "{a: 40, b: 2}", env=any_master.cli_env)
+        assert out.returncode == code, out.stderr
+        if code == 0:
+            assert out.stdout == "sum: 42\n"
+            server.expect("request 40 2", 10)
+        else:
+            assert text in out.stderr
+    finally:
+        server.stop()

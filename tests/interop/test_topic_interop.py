@@ -183,3 +183,39 @@ def test_real_rosnode_works_on_our_nodes(any_master: MasterInfo) -> None:
     finally:
         pub.stop()
         sub.stop()
+
+
+def test_roscpp_listener_receives_from_rostools_pub(any_master: MasterInfo) -> None:
+    from tests.support.cppbuild import build, cpp_missing
+
+    if (reason := cpp_missing()) is not None:
+        pytest.skip(reason)
+    listener = Proc([str(build("listener")), "/to_cpp"], env=any_master.ros_env)
+    pub = rostools(
+        any_master, "topic", "pub", "-r", "10", "/to_cpp", "std_msgs/String", "data: from rostools"
+    )
+    try:
+        listener.expect("got from rostools", 30)
+        listener.expect("got from rostools", 5)
+    finally:
+        pub.stop()
+        listener.stop()
+
+
+def test_rostools_echo_and_hz_read_a_roscpp_talker(any_master: MasterInfo) -> None:
+    from tests.support.cppbuild import build, cpp_missing
+
+    if (reason := cpp_missing()) is not None:
+        pytest.skip(reason)
+    talker = Proc([str(build("talker")), "/cpp_chatter", "--rate", "50"], env=any_master.ros_env)
+    env = any_master.cli_env
+    try:
+        talker.expect("ready", 30)
+        out = run_cli("topic", "echo", "/cpp_chatter", "-n", "2", "--timeout", "20", env=env)
+        assert out.stdout.count('data: "hello ') == 2, out.stderr
+        hz = run_cli(
+            "topic", "hz", "/cpp_chatter", "--timeout", "3.5", "-F", "json", env=env, timeout=30
+        )
+        assert abs(json.loads(hz.stdout.splitlines()[-1])["rate"] - 50) < 2
+    finally:
+        talker.stop()

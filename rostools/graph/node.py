@@ -213,7 +213,7 @@ class Node:
         topic: str,
         callback: FramesCallback,
         topic_type: TopicType = ANY,
-        tcp_nodelay: bool = True,
+        tcp_nodelay: bool = False,
         on_header: Callable[[Any], None] | None = None,
     ) -> Subscriber:
         """Subscribe to ``topic``; ``topic_type`` ``ANY`` learns it from the publisher."""

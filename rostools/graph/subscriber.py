@@ -36,7 +36,7 @@ class Subscriber:
         topic: str,
         topic_type: TopicType,
         callback: FramesCallback,
-        tcp_nodelay: bool = True,
+        tcp_nodelay: bool = False,
         max_frame: int = MAX_FRAME,
     ) -> None:
         self.node = node

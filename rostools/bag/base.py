@@ -1,0 +1,178 @@
+"""The reader and writer interfaces every format implements, and file opening helpers."""
+
+from __future__ import annotations
+
+import contextlib
+import mmap
+import os
+from abc import ABC, abstractmethod
+from collections.abc import Collection, Iterable, Iterator, Mapping
+from pathlib import Path
+from types import TracebackType
+
+from rostools.bag.model import (
+    BagFormatError,
+    BagInfo,
+    BagNotFoundError,
+    Connection,
+)
+from rostools.bag.ordering import Message
+from rostools.errors import InvalidDataError
+
+#: Times are u32 seconds in a ``.bag`` and u64 ns in MCAP; this bound covers both.
+MAX_TIME_NS = (1 << 64) - 1
+
+
+def map_file(path: Path) -> tuple[mmap.mmap | None, int]:
+    """The file mapped read-only, and its size (an empty file maps to None).
+
+    Mapping lets the readers slice headers, indexes and uncompressed chunks without copies.
+    """
+    try:
+        with path.open("rb") as f:
+            size = os.fstat(f.fileno()).st_size
+            if size == 0:
+                return None, 0
+            return mmap.mmap(f.fileno(), 0, access=mmap.ACCESS_READ), size
+    except FileNotFoundError:
+        raise BagNotFoundError(f"no such file: {path}") from None
+    except IsADirectoryError:
+        raise BagFormatError(f"{path} is a directory, not a bag file") from None
+    except OSError as err:
+        raise InvalidDataError(f"cannot read {path}: {err.strerror or err}") from err
+
+
+def release(mm: mmap.mmap | None) -> None:
+    """Unmap, unless yielded messages still point into the map (then the GC unmaps it)."""
+    if mm is not None:
+        with contextlib.suppress(BufferError):
+            mm.close()
+
+
+class BagReader(ABC):
+    """A ``.bag`` or MCAP file opened for reading.
+
+    ``connections`` lists every connection (MCAP: channel) in id order. ``messages`` yields
+    ``(connection, time_ns, data)`` in time order with ``data`` the raw serialized message (a
+    memoryview into the file or a decompressed chunk; never decoded). ``problems`` lists the
+    damage found while reading an unindexed or cut-short file.
+    """
+
+    path: Path
+    format: str
+    indexed: bool
+    connections: list[Connection]
+    problems: list[str]
+
+    @abstractmethod
+    def info(self) -> BagInfo:
+        """The summary ``bag info`` shows, from the index alone when there is one."""
+
+    @abstractmethod
+    def messages(
+        self,
+        topics: Collection[str] | None = None,
+        start: int | None = None,
+        end: int | None = None,
+        connections: Iterable[Connection] | None = None,
+    ) -> Iterator[Message]:
+        """Messages in time order, optionally only some topics/connections and times.
+
+        ``start`` and ``end`` are inclusive bounds in ns; None means unbounded (0 is a time).
+        """
+
+    @abstractmethod
+    def close(self) -> None:
+        """Release the file."""
+
+    def __enter__(self) -> BagReader:
+        return self
+
+    def __exit__(
+        self,
+        exc_type: type[BaseException] | None,
+        exc: BaseException | None,
+        tb: TracebackType | None,
+    ) -> None:
+        self.close()
+
+    def wanted(
+        self, topics: Collection[str] | None, connections: Iterable[Connection] | None
+    ) -> Mapping[int, tuple[int, Connection]]:
+        """Connection id -> (rank, connection) for the connections a read selects."""
+        ids = None if connections is None else {c.id for c in connections}
+        topic_set = None if topics is None else set(topics)
+        return {
+            c.id: (rank, c)
+            for rank, c in enumerate(self.connections)
+            if (topic_set is None or c.topic in topic_set) and (ids is None or c.id in ids)
+        }
+
+
+class BagWriter(ABC):
+    """A ``.bag`` or MCAP file being written.
+
+    ``add_connection`` declares a publisher connection and returns its ``Connection`` (with
+    the id in the file); ``write`` stores one raw message; ``close`` writes the index. Leaving
+    a ``with`` block by an exception calls ``abort``.
+    """
+
+    path: Path
+
+    @abstractmethod
+    def add_connection(
+        self,
+        topic: str,
+        type: str,
+        md5sum: str,
+        definition: str,
+        *,
+        callerid: str = "",
+        latching: bool = False,
+        extra: Mapping[str, str] | None = None,
+        header_has_latching: bool = True,
+    ) -> Connection:
+        """Declare a connection; messages are written against the returned one."""
+
+    @abstractmethod
+    def write(self, conn: Connection, t_ns: int, data: bytes | bytearray | memoryview) -> None:
+        """Store one serialized message received at ``t_ns``."""
+
+    @abstractmethod
+    def flush(self) -> None:
+        """Hand everything written so far to the OS (the open chunk stays open)."""
+
+    @abstractmethod
+    def close(self) -> None:
+        """Finish the file: last chunk, index or summary, header."""
+
+    @abstractmethod
+    def abort(self) -> None:
+        """Stop and delete the unfinished file."""
+
+    def copy_connection(self, conn: Connection) -> Connection:
+        """Declare a connection identical to ``conn`` (from another bag) in this file."""
+        return self.add_connection(
+            conn.topic,
+            conn.type,
+            conn.md5sum,
+            conn.definition,
+            callerid=conn.callerid,
+            latching=conn.latching,
+            extra=conn.extra,
+            header_has_latching=conn.header_has_latching,
+        )
+
+    def __enter__(self) -> BagWriter:
+        return self
+
+    def __exit__(
+        self,
+        exc_type: type[BaseException] | None,
+        exc: BaseException | None,
+        tb: TracebackType | None,
+    ) -> None:
+        if exc_type is None:
+            self.close()
+        else:
+            self.abort()

@@ -1,0 +1,322 @@
+"""Writing MCAP files under the ROS 1 profile (what Foxglove and ``mcap`` tools expect).
+
+Profile ``ros1``; one schema per distinct type definition (encoding ``ros1msg``, the full
+``message_definition`` text) and one channel per publisher connection (message encoding
+``ros1``, metadata ``callerid``, ``latching`` as "true"/"false", and ``md5sum`` as Foxglove's
+converter stores it). Channel ids are the connection ids, from 0 like a ``.bag``'s.
+
+Chunked (zstd, lz4 or none), with message indexes after every chunk and a summary of schemas,
+channels, statistics and chunk indexes plus summary offsets. Schemas and channels go outside
+the chunks as soon as they are declared, and every chunk goes to the OS when it closes, so a
+killed writer leaves everything but the open chunk recoverable.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import sys
+from array import array
+from collections.abc import Callable, Mapping
+from pathlib import Path
+from typing import Final
+
+from rostools import __version__
+from rostools.bag import mcap_format as fmt
+from rostools.bag.base import BagWriter
+from rostools.bag.model import BagUsageError, Connection, UnsupportedBagError
+from rostools.errors import InvalidDataError
+
+#: Chunk threshold (uncompressed bytes): rosbag's 768 KiB, close to the mcap library's 1 MiB.
+DEFAULT_CHUNK_SIZE: Final = 768 * 1024
+COMPRESSIONS: Final = ("zstd", "lz4", "none")
+#: Channel ids are u16 in MCAP.
+MAX_CHANNELS: Final = 1 << 16
+#: zstd level 3 is the library default and what the mcap writers use.
+ZSTD_LEVEL: Final = 3
+_MAX_TIME: Final = (1 << 64) - 1
+#: Compresses a chunk's records.
+_Compress = Callable[[bytearray], bytes]
+
+
+class McapWriter(BagWriter):
+    """An MCAP file being written; see the module docstring."""
+
+    def __init__(
+        self,
+        path: str | Path,
+        *,
+        compression: str = "zstd",
+        chunk_size: int = DEFAULT_CHUNK_SIZE,
+        overwrite: bool = False,
+        profile: str = "ros1",
+        library: str = f"rostools {__version__}",
+    ) -> None:
+        if compression not in COMPRESSIONS:
+            raise UnsupportedBagError(
+                f"unknown MCAP compression {compression!r} (use zstd, lz4 or none)"
+            )
+        if chunk_size <= 0:
+            raise BagUsageError(f"chunk size must be positive, not {chunk_size}")
+        self.path = Path(path)
+        self.compression = compression
+        self.chunk_size = chunk_size
+        flags = os.O_WRONLY | os.O_CREAT | (os.O_TRUNC if overwrite else os.O_EXCL)
+        try:
+            self._fd = os.open(self.path, flags, 0o644)
+        except FileExistsError:
+            raise BagUsageError(f"{self.path} exists; refusing to overwrite it") from None
+        except OSError as err:
+            raise InvalidDataError(f"cannot create {self.path}: {err.strerror or err}") from err
+        self._compress = _compressor(compression)
+        self._closed = False
+        self._written = 0
+        self._out = bytearray()
+        self._connections: list[Connection] = []
+        self._schema_ids: dict[tuple[str, str], int] = {}
+        self._schema_records: list[bytes] = []
+        self._channel_records: list[bytes] = []
+        self._counts: list[int] = []
+        self._chunk = bytearray()
+        self._chunk_start = 0
+        self._chunk_end = 0
+        self._index: dict[int, array[int]] = {}
+        self._unsorted = False
+        self._chunk_indexes: list[fmt.ChunkIndex] = []
+        self._start = _MAX_TIME
+        self._end = 0
+        self._out += fmt.MAGIC
+        self._out += fmt.encode_header(profile, library)
+        self._flush_out()
+
+    # -- the public interface --------------------------------------------------------------
+
+    def add_connection(
+        self,
+        topic: str,
+        type: str,
+        md5sum: str,
+        definition: str,
+        *,
+        callerid: str = "",
+        latching: bool = False,
+        extra: Mapping[str, str] | None = None,
+        header_has_latching: bool = True,
+    ) -> Connection:
+        """Declare a connection: a channel (and its schema, once per definition)."""
+        self._check_open()
+        if len(self._connections) >= MAX_CHANNELS:
+            raise BagUsageError(f"an MCAP file holds at most {MAX_CHANNELS} channels")
+        conn = Connection(
+            id=len(self._connections),
+            topic=topic,
+            type=type,
+            md5sum=md5sum,
+            definition=definition,
+            callerid=callerid,
+            latching=latching,
+            extra=dict(extra or {}),
+            header_has_latching=header_has_latching,
+        )
+        key = (type, definition)
+        schema_id = self._schema_ids.get(key)
+        if schema_id is None:
+            schema_id = self._schema_ids[key] = len(self._schema_records) + 1
+            record = fmt.encode_schema(schema_id, type, "ros1msg", definition.encode())
+            self._schema_records.append(record)
+            self._out += record
+        record = fmt.encode_channel(conn.id, schema_id, topic, "ros1", channel_metadata(conn))
+        self._channel_records.append(record)
+        self._out += record
+        self._connections.append(conn)
+        self._counts.append(0)
+        return conn
+
+    def write(self, conn: Connection, t_ns: int, data: bytes | bytearray | memoryview) -> None:
+        """Store one message of ``conn`` with log (and publish) time ``t_ns``."""
+        cid = conn.id
+        if self._closed or cid >= len(self._connections) or self._connections[cid] is not conn:
+            self._check_open()
+            raise BagUsageError(f"connection {cid} ({conn.topic}) was not added to this writer")
+        if not 0 <= t_ns <= _MAX_TIME:
+            raise BagUsageError(f"time {t_ns} ns does not fit an MCAP file")
+        chunk = self._chunk
+        if not chunk:
+            self._chunk_start = self._chunk_end = t_ns
+        elif t_ns > self._chunk_end:
+            self._chunk_end = t_ns
+        elif t_ns < self._chunk_end:
+            self._unsorted = True  # message indexes get sorted when the chunk closes
+            if t_ns < self._chunk_start:
+                self._chunk_start = t_ns
+        index = self._index.get(cid)
+        if index is None:
+            index = self._index[cid] = array("Q")
+        seq = self._counts[cid]
+        self._counts[cid] = seq + 1
+        index.append(t_ns)
+        index.append(len(chunk))
+        chunk += fmt.MESSAGE_PREFIX.pack(
+            fmt.OP_MESSAGE, 22 + len(data), cid, seq & 0xFFFFFFFF, t_ns, t_ns
+        )
+        chunk += data
+        if len(chunk) >= self.chunk_size:
+            self._close_chunk()
+
+    def flush(self) -> None:
+        """Close the open chunk and hand everything to the OS."""
+        self._check_open()
+        if self._chunk:
+            self._close_chunk()
+        self._flush_out()
+
+    def close(self) -> None:
+        """Write the last chunk, the data end, the summary and the footer."""
+        if self._closed:
+            return
+        try:
+            if self._chunk:
+                self._close_chunk()
+            self._out += fmt.encode_data_end()
+            summary_start = self._written + len(self._out)
+            summary = bytearray()
+            offsets = bytearray()
+            groups: list[tuple[int, list[bytes]]] = [
+                (fmt.OP_SCHEMA, self._schema_records),
+                (fmt.OP_CHANNEL, self._channel_records),
+                (fmt.OP_STATISTICS, [fmt.encode_statistics(self._statistics())]),
+                (fmt.OP_CHUNK_INDEX, [fmt.encode_chunk_index(i) for i in self._chunk_indexes]),
+            ]
+            for opcode, group in groups:
+                if group:
+                    body = b"".join(group)
+                    offsets += fmt.encode_summary_offset(
+                        opcode, summary_start + len(summary), len(body)
+                    )
+                    summary += body
+            offset_start = summary_start + len(summary)
+            summary += offsets
+            self._out += summary
+            self._out += fmt.encode_footer(summary_start, offset_start, bytes(summary))
+            self._flush_out()
+        finally:
+            self._closed = True
+            os.close(self._fd)
+
+    def abort(self) -> None:
+        """Stop writing and delete the file."""
+        if not self._closed:
+            self._closed = True
+            os.close(self._fd)
+        with contextlib.suppress(FileNotFoundError):
+            self.path.unlink()
+
+    # -- internals -------------------------------------------------------------------------
+
+    def _check_open(self) -> None:
+        if self._closed:
+            raise BagUsageError(f"{self.path} is closed")
+
+    def _statistics(self) -> fmt.Statistics:
+        total = sum(self._counts)
+        return fmt.Statistics(
+            message_count=total,
+            schema_count=len(self._schema_records),
+            channel_count=len(self._channel_records),
+            attachment_count=0,
+            metadata_count=0,
+            chunk_count=len(self._chunk_indexes),
+            message_start_time=self._start if total else 0,
+            message_end_time=self._end if total else 0,
+            channel_message_counts={i: n for i, n in enumerate(self._counts) if n},
+        )
+
+    def _close_chunk(self) -> None:
+        raw = self._chunk
+        data = self._compress(raw)
+        start, end = self._chunk_start, self._chunk_end
+        self._start = min(self._start, start)
+        self._end = max(self._end, end)
+        chunk_pos = self._written + len(self._out)
+        record = fmt.encode_chunk(
+            start, end, len(raw), "" if self.compression == "none" else self.compression, data
+        )
+        self._out += record
+        index_start = chunk_pos + len(record)
+        offsets: dict[int, int] = {}
+        for cid in sorted(self._index):
+            entries = self._index[cid]
+            if self._unsorted:
+                pairs = sorted(zip(entries[::2], entries[1::2], strict=True))
+                entries = array("Q", [v for pair in pairs for v in pair])
+            offsets[cid] = self._written + len(self._out)
+            self._out += fmt.encode_message_index(cid, _little_endian(entries))
+        self._chunk_indexes.append(
+            fmt.ChunkIndex(
+                message_start_time=start,
+                message_end_time=end,
+                chunk_start_offset=chunk_pos,
+                chunk_length=len(record),
+                message_index_offsets=offsets,
+                message_index_length=self._written + len(self._out) - index_start,
+                compression="" if self.compression == "none" else self.compression,
+                compressed_size=len(data),
+                uncompressed_size=len(raw),
+            )
+        )
+        self._chunk = bytearray()
+        self._index = {}
+        self._unsorted = False
+        self._flush_out()
+
+    def _flush_out(self) -> None:
+        view = memoryview(self._out)
+        done = 0
+        try:
+            while done < len(view):
+                done += os.write(self._fd, view[done:])
+        except OSError as err:
+            raise InvalidDataError(f"cannot write {self.path}: {err.strerror or err}") from err
+        finally:
+            view.release()
+        self._written += done
+        del self._out[:done]
+
+
+def channel_metadata(conn: Connection) -> dict[str, str]:
+    """The ROS 1 profile's channel metadata for a connection (plus its extra header fields)."""
+    meta = dict(conn.extra)
+    if conn.callerid:
+        meta["callerid"] = conn.callerid
+    if conn.latching or conn.header_has_latching:
+        meta["latching"] = "true" if conn.latching else "false"
+    meta["md5sum"] = conn.md5sum
+    return meta
+
+
+def _compressor(kind: str) -> _Compress:
+    if kind == "zstd":
+        import zstandard
+
+        compressor = zstandard.ZstdCompressor(level=ZSTD_LEVEL)
+
+        def zstd(data: bytearray) -> bytes:
+            return compressor.compress(data)
+
+        return zstd
+    if kind == "lz4":
+        import lz4.frame
+
+        def lz4_frame(data: bytearray) -> bytes:
+            return bytes(lz4.frame.compress(data))
+
+        return lz4_frame
+    return bytes
+
+
+def _little_endian(values: array[int]) -> bytes:
+    """The bytes of a u64 array as the file wants them (little-endian)."""
+    if sys.byteorder == "big":
+        values = array(values.typecode, values)
+        values.byteswap()
+    return values.tobytes()

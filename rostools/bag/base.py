@@ -54,15 +54,33 @@ class BagReader(ABC):
 
     ``connections`` lists every connection (MCAP: channel) in id order. ``messages`` yields
     ``(connection, time_ns, data)`` in time order with ``data`` the raw serialized message (a
-    memoryview into the file or a decompressed chunk; never decoded). ``problems`` lists the
-    damage found while reading an unindexed or cut-short file.
+    memoryview into the file or a decompressed chunk; never decoded). ``notes`` says how an
+    unindexed or unfinished file was read; ``damage`` lists data that could not be read.
     """
 
     path: Path
     format: str
     indexed: bool
     connections: list[Connection]
-    problems: list[str]
+
+    def __init__(self) -> None:
+        self.notes: list[str] = []
+        self.damage: list[str] = []
+
+    @property
+    def problems(self) -> list[str]:
+        """Notes and damage together, for display."""
+        return [*self.notes, *self.damage]
+
+    def note(self, text: str) -> None:
+        """Record how the file had to be read (no data lost)."""
+        if text not in self.notes:
+            self.notes.append(text)
+
+    def damaged(self, text: str) -> None:
+        """Record data that could not be read (reading a chunk twice records it once)."""
+        if text not in self.damage:
+            self.damage.append(text)
 
     @abstractmethod
     def info(self) -> BagInfo:

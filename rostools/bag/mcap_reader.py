@@ -55,8 +55,8 @@ class McapReader(BagReader):
     format = "mcap"
 
     def __init__(self, path: str | Path) -> None:
+        super().__init__()
         self.path = Path(path)
-        self.problems: list[str] = []
         self.connections: list[Connection] = []
         self.indexed = False
         self.profile = ""
@@ -97,7 +97,7 @@ class McapReader(BagReader):
         self._data_end = size
         footer = fmt.parse_footer(mm[max(0, size - fmt.FOOTER_SIZE - len(fmt.MAGIC)) :])
         if footer is None:
-            self.problems.append("no footer: the file is unfinished or cut short")
+            self.note("no footer: the file is unfinished or cut short")
         else:
             self._data_end = size - fmt.FOOTER_SIZE - len(fmt.MAGIC)
             if footer.summary_start:
@@ -111,7 +111,7 @@ class McapReader(BagReader):
     def _read_summary(self, footer: fmt.Footer) -> None:
         end = footer.summary_offset_start or self._data_end
         if not (self._data_start <= footer.summary_start <= end <= self._data_end):
-            self.problems.append("the footer points outside the file; summary ignored")
+            self.note("the footer points outside the file; summary ignored")
             return
         try:
             for _, op, start, stop in fmt.records(self._mm, footer.summary_start, end):
@@ -129,7 +129,7 @@ class McapReader(BagReader):
                 elif isinstance(record, fmt.MetadataIndex):
                     self.metadata_indexes.append(record)
         except fmt.McapFormatError as err:
-            self.problems.append(f"damaged summary ({err}); scanned the data section")
+            self.note(f"damaged summary ({err}); scanned the data section")
             self.statistics, self.chunk_indexes = None, []
             return
         self._data_end = footer.summary_start
@@ -164,10 +164,10 @@ class McapReader(BagReader):
                 yield rec, op, start, stop, True
         except fmt.McapFormatError as err:
             if nxt + 9 + 40 <= self.size and mm[nxt] == fmt.OP_CHUNK:
-                self.problems.append(f"chunk at {nxt} is cut short; read what decompresses")
+                self.damaged(f"chunk at {nxt} is cut short; read what decompresses")
                 yield nxt, fmt.OP_CHUNK, nxt + 9, self.size, False
             else:
-                self.problems.append(f"data section ends in a damaged or cut-short record ({err})")
+                self.damaged(f"data section ends in a damaged or cut-short record ({err})")
 
     def _scan(self) -> _Scan:
         """Walk the data section for schemas, channels, counts and times (no summary).
@@ -191,7 +191,7 @@ class McapReader(BagReader):
                         compression, size, data_start, data_len, complete
                     )
                 except fmt.McapFormatError as err:
-                    self.problems.append(f"chunk at {rec} is unreadable ({err})")
+                    self.damaged(f"chunk at {rec} is unreadable ({err})")
                     continue
                 if complete:
                     scan.chunks.append((compression or "none", data_len, size))
@@ -260,7 +260,7 @@ class McapReader(BagReader):
                 elif op in (fmt.OP_SCHEMA, fmt.OP_CHANNEL):
                     self._register(fmt.parse(op, buf, start, stop))
         except (fmt.McapFormatError, struct.error) as err:
-            self.problems.append(f"chunk at {rec} ends in a damaged record ({err})")
+            self.damaged(f"chunk at {rec} ends in a damaged record ({err})")
 
     def _register(self, record: fmt.Record | None) -> None:
         if isinstance(record, fmt.Schema):
@@ -414,7 +414,7 @@ class McapReader(BagReader):
         except fmt.McapFormatError as err:
             if complete:
                 raise BagFormatError(f"{self.path}: {err}") from err
-            self.problems.append(f"cut-short chunk at {rec} is unreadable ({err})")
+            self.damaged(f"cut-short chunk at {rec} is unreadable ({err})")
             return []
         view = memoryview(buf)
         out: list[Entry] = []
@@ -444,7 +444,7 @@ class McapReader(BagReader):
         except fmt.McapFormatError as err:
             if complete:
                 raise BagFormatError(f"{self.path}: {err}") from err
-            self.problems.append(f"cut-short chunk at {rec}: {err}")
+            self.damaged(f"cut-short chunk at {rec}: {err}")
         out.sort()
         return out
 

@@ -67,8 +67,8 @@ class Bag1Reader(BagReader):
     format = "bag"
 
     def __init__(self, path: str | Path) -> None:
+        super().__init__()
         self.path = Path(path)
-        self.problems: list[str] = []
         self.connections: list[Connection] = []
         self.chunks: list[Chunk] = []
         self.indexed = False
@@ -110,12 +110,12 @@ class Bag1Reader(BagReader):
                 self.indexed = True
                 return
             except (fmt.RecordError, HeaderError, struct.error) as err:
-                self.problems.append(f"index at {index_pos} is damaged ({err}); scanned chunks")
+                self.note(f"index at {index_pos} is damaged ({err}); scanned chunks")
                 self.connections, self.chunks, self._by_id = [], [], {}
         elif index_pos == 0:
-            self.problems.append("bag is not indexed (an unclosed recording); scanned chunks")
+            self.note("bag is not indexed (an unclosed recording); scanned chunks")
         else:
-            self.problems.append(
+            self.note(
                 f"the index at {index_pos} is past the end of the file ({self.size} bytes):"
                 " the file is cut short; scanned chunks"
             )
@@ -212,7 +212,7 @@ class Bag1Reader(BagReader):
                 try:
                     self._add_connection(fields, data, dlen)
                 except fmt.RecordError as err:
-                    self.problems.append(f"skipped a damaged connection record at {pos}: {err}")
+                    self.damaged(f"skipped a damaged connection record at {pos}: {err}")
             elif op == fmt.OP_INDEX_DATA:
                 # rosbag reads `count` entries whatever data_len says (a known writer bug).
                 dlen = fmt.INDEX_ENTRY_SIZE * _u32_or(fields, "count", dlen // 12)
@@ -240,19 +240,19 @@ class Bag1Reader(BagReader):
             if chunk.counts:
                 self.chunks.append(chunk)
             got = sum(chunk.counts.values())
-            self.problems.append(
+            self.damaged(
                 f"chunk at {pos} is cut short ({self.size - data} of its bytes are in the file);"
                 f" {got} messages salvaged from it"
             )
         else:
-            self.problems.append(f"{self.size - pos} bytes at {pos} do not parse ({err})")
+            self.damaged(f"{self.size - pos} bytes at {pos} do not parse ({err})")
 
     def _scan_chunk(self, chunk: Chunk) -> None:
         """Fill a chunk's counts and times by walking its records (no index)."""
         try:
             buf, base, end = self._chunk_data(chunk)
         except fmt.RecordError as err:
-            self.problems.append(f"chunk at {chunk.pos} is unreadable: {err}")
+            self.damaged(f"chunk at {chunk.pos} is unreadable: {err}")
             return
         first = True
         for t, conn_id, _ in self._walk(chunk, buf, base, end):
@@ -271,9 +271,10 @@ class Bag1Reader(BagReader):
         """(time, connection id, record offset) of each message record, by walking records.
 
         Connection records met on the way are registered. A record that does not parse ends
-        the walk (the rest of an unclosed or cut-short chunk), noted in ``problems``.
+        the walk (the rest of an unclosed or cut-short chunk), noted in ``damage``.
         """
         pos = base
+        unknown = 0
         while pos < end:
             try:
                 fields, data, dlen = fmt.read_record(buf, pos, end)
@@ -283,20 +284,22 @@ class Bag1Reader(BagReader):
                     if conn_id in self._by_id:
                         yield fmt.time_field(fields, "time"), conn_id, pos - base
                     else:
-                        self.problems.append(
-                            f"chunk at {chunk.pos}: message of unknown connection {conn_id}"
-                        )
+                        unknown += 1
                 elif op == fmt.OP_CONNECTION:
                     self._add_connection_from(buf, fields, data, dlen)
             except fmt.RecordError as err:
                 if chunk.complete:
-                    self.problems.append(f"chunk at {chunk.pos}: record at {pos - base}: {err}")
+                    self.damaged(f"chunk at {chunk.pos}: record at {pos - base}: {err}")
                 else:
-                    self.problems.append(
+                    self.damaged(
                         f"chunk at {chunk.pos} ends in a partial record ({end - pos} bytes lost)"
                     )
-                return
+                break
             pos = data + dlen
+        if unknown:
+            self.damaged(
+                f"chunk at {chunk.pos}: {unknown} messages of connections whose record is lost"
+            )
 
     def _add_connection_from(
         self, buf: Buffer, fields: Mapping[str, bytes], data: int, dlen: int

@@ -156,6 +156,18 @@ class BagWriter(ABC):
     def write(self, conn: Connection, t_ns: int, data: bytes | bytearray | memoryview) -> None:
         """Store one serialized message received at ``t_ns``."""
 
+    def write_many(self, messages: Iterable[Message], targets: Targets) -> int:
+        """Store a stream of messages read from another bag; how many were written.
+
+        ``targets`` maps source connections to this writer's (see ``Targets``).
+        """
+        n = 0
+        for conn, t, data in messages:
+            target = targets.get(conn.id) or targets.resolve(conn)
+            self.write(target, t, data)
+            n += 1
+        return n
+
     @abstractmethod
     def flush(self) -> None:
         """Hand everything written so far to the OS (the open chunk stays open)."""
@@ -194,3 +206,24 @@ class BagWriter(ABC):
             self.close()
         else:
             self.abort()
+
+
+class Targets(dict[int, Connection]):
+    """Source connection id -> a writer's copy of that connection.
+
+    ``resolve`` copies a connection on first use, so a stream whose reader meets a connection
+    only while reading is still copied whole.
+    """
+
+    def __init__(self, writer: BagWriter, sources: Iterable[Connection] = ()) -> None:
+        super().__init__()
+        self.writer = writer
+        for conn in sources:
+            self[conn.id] = writer.copy_connection(conn)
+
+    def resolve(self, conn: Connection) -> Connection:
+        """The writer's connection for a source connection, copied if new."""
+        target = self.get(conn.id)
+        if target is None:
+            target = self[conn.id] = self.writer.copy_connection(conn)
+        return target

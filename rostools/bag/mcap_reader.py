@@ -345,7 +345,7 @@ class McapReader(BagReader):
                 if lo <= log <= hi and self._selects(channel_id, wanted, everything):
                     rank, conn = wanted[channel_id]
                     data = memoryview(mm)[start + 22 : stop]
-                    loose.append((log, rank, len(blocks), rec, conn, data))
+                    loose.append((log, rank, rec, conn, data))
                 continue
             if loose:
                 blocks.append(_loose_block(loose, len(blocks)))
@@ -437,7 +437,7 @@ class McapReader(BagReader):
                         raise fmt.McapFormatError(f"message at {pos} in chunk {rec} is too short")
                     if lo <= log <= hi and self._selects(channel_id, wanted, everything):
                         rank, conn = wanted[channel_id]
-                        append((log, rank, order, pos, conn, view[pos + 31 : nxt]))
+                        append((log, rank, pos, conn, view[pos + 31 : nxt]))
                 elif op in (fmt.OP_SCHEMA, fmt.OP_CHANNEL):
                     self._register(fmt.parse(op, buf, pos + 9, nxt))
                 pos = nxt

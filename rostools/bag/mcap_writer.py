@@ -17,14 +17,15 @@ import contextlib
 import os
 import sys
 from array import array
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Iterable, Mapping
 from pathlib import Path
 from typing import Final
 
 from rostools import __version__
 from rostools.bag import mcap_format as fmt
-from rostools.bag.base import BagWriter
+from rostools.bag.base import BagWriter, Targets
 from rostools.bag.model import BagUsageError, Connection, UnsupportedBagError
+from rostools.bag.ordering import Message
 from rostools.errors import InvalidDataError
 
 #: Chunk threshold (uncompressed bytes): rosbag's 768 KiB, close to the mcap library's 1 MiB.
@@ -162,6 +163,61 @@ class McapWriter(BagWriter):
         chunk += data
         if len(chunk) >= self.chunk_size:
             self._close_chunk()
+
+    def write_many(self, messages: Iterable[Message], targets: Targets) -> int:
+        """Store a stream of messages read from another bag; how many were written.
+
+        ``targets`` maps source connections to this writer's (see ``Targets``). The same
+        work as ``write``, without a method call per message.
+        """
+        self._check_open()
+        ids: dict[int, int] = {}
+        for src, conn in targets.items():
+            if conn.id >= len(self._connections) or self._connections[conn.id] is not conn:
+                raise BagUsageError(f"connection {conn.id} was not added to this writer")
+            ids[src] = conn.id
+        pack = fmt.MESSAGE_PREFIX.pack
+        limit = self.chunk_size
+        counts = self._counts
+        chunk, index = self._chunk, self._index
+        first, last = self._chunk_start, self._chunk_end
+        n = 0
+        for conn, t, data in messages:
+            cid = ids.get(conn.id)
+            if cid is None:
+                cid = ids[conn.id] = self._target(targets, conn)
+            if not chunk:
+                first = last = t
+            elif t > last:
+                last = t
+            elif t < last:
+                self._unsorted = True
+                if t < first:
+                    first = t
+            if t < 0 or t > _MAX_TIME:
+                raise BagUsageError(f"time {t} ns does not fit an MCAP file")
+            entries = index.get(cid)
+            if entries is None:
+                entries = index[cid] = array("Q")
+            seq = counts[cid]
+            counts[cid] = seq + 1
+            entries.append(t)
+            entries.append(len(chunk))
+            chunk += pack(5, 22 + len(data), cid, seq & 0xFFFFFFFF, t, t)
+            chunk += data
+            n += 1
+            if len(chunk) >= limit:
+                self._chunk_start, self._chunk_end = first, last
+                self._close_chunk()
+                chunk, index = self._chunk, self._index
+        self._chunk_start, self._chunk_end = first, last
+        return n
+
+    def _target(self, targets: Targets, conn: Connection) -> int:
+        target = targets.resolve(conn)
+        if target.id >= len(self._connections) or self._connections[target.id] is not target:
+            raise BagUsageError(f"connection {target.id} was not added to this writer")
+        return target.id
 
     def flush(self) -> None:
         """Close the open chunk and hand everything to the OS."""

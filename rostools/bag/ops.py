@@ -14,7 +14,7 @@ from pathlib import Path
 from typing import Any, Final
 
 from rostools.bag.api import format_for_name, open_bag, open_writer
-from rostools.bag.base import BagReader, BagWriter
+from rostools.bag.base import BagReader, BagWriter, Targets
 from rostools.bag.mcap_reader import McapReader
 from rostools.bag.model import BagUsageError, Connection, UnsupportedBagError
 from rostools.bag.ordering import Message
@@ -247,10 +247,10 @@ def _pump(
     total: int,
 ) -> tuple[int, int, int]:
     """Copy a message stream; (messages read, messages written, connections written)."""
-    out: dict[int, Connection] = {}
-    if eager:
-        for conn in reader.connections:
-            out[conn.id] = writer.copy_connection(conn)
+    out = Targets(writer, reader.connections if eager else ())
+    if keep is None and progress is None:
+        written = writer.write_many(stream, out)
+        return written, written, len(out)
     write = writer.write
     read = written = 0
     for conn, t, data in stream:
@@ -259,10 +259,7 @@ def _pump(
             progress(read, total)
         if keep is not None and not keep(conn, t, data):
             continue
-        target = out.get(conn.id)
-        if target is None:
-            target = out[conn.id] = writer.copy_connection(conn)
-        write(target, t, data)
+        write(out.get(conn.id) or out.resolve(conn), t, data)
         written += 1
     if progress is not None:
         progress(read, total)

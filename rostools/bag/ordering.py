@@ -19,10 +19,10 @@ from typing import TYPE_CHECKING
 if TYPE_CHECKING:
     from rostools.bag.model import Connection
 
-#: One message ready to yield: (time ns, rank, block order, position, connection, data).
-#: The first four ints are unique per message, so sorting never compares the last two. Rank
-#: breaks ties between connections the way rosbag does (order of the connection records).
-Entry = tuple[int, int, int, int, "Connection", memoryview]
+#: One message of a block: (time ns, rank, position in the block, connection, data). The
+#: three ints are unique within a block, so sorting never compares the last two. Rank breaks
+#: ties between connections the way rosbag does (order of the connection records).
+Entry = tuple[int, int, int, "Connection", memoryview]
 #: What readers yield: the connection, the receive time in ns, the raw serialized message.
 Message = tuple["Connection", int, memoryview]
 
@@ -41,36 +41,42 @@ class Block:
 
 
 def ordered(blocks: Iterable[Block]) -> Iterator[Message]:
-    """Every entry of every block, in time order (ties: rank, then file position)."""
+    """Every entry of every block, in time order (ties: rank, block order, position)."""
     todo = sorted(blocks, key=lambda b: (b.start_ns, b.order))
     count = len(todo)
-    heap: list[tuple[Entry, int, list[Entry]]] = []
+    # Heap items: (time, rank, block order, position, index in entries, entries).
+    heap: list[tuple[int, int, int, int, int, list[Entry]]] = []
     i = 0
     while True:
         # Admit every block that may hold something at or before the current head.
-        while i < count and (not heap or todo[i].start_ns <= heap[0][0][0]):
-            entries = todo[i].load()
+        while i < count and (not heap or todo[i].start_ns <= heap[0][0]):
+            block = todo[i]
+            entries = block.load()
             i += 1
             if entries:
-                heapq.heappush(heap, (entries[0], 0, entries))
+                e = entries[0]
+                heapq.heappush(heap, (e[0], e[1], block.order, e[2], 0, entries))
         if not heap:
             return
         if len(heap) == 1:
             # One block open: stream it up to where the next block starts.
-            _, k, entries = heap[0]
+            _, _, order, _, k, entries = heap[0]
             cut = len(entries) if i >= count else bisect_left(entries, (todo[i].start_ns,), lo=k)
             for e in entries[k:cut] if k or cut < len(entries) else entries:
-                yield e[4], e[0], e[5]
+                yield e[3], e[0], e[4]
             if cut >= len(entries):
                 heap.clear()
             else:
-                heap[0] = (entries[cut], cut, entries)
+                e = entries[cut]
+                heap[0] = (e[0], e[1], order, e[2], cut, entries)
             continue
-        entry, k, entries = heapq.heappop(heap)
-        yield entry[4], entry[0], entry[5]
+        _, _, order, _, k, entries = heapq.heappop(heap)
+        e = entries[k]
+        yield e[3], e[0], e[4]
         k += 1
         if k < len(entries):
-            heapq.heappush(heap, (entries[k], k, entries))
+            e = entries[k]
+            heapq.heappush(heap, (e[0], e[1], order, e[2], k, entries))
 
 
 def merge(streams: Iterable[Iterator[Message]]) -> Iterator[Message]:

@@ -12,6 +12,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from rostools.bag.api import format_for_name, open_bag, open_writer
+from rostools.bag.base import Targets
 from rostools.bag.model import BagDataLossError, BagUsageError, CompressionStats
 
 
@@ -71,15 +72,8 @@ def recover(
             overwrite=overwrite,
         )
         try:
-            out = {c.id: writer.copy_connection(c) for c in reader.connections}
-            write = writer.write
-            count = 0
-            for conn, t, data in reader.messages():
-                target = out.get(conn.id)
-                if target is None:  # a connection met only while reading
-                    target = out[conn.id] = writer.copy_connection(conn)
-                write(target, t, data)
-                count += 1
+            out = Targets(writer, reader.connections)
+            count = writer.write_many(reader.messages(), out)
         except BaseException:
             writer.abort()
             raise

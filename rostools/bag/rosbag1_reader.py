@@ -36,8 +36,11 @@ Buffer = bytes | mmap.mmap
 _ENTRY = struct.Struct("<III")
 _U32 = fmt.U32
 _NS = 1_000_000_000
-#: The ``op`` field of a MESSAGE_DATA record header, found with one ``find`` per message.
-_MSG_OP = b"op=\x02"
+#: A message record's header length, op field and data length, read in one go for the
+#: 38-byte headers rosbag writes: fields sorted (C++: conn, op, time) or Python's op, conn, time.
+_MSG_CPP = struct.Struct("<I13x8s17xI")
+_MSG_PY = struct.Struct("<I8s30xI")
+_OP_FIELD = b"\x04\x00\x00\x00op=\x02"
 
 
 @dataclass
@@ -409,19 +412,19 @@ class Bag1Reader(BagReader):
         view = memoryview(buf)
         out: list[Entry] = []
         append = out.append
-        unpack = _U32.unpack_from
         if chunk.index_pos < 0:
+            unpack = _U32.unpack_from
             for t, conn_id, off in self._walk(chunk, buf, base, end):
                 if conn_id in wanted and lo <= t <= hi:
                     p = base + off
-                    hlen = unpack(buf, p)[0]
-                    q = p + 8 + hlen
+                    q = p + 8 + unpack(buf, p)[0]
                     dlen = unpack(buf, q - 4)[0]
                     rank, conn = wanted[conn_id]
-                    append((t, rank, order, off, conn, view[q : q + dlen]))
+                    append((t, rank, off, conn, view[q : q + dlen]))
             out.sort()
             return out
-        find = buf.find
+        fast = _MSG_CPP
+        limit = end - _MSG_CPP.size
         for conn_id, raw in self._index_records(chunk):
             if conn_id not in wanted:
                 continue
@@ -431,15 +434,21 @@ class Bag1Reader(BagReader):
                 if t < lo or t > hi:
                     continue
                 p = base + off
-                hlen = unpack(buf, p)[0]
-                if find(_MSG_OP, p + 4, p + 4 + hlen) < 0:
-                    p = self._skip_connections(buf, p, end)
-                    hlen = unpack(buf, p)[0]
-                q = p + 8 + hlen
-                dlen = unpack(buf, q - 4)[0]
+                # Message record headers are 38 bytes in rosbag's C++ or Python field order;
+                # anything else (or a connection record first) takes the general path.
+                if p <= limit:
+                    hlen, op_field, dlen = fast.unpack_from(buf, p)
+                    if hlen != 38 or op_field != _OP_FIELD:
+                        fast = _MSG_PY if fast is _MSG_CPP else _MSG_CPP
+                        hlen, op_field, dlen = fast.unpack_from(buf, p)
+                    q = p + 46
+                    if hlen != 38 or op_field != _OP_FIELD:
+                        q, dlen = self._message_at(buf, p, end)
+                else:
+                    q, dlen = self._message_at(buf, p, end)
                 if q + dlen > end:
                     raise BagFormatError(f"{self.path}: chunk at {chunk.pos}: index points past it")
-                append((t, rank, order, off, conn, view[q : q + dlen]))
+                append((t, rank, off, conn, view[q : q + dlen]))
         out.sort()
         return out
 
@@ -464,14 +473,17 @@ class Bag1Reader(BagReader):
                 raise BagFormatError(f"{self.path}: index data at {data} is cut short")
             yield conn_id, self._view[data:pos]
 
-    def _skip_connections(self, buf: Buffer, pos: int, end: int) -> int:
-        """The message record at or after ``pos``, skipping connection records as rosbag does."""
+    def _message_at(self, buf: Buffer, pos: int, end: int) -> tuple[int, int]:
+        """(data start, data length) of the message record at ``pos``.
+
+        Connection records before it are skipped, as rosbag does.
+        """
         try:
             while True:
                 fields, data, dlen = fmt.read_record(buf, pos, end)
                 op = fmt.op_of(fields)
                 if op == fmt.OP_MSG_DATA:
-                    return pos
+                    return data, dlen
                 if op != fmt.OP_CONNECTION:
                     raise fmt.RecordError(f"index points at a record with op {op}")
                 pos = data + dlen

@@ -170,7 +170,7 @@ class BagWriter(ABC):
 
     @abstractmethod
     def flush(self) -> None:
-        """Hand everything written so far to the OS (the open chunk stays open)."""
+        """Hand everything written so far to the OS: a killed writer then loses none of it."""
 
     @abstractmethod
     def close(self) -> None:

@@ -212,8 +212,14 @@ class Bag1Writer(BagWriter):
         return target.id
 
     def flush(self) -> None:
-        """Hand everything so far to the OS (an uncompressed open chunk's records included)."""
+        """Hand everything so far to the OS: after this, a killed writer loses none of it.
+
+        An uncompressed chunk stays open (its records are already in the file); a compressed
+        one is closed, since its data only exists once compressed.
+        """
         self._check_open()
+        if self._chunk_open and not self._plain:
+            self._close_chunk()
         self._flush_out()
 
     def close(self) -> None:

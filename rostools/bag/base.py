@@ -148,7 +148,7 @@ class BagWriter(ABC):
         callerid: str = "",
         latching: bool = False,
         extra: Mapping[str, str] | None = None,
-        header_has_latching: bool = True,
+        absent: frozenset[str] = frozenset(),
     ) -> Connection:
         """Declare a connection; messages are written against the returned one."""
 
@@ -190,7 +190,7 @@ class BagWriter(ABC):
             callerid=conn.callerid,
             latching=conn.latching,
             extra=conn.extra,
-            header_has_latching=conn.header_has_latching,
+            absent=conn.absent,
         )
 
     def __enter__(self) -> BagWriter:

@@ -484,7 +484,7 @@ def channel_connection(channel: fmt.Channel, schemas: Mapping[int, fmt.Schema]) 
         callerid=callerid,
         latching=latching in ("true", "1"),
         extra=meta,
-        header_has_latching=latching is not None,
+        absent=frozenset() if latching is not None else frozenset({"latching"}),
     )
 
 

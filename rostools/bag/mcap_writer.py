@@ -102,7 +102,7 @@ class McapWriter(BagWriter):
         callerid: str = "",
         latching: bool = False,
         extra: Mapping[str, str] | None = None,
-        header_has_latching: bool = True,
+        absent: frozenset[str] = frozenset(),
     ) -> Connection:
         """Declare a connection: a channel (and its schema, once per definition)."""
         self._check_open()
@@ -117,7 +117,7 @@ class McapWriter(BagWriter):
             callerid=callerid,
             latching=latching,
             extra=dict(extra or {}),
-            header_has_latching=header_has_latching,
+            absent=absent,
         )
         key = (type, definition)
         schema_id = self._schema_ids.get(key)
@@ -344,7 +344,7 @@ def channel_metadata(conn: Connection) -> dict[str, str]:
     meta = dict(conn.extra)
     if conn.callerid:
         meta["callerid"] = conn.callerid
-    if conn.latching or conn.header_has_latching:
+    if "latching" not in conn.absent:
         meta["latching"] = "true" if conn.latching else "false"
     meta["md5sum"] = conn.md5sum
     return meta

@@ -22,8 +22,9 @@ class Connection:
 
     ``topic`` is the topic the messages are stored under. ``extra`` holds every other field of
     the original connection header (including a ``topic`` that differs from the stored one), so
-    a conversion between formats loses nothing. ``header_has_latching`` is False for headers
-    without a ``latching`` field (rosbag's Python writer omits it), so it is not invented.
+    a conversion between formats loses nothing. ``absent`` names the standard fields the
+    original header lacked (rosbag's Python writer omits ``latching`` and ``callerid``; some
+    writers omit ``topic``), so ``header()`` does not invent them.
     """
 
     id: int
@@ -34,24 +35,29 @@ class Connection:
     callerid: str = ""
     latching: bool = False
     extra: Mapping[str, str] = field(default_factory=dict, hash=False)
-    header_has_latching: bool = True
+    absent: frozenset[str] = frozenset()
 
     def header(self) -> dict[str, str]:
         """The connection header as ROS 1 writes it (``latching`` as "1"/"0")."""
         fields = dict(self.extra)
-        fields.setdefault("topic", self.topic)
-        fields["type"] = self.type
-        fields["md5sum"] = self.md5sum
-        fields["message_definition"] = self.definition
-        if self.callerid:
-            fields["callerid"] = self.callerid
-        if self.latching or self.header_has_latching:
-            fields["latching"] = "1" if self.latching else "0"
+        standard = {
+            "topic": fields.get("topic", self.topic),
+            "type": self.type,
+            "md5sum": self.md5sum,
+            "message_definition": self.definition,
+            "callerid": self.callerid,
+            "latching": "1" if self.latching else "0",
+        }
+        for key, value in standard.items():
+            if key not in self.absent and (value or key != "callerid"):
+                fields[key] = value
         return fields
 
 
 #: The fields of a connection header that ``Connection`` keeps as attributes.
 HEADER_FIELDS = frozenset(("type", "md5sum", "message_definition", "callerid", "latching"))
+#: Standard fields whose absence from a header is remembered (``Connection.absent``).
+OPTIONAL_FIELDS = frozenset(("topic", *HEADER_FIELDS))
 
 
 def connection_from_header(conn_id: int, topic: str, fields: Mapping[str, str]) -> Connection:
@@ -68,7 +74,7 @@ def connection_from_header(conn_id: int, topic: str, fields: Mapping[str, str]) 
         callerid=fields.get("callerid", ""),
         latching=fields.get("latching", "0") in ("1", "true"),
         extra=extra,
-        header_has_latching="latching" in fields,
+        absent=OPTIONAL_FIELDS - fields.keys() - {"callerid"},
     )
 
 

@@ -101,7 +101,7 @@ class Bag1Writer(BagWriter):
         callerid: str = "",
         latching: bool = False,
         extra: Mapping[str, str] | None = None,
-        header_has_latching: bool = True,
+        absent: frozenset[str] = frozenset(),
     ) -> Connection:
         """Declare a connection (written into the chunk of its first message)."""
         self._check_open()
@@ -114,7 +114,7 @@ class Bag1Writer(BagWriter):
             callerid=callerid,
             latching=latching,
             extra=dict(extra or {}),
-            header_has_latching=header_has_latching,
+            absent=absent,
         )
         self._connections.append(conn)
         # Every message record header of this connection: conn, op, then time (sorted).

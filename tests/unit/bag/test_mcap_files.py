@@ -127,4 +127,4 @@ def test_missing_md5_is_computed_from_a_ros1_definition(tmp_path: Path) -> None:
     with McapReader(path) as reader:
         (conn,) = reader.connections
     assert conn.md5sum == "992ce8a1687cec8c8bd883ec73ca41d1"
-    assert not conn.header_has_latching
+    assert conn.absent == {"latching"}

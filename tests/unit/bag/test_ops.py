@@ -35,7 +35,7 @@ def test_convert_keeps_unusual_headers(tmp_path: Path) -> None:
         "d41d8cd98f00b204e9800998ecf8427e",
         "",
         extra={"topic": "/original", "tcp_nodelay": "1"},
-        header_has_latching=False,
+        absent=frozenset({"latching"}),
     )
     writer.write(conn, 5, b"")
     writer.close()

@@ -61,7 +61,9 @@ def test_rosbag_reads_our_bags(tmp_path: Path, compression: str) -> None:
 
 def test_rosbag_info_cli(tmp_path: Path) -> None:
     sample = write_sample(tmp_path / "ours.bag", 500, compression="lz4")
-    proc = subprocess.run(["rosbag", "info", "--yaml", str(sample.path)], capture_output=True, text=True, check=True)
+    proc = subprocess.run(
+        ["rosbag", "info", "--yaml", str(sample.path)], capture_output=True, text=True, check=True
+    )
     info = yaml.safe_load(proc.stdout)
     ours = bag_info(sample.path)
     assert info["messages"] == ours.message_count
@@ -71,7 +73,9 @@ def test_rosbag_info_cli(tmp_path: Path) -> None:
 
 @pytest.mark.parametrize("compression", ["none", "lz4"])
 def test_rosbag_reindex_of_our_unclosed_bag(tmp_path: Path, compression: str) -> None:
-    sample = write_sample(tmp_path / "rec.bag", 2000, compression=compression, chunk_size=20_000, close=False)
+    sample = write_sample(
+        tmp_path / "rec.bag", 2000, compression=compression, chunk_size=20_000, close=False
+    )
     copy = tmp_path / "copy.bag"
     shutil.copy(sample.path, copy)
     subprocess.run(["rosbag", "reindex", "-q", str(copy)], capture_output=True, check=True)

@@ -12,7 +12,7 @@ import time
 
 from benchmarks.common import ROOT, Result, write_report
 
-MODULES = ["benchmarks.bench_msg"]
+MODULES = ["benchmarks.bench_msg", "benchmarks.bench_bag"]
 
 
 def collect() -> dict[str, object]:

@@ -453,17 +453,25 @@ def encode_channel(
     return _record(OP_CHANNEL, content)
 
 
-def encode_chunk(start: int, end: int, size: int, compression: str, data: bytes) -> bytes:
-    """A whole Chunk record around already compressed ``data`` (CRC of the records: 0)."""
+def encode_chunk_head(start: int, end: int, size: int, compression: str, data_len: int) -> bytes:
+    """A Chunk record up to its records: append ``data_len`` bytes of (compressed) records.
+
+    The records' CRC is left 0 ("not computed"), as readers allow.
+    """
     content_head = (
         _U64.pack(start)
         + _U64.pack(end)
         + _U64.pack(size)
         + _U32.pack(0)
         + _str(compression)
-        + _U64.pack(len(data))
+        + _U64.pack(data_len)
     )
-    return PREFIX.pack(OP_CHUNK, len(content_head) + len(data)) + content_head + data
+    return PREFIX.pack(OP_CHUNK, len(content_head) + data_len) + content_head
+
+
+def encode_chunk(start: int, end: int, size: int, compression: str, data: bytes) -> bytes:
+    """A whole Chunk record around already compressed ``data``."""
+    return encode_chunk_head(start, end, size, compression, len(data)) + data
 
 
 def encode_message_index(channel_id: int, entries: bytes) -> bytes:

@@ -26,6 +26,7 @@ from rostools.bag import mcap_format as fmt
 from rostools.bag.base import BagWriter, Targets
 from rostools.bag.model import BagUsageError, Connection, UnsupportedBagError
 from rostools.bag.ordering import Message
+from rostools.bag.sink import BIG_PAYLOAD, Sink, frozen
 from rostools.errors import InvalidDataError
 
 #: Chunk threshold (uncompressed bytes): rosbag's 768 KiB, close to the mcap library's 1 MiB.
@@ -36,8 +37,10 @@ MAX_CHANNELS: Final = 1 << 16
 #: zstd level 3 is the library default and what the mcap writers use.
 ZSTD_LEVEL: Final = 3
 _MAX_TIME: Final = (1 << 64) - 1
-#: Compresses a chunk's records.
-_Compress = Callable[[bytearray], bytes]
+_MSG = fmt.MESSAGE_PREFIX
+_Chunk = bytes | bytearray | memoryview
+#: Compresses a chunk's records, given in pieces.
+_Compress = Callable[[list[_Chunk]], bytes]
 
 
 class McapWriter(BagWriter):
@@ -71,14 +74,16 @@ class McapWriter(BagWriter):
             raise InvalidDataError(f"cannot create {self.path}: {err.strerror or err}") from err
         self._compress = _compressor(compression)
         self._closed = False
-        self._written = 0
-        self._out = bytearray()
+        self._sink = Sink(self._fd, str(self.path))
         self._connections: list[Connection] = []
         self._schema_ids: dict[tuple[str, str], int] = {}
         self._schema_records: list[bytes] = []
         self._channel_records: list[bytes] = []
         self._counts: list[int] = []
-        self._chunk = bytearray()
+        # The open chunk: its small records coalesced, big payloads kept by reference.
+        self._chunk_small = bytearray()
+        self._chunk_pieces: list[bytes | bytearray | memoryview] = []
+        self._chunk_len = 0
         self._chunk_start = 0
         self._chunk_end = 0
         self._index: dict[int, array[int]] = {}
@@ -86,9 +91,9 @@ class McapWriter(BagWriter):
         self._chunk_indexes: list[fmt.ChunkIndex] = []
         self._start = _MAX_TIME
         self._end = 0
-        self._out += fmt.MAGIC
-        self._out += fmt.encode_header(profile, library)
-        self._flush_out()
+        self._sink.write(fmt.MAGIC)
+        self._sink.write(fmt.encode_header(profile, library))
+        self._sink.flush()
 
     # -- the public interface --------------------------------------------------------------
 
@@ -125,10 +130,10 @@ class McapWriter(BagWriter):
             schema_id = self._schema_ids[key] = len(self._schema_records) + 1
             record = fmt.encode_schema(schema_id, type, "ros1msg", definition.encode())
             self._schema_records.append(record)
-            self._out += record
+            self._sink.write(record)
         record = fmt.encode_channel(conn.id, schema_id, topic, "ros1", channel_metadata(conn))
         self._channel_records.append(record)
-        self._out += record
+        self._sink.write(record)
         self._connections.append(conn)
         self._counts.append(0)
         return conn
@@ -139,10 +144,30 @@ class McapWriter(BagWriter):
         if self._closed or cid >= len(self._connections) or self._connections[cid] is not conn:
             self._check_open()
             raise BagUsageError(f"connection {cid} ({conn.topic}) was not added to this writer")
+        self._store(cid, t_ns, data)
+
+    def write_many(self, messages: Iterable[Message], targets: Targets) -> int:
+        """Store a stream of messages read from another bag; how many were written.
+
+        ``targets`` maps source connections to this writer's (see ``Targets``).
+        """
+        self._check_open()
+        ids: dict[int, int] = {}
+        store = self._store
+        n = 0
+        for conn, t, data in messages:
+            cid = ids.get(conn.id)
+            if cid is None:
+                cid = ids[conn.id] = self._target(targets, conn)
+            store(cid, t, data)
+            n += 1
+        return n
+
+    def _store(self, cid: int, t_ns: int, data: bytes | bytearray | memoryview) -> None:
         if not 0 <= t_ns <= _MAX_TIME:
             raise BagUsageError(f"time {t_ns} ns does not fit an MCAP file")
-        chunk = self._chunk
-        if not chunk:
+        offset = self._chunk_len
+        if not offset:
             self._chunk_start = self._chunk_end = t_ns
         elif t_ns > self._chunk_end:
             self._chunk_end = t_ns
@@ -156,62 +181,19 @@ class McapWriter(BagWriter):
         seq = self._counts[cid]
         self._counts[cid] = seq + 1
         index.append(t_ns)
-        index.append(len(chunk))
-        chunk += fmt.MESSAGE_PREFIX.pack(
-            fmt.OP_MESSAGE, 22 + len(data), cid, seq & 0xFFFFFFFF, t_ns, t_ns
-        )
-        chunk += data
-        if len(chunk) >= self.chunk_size:
+        index.append(offset)
+        size = len(data)
+        small = self._chunk_small
+        small += _MSG.pack(5, 22 + size, cid, seq & 0xFFFFFFFF, t_ns, t_ns)
+        if size >= BIG_PAYLOAD:
+            self._chunk_pieces.append(small)
+            self._chunk_pieces.append(frozen(data))
+            self._chunk_small = bytearray()
+        else:
+            small += data
+        self._chunk_len = offset + 31 + size
+        if self._chunk_len >= self.chunk_size:
             self._close_chunk()
-
-    def write_many(self, messages: Iterable[Message], targets: Targets) -> int:
-        """Store a stream of messages read from another bag; how many were written.
-
-        ``targets`` maps source connections to this writer's (see ``Targets``). The same
-        work as ``write``, without a method call per message.
-        """
-        self._check_open()
-        ids: dict[int, int] = {}
-        for src, conn in targets.items():
-            if conn.id >= len(self._connections) or self._connections[conn.id] is not conn:
-                raise BagUsageError(f"connection {conn.id} was not added to this writer")
-            ids[src] = conn.id
-        pack = fmt.MESSAGE_PREFIX.pack
-        limit = self.chunk_size
-        counts = self._counts
-        chunk, index = self._chunk, self._index
-        first, last = self._chunk_start, self._chunk_end
-        n = 0
-        for conn, t, data in messages:
-            cid = ids.get(conn.id)
-            if cid is None:
-                cid = ids[conn.id] = self._target(targets, conn)
-            if not chunk:
-                first = last = t
-            elif t > last:
-                last = t
-            elif t < last:
-                self._unsorted = True
-                if t < first:
-                    first = t
-            if t < 0 or t > _MAX_TIME:
-                raise BagUsageError(f"time {t} ns does not fit an MCAP file")
-            entries = index.get(cid)
-            if entries is None:
-                entries = index[cid] = array("Q")
-            seq = counts[cid]
-            counts[cid] = seq + 1
-            entries.append(t)
-            entries.append(len(chunk))
-            chunk += pack(5, 22 + len(data), cid, seq & 0xFFFFFFFF, t, t)
-            chunk += data
-            n += 1
-            if len(chunk) >= limit:
-                self._chunk_start, self._chunk_end = first, last
-                self._close_chunk()
-                chunk, index = self._chunk, self._index
-        self._chunk_start, self._chunk_end = first, last
-        return n
 
     def _target(self, targets: Targets, conn: Connection) -> int:
         target = targets.resolve(conn)
@@ -222,19 +204,19 @@ class McapWriter(BagWriter):
     def flush(self) -> None:
         """Close the open chunk and hand everything to the OS."""
         self._check_open()
-        if self._chunk:
+        if self._chunk_len:
             self._close_chunk()
-        self._flush_out()
+        self._sink.flush()
 
     def close(self) -> None:
         """Write the last chunk, the data end, the summary and the footer."""
         if self._closed:
             return
         try:
-            if self._chunk:
+            if self._chunk_len:
                 self._close_chunk()
-            self._out += fmt.encode_data_end()
-            summary_start = self._written + len(self._out)
+            self._sink.write(fmt.encode_data_end())
+            summary_start = self._sink.tell()
             summary = bytearray()
             offsets = bytearray()
             groups: list[tuple[int, list[bytes]]] = [
@@ -252,9 +234,9 @@ class McapWriter(BagWriter):
                     summary += body
             offset_start = summary_start + len(summary)
             summary += offsets
-            self._out += summary
-            self._out += fmt.encode_footer(summary_start, offset_start, bytes(summary))
-            self._flush_out()
+            self._sink.write(summary)
+            self._sink.write(fmt.encode_footer(summary_start, offset_start, bytes(summary)))
+            self._sink.flush()
         finally:
             self._closed = True
             os.close(self._fd)
@@ -288,55 +270,54 @@ class McapWriter(BagWriter):
         )
 
     def _close_chunk(self) -> None:
-        raw = self._chunk
-        data = self._compress(raw)
+        pieces = self._chunk_pieces
+        if self._chunk_small:
+            pieces.append(self._chunk_small)
+        size = self._chunk_len
         start, end = self._chunk_start, self._chunk_end
         self._start = min(self._start, start)
         self._end = max(self._end, end)
-        chunk_pos = self._written + len(self._out)
-        record = fmt.encode_chunk(
-            start, end, len(raw), "" if self.compression == "none" else self.compression, data
-        )
-        self._out += record
-        index_start = chunk_pos + len(record)
+        compression = "" if self.compression == "none" else self.compression
+        sink = self._sink
+        chunk_pos = sink.tell()
+        if compression:
+            data = self._compress(pieces)
+            sink.write(fmt.encode_chunk_head(start, end, size, compression, len(data)))
+            sink.write(data)
+            stored = len(data)
+        else:
+            sink.write(fmt.encode_chunk_head(start, end, size, compression, size))
+            for piece in pieces:
+                sink.write(piece)
+            stored = size
+        index_start = sink.tell()
         offsets: dict[int, int] = {}
         for cid in sorted(self._index):
             entries = self._index[cid]
             if self._unsorted:
                 pairs = sorted(zip(entries[::2], entries[1::2], strict=True))
                 entries = array("Q", [v for pair in pairs for v in pair])
-            offsets[cid] = self._written + len(self._out)
-            self._out += fmt.encode_message_index(cid, _little_endian(entries))
+            offsets[cid] = sink.tell()
+            sink.write(fmt.encode_message_index(cid, _little_endian(entries)))
         self._chunk_indexes.append(
             fmt.ChunkIndex(
                 message_start_time=start,
                 message_end_time=end,
                 chunk_start_offset=chunk_pos,
-                chunk_length=len(record),
+                chunk_length=index_start - chunk_pos,
                 message_index_offsets=offsets,
-                message_index_length=self._written + len(self._out) - index_start,
-                compression="" if self.compression == "none" else self.compression,
-                compressed_size=len(data),
-                uncompressed_size=len(raw),
+                message_index_length=sink.tell() - index_start,
+                compression=compression,
+                compressed_size=stored,
+                uncompressed_size=size,
             )
         )
-        self._chunk = bytearray()
+        self._chunk_small = bytearray()
+        self._chunk_pieces = []
+        self._chunk_len = 0
         self._index = {}
         self._unsorted = False
-        self._flush_out()
-
-    def _flush_out(self) -> None:
-        view = memoryview(self._out)
-        done = 0
-        try:
-            while done < len(view):
-                done += os.write(self._fd, view[done:])
-        except OSError as err:
-            raise InvalidDataError(f"cannot write {self.path}: {err.strerror or err}") from err
-        finally:
-            view.release()
-        self._written += done
-        del self._out[:done]
+        sink.flush()
 
 
 def channel_metadata(conn: Connection) -> dict[str, str]:
@@ -351,23 +332,35 @@ def channel_metadata(conn: Connection) -> dict[str, str]:
 
 
 def _compressor(kind: str) -> _Compress:
+    """Compresses a chunk given as pieces, streaming them so big payloads are not joined."""
     if kind == "zstd":
         import zstandard
 
         compressor = zstandard.ZstdCompressor(level=ZSTD_LEVEL)
 
-        def zstd(data: bytearray) -> bytes:
-            return compressor.compress(data)
+        def zstd(pieces: list[_Chunk]) -> bytes:
+            if len(pieces) == 1:
+                return compressor.compress(pieces[0])
+            stream = compressor.compressobj(size=sum(len(p) for p in pieces))
+            out = [stream.compress(piece) for piece in pieces]
+            out.append(stream.flush())
+            return b"".join(out)
 
         return zstd
     if kind == "lz4":
         import lz4.frame
 
-        def lz4_frame(data: bytearray) -> bytes:
-            return bytes(lz4.frame.compress(data))
+        def lz4_frame(pieces: list[_Chunk]) -> bytes:
+            if len(pieces) == 1:
+                return bytes(lz4.frame.compress(pieces[0]))
+            stream = lz4.frame.LZ4FrameCompressor()
+            out = [stream.begin()]
+            out += [stream.compress(piece) for piece in pieces]
+            out.append(stream.flush())
+            return b"".join(out)
 
         return lz4_frame
-    return bytes
+    return b"".join
 
 
 def _little_endian(values: array[int]) -> bytes:

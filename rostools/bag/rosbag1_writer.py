@@ -27,6 +27,7 @@ from rostools.bag import rosbag1_format as fmt
 from rostools.bag.base import BagWriter, Targets
 from rostools.bag.model import NS_PER_SEC, BagUsageError, Connection, UnsupportedBagError
 from rostools.bag.ordering import Message
+from rostools.bag.sink import Sink
 from rostools.errors import InvalidDataError
 from rostools.wire.header import encode_fields
 
@@ -71,8 +72,7 @@ class Bag1Writer(BagWriter):
         except OSError as err:
             raise InvalidDataError(f"cannot create {self.path}: {err.strerror or err}") from err
         self._closed = False
-        self._written = 0  # bytes handed to the OS
-        self._out = bytearray()  # bytes not yet handed over
+        self._sink = Sink(self._fd, str(self.path))
         self._connections: list[Connection] = []
         self._prefixes: list[bytes] = []
         self._in_file: set[int] = set()
@@ -85,9 +85,9 @@ class Bag1Writer(BagWriter):
         self._chunk_start = 0
         self._chunk_end = 0
         self._chunk_index: dict[int, array[int]] = {}
-        self._out += fmt.MAGIC
-        self._out += self._bag_header(0, 0, 0)
-        self._flush_out()
+        self._sink.write(fmt.MAGIC)
+        self._sink.write(self._bag_header(0, 0, 0))
+        self._sink.flush()
 
     # -- the public interface --------------------------------------------------------------
 
@@ -136,6 +136,26 @@ class Bag1Writer(BagWriter):
         if self._closed or cid >= len(self._connections) or self._connections[cid] is not conn:
             self._check_open()
             raise BagUsageError(f"connection {cid} ({conn.topic}) was not added to this writer")
+        self._store(cid, t_ns, data)
+
+    def write_many(self, messages: Iterable[Message], targets: Targets) -> int:
+        """Store a stream of messages read from another bag; how many were written.
+
+        ``targets`` maps source connections to this writer's (see ``Targets``).
+        """
+        self._check_open()
+        ids: dict[int, int] = {}
+        store = self._store
+        n = 0
+        for conn, t, data in messages:
+            cid = ids.get(conn.id)
+            if cid is None:
+                cid = ids[conn.id] = self._target(targets, conn)
+            store(cid, t, data)
+            n += 1
+        return n
+
+    def _store(self, cid: int, t_ns: int, data: bytes | bytearray | memoryview) -> None:
         if not 0 <= t_ns <= MAX_BAG_TIME_NS:
             raise BagUsageError(f"time {t_ns} ns does not fit a .bag (0 to 2^32 s)")
         if not self._chunk_open:
@@ -146,64 +166,23 @@ class Bag1Writer(BagWriter):
             self._chunk_end = t_ns
         if cid not in self._in_file:
             self._in_file.add(cid)
-            self._chunk_append(self._connection_record(conn))
+            self._chunk_append(self._connection_record(self._connections[cid]))
         secs, nsecs = divmod(t_ns, NS_PER_SEC)
         index = self._chunk_index.get(cid)
         if index is None:
             index = self._chunk_index[cid] = array("I")
         index.extend((secs, nsecs, self._chunk_len))
-        out = self._out if self._plain else self._chunk_buf
-        out += self._prefixes[cid]
-        out += _MSG_TAIL.pack(secs, nsecs, len(data))
-        out += data
+        head = self._prefixes[cid] + _MSG_TAIL.pack(secs, nsecs, len(data))
+        if self._plain:
+            self._sink.write_record(head, data)
+        else:
+            self._chunk_buf += head
+            self._chunk_buf += data
         self._chunk_len += 46 + len(data)  # u32 + 38-byte header + u32 + data
         if self._chunk_len >= self.chunk_size:
             self._close_chunk()
-        elif len(self._out) >= FLUSH_SIZE:
-            self._flush_out()
-
-    def write_many(self, messages: Iterable[Message], targets: Targets) -> int:
-        """Store a stream of messages read from another bag; how many were written.
-
-        ``targets`` maps source connections to this writer's (see ``Targets``). The same
-        work as ``write``, without a method call per message.
-        """
-        self._check_open()
-        ids: dict[int, int] = {}
-        prefixes = self._prefixes
-        tail = _MSG_TAIL.pack
-        n = 0
-        for conn, t, data in messages:
-            cid = ids.get(conn.id)
-            if cid is None:
-                cid = ids[conn.id] = self._target(targets, conn)
-            if t < 0 or t > MAX_BAG_TIME_NS:
-                raise BagUsageError(f"time {t} ns does not fit a .bag (0 to 2^32 s)")
-            if not self._chunk_open:
-                self._open_chunk(t)
-            elif t < self._chunk_start:
-                self._chunk_start = t
-            elif t > self._chunk_end:
-                self._chunk_end = t
-            if cid not in self._in_file:
-                self._in_file.add(cid)
-                self._chunk_append(self._connection_record(self._connections[cid]))
-            secs, nsecs = divmod(t, NS_PER_SEC)
-            index = self._chunk_index.get(cid)
-            if index is None:
-                index = self._chunk_index[cid] = array("I")
-            index.extend((secs, nsecs, self._chunk_len))
-            out = self._out if self._plain else self._chunk_buf
-            out += prefixes[cid]
-            out += tail(secs, nsecs, len(data))
-            out += data
-            self._chunk_len += 46 + len(data)
-            n += 1
-            if self._chunk_len >= self.chunk_size:
-                self._close_chunk()
-            elif len(self._out) >= FLUSH_SIZE:
-                self._flush_out()
-        return n
+        elif self._sink.pending() >= FLUSH_SIZE:
+            self._sink.flush()
 
     def _target(self, targets: Targets, conn: Connection) -> int:
         target = targets.resolve(conn)
@@ -220,7 +199,7 @@ class Bag1Writer(BagWriter):
         self._check_open()
         if self._chunk_open and not self._plain:
             self._close_chunk()
-        self._flush_out()
+        self._sink.flush()
 
     def close(self) -> None:
         """Close the last chunk, write the index, rewrite the bag header."""
@@ -229,24 +208,26 @@ class Bag1Writer(BagWriter):
         try:
             if self._chunk_open:
                 self._close_chunk()
-            index_pos = self._written + len(self._out)
+            index_pos = self._sink.tell()
             for conn in self._connections:
-                self._out += self._connection_record(conn)
+                self._sink.write(self._connection_record(conn))
             for pos, start, end, counts in self._chunk_infos:
-                self._out += fmt.encode_record(
-                    {
-                        "op": _OP[fmt.OP_CHUNK_INFO],
-                        "ver": _U32.pack(fmt.INDEX_VERSION),
-                        "chunk_pos": fmt.U64.pack(pos),
-                        "start_time": fmt.pack_time(start),
-                        "end_time": fmt.pack_time(end),
-                        "count": _U32.pack(len(counts)),
-                    },
-                    b"".join(_U32.pack(c) + _U32.pack(n) for c, n in sorted(counts.items())),
+                self._sink.write(
+                    fmt.encode_record(
+                        {
+                            "op": _OP[fmt.OP_CHUNK_INFO],
+                            "ver": _U32.pack(fmt.INDEX_VERSION),
+                            "chunk_pos": fmt.U64.pack(pos),
+                            "start_time": fmt.pack_time(start),
+                            "end_time": fmt.pack_time(end),
+                            "count": _U32.pack(len(counts)),
+                        },
+                        b"".join(_U32.pack(c) + _U32.pack(n) for c, n in sorted(counts.items())),
+                    )
                 )
-            self._flush_out()
+            self._sink.flush()
             header = self._bag_header(index_pos, len(self._connections), len(self._chunk_infos))
-            self._pwrite(header, len(fmt.MAGIC))
+            self._sink.pwrite(header, len(fmt.MAGIC))
         finally:
             self._closed = True
             os.close(self._fd)
@@ -304,66 +285,50 @@ class Bag1Writer(BagWriter):
 
     def _open_chunk(self, t_ns: int) -> None:
         self._chunk_open = True
-        self._chunk_pos = self._written + len(self._out)
+        self._chunk_pos = self._sink.tell()
         self._chunk_len = 0
         self._chunk_start = self._chunk_end = t_ns
         self._chunk_index = {}
         if self.compression == "none":
             # Provisional header (size 0, data length 0), patched on close, as rosbag does.
-            self._out += self._chunk_header("none", 0, 0)
-            self._chunk_data_pos = self._written + len(self._out)
+            self._sink.write(self._chunk_header("none", 0, 0))
+            self._chunk_data_pos = self._sink.tell()
 
     def _chunk_append(self, record: bytes) -> None:
-        (self._chunk_buf if self.compression != "none" else self._out).extend(record)
+        if self._plain:
+            self._sink.write(record)
+        else:
+            self._chunk_buf += record
         self._chunk_len += len(record)
 
     def _close_chunk(self) -> None:
         self._chunk_open = False
         index = self._chunk_index
         if self.compression == "none":
-            self._flush_out()
+            self._sink.flush()
             header = self._chunk_header("none", self._chunk_len, self._chunk_len)
-            self._pwrite(header, self._chunk_pos)
+            self._sink.pwrite(header, self._chunk_pos)
         else:
             data = fmt.compress(self.compression, self._chunk_buf)
-            self._out += self._chunk_header(self.compression, self._chunk_len, len(data))
-            self._out += data
+            self._sink.write(self._chunk_header(self.compression, self._chunk_len, len(data)))
+            self._sink.write(data)
             self._chunk_buf = bytearray()
         for cid in sorted(index):
             entries = index[cid]
-            self._out += fmt.encode_record(
-                {
-                    "op": _OP[fmt.OP_INDEX_DATA],
-                    "ver": _U32.pack(fmt.INDEX_VERSION),
-                    "conn": _U32.pack(cid),
-                    "count": _U32.pack(len(entries) // 3),
-                },
-                _little_endian(entries),
+            self._sink.write(
+                fmt.encode_record(
+                    {
+                        "op": _OP[fmt.OP_INDEX_DATA],
+                        "ver": _U32.pack(fmt.INDEX_VERSION),
+                        "conn": _U32.pack(cid),
+                        "count": _U32.pack(len(entries) // 3),
+                    },
+                    _little_endian(entries),
+                )
             )
         counts = {cid: len(entries) // 3 for cid, entries in index.items()}
         self._chunk_infos.append((self._chunk_pos, self._chunk_start, self._chunk_end, counts))
-        self._flush_out()
-
-    # -- output ----------------------------------------------------------------------------
-
-    def _flush_out(self) -> None:
-        view = memoryview(self._out)
-        done = 0
-        try:
-            while done < len(view):
-                done += os.write(self._fd, view[done:])
-        except OSError as err:
-            raise InvalidDataError(f"cannot write {self.path}: {err.strerror or err}") from err
-        finally:
-            view.release()
-        self._written += done
-        del self._out[:done]
-
-    def _pwrite(self, data: bytes, pos: int) -> None:
-        try:
-            os.pwrite(self._fd, data, pos)
-        except OSError as err:
-            raise InvalidDataError(f"cannot write {self.path}: {err.strerror or err}") from err
+        self._sink.flush()
 
 
 def _little_endian(values: array[int]) -> bytes:

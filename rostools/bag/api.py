@@ -7,6 +7,7 @@ raise the errors of ``rostools.errors`` with a one-line message naming the probl
 
 from __future__ import annotations
 
+import statistics
 from collections.abc import Collection, Iterable, Iterator
 from pathlib import Path
 from typing import Final
@@ -132,3 +133,24 @@ def merged_messages(
 ) -> Iterator[Message]:
     """The messages of several bags in one time order (``bag play a.bag b.bag``)."""
     return merge(r.messages(topics=topics, start=start, end=end) for r in readers)
+
+
+def topic_frequencies(reader: BagReader) -> dict[str, float]:
+    """Topic -> median message rate in Hz, as ``rosbag info --freq`` computes it.
+
+    The median of the gaps between consecutive messages of a topic (all its connections
+    merged); topics with fewer than two messages or a zero median gap are left out.
+    """
+    last: dict[str, int] = {}
+    gaps: dict[str, list[int]] = {}
+    for conn, t, _ in reader.times():
+        prev = last.get(conn.topic)
+        if prev is not None:
+            gaps.setdefault(conn.topic, []).append(t - prev)
+        last[conn.topic] = t
+    rates: dict[str, float] = {}
+    for topic, values in gaps.items():
+        median = statistics.median(values)
+        if median > 0:
+            rates[topic] = 1e9 / median
+    return rates

@@ -99,6 +99,13 @@ class BagReader(ABC):
         ``start`` and ``end`` are inclusive bounds in ns; None means unbounded (0 is a time).
         """
 
+    def times(self, topics: Collection[str] | None = None) -> Iterator[Message]:
+        """Like ``messages`` but the data may be left empty: for timing statistics only.
+
+        Formats with a per-message index answer from it without reading the messages.
+        """
+        return self.messages(topics=topics)
+
     @abstractmethod
     def close(self) -> None:
         """Release the file."""

@@ -34,6 +34,7 @@ from rostools.wire.header import HeaderError, split_fields
 #: A chunk's records: the file map (uncompressed chunks) or the decompressed bytes.
 Buffer = bytes | mmap.mmap
 _ENTRY = struct.Struct("<III")
+_EMPTY = memoryview(b"")
 _U32 = fmt.U32
 _NS = 1_000_000_000
 #: A message record's header length, op field and data length, read in one go for the
@@ -395,6 +396,36 @@ class Bag1Reader(BagReader):
             and not wanted.keys().isdisjoint(chunk.counts)
         ]
         return ordered(blocks)
+
+    def times(self, topics: Collection[str] | None = None) -> Iterator[Message]:
+        """(connection, time, empty data) of each message in time order, from the index alone.
+
+        What ``info --freq`` needs, without decompressing a chunk (unindexed bags: a full read).
+        """
+        if not self.indexed:
+            yield from self.messages(topics=topics)
+            return
+        wanted = self.wanted(topics, None)
+        blocks = [
+            Block(chunk.start_ns, chunk.end_ns, order, partial(self._index_entries, chunk, wanted))
+            for order, chunk in enumerate(self.chunks)
+            if not wanted.keys().isdisjoint(chunk.counts)
+        ]
+        yield from ordered(blocks)
+
+    def _index_entries(
+        self, chunk: Chunk, wanted: Mapping[int, tuple[int, Connection]]
+    ) -> list[Entry]:
+        out: list[Entry] = []
+        for conn_id, raw in self._index_records(chunk):
+            if conn_id in wanted:
+                rank, conn = wanted[conn_id]
+                out += [
+                    (secs * _NS + nsecs, rank, off, conn, _EMPTY)
+                    for secs, nsecs, off in _ENTRY.iter_unpack(raw)
+                ]
+        out.sort()
+        return out
 
     def _entries(
         self,

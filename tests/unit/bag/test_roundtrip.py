@@ -192,3 +192,16 @@ def test_abort_and_exceptions_delete_the_file(tmp_path: Path, name: str) -> None
         writer.write(conn, 0, b"")
         raise RuntimeError("boom")
     assert not path.exists()
+
+
+@pytest.mark.parametrize("name", ["x.bag", "x.mcap"])
+def test_times_and_frequencies(tmp_path: Path, name: str) -> None:
+    from rostools.bag.api import topic_frequencies
+
+    sample = write_sample(tmp_path / name, 401, chunk_size=3000)
+    with open_bag(sample.path) as reader:
+        times = [(c.id, t) for c, t, _ in reader.times()]
+        assert times == [(c.id, t) for c, t, _ in reader.messages()]
+        rates = topic_frequencies(reader)
+    assert rates["/count"] == pytest.approx(1e9 / (4 * STEP_NS))
+    assert rates["/chatter"] == pytest.approx(1e9 / (2 * STEP_NS))  # gaps of 1 and 3 steps

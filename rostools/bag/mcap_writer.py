@@ -195,11 +195,50 @@ class McapWriter(BagWriter):
         if self._chunk_len >= self.chunk_size:
             self._close_chunk()
 
+    def sequence(self, channel_id: int) -> int:
+        """How many messages a channel has so far (the next message's sequence number)."""
+        return self._counts[channel_id]
+
+    def end_chunk(self) -> None:
+        """Close the open chunk, if any (the next message starts a new one)."""
+        if self._chunk_len:
+            self._close_chunk()
+
+    def write_chunk(
+        self,
+        start: int,
+        end: int,
+        records: bytes | memoryview,
+        indexes: Mapping[int, bytes],
+        counts: Mapping[int, int],
+    ) -> None:
+        """Store a chunk built elsewhere (``fastcopy``): its message records, their index.
+
+        ``indexes`` maps channels to packed (log time, offset) pairs; ``counts`` says how many
+        messages of each channel the records hold.
+        """
+        self._check_open()
+        self.end_chunk()
+        self._chunk_pieces = [records]
+        self._chunk_len = len(records)
+        self._chunk_start, self._chunk_end = start, end
+        for cid, n in counts.items():
+            self._counts[cid] += n
+        self._close_chunk(indexes)
+
     def _target(self, targets: Targets, conn: Connection) -> int:
         target = targets.resolve(conn)
         if target.id >= len(self._connections) or self._connections[target.id] is not target:
             raise BagUsageError(f"connection {target.id} was not added to this writer")
         return target.id
+
+    def _packed_index(self, cid: int) -> bytes:
+        """A channel's (log time, offset) pairs in the open chunk, sorted, as file bytes."""
+        entries = self._index[cid]
+        if self._unsorted:
+            pairs = sorted(zip(entries[::2], entries[1::2], strict=True))
+            entries = array("Q", [v for pair in pairs for v in pair])
+        return _little_endian(entries)
 
     def flush(self) -> None:
         """Close the open chunk and hand everything to the OS."""
@@ -269,7 +308,7 @@ class McapWriter(BagWriter):
             channel_message_counts={i: n for i, n in enumerate(self._counts) if n},
         )
 
-    def _close_chunk(self) -> None:
+    def _close_chunk(self, packed: Mapping[int, bytes] | None = None) -> None:
         pieces = self._chunk_pieces
         if self._chunk_small:
             pieces.append(self._chunk_small)
@@ -292,13 +331,11 @@ class McapWriter(BagWriter):
             stored = size
         index_start = sink.tell()
         offsets: dict[int, int] = {}
-        for cid in sorted(self._index):
-            entries = self._index[cid]
-            if self._unsorted:
-                pairs = sorted(zip(entries[::2], entries[1::2], strict=True))
-                entries = array("Q", [v for pair in pairs for v in pair])
+        if packed is None:
+            packed = {cid: self._packed_index(cid) for cid in self._index}
+        for cid in sorted(packed):
             offsets[cid] = sink.tell()
-            sink.write(fmt.encode_message_index(cid, _little_endian(entries)))
+            sink.write(fmt.encode_message_index(cid, packed[cid]))
         self._chunk_indexes.append(
             fmt.ChunkIndex(
                 message_start_time=start,

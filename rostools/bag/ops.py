@@ -221,7 +221,10 @@ def _copy(
         writer = open_writer(dst, kind, compression, chunk_size, overwrite=overwrite)
         try:
             stream = reader.messages(topics=topics, start=start, end=end)
-            read, written, conns = _pump(reader, writer, stream, eager, keep, progress, total)
+            everything = topics is None and start is None and end is None
+            read, written, conns = _pump(
+                reader, writer, stream, everything, eager, keep, progress, total
+            )
         except BaseException:
             writer.abort()
             raise
@@ -241,6 +244,7 @@ def _pump(
     reader: BagReader,
     writer: BagWriter,
     stream: Iterator[Message],
+    everything: bool,
     eager: bool,
     keep: Callable[[Connection, int, memoryview], bool] | None,
     progress: Progress | None,
@@ -249,7 +253,9 @@ def _pump(
     """Copy a message stream; (messages read, messages written, connections written)."""
     out = Targets(writer, reader.connections if eager else ())
     if keep is None and progress is None:
-        written = writer.write_many(stream, out)
+        written = _chunk_for_chunk(reader, writer, out) if eager and everything else None
+        if written is None:
+            written = writer.write_many(stream, out)
         return written, written, len(out)
     write = writer.write
     read = written = 0
@@ -275,3 +281,15 @@ def _check_ros1(reader: BagReader, kind: str) -> None:
                     f"{reader.path}: channel {channel.topic} holds {channel.message_encoding!r}"
                     f" messages; only ROS 1 messages can go into a {kind} file"
                 )
+
+
+def _chunk_for_chunk(reader: BagReader, writer: BagWriter, targets: Targets) -> int | None:
+    """The whole-file .bag -> MCAP copy without per-message work, when it applies."""
+    from rostools.bag.mcap_writer import McapWriter
+    from rostools.bag.rosbag1_reader import Bag1Reader
+
+    if isinstance(reader, Bag1Reader) and isinstance(writer, McapWriter):
+        from rostools.bag.fastcopy import convert_chunks
+
+        return convert_chunks(reader, writer, targets)
+    return None

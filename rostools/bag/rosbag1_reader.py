@@ -254,7 +254,7 @@ class Bag1Reader(BagReader):
     def _scan_chunk(self, chunk: Chunk) -> None:
         """Fill a chunk's counts and times by walking its records (no index)."""
         try:
-            buf, base, end = self._chunk_data(chunk)
+            buf, base, end = self.chunk_data(chunk)
         except fmt.RecordError as err:
             self.damaged(f"chunk at {chunk.pos} is unreadable: {err}")
             return
@@ -324,7 +324,7 @@ class Bag1Reader(BagReader):
         self.connections.append(conn)
         self._by_id[conn_id] = conn
 
-    def _chunk_data(self, chunk: Chunk) -> tuple[Buffer, int, int]:
+    def chunk_data(self, chunk: Chunk) -> tuple[Buffer, int, int]:
         """(buffer, start, end) of a chunk's uncompressed records.
 
         Uncompressed chunks are read in place from the map; others are decompressed.
@@ -388,7 +388,7 @@ class Bag1Reader(BagReader):
                 chunk.start_ns,
                 chunk.end_ns,
                 order,
-                partial(self._entries, chunk, order, wanted, lo, hi),
+                partial(self._entries, chunk, wanted, lo, hi),
             )
             for order, chunk in enumerate(self.chunks)
             if chunk.end_ns >= lo
@@ -396,6 +396,13 @@ class Bag1Reader(BagReader):
             and not wanted.keys().isdisjoint(chunk.counts)
         ]
         return ordered(blocks)
+
+    def chunk_messages(
+        self, chunk: Chunk, wanted: Mapping[int, tuple[int, Connection]]
+    ) -> Iterator[Message]:
+        """The wanted messages of one chunk, in time order."""
+        for t, _, _, conn, data in self._entries(chunk, wanted, 0, MAX_TIME_NS):
+            yield conn, t, data
 
     def times(self, topics: Collection[str] | None = None) -> Iterator[Message]:
         """(connection, time, empty data) of each message in time order, from the index alone.
@@ -417,7 +424,7 @@ class Bag1Reader(BagReader):
         self, chunk: Chunk, wanted: Mapping[int, tuple[int, Connection]]
     ) -> list[Entry]:
         out: list[Entry] = []
-        for conn_id, raw in self._index_records(chunk):
+        for conn_id, raw in self.index_records(chunk):
             if conn_id in wanted:
                 rank, conn = wanted[conn_id]
                 out += [
@@ -430,14 +437,13 @@ class Bag1Reader(BagReader):
     def _entries(
         self,
         chunk: Chunk,
-        order: int,
         wanted: Mapping[int, tuple[int, Connection]],
         lo: int,
         hi: int,
     ) -> list[Entry]:
         """The wanted messages of one chunk, sorted."""
         try:
-            buf, base, end = self._chunk_data(chunk)
+            buf, base, end = self.chunk_data(chunk)
         except fmt.RecordError as err:
             raise BagFormatError(f"{self.path}: chunk at {chunk.pos}: {err}") from err
         view = memoryview(buf)
@@ -456,7 +462,7 @@ class Bag1Reader(BagReader):
             return out
         fast = _MSG_CPP
         limit = end - _MSG_CPP.size
-        for conn_id, raw in self._index_records(chunk):
+        for conn_id, raw in self.index_records(chunk):
             if conn_id not in wanted:
                 continue
             rank, conn = wanted[conn_id]
@@ -483,7 +489,7 @@ class Bag1Reader(BagReader):
         out.sort()
         return out
 
-    def _index_records(self, chunk: Chunk) -> Iterator[tuple[int, memoryview]]:
+    def index_records(self, chunk: Chunk) -> Iterator[tuple[int, memoryview]]:
         """(connection id, raw entries) of each INDEX_DATA record after a chunk."""
         pos = chunk.index_pos
         for _ in range(len(chunk.counts)):

@@ -85,29 +85,38 @@ def _convert_chunk(
     count = len(entries)
     times = entries["secs"].astype(np.uint64) * np.uint64(1_000_000_000) + entries["nsecs"]
     offs = entries["off"].astype(np.int64)
-    order = np.lexsort((offs, np.concatenate(ranks), times))
-    offs, times, cids = offs[order], times[order], np.concatenate(channels)[order]
-    if count > 1 and not bool(np.all(offs[1:] > offs[:-1])):
-        return None  # time order is not file order in this chunk
+    order = np.argsort(offs, kind="stable")  # file order
+    offs, times = offs[order], times[order]
+    rank, cids = np.concatenate(ranks)[order], np.concatenate(channels)[order]
+    if count > 1:
+        # Time order (time, rank, position) must be file order: no step back in (time, rank).
+        step = np.diff(times.astype(np.int64))
+        if not bool(np.all((step > 0) | ((step == 0) & (np.diff(rank.astype(np.int64)) >= 0)))):
+            return None
+        if not bool(np.all(offs[1:] > offs[:-1])):
+            return None  # two index entries for one record
     if int(offs[-1]) + _BAG_HEAD > size:
         return None
-    hlen = _gather_u32(np, arr, offs)
-    if not bool(np.all(hlen == 38)):
+    if not bool(np.all(_u32_at(np, arr, offs) == 38)):
         return None
-    op = np.frombuffer(_OP_FIELD, dtype=np.uint8)
-    if not any(bool(np.all(arr[offs[:, None] + (k + np.arange(8))] == op)) for k in _OP_PLACES):
+    if not any(_op_field_at(np, arr, offs + k) for k in _OP_PLACES):
         return None
-    dlen = _gather_u32(np, arr, offs + 42).astype(np.int64)
+    dlen = _u32_at(np, arr, offs + 42).astype(np.int64)
     ends = offs + _BAG_HEAD + dlen
     if int(ends[-1]) > size or (count > 1 and not bool(np.all(ends[:-1] <= offs[1:]))):
         return None
-    # Keep [record + 15, record end) of every message record; everything else goes.
-    edges = np.zeros(size + 1, dtype=np.int8)
-    edges[offs + (_BAG_HEAD - _MCAP_HEAD)] = 1
-    edges[ends] = -1  # each end lies after its own start and at or before the next record
-    records = arr[np.cumsum(edges[:-1], dtype=np.int8).view(np.bool_)]
+    # Keep [record + 15, record end) of every message record; drop the rest (the first 15
+    # bytes of each message record, connection records): alternating drop/keep runs.
+    runs = np.empty(2 * count + 1, dtype=np.int64)
+    runs[0] = offs[0] + (_BAG_HEAD - _MCAP_HEAD)
+    runs[1::2] = _MCAP_HEAD + dlen
+    runs[2:-1:2] = offs[1:] + (_BAG_HEAD - _MCAP_HEAD) - ends[:-1]
+    runs[-1] = size - ends[-1]
+    keep = np.zeros(2 * count + 1, dtype=np.bool_)
+    keep[1::2] = True
+    records = arr[np.repeat(keep, runs)]
     starts = np.zeros(count, dtype=np.int64)
-    np.cumsum(_MCAP_HEAD + dlen[:-1], out=starts[1:])
+    np.cumsum(runs[1:-2:2], out=starts[1:])
     header = np.empty(count, dtype=_mcap_header(np))
     header["op"] = 5
     header["length"] = 22 + dlen
@@ -127,14 +136,25 @@ def _convert_chunk(
         indexes[cid] = pairs.tobytes()
         counts[cid] = len(mine)
     header["sequence"] = sequence
-    records[(starts[:, None] + np.arange(_MCAP_HEAD)).ravel()] = header.view(np.uint8)
+    where = starts.astype(np.int32 if len(records) < 1 << 31 else np.int64)
+    records[(where[:, None] + np.arange(_MCAP_HEAD, dtype=where.dtype)).ravel()] = header.view(
+        np.uint8
+    )
     writer.write_chunk(int(times[0]), int(times.max()), memoryview(records), indexes, counts)
     return count
 
 
-def _gather_u32(np: Any, arr: Any, at: Any) -> Any:
+def _u32_at(np: Any, arr: Any, at: Any) -> Any:
     """Little-endian u32s at arbitrary (unaligned) byte offsets."""
-    return arr[at[:, None] + np.arange(4)].copy().view("<u4").ravel()
+    value = arr[at].astype(np.uint32)
+    for k in (1, 2, 3):
+        value |= arr[at + k].astype(np.uint32) << (8 * k)
+    return value
+
+
+def _op_field_at(np: Any, arr: Any, at: Any) -> bool:
+    """Whether every offset holds the op=2 header field."""
+    return all(bool(np.all(arr[at + k] == byte)) for k, byte in enumerate(_OP_FIELD))
 
 
 def _mcap_header(np: Any) -> Any:

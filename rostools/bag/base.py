@@ -15,6 +15,7 @@ from rostools.bag.model import (
     BagInfo,
     BagNotFoundError,
     Connection,
+    connection_from_header,
 )
 from rostools.bag.ordering import Message
 from rostools.errors import InvalidDataError
@@ -186,6 +187,21 @@ class BagWriter(ABC):
     @abstractmethod
     def abort(self) -> None:
         """Stop and delete the unfinished file."""
+
+    def connection_for(self, topic: str, header: Mapping[str, str]) -> Connection:
+        """The connection for a publisher's connection header, declared on first use.
+
+        What ``bag record`` needs: messages arriving with the same header on a topic share a
+        connection; each other publisher (callerid, latching, definition) gets its own, as
+        ``rosbag record`` keeps them.
+        """
+        cache: dict[tuple[str, tuple[tuple[str, str], ...]], Connection]
+        cache = self.__dict__.setdefault("_by_header", {})
+        key = (topic, tuple(sorted(header.items())))
+        conn = cache.get(key)
+        if conn is None:
+            conn = cache[key] = self.copy_connection(connection_from_header(0, topic, header))
+        return conn
 
     def copy_connection(self, conn: Connection) -> Connection:
         """Declare a connection identical to ``conn`` (from another bag) in this file."""

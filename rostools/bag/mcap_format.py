@@ -394,9 +394,22 @@ def decompress_prefix(compression: str, data: bytes | memoryview, limit: int) ->
         if compression == "":
             return bytes(data[:limit])
         if compression == "zstd":
+            import io
+
             import zstandard
 
-            return bytes(zstandard.ZstdDecompressor().decompressobj().decompress(data)[:limit])
+            # A stream reader stops at ``limit``: a small frame cannot make us allocate more.
+            reader = zstandard.ZstdDecompressor().stream_reader(io.BytesIO(data))
+            out = bytearray()
+            while len(out) < limit:
+                try:
+                    piece = reader.read(min(limit - len(out), 1 << 20))
+                except zstandard.ZstdError:
+                    break  # the cut: keep what came before it
+                if not piece:
+                    break
+                out += piece
+            return bytes(out)
         if compression == "lz4":
             import lz4.frame
 

@@ -169,13 +169,21 @@ class Bag1Reader(BagReader):
             data_len=dlen,
         )
 
-    def _add_connection(self, fields: Mapping[str, bytes], data: int, dlen: int) -> Connection:
+    def _add_connection(
+        self, fields: Mapping[str, bytes], data: int, dlen: int, buf: Buffer | None = None
+    ) -> Connection:
+        """Register the connection record whose header is ``buf[data:data + dlen]``.
+
+        ``buf`` is the file map unless the record sits in a decompressed chunk. The first
+        record of an id wins (the index repeats those in the chunks).
+        """
         conn_id = fmt.u32_field(fields, "conn")
         existing = self._by_id.get(conn_id)
         if existing is not None:
             return existing
         try:
-            header = split_fields(self._view[data : data + dlen])
+            view = self._view if buf is None else memoryview(buf)
+            header = split_fields(view[data : data + dlen])
         except HeaderError as err:
             raise fmt.RecordError(f"connection {conn_id} has a malformed header: {err}") from err
         text = {k: v.decode("utf-8", "replace") for k, v in header.items()}
@@ -290,7 +298,7 @@ class Bag1Reader(BagReader):
                     else:
                         unknown += 1
                 elif op == fmt.OP_CONNECTION:
-                    self._add_connection_from(buf, fields, data, dlen)
+                    self._add_connection(fields, data, dlen, buf)
             except fmt.RecordError as err:
                 if chunk.complete:
                     self.damaged(f"chunk at {chunk.pos}: record at {pos - base}: {err}")
@@ -304,25 +312,6 @@ class Bag1Reader(BagReader):
             self.damaged(
                 f"chunk at {chunk.pos}: {unknown} messages of connections whose record is lost"
             )
-
-    def _add_connection_from(
-        self, buf: Buffer, fields: Mapping[str, bytes], data: int, dlen: int
-    ) -> None:
-        if buf is self._mm:
-            self._add_connection(fields, data, dlen)
-            return
-        conn_id = fmt.u32_field(fields, "conn")
-        if conn_id in self._by_id:
-            return
-        try:
-            header = split_fields(memoryview(buf)[data : data + dlen])
-        except HeaderError as err:
-            raise fmt.RecordError(f"connection {conn_id} has a malformed header: {err}") from err
-        text = {k: v.decode("utf-8", "replace") for k, v in header.items()}
-        topic = fields.get("topic", header.get("topic", b"")).decode("utf-8", "replace")
-        conn = connection_from_header(conn_id, topic, text)
-        self.connections.append(conn)
-        self._by_id[conn_id] = conn
 
     def chunk_data(self, chunk: Chunk) -> tuple[Buffer, int, int]:
         """(buffer, start, end) of a chunk's uncompressed records.

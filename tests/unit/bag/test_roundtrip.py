@@ -205,3 +205,30 @@ def test_times_and_frequencies(tmp_path: Path, name: str) -> None:
         rates = topic_frequencies(reader)
     assert rates["/count"] == pytest.approx(1e9 / (4 * STEP_NS))
     assert rates["/chatter"] == pytest.approx(1e9 / (2 * STEP_NS))  # gaps of 1 and 3 steps
+
+
+@pytest.mark.parametrize("name", ["x.bag", "x.mcap"])
+def test_connection_for_publisher_headers(tmp_path: Path, name: str) -> None:
+    writer = open_writer(tmp_path / name)
+    base = {
+        "topic": "/chatter",
+        "type": "std_msgs/String",
+        "md5sum": "992ce8a1687cec8c8bd883ec73ca41d1",
+        "message_definition": "string data\n",
+        "callerid": "/talker",
+        "latching": "1",
+    }
+    first = writer.connection_for("/chatter", base)
+    again = writer.connection_for("/chatter", dict(base))
+    other = writer.connection_for("/chatter", {**base, "callerid": "/talker2", "latching": "0"})
+    assert first is again
+    assert other.id != first.id
+    assert (first.callerid, first.latching, other.latching) == ("/talker", True, False)
+    writer.write(first, 1, b"\x01\x00\x00\x00a")
+    writer.write(other, 2, b"\x01\x00\x00\x00b")
+    writer.close()
+    with open_bag(tmp_path / name) as reader:
+        assert [c.header() for c in reader.connections] == [
+            base,
+            {**base, "callerid": "/talker2", "latching": "0"},
+        ]

@@ -389,7 +389,10 @@ class McapReader(BagReader):
         """
         if channel_id in wanted:
             return True
-        if not everything or channel_id not in self.channels:
+        if not everything:
+            return False
+        if channel_id not in self.channels:
+            self.damaged(f"messages on channel {channel_id}, which no channel record defines")
             return False
         wanted[channel_id] = (len(self.connections), self._connection(channel_id))
         return True

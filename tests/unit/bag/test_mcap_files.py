@@ -128,3 +128,16 @@ def test_missing_md5_is_computed_from_a_ros1_definition(tmp_path: Path) -> None:
         (conn,) = reader.connections
     assert conn.md5sum == "992ce8a1687cec8c8bd883ec73ca41d1"
     assert conn.absent == {"latching"}
+
+
+def test_messages_of_undefined_channels_are_reported(tmp_path: Path) -> None:
+    path = tmp_path / "orphan.mcap"
+    out = bytearray(fmt.MAGIC)
+    out += fmt.encode_header("ros1", "")
+    out += fmt.MESSAGE_PREFIX.pack(fmt.OP_MESSAGE, 22 + 1, 9, 0, 5, 5) + b"x"
+    out += fmt.encode_data_end()
+    out += fmt.encode_footer(0, 0, b"")
+    path.write_bytes(bytes(out))
+    with McapReader(path) as reader:
+        assert list(reader.messages()) == []
+        assert any("channel 9" in d for d in reader.damage)

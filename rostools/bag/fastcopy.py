@@ -10,7 +10,8 @@ with MCAP fields turns the chunk's records into the MCAP chunk's records in two 
 
 It applies when the bag is indexed, its chunks do not overlap in time, and inside each chunk
 time order (ties: connection rank) is file order, so the MCAP file yields exactly the stream
-the bag does. Any chunk that does not qualify goes through the ordinary per-message path.
+the bag does. Any chunk that does not qualify, or whose messages are big (images: the
+per-message path is already cheap for them), goes through the ordinary per-message path.
 numpy comes with rosbags; without it, ``convert`` simply uses the ordinary path.
 """
 
@@ -30,6 +31,10 @@ _OP_FIELD = b"\x04\x00\x00\x00op=\x02"
 #: Where that field starts in the record (after the u32 header length): rosbag's C++ writer
 #: sorts the fields (conn, op, time), its Python writer writes op, conn, time.
 _OP_PLACES = (4 + 13, 4)
+#: Chunks whose messages average more than this many bytes go the per-message way: its cost
+#: per message is small beside their size, and it hands payloads to the kernel without the
+#: per-byte pass that compacting the chunk here costs.
+SMALL_MESSAGE = 4096
 _BAG_HEAD = 46
 _MCAP_HEAD = 31
 
@@ -49,7 +54,8 @@ def convert_chunks(reader: Bag1Reader, writer: McapWriter, targets: Targets) -> 
     wanted = reader.wanted(None, None)
     total = 0
     for chunk in chunks:
-        done = _convert_chunk(np, reader, writer, targets, wanted, chunk)
+        many = sum(chunk.counts.values()) * SMALL_MESSAGE >= chunk.size
+        done = _convert_chunk(np, reader, writer, targets, wanted, chunk) if many else None
         if done is None:  # this chunk does not qualify: the per-message path
             done = writer.write_many(reader.chunk_messages(chunk, wanted), targets)
             writer.end_chunk()
@@ -136,10 +142,11 @@ def _convert_chunk(
         indexes[cid] = pairs.tobytes()
         counts[cid] = len(mine)
     header["sequence"] = sequence
-    where = starts.astype(np.int32 if len(records) < 1 << 31 else np.int64)
-    records[(where[:, None] + np.arange(_MCAP_HEAD, dtype=where.dtype)).ravel()] = header.view(
-        np.uint8
+    # Rows k of this view are records[k:k + 31]: one row copy per message header.
+    windows = np.lib.stride_tricks.as_strided(
+        records, shape=(len(records) - _MCAP_HEAD + 1, _MCAP_HEAD), strides=(1, 1)
     )
+    windows[starts] = header.view(np.uint8).reshape(count, _MCAP_HEAD)
     writer.write_chunk(int(times[0]), int(times.max()), memoryview(records), indexes, counts)
     return count
 

@@ -4,7 +4,6 @@ the MCAP conformance suite's expected output, and rosbag2's own counts."""
 from __future__ import annotations
 
 import json
-import shutil
 import subprocess
 from pathlib import Path
 from typing import Any
@@ -230,8 +229,7 @@ def test_every_corpus_mcap_is_described() -> None:
             assert sum(1 for _ in reader.messages()) == info.message_count
 
 
-@pytest.mark.skipif(shutil.which("rosbag") is None, reason="real rosbag not installed")
-def test_no_traceback_for_any_corpus_file(tmp_path: Path) -> None:
+def test_no_traceback_for_any_corpus_file() -> None:
     for path in sorted(CORPUS.rglob("*")):
         if path.is_file() and path.suffix in (".bag", ".mcap", ".txt"):
             try:

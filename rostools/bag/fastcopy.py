@@ -17,6 +17,7 @@ numpy comes with rosbags; without it, ``convert`` simply uses the ordinary path.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from itertools import pairwise
 from typing import TYPE_CHECKING, Any
 
@@ -39,10 +40,16 @@ _BAG_HEAD = 46
 _MCAP_HEAD = 31
 
 
-def convert_chunks(reader: Bag1Reader, writer: McapWriter, targets: Targets) -> int | None:
+def convert_chunks(
+    reader: Bag1Reader,
+    writer: McapWriter,
+    targets: Targets,
+    progress: Callable[[int], None] | None = None,
+) -> int | None:
     """Copy every message of an indexed bag into an MCAP writer; None if it does not qualify.
 
-    ``targets`` maps the bag's connections to the writer's channels.
+    ``targets`` maps the bag's connections to the writer's channels; ``progress`` gets the
+    number of messages done after each chunk.
     """
     try:
         import numpy as np
@@ -60,6 +67,8 @@ def convert_chunks(reader: Bag1Reader, writer: McapWriter, targets: Targets) -> 
             done = writer.write_many(reader.chunk_messages(chunk, wanted), targets)
             writer.end_chunk()
         total += done
+        if progress is not None:
+            progress(total)
     return total
 
 

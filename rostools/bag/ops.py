@@ -252,10 +252,15 @@ def _pump(
 ) -> tuple[int, int, int]:
     """Copy a message stream; (messages read, messages written, connections written)."""
     out = Targets(writer, reader.connections if eager else ())
-    if keep is None and progress is None:
-        written = _chunk_for_chunk(reader, writer, out) if eager and everything else None
+    if keep is None:
+        written = None
+        if eager and everything:
+            written = _chunk_for_chunk(reader, writer, out, progress, total)
         if written is None:
-            written = writer.write_many(stream, out)
+            counted = stream if progress is None else _counting(stream, progress, total)
+            written = writer.write_many(counted, out)
+        if progress is not None:
+            progress(written, total)
         return written, written, len(out)
     write = writer.write
     read = written = 0
@@ -272,6 +277,14 @@ def _pump(
     return read, written, len(out)
 
 
+def _counting(stream: Iterator[Message], progress: Progress, total: int) -> Iterator[Message]:
+    """The stream, calling ``progress`` every ``PROGRESS_EVERY`` messages."""
+    for done, message in enumerate(stream, 1):
+        if done % PROGRESS_EVERY == 0:
+            progress(done, total)
+        yield message
+
+
 def _check_ros1(reader: BagReader, kind: str) -> None:
     """Refuse to put non-ROS 1 messages (ROS 2 CDR, JSON, ...) under the ROS 1 profile."""
     if isinstance(reader, McapReader):
@@ -283,7 +296,9 @@ def _check_ros1(reader: BagReader, kind: str) -> None:
                 )
 
 
-def _chunk_for_chunk(reader: BagReader, writer: BagWriter, targets: Targets) -> int | None:
+def _chunk_for_chunk(
+    reader: BagReader, writer: BagWriter, targets: Targets, progress: Progress | None, total: int
+) -> int | None:
     """The whole-file .bag -> MCAP copy without per-message work, when it applies."""
     from rostools.bag.mcap_writer import McapWriter
     from rostools.bag.rosbag1_reader import Bag1Reader
@@ -291,5 +306,6 @@ def _chunk_for_chunk(reader: BagReader, writer: BagWriter, targets: Targets) -> 
     if isinstance(reader, Bag1Reader) and isinstance(writer, McapWriter):
         from rostools.bag.fastcopy import convert_chunks
 
-        return convert_chunks(reader, writer, targets)
+        report = None if progress is None else (lambda done: progress(done, total))
+        return convert_chunks(reader, writer, targets, report)
     return None

@@ -77,14 +77,17 @@ def test_same_file_is_refused(tmp_path: Path) -> None:
         ops.convert(sample.path, sample.path, overwrite=True)
 
 
-def test_progress(tmp_path: Path) -> None:
-    sample = write_sample(tmp_path / "x.bag", 10_000)
+@pytest.mark.parametrize("out", ["y.mcap", "y.bag"])
+def test_progress(tmp_path: Path, out: str) -> None:
+    sample = write_sample(tmp_path / "x.bag", 10_000, chunk_size=50_000)
     seen: list[tuple[int, int]] = []
     ops.convert(
-        sample.path, tmp_path / "y.mcap", progress=lambda done, total: seen.append((done, total))
+        sample.path, tmp_path / out, progress=lambda done, total: seen.append((done, total))
     )
     assert seen[-1] == (10_000, 10_000)
-    assert len(seen) > 1
+    assert len(seen) > 2
+    assert [d for d, _ in seen] == sorted(d for d, _ in seen)
+    assert read_stream(tmp_path / out) == sample.stream
 
 
 @pytest.mark.parametrize("out", ["f.bag", "f.mcap"])

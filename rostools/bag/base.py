@@ -7,6 +7,7 @@ import mmap
 import os
 from abc import ABC, abstractmethod
 from collections.abc import Collection, Iterable, Iterator, Mapping
+from functools import partial
 from pathlib import Path
 from types import TracebackType
 
@@ -17,7 +18,7 @@ from rostools.bag.model import (
     Connection,
     connection_from_header,
 )
-from rostools.bag.ordering import Message
+from rostools.bag.ordering import Block, Entry, Message
 from rostools.errors import InvalidDataError
 
 #: Times are u32 seconds in a ``.bag`` and u64 ns in MCAP; this bound covers both.
@@ -63,6 +64,9 @@ class BagReader(ABC):
     format: str
     indexed: bool
     connections: list[Connection]
+    #: Set by recovery: a chunk that does not read is skipped (and listed in ``damage``)
+    #: instead of ending the read with an error.
+    skip_damaged = False
 
     def __init__(self) -> None:
         self.notes: list[str] = []
@@ -121,6 +125,19 @@ class BagReader(ABC):
         tb: TracebackType | None,
     ) -> None:
         self.close()
+
+    def guarded(self, blocks: list[Block]) -> list[Block]:
+        """The blocks, loading with damage skipped when ``skip_damaged`` is set."""
+        if not self.skip_damaged:
+            return blocks
+        return [Block(b.start_ns, b.end_ns, b.order, partial(self._load, b)) for b in blocks]
+
+    def _load(self, block: Block) -> list[Entry]:
+        try:
+            return block.load()
+        except BagFormatError as err:
+            self.damaged(f"skipped a damaged chunk ({err})")
+            return []
 
     def wanted(
         self, topics: Collection[str] | None, connections: Iterable[Connection] | None

@@ -371,7 +371,10 @@ def decompress(compression: str, data: bytes | memoryview, size: int) -> bytes:
         elif compression == "zstd":
             import zstandard
 
-            out = zstandard.ZstdDecompressor().decompress(data, max_output_size=size)
+            try:
+                out = zstandard.ZstdDecompressor().decompress(data, max_output_size=size)
+            except zstandard.ZstdError as err:  # not an OSError: name it ourselves
+                raise McapFormatError(f"zstd chunk does not decompress: {err}") from err
         elif compression == "lz4":
             import lz4.frame
 

@@ -331,7 +331,8 @@ class McapReader(BagReader):
         wanted = dict(self.wanted(topics, connections))
         lo = 0 if start is None else start
         hi = MAX_TIME_NS if end is None else end
-        return ordered(self._blocks(wanted, topics is None and connections is None, lo, hi))
+        everything = topics is None and connections is None
+        return ordered(self.guarded(self._blocks(wanted, everything, lo, hi)))
 
     def _blocks(self, wanted: _Wanted, everything: bool, lo: int, hi: int) -> list[Block]:
         """One block per chunk (loaded lazily) and per run of top-level messages."""

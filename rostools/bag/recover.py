@@ -64,6 +64,7 @@ def recover(
     if dst.exists() and src.resolve() == dst.resolve():
         raise BagUsageError(f"cannot recover {src} into itself; give another output file")
     with open_bag(src) as reader:
+        reader.skip_damaged = True
         info = reader.info()
         writer = open_writer(
             dst,

@@ -384,7 +384,7 @@ class Bag1Reader(BagReader):
             and chunk.start_ns <= hi
             and not wanted.keys().isdisjoint(chunk.counts)
         ]
-        return ordered(blocks)
+        return ordered(self.guarded(blocks))
 
     def chunk_messages(
         self, chunk: Chunk, wanted: Mapping[int, tuple[int, Connection]]

@@ -11,9 +11,11 @@ from pathlib import Path
 
 import pytest
 
-from rostools.bag.api import bag_info
+from rostools.bag.api import bag_info, open_bag
+from rostools.bag.mcap_reader import McapReader
 from rostools.bag.model import BagFormatError
 from rostools.bag.recover import recover, reindex
+from rostools.bag.rosbag1_reader import Bag1Reader
 from rostools.errors import DataLossError
 from tests.support.bagdata import read_stream, write_sample
 from tests.support.env import ROOT
@@ -154,3 +156,30 @@ def test_killed_writer_is_recovered(tmp_path: Path, name: str, compression: str)
     assert len(got) >= flushed  # every message handed to the OS is back
     assert got == expected[: len(got)]
     assert report.messages == len(got)
+
+
+@pytest.mark.parametrize(("name", "compression"), [("x.bag", "bz2"), ("x.mcap", "zstd")])
+def test_a_corrupt_chunk_is_skipped_and_reported(
+    tmp_path: Path, name: str, compression: str
+) -> None:
+    sample = write_sample(tmp_path / name, 600, compression=compression, chunk_size=6000)
+    raw = bytearray(sample.path.read_bytes())
+    with open_bag(sample.path) as reader:
+        assert reader.info().chunk_count > 3
+        if isinstance(reader, McapReader):
+            index = reader.chunk_indexes[len(reader.chunk_indexes) // 2]
+            middle = index.chunk_start_offset + index.chunk_length // 2
+        else:
+            assert isinstance(reader, Bag1Reader)
+            chunk = reader.chunks[len(reader.chunks) // 2]
+            middle = chunk.data_pos + chunk.data_len // 2
+    raw[middle : middle + 64] = b"\xa5" * 64  # garbage in the middle of a compressed chunk
+    bad = tmp_path / ("bad" + Path(name).suffix)
+    bad.write_bytes(bytes(raw))
+    with pytest.raises(BagFormatError), open_bag(bad) as reader:
+        list(reader.messages())
+    report = recover(bad, tmp_path / ("out" + Path(name).suffix))
+    assert not report.complete
+    got = read_stream(tmp_path / ("out" + Path(name).suffix))
+    assert 300 < len(got) < 600
+    assert set(got) < set(sample.stream)

@@ -217,8 +217,53 @@ def bench_convert_small() -> list[Result]:
     return _convert_results(_small_bag(), "1M small messages", ["lz4"])
 
 
+ROSBAG_READ = r"""
+import sys, time, rosbag
+start = time.perf_counter()
+n = sum(1 for _ in rosbag.Bag(sys.argv[1]).read_messages(raw=True))
+print(n / (time.perf_counter() - start))
+"""
+
+OUR_READ = r"""
+import sys, time
+from rostools.bag.api import open_bag
+start = time.perf_counter()
+with open_bag(sys.argv[1]) as reader:
+    n = sum(1 for _ in reader.messages())
+print(n / (time.perf_counter() - start))
+"""
+
+
+def bench_read() -> Result:
+    bag = _small_bag()
+    ours = statistics.median(
+        float(
+            subprocess.run(
+                [_python(), "-c", OUR_READ, str(bag)], capture_output=True, text=True, check=True
+            ).stdout
+        )
+        for _ in range(REPEATS)
+    )
+    theirs = None
+    if have("rosbag"):
+        proc = subprocess.run(
+            [SYSTEM_PYTHON, "-c", ROSBAG_READ, str(bag)], capture_output=True, text=True, check=True
+        )
+        theirs = float(proc.stdout)
+    return Result(
+        "read raw messages in time order, 1M small messages",
+        "msgs/s",
+        ours,
+        theirs,
+        "faster than rosbag.Bag",
+        None if theirs is None else ours > theirs,
+        "open + messages() vs rosbag.Bag(...).read_messages(raw=True), in-process time",
+    )
+
+
 BENCHMARKS = {
     "bag_info": bench_info,
+    "bag_read": bench_read,
     "bag_convert": bench_convert,
     "bag_convert_small": bench_convert_small,
 }

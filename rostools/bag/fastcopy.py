@@ -141,8 +141,10 @@ def _convert_chunk(
     sequence = np.empty(count, dtype=np.uint32)
     indexes: dict[int, bytes] = {}
     counts: dict[int, int] = {}
-    for cid in np.unique(cids).tolist():
-        mine = np.flatnonzero(cids == cid)
+    by_channel = np.argsort(cids, kind="stable")  # each channel's messages, in order
+    cuts = np.flatnonzero(np.diff(cids[by_channel])) + 1
+    for mine in np.split(by_channel, cuts):
+        cid = int(cids[mine[0]])
         first = writer.sequence(cid)
         sequence[mine] = (np.arange(first, first + len(mine)) & 0xFFFFFFFF).astype(np.uint32)
         pairs = np.empty((len(mine), 2), dtype="<u8")

@@ -39,8 +39,8 @@ ZSTD_LEVEL: Final = 3
 _MAX_TIME: Final = (1 << 64) - 1
 _MSG = fmt.MESSAGE_PREFIX
 _Chunk = bytes | bytearray | memoryview
-#: Compresses a chunk's records, given in pieces.
-_Compress = Callable[[list[_Chunk]], bytes]
+#: Compresses a chunk's records, given in pieces, into pieces of the stored bytes.
+_Compress = Callable[[list[_Chunk]], list[_Chunk]]
 
 
 class McapWriter(BagWriter):
@@ -319,16 +319,11 @@ class McapWriter(BagWriter):
         compression = "" if self.compression == "none" else self.compression
         sink = self._sink
         chunk_pos = sink.tell()
-        if compression:
-            data = self._compress(pieces)
-            sink.write(fmt.encode_chunk_head(start, end, size, compression, len(data)))
-            sink.write(data)
-            stored = len(data)
-        else:
-            sink.write(fmt.encode_chunk_head(start, end, size, compression, size))
-            for piece in pieces:
-                sink.write(piece)
-            stored = size
+        stored_pieces = self._compress(pieces)
+        stored = sum(len(p) for p in stored_pieces)
+        sink.write(fmt.encode_chunk_head(start, end, size, compression, stored))
+        for piece in stored_pieces:
+            sink.write(piece)
         index_start = sink.tell()
         offsets: dict[int, int] = {}
         if packed is None:
@@ -369,35 +364,35 @@ def channel_metadata(conn: Connection) -> dict[str, str]:
 
 
 def _compressor(kind: str) -> _Compress:
-    """Compresses a chunk given as pieces, streaming them so big payloads are not joined."""
+    """Compresses a chunk given as pieces, into pieces: big payloads are never joined."""
     if kind == "zstd":
         import zstandard
 
         compressor = zstandard.ZstdCompressor(level=ZSTD_LEVEL)
 
-        def zstd(pieces: list[_Chunk]) -> bytes:
+        def zstd(pieces: list[_Chunk]) -> list[_Chunk]:
             if len(pieces) == 1:
-                return compressor.compress(pieces[0])
+                return [compressor.compress(pieces[0])]
             stream = compressor.compressobj(size=sum(len(p) for p in pieces))
-            out = [stream.compress(piece) for piece in pieces]
+            out: list[_Chunk] = [stream.compress(piece) for piece in pieces]
             out.append(stream.flush())
-            return b"".join(out)
+            return out
 
         return zstd
     if kind == "lz4":
         import lz4.frame
 
-        def lz4_frame(pieces: list[_Chunk]) -> bytes:
+        def lz4_frame(pieces: list[_Chunk]) -> list[_Chunk]:
             if len(pieces) == 1:
-                return bytes(lz4.frame.compress(pieces[0]))
+                return [bytes(lz4.frame.compress(pieces[0]))]
             stream = lz4.frame.LZ4FrameCompressor()
-            out = [stream.begin()]
+            out: list[_Chunk] = [stream.begin()]
             out += [stream.compress(piece) for piece in pieces]
             out.append(stream.flush())
-            return b"".join(out)
+            return out
 
         return lz4_frame
-    return b"".join
+    return list
 
 
 def _little_endian(values: array[int]) -> bytes:

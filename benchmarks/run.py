@@ -18,6 +18,7 @@ MODULES = [
     "benchmarks.bench_topic",
     "benchmarks.bench_topic_cpp",
     "benchmarks.bench_service",
+    "benchmarks.bench_bag",
 ]
 
 

@@ -1,0 +1,156 @@
+"""One interface over ``.bag`` v2.0 and MCAP: open by content, write by name.
+
+``open_bag`` looks at the first bytes of a file, never its name, and returns a ``BagReader``;
+``open_writer`` picks the format from the output name (``.mcap`` or not) unless told. Both
+raise the errors of ``rostools.errors`` with a one-line message naming the problem.
+"""
+
+from __future__ import annotations
+
+import statistics
+from collections.abc import Collection, Iterable, Iterator
+from pathlib import Path
+from typing import Final
+
+from rostools.bag import mcap_format, rosbag1_format
+from rostools.bag.base import BagReader, BagWriter
+from rostools.bag.model import (
+    BagFormatError,
+    BagInfo,
+    BagNotFoundError,
+    BagUsageError,
+    UnsupportedBagError,
+)
+from rostools.bag.ordering import Message, merge
+from rostools.errors import InvalidDataError
+
+FORMATS: Final = ("bag", "mcap")
+#: Chunk compressions each format can write; the first is the default.
+WRITE_COMPRESSIONS: Final = {"bag": ("none", "bz2", "lz4"), "mcap": ("zstd", "lz4", "none")}
+_SNIFF = 16
+
+
+def detect_format(path: str | Path) -> str:
+    """``"bag"`` or ``"mcap"``, from the first bytes of the file (not its name)."""
+    path = Path(path)
+    try:
+        with path.open("rb") as f:
+            head = f.read(_SNIFF)
+    except FileNotFoundError:
+        raise BagNotFoundError(f"no such file: {path}") from None
+    except IsADirectoryError:
+        hint = " (a ROS 2 bag folder? give the .mcap or .db3 inside)" if _is_ros2(path) else ""
+        raise BagFormatError(f"{path} is a directory, not a bag file{hint}") from None
+    except OSError as err:
+        raise InvalidDataError(f"cannot read {path}: {err.strerror or err}") from err
+    if head.startswith(mcap_format.MAGIC):
+        return "mcap"
+    if head.startswith(rosbag1_format.MAGIC):
+        return "bag"
+    if not head:
+        raise BagFormatError(f"{path} is empty, not a bag")
+    if head.startswith(b"#ROSBAG V"):
+        version = head[len(b"#ROSBAG V") :].split(b"\n")[0].decode("ascii", "replace")
+        raise UnsupportedBagError(f"{path} is a rosbag of version {version}; only 2.0 is read")
+    if head.startswith(b"SQLite format"):
+        raise BagFormatError(f"{path} is an SQLite database (a ROS 2 bag?), not a ROS 1 bag")
+    raise BagFormatError(f"{path} is neither a ROS 1 .bag nor an MCAP file")
+
+
+def _is_ros2(path: Path) -> bool:
+    return (path / "metadata.yaml").is_file()
+
+
+def open_bag(path: str | Path) -> BagReader:
+    """Open a ``.bag`` or MCAP file for reading, whatever its name."""
+    kind = detect_format(path)
+    if kind == "mcap":
+        from rostools.bag.mcap_reader import McapReader
+
+        return McapReader(path)
+    from rostools.bag.rosbag1_reader import Bag1Reader
+
+    return Bag1Reader(path)
+
+
+def format_for_name(path: str | Path) -> str:
+    """The format an output file gets from its name: ``mcap`` for ``*.mcap``, else ``bag``."""
+    return "mcap" if Path(path).suffix.lower() == ".mcap" else "bag"
+
+
+def open_writer(
+    path: str | Path,
+    format: str | None = None,
+    compression: str | None = None,
+    chunk_size: int | None = None,
+    *,
+    overwrite: bool = False,
+) -> BagWriter:
+    """Create a ``.bag`` or MCAP file (format from the name unless given).
+
+    ``compression``: none, bz2 or lz4 for ``.bag`` (default none, as ``rosbag record``);
+    zstd, lz4 or none for MCAP (default zstd). ``chunk_size`` in bytes (default 768 KiB).
+    """
+    kind = format or format_for_name(path)
+    if kind not in FORMATS:
+        raise BagUsageError(f"unknown bag format {kind!r} (bag or mcap)")
+    allowed = WRITE_COMPRESSIONS[kind]
+    compression = compression or allowed[0]
+    if compression not in allowed:
+        raise BagUsageError(
+            f"{kind} files cannot use {compression!r} compression (use {', '.join(allowed)})"
+        )
+    if kind == "mcap":
+        from rostools.bag.mcap_writer import DEFAULT_CHUNK_SIZE, McapWriter
+
+        return McapWriter(
+            path,
+            compression=compression,
+            chunk_size=chunk_size or DEFAULT_CHUNK_SIZE,
+            overwrite=overwrite,
+        )
+    from rostools.bag.rosbag1_writer import Bag1Writer
+
+    return Bag1Writer(
+        path,
+        compression=compression,
+        chunk_size=chunk_size or rosbag1_format.DEFAULT_CHUNK_SIZE,
+        overwrite=overwrite,
+    )
+
+
+def bag_info(path: str | Path) -> BagInfo:
+    """``open_bag(path).info()``, closing the file."""
+    with open_bag(path) as reader:
+        return reader.info()
+
+
+def merged_messages(
+    readers: Iterable[BagReader],
+    topics: Collection[str] | None = None,
+    start: int | None = None,
+    end: int | None = None,
+) -> Iterator[Message]:
+    """The messages of several bags in one time order (``bag play a.bag b.bag``)."""
+    return merge(r.messages(topics=topics, start=start, end=end) for r in readers)
+
+
+def topic_frequencies(reader: BagReader) -> dict[str, float]:
+    """Topic -> median message rate in Hz, as ``rosbag info --freq`` computes it.
+
+    The median of the gaps between consecutive messages of a topic (all its connections
+    merged); topics with fewer than two messages or a zero median gap are left out.
+    """
+    last: dict[str, int] = {}
+    gaps: dict[str, list[int]] = {}
+    for conn, t, _ in reader.times():
+        prev = last.get(conn.topic)
+        if prev is not None:
+            gaps.setdefault(conn.topic, []).append(t - prev)
+        last[conn.topic] = t
+    rates: dict[str, float] = {}
+    for topic, values in gaps.items():
+        median = statistics.median(values)
+        if median > 0:
+            rates[topic] = 1e9 / median
+    return rates

@@ -1,0 +1,269 @@
+"""The reader and writer interfaces every format implements, and file opening helpers."""
+
+from __future__ import annotations
+
+import contextlib
+import mmap
+import os
+from abc import ABC, abstractmethod
+from collections.abc import Collection, Iterable, Iterator, Mapping
+from functools import partial
+from pathlib import Path
+from types import TracebackType
+
+from rostools.bag.model import (
+    BagFormatError,
+    BagInfo,
+    BagNotFoundError,
+    Connection,
+    connection_from_header,
+)
+from rostools.bag.ordering import Block, Entry, Message
+from rostools.errors import InvalidDataError
+
+#: Times are u32 seconds in a ``.bag`` and u64 ns in MCAP; this bound covers both.
+MAX_TIME_NS = (1 << 64) - 1
+
+
+def map_file(path: Path) -> tuple[mmap.mmap | None, int]:
+    """The file mapped read-only, and its size (an empty file maps to None).
+
+    Mapping lets the readers slice headers, indexes and uncompressed chunks without copies.
+    """
+    try:
+        with path.open("rb") as f:
+            size = os.fstat(f.fileno()).st_size
+            if size == 0:
+                return None, 0
+            return mmap.mmap(f.fileno(), 0, access=mmap.ACCESS_READ), size
+    except FileNotFoundError:
+        raise BagNotFoundError(f"no such file: {path}") from None
+    except IsADirectoryError:
+        raise BagFormatError(f"{path} is a directory, not a bag file") from None
+    except OSError as err:
+        raise InvalidDataError(f"cannot read {path}: {err.strerror or err}") from err
+
+
+def release(mm: mmap.mmap | None) -> None:
+    """Unmap, unless yielded messages still point into the map (then the GC unmaps it)."""
+    if mm is not None:
+        with contextlib.suppress(BufferError):
+            mm.close()
+
+
+class BagReader(ABC):
+    """A ``.bag`` or MCAP file opened for reading.
+
+    ``connections`` lists every connection (MCAP: channel) in id order. ``messages`` yields
+    ``(connection, time_ns, data)`` in time order with ``data`` the raw serialized message (a
+    memoryview into the file or a decompressed chunk; never decoded). ``notes`` says how an
+    unindexed or unfinished file was read; ``damage`` lists data that could not be read.
+    """
+
+    path: Path
+    format: str
+    indexed: bool
+    connections: list[Connection]
+    #: Set by recovery: a chunk that does not read is skipped (and listed in ``damage``)
+    #: instead of ending the read with an error.
+    skip_damaged = False
+
+    def __init__(self) -> None:
+        self.notes: list[str] = []
+        self.damage: list[str] = []
+
+    @property
+    def problems(self) -> list[str]:
+        """Notes and damage together, for display."""
+        return [*self.notes, *self.damage]
+
+    def note(self, text: str) -> None:
+        """Record how the file had to be read (no data lost)."""
+        if text not in self.notes:
+            self.notes.append(text)
+
+    def damaged(self, text: str) -> None:
+        """Record data that could not be read (reading a chunk twice records it once)."""
+        if text not in self.damage:
+            self.damage.append(text)
+
+    @abstractmethod
+    def info(self) -> BagInfo:
+        """The summary ``bag info`` shows, from the index alone when there is one."""
+
+    @abstractmethod
+    def messages(
+        self,
+        topics: Collection[str] | None = None,
+        start: int | None = None,
+        end: int | None = None,
+        connections: Iterable[Connection] | None = None,
+    ) -> Iterator[Message]:
+        """Messages in time order, optionally only some topics/connections and times.
+
+        ``start`` and ``end`` are inclusive bounds in ns; None means unbounded (0 is a time).
+        """
+
+    def times(self, topics: Collection[str] | None = None) -> Iterator[Message]:
+        """Like ``messages`` but the data may be left empty: for timing statistics only.
+
+        Formats with a per-message index answer from it without reading the messages.
+        """
+        return self.messages(topics=topics)
+
+    @abstractmethod
+    def close(self) -> None:
+        """Release the file."""
+
+    def __enter__(self) -> BagReader:
+        return self
+
+    def __exit__(
+        self,
+        exc_type: type[BaseException] | None,
+        exc: BaseException | None,
+        tb: TracebackType | None,
+    ) -> None:
+        self.close()
+
+    def guarded(self, blocks: list[Block]) -> list[Block]:
+        """The blocks, loading with damage skipped when ``skip_damaged`` is set."""
+        if not self.skip_damaged:
+            return blocks
+        return [Block(b.start_ns, b.end_ns, b.order, partial(self._load, b)) for b in blocks]
+
+    def _load(self, block: Block) -> list[Entry]:
+        try:
+            return block.load()
+        except BagFormatError as err:
+            self.damaged(f"skipped a damaged chunk ({err})")
+            return []
+
+    def wanted(
+        self, topics: Collection[str] | None, connections: Iterable[Connection] | None
+    ) -> Mapping[int, tuple[int, Connection]]:
+        """Connection id -> (rank, connection) for the connections a read selects."""
+        ids = None if connections is None else {c.id for c in connections}
+        topic_set = None if topics is None else set(topics)
+        return {
+            c.id: (rank, c)
+            for rank, c in enumerate(self.connections)
+            if (topic_set is None or c.topic in topic_set) and (ids is None or c.id in ids)
+        }
+
+
+class BagWriter(ABC):
+    """A ``.bag`` or MCAP file being written.
+
+    ``add_connection`` declares a publisher connection and returns its ``Connection`` (with
+    the id in the file); ``write`` stores one raw message; ``close`` writes the index. Leaving
+    a ``with`` block by an exception calls ``abort``.
+    """
+
+    path: Path
+
+    @abstractmethod
+    def add_connection(
+        self,
+        topic: str,
+        type: str,
+        md5sum: str,
+        definition: str,
+        *,
+        callerid: str = "",
+        latching: bool = False,
+        extra: Mapping[str, str] | None = None,
+        absent: frozenset[str] = frozenset(),
+    ) -> Connection:
+        """Declare a connection; messages are written against the returned one."""
+
+    @abstractmethod
+    def write(self, conn: Connection, t_ns: int, data: bytes | bytearray | memoryview) -> None:
+        """Store one serialized message received at ``t_ns``."""
+
+    def write_many(self, messages: Iterable[Message], targets: Targets) -> int:
+        """Store a stream of messages read from another bag; how many were written.
+
+        ``targets`` maps source connections to this writer's (see ``Targets``).
+        """
+        n = 0
+        for conn, t, data in messages:
+            target = targets.get(conn.id) or targets.resolve(conn)
+            self.write(target, t, data)
+            n += 1
+        return n
+
+    @abstractmethod
+    def flush(self) -> None:
+        """Hand everything written so far to the OS: a killed writer then loses none of it."""
+
+    @abstractmethod
+    def close(self) -> None:
+        """Finish the file: last chunk, index or summary, header."""
+
+    @abstractmethod
+    def abort(self) -> None:
+        """Stop and delete the unfinished file."""
+
+    def connection_for(self, topic: str, header: Mapping[str, str]) -> Connection:
+        """The connection for a publisher's connection header, declared on first use.
+
+        What ``bag record`` needs: messages arriving with the same header on a topic share a
+        connection; each other publisher (callerid, latching, definition) gets its own, as
+        ``rosbag record`` keeps them.
+        """
+        cache: dict[tuple[str, tuple[tuple[str, str], ...]], Connection]
+        cache = self.__dict__.setdefault("_by_header", {})
+        key = (topic, tuple(sorted(header.items())))
+        conn = cache.get(key)
+        if conn is None:
+            conn = cache[key] = self.copy_connection(connection_from_header(0, topic, header))
+        return conn
+
+    def copy_connection(self, conn: Connection) -> Connection:
+        """Declare a connection identical to ``conn`` (from another bag) in this file."""
+        return self.add_connection(
+            conn.topic,
+            conn.type,
+            conn.md5sum,
+            conn.definition,
+            callerid=conn.callerid,
+            latching=conn.latching,
+            extra=conn.extra,
+            absent=conn.absent,
+        )
+
+    def __enter__(self) -> BagWriter:
+        return self
+
+    def __exit__(
+        self,
+        exc_type: type[BaseException] | None,
+        exc: BaseException | None,
+        tb: TracebackType | None,
+    ) -> None:
+        if exc_type is None:
+            self.close()
+        else:
+            self.abort()
+
+
+class Targets(dict[int, Connection]):
+    """Source connection id -> a writer's copy of that connection.
+
+    ``resolve`` copies a connection on first use, so a stream whose reader meets a connection
+    only while reading is still copied whole.
+    """
+
+    def __init__(self, writer: BagWriter, sources: Iterable[Connection] = ()) -> None:
+        super().__init__()
+        self.writer = writer
+        for conn in sources:
+            self[conn.id] = writer.copy_connection(conn)
+
+    def resolve(self, conn: Connection) -> Connection:
+        """The writer's connection for a source connection, copied if new."""
+        target = self.get(conn.id)
+        if target is None:
+            target = self[conn.id] = self.writer.copy_connection(conn)
+        return target

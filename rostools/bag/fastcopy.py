@@ -1,0 +1,189 @@
+""".bag -> MCAP chunk for chunk, with numpy: no Python work per message.
+
+A chunk of small messages costs microseconds per message through ``messages()`` and
+``write()``; here each chunk is rearranged with array operations instead. A rosbag message
+record is ``u32 header_len (38), header, u32 data_len, data`` (46 bytes before the data); an
+MCAP message record is ``u8 op, u64 length, u16 channel, u32 sequence, u64 log time, u64
+publish time`` (31 bytes) before the same data. So dropping the first 15 bytes of every bag
+message record (and the connection records between them) and overwriting the remaining 31
+with MCAP fields turns the chunk's records into the MCAP chunk's records in two passes.
+
+It applies when the bag is indexed, its chunks do not overlap in time, and inside each chunk
+time order (ties: connection rank) is file order, so the MCAP file yields exactly the stream
+the bag does. Any chunk that does not qualify, or whose messages are big (images: the
+per-message path is already cheap for them), goes through the ordinary per-message path.
+numpy comes with rosbags; without it, ``convert`` simply uses the ordinary path.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from itertools import pairwise
+from typing import TYPE_CHECKING, Any
+
+from rostools.bag.base import Targets
+
+if TYPE_CHECKING:
+    from rostools.bag.mcap_writer import McapWriter
+    from rostools.bag.rosbag1_reader import Bag1Reader, Chunk
+
+#: 8 bytes at a fixed place of a 38-byte message record header: the ``op=2`` field.
+_OP_FIELD = b"\x04\x00\x00\x00op=\x02"
+#: Where that field starts in the record (after the u32 header length): rosbag's C++ writer
+#: sorts the fields (conn, op, time), its Python writer writes op, conn, time.
+_OP_PLACES = (4 + 13, 4)
+#: Chunks whose messages average more than this many bytes go the per-message way: its cost
+#: per message is small beside their size, and it hands payloads to the kernel without the
+#: per-byte pass that compacting the chunk here costs.
+SMALL_MESSAGE = 4096
+_BAG_HEAD = 46
+_MCAP_HEAD = 31
+
+
+def convert_chunks(
+    reader: Bag1Reader,
+    writer: McapWriter,
+    targets: Targets,
+    progress: Callable[[int], None] | None = None,
+) -> int | None:
+    """Copy every message of an indexed bag into an MCAP writer; None if it does not qualify.
+
+    ``targets`` maps the bag's connections to the writer's channels; ``progress`` gets the
+    number of messages done after each chunk.
+    """
+    try:
+        import numpy as np
+    except ImportError:  # pragma: no cover - numpy comes with rosbags
+        return None
+    chunks = sorted(reader.chunks, key=lambda c: (c.start_ns, c.pos))
+    if not reader.indexed or any(a.end_ns >= b.start_ns for a, b in pairwise(chunks)):
+        return None
+    wanted = reader.wanted(None, None)
+    total = 0
+    for chunk in chunks:
+        many = sum(chunk.counts.values()) * SMALL_MESSAGE >= chunk.size
+        done = _convert_chunk(np, reader, writer, targets, wanted, chunk) if many else None
+        if done is None:  # this chunk does not qualify: the per-message path
+            done = writer.write_many(reader.chunk_messages(chunk, wanted), targets)
+            writer.end_chunk()
+        total += done
+        if progress is not None:
+            progress(total)
+    return total
+
+
+def _convert_chunk(
+    np: Any,
+    reader: Bag1Reader,
+    writer: McapWriter,
+    targets: Targets,
+    wanted: Any,
+    chunk: Chunk,
+) -> int | None:
+    """One bag chunk as one MCAP chunk; None when the chunk does not qualify."""
+    buf, base, end = reader.chunk_data(chunk)
+    size = end - base
+    arr = np.frombuffer(buf, dtype=np.uint8, count=size, offset=base)
+    entry = np.dtype([("secs", "<u4"), ("nsecs", "<u4"), ("off", "<u4")])
+    parts, channels, ranks = [], [], []
+    for conn_id, raw in reader.index_records(chunk):
+        if conn_id not in wanted:
+            return None
+        rank, conn = wanted[conn_id]
+        entries = np.frombuffer(raw, dtype=entry)
+        parts.append(entries)
+        channels.append(np.full(len(entries), targets.resolve(conn).id, dtype=np.uint16))
+        ranks.append(np.full(len(entries), rank, dtype=np.uint32))
+    if not parts:
+        return 0
+    entries = np.concatenate(parts)
+    count = len(entries)
+    times = entries["secs"].astype(np.uint64) * np.uint64(1_000_000_000) + entries["nsecs"]
+    offs = entries["off"].astype(np.int64)
+    order = np.argsort(offs, kind="stable")  # file order
+    offs, times = offs[order], times[order]
+    rank, cids = np.concatenate(ranks)[order], np.concatenate(channels)[order]
+    if count > 1:
+        # Time order (time, rank, position) must be file order: no step back in (time, rank).
+        step = np.diff(times.astype(np.int64))
+        if not bool(np.all((step > 0) | ((step == 0) & (np.diff(rank.astype(np.int64)) >= 0)))):
+            return None
+        if not bool(np.all(offs[1:] > offs[:-1])):
+            return None  # two index entries for one record
+    if int(offs[-1]) + _BAG_HEAD > size:
+        return None
+    if not bool(np.all(_u32_at(np, arr, offs) == 38)):
+        return None
+    if not any(_op_field_at(np, arr, offs + k) for k in _OP_PLACES):
+        return None
+    dlen = _u32_at(np, arr, offs + 42).astype(np.int64)
+    ends = offs + _BAG_HEAD + dlen
+    if int(ends[-1]) > size or (count > 1 and not bool(np.all(ends[:-1] <= offs[1:]))):
+        return None
+    # Keep [record + 15, record end) of every message record; drop the rest (the first 15
+    # bytes of each message record, connection records): alternating drop/keep runs.
+    runs = np.empty(2 * count + 1, dtype=np.int64)
+    runs[0] = offs[0] + (_BAG_HEAD - _MCAP_HEAD)
+    runs[1::2] = _MCAP_HEAD + dlen
+    runs[2:-1:2] = offs[1:] + (_BAG_HEAD - _MCAP_HEAD) - ends[:-1]
+    runs[-1] = size - ends[-1]
+    keep = np.zeros(2 * count + 1, dtype=np.bool_)
+    keep[1::2] = True
+    records = arr[np.repeat(keep, runs)]
+    starts = np.zeros(count, dtype=np.int64)
+    np.cumsum(runs[1:-2:2], out=starts[1:])
+    header = np.empty(count, dtype=_mcap_header(np))
+    header["op"] = 5
+    header["length"] = 22 + dlen
+    header["channel"] = cids
+    header["log_time"] = times
+    header["publish_time"] = times
+    sequence = np.empty(count, dtype=np.uint32)
+    indexes: dict[int, bytes] = {}
+    counts: dict[int, int] = {}
+    by_channel = np.argsort(cids, kind="stable")  # each channel's messages, in order
+    cuts = np.flatnonzero(np.diff(cids[by_channel])) + 1
+    for mine in np.split(by_channel, cuts):
+        cid = int(cids[mine[0]])
+        first = writer.sequence(cid)
+        sequence[mine] = (np.arange(first, first + len(mine)) & 0xFFFFFFFF).astype(np.uint32)
+        pairs = np.empty((len(mine), 2), dtype="<u8")
+        pairs[:, 0] = times[mine]
+        pairs[:, 1] = starts[mine]
+        indexes[cid] = pairs.tobytes()
+        counts[cid] = len(mine)
+    header["sequence"] = sequence
+    # Rows k of this view are records[k:k + 31]: one row copy per message header.
+    windows = np.lib.stride_tricks.as_strided(
+        records, shape=(len(records) - _MCAP_HEAD + 1, _MCAP_HEAD), strides=(1, 1)
+    )
+    windows[starts] = header.view(np.uint8).reshape(count, _MCAP_HEAD)
+    writer.write_chunk(int(times[0]), int(times.max()), memoryview(records), indexes, counts)
+    return count
+
+
+def _u32_at(np: Any, arr: Any, at: Any) -> Any:
+    """Little-endian u32s at arbitrary (unaligned) byte offsets."""
+    value = arr[at].astype(np.uint32)
+    for k in (1, 2, 3):
+        value |= arr[at + k].astype(np.uint32) << (8 * k)
+    return value
+
+
+def _op_field_at(np: Any, arr: Any, at: Any) -> bool:
+    """Whether every offset holds the op=2 header field."""
+    return all(bool(np.all(arr[at + k] == byte)) for k, byte in enumerate(_OP_FIELD))
+
+
+def _mcap_header(np: Any) -> Any:
+    """An MCAP message record up to its data, as a packed 31-byte numpy record."""
+    return np.dtype(
+        [
+            ("op", "u1"),
+            ("length", "<u8"),
+            ("channel", "<u2"),
+            ("sequence", "<u4"),
+            ("log_time", "<u8"),
+            ("publish_time", "<u8"),
+        ]
+    )

@@ -1,0 +1,502 @@
+"""Reading MCAP files of any profile; ROS 1 channels become ``Connection``s.
+
+``info`` reads only the summary section when the file has a complete one (a few records at the
+end). Messages are read by walking the data section's top-level records (skipping over chunk
+bodies) and loading chunks lazily in time order. The records inside chunks are authoritative:
+a summary that lacks some channels or schemas (valid MCAP; the upstream Python indexed reader
+fails on such files) makes the reader collect them from the data section instead. Files cut
+short are read up to the last complete record, plus what decompresses of a cut-short chunk.
+"""
+
+from __future__ import annotations
+
+import struct
+from collections.abc import Collection, Iterable, Iterator, Mapping
+from dataclasses import dataclass, field
+from functools import partial
+from pathlib import Path
+
+from rostools.bag import mcap_format as fmt
+from rostools.bag.base import MAX_TIME_NS, BagReader, map_file, release
+from rostools.bag.model import (
+    BagFormatError,
+    BagInfo,
+    Connection,
+    compression_rows,
+    summarize,
+)
+from rostools.bag.ordering import Block, Entry, Message, ordered
+
+_MSG = fmt.MESSAGE_PREFIX
+_PREFIX = fmt.PREFIX
+#: A chunk record's fixed fields: start, end, uncompressed size, crc.
+_CHUNK_HEAD = struct.Struct("<QQQI")
+_U32 = struct.Struct("<I")
+_U64 = struct.Struct("<Q")
+#: Channel id -> (rank, connection) of a read; unfiltered reads add channels met late.
+_Wanted = dict[int, tuple[int, Connection]]
+
+
+@dataclass
+class _Scan:
+    """What a walk over the whole data section found (for files without a usable summary)."""
+
+    counts: dict[int, int] = field(default_factory=dict)
+    start: int | None = None
+    end: int | None = None
+    chunks: list[tuple[str, int, int]] = field(default_factory=list)
+    attachments: int = 0
+    metadata: int = 0
+
+
+class McapReader(BagReader):
+    """An MCAP file; see the module docstring."""
+
+    format = "mcap"
+
+    def __init__(self, path: str | Path) -> None:
+        super().__init__()
+        self.path = Path(path)
+        self.connections: list[Connection] = []
+        self.indexed = False
+        self.profile = ""
+        self.library = ""
+        self.schemas: dict[int, fmt.Schema] = {}
+        self.channels: dict[int, fmt.Channel] = {}
+        self.statistics: fmt.Statistics | None = None
+        self.chunk_indexes: list[fmt.ChunkIndex] = []
+        self.attachment_indexes: list[fmt.AttachmentIndex] = []
+        self.metadata_indexes: list[fmt.MetadataIndex] = []
+        self._scan_result: _Scan | None = None
+        self._by_id: dict[int, Connection] = {}
+        mm, self.size = map_file(self.path)
+        if mm is None:
+            raise BagFormatError(f"{self.path} is empty, not an MCAP file")
+        self._mm = mm
+        try:
+            self._open()
+        except BaseException:
+            self.close()
+            raise
+
+    # -- opening ---------------------------------------------------------------------------
+
+    def _open(self) -> None:
+        mm, size = self._mm, self.size
+        if mm[: len(fmt.MAGIC)] != fmt.MAGIC:
+            raise BagFormatError(f"{self.path} is not an MCAP file (bad magic)")
+        try:
+            _, op, start, end = next(fmt.records(mm, len(fmt.MAGIC), size))
+            header = fmt.parse(op, mm, start, end)
+        except (StopIteration, fmt.McapFormatError) as err:
+            raise BagFormatError(f"{self.path}: MCAP file cut short in its header") from err
+        if not isinstance(header, fmt.Header):
+            raise BagFormatError(f"{self.path}: MCAP file does not start with a header record")
+        self.profile, self.library = header.profile, header.library
+        self._data_start = end
+        self._data_end = size
+        footer = fmt.parse_footer(mm[max(0, size - fmt.FOOTER_SIZE - len(fmt.MAGIC)) :])
+        if footer is None:
+            self.note("no footer: the file is unfinished or cut short")
+        else:
+            self._data_end = size - fmt.FOOTER_SIZE - len(fmt.MAGIC)
+            if footer.summary_start:
+                self._read_summary(footer)
+        if not self._summary_complete():
+            self.schemas, self.channels = {}, {}
+            self._scan_result = self._scan()
+        for channel_id in sorted(self.channels):
+            self._connection(channel_id)
+
+    def _read_summary(self, footer: fmt.Footer) -> None:
+        end = footer.summary_offset_start or self._data_end
+        if not (self._data_start <= footer.summary_start <= end <= self._data_end):
+            self.note("the footer points outside the file; summary ignored")
+            return
+        try:
+            for _, op, start, stop in fmt.records(self._mm, footer.summary_start, end):
+                record = fmt.parse(op, self._mm, start, stop)
+                if isinstance(record, fmt.Schema):
+                    self.schemas.setdefault(record.id, record)
+                elif isinstance(record, fmt.Channel):
+                    self.channels.setdefault(record.id, record)
+                elif isinstance(record, fmt.Statistics):
+                    self.statistics = record
+                elif isinstance(record, fmt.ChunkIndex):
+                    self.chunk_indexes.append(record)
+                elif isinstance(record, fmt.AttachmentIndex):
+                    self.attachment_indexes.append(record)
+                elif isinstance(record, fmt.MetadataIndex):
+                    self.metadata_indexes.append(record)
+        except fmt.McapFormatError as err:
+            self.note(f"damaged summary ({err}); scanned the data section")
+            self.statistics, self.chunk_indexes = None, []
+            return
+        self._data_end = footer.summary_start
+        self.indexed = self.statistics is not None or bool(self.chunk_indexes)
+
+    def _summary_complete(self) -> bool:
+        """Whether the summary names every channel (and schema) the data uses."""
+        if not self.indexed:
+            return False
+        used: set[int] = set()
+        if self.statistics is not None:
+            used.update(self.statistics.channel_message_counts)
+        for index in self.chunk_indexes:
+            used.update(index.message_index_offsets)
+        if self.statistics is None and self.chunk_indexes and not used:
+            return False  # chunks without message indexes: nothing says which channels exist
+        if not used <= self.channels.keys():
+            return False
+        return all(c.schema_id == 0 or c.schema_id in self.schemas for c in self.channels.values())
+
+    def _top(self, pos: int, end: int) -> Iterator[tuple[int, int, int, int, bool]]:
+        """(record, opcode, content start, content end, complete) of top-level records.
+
+        At a record that does not fit (a cut-short file) the walk ends; if that record is a
+        chunk whose header is whole, it is yielded with ``complete`` False and the end of the
+        file as its end, so what decompresses of it can still be read.
+        """
+        mm, nxt = self._mm, pos
+        try:
+            for rec, op, start, stop in fmt.records(mm, pos, end):
+                nxt = stop
+                yield rec, op, start, stop, True
+        except fmt.McapFormatError as err:
+            if nxt + 9 + 40 <= self.size and mm[nxt] == fmt.OP_CHUNK:
+                self.damaged(f"chunk at {nxt} is cut short; read what decompresses")
+                yield nxt, fmt.OP_CHUNK, nxt + 9, self.size, False
+            else:
+                self.damaged(f"data section ends in a damaged or cut-short record ({err})")
+
+    def _scan(self) -> _Scan:
+        """Walk the data section for schemas, channels, counts and times (no summary).
+
+        Schema and channel records are registered on the way, inside chunks too.
+        """
+        scan = _Scan()
+        mm = self._mm
+        times: list[int] = []
+        for rec, op, start, stop, complete in self._top(self._data_start, self._data_end):
+            if op == fmt.OP_MESSAGE:
+                channel_id, log = struct.unpack_from("<H4xQ", mm, start)
+                scan.counts[channel_id] = scan.counts.get(channel_id, 0) + 1
+                times.append(log)
+            elif op == fmt.OP_CHUNK:
+                try:
+                    compression, size, data_start, data_len = self._chunk_fields(
+                        rec, start, stop, complete
+                    )
+                    data, base, data_end = self._chunk_data(
+                        compression, size, data_start, data_len, complete
+                    )
+                except fmt.McapFormatError as err:
+                    self.damaged(f"chunk at {rec} is unreadable ({err})")
+                    continue
+                if complete:
+                    scan.chunks.append((compression or "none", data_len, size))
+                for channel_id, log in self._inner(data, base, data_end, rec):
+                    scan.counts[channel_id] = scan.counts.get(channel_id, 0) + 1
+                    times.append(log)
+            elif op in (fmt.OP_SCHEMA, fmt.OP_CHANNEL):
+                self._register(fmt.parse(op, mm, start, stop))
+            elif op == fmt.OP_ATTACHMENT:
+                scan.attachments += 1
+            elif op == fmt.OP_METADATA:
+                scan.metadata += 1
+            elif op in (fmt.OP_DATA_END, fmt.OP_FOOTER):
+                break
+        if times:
+            scan.start, scan.end = min(times), max(times)
+        return scan
+
+    def _chunk_fields(
+        self, rec: int, start: int, stop: int, complete: bool = True
+    ) -> tuple[str, int, int, int]:
+        """(compression, uncompressed size, records start, records length) of a chunk.
+
+        For a cut-short chunk (``complete`` False) the records run to ``stop``.
+        """
+        try:
+            _, _, size, _ = _CHUNK_HEAD.unpack_from(self._mm, start)
+            (clen,) = _U32.unpack_from(self._mm, start + 28)
+            compression = bytes(self._mm[start + 32 : start + 32 + clen]).decode()
+            (dlen,) = _U64.unpack_from(self._mm, start + 32 + clen)
+        except (struct.error, UnicodeDecodeError) as err:
+            raise fmt.McapFormatError(f"chunk at {rec} has a malformed header") from err
+        data_start = start + 40 + clen
+        if not complete:
+            return compression, size, data_start, max(0, min(dlen, stop - data_start))
+        if data_start + dlen > stop:
+            raise fmt.McapFormatError(f"chunk at {rec} holds more than its record")
+        return compression, size, data_start, dlen
+
+    def _chunk_data(
+        self, compression: str, size: int, start: int, length: int, complete: bool
+    ) -> tuple[bytes | memoryview, int, int]:
+        """(buffer, start, end) of a chunk's records: in place when uncompressed."""
+        if compression == "":
+            return memoryview(self._mm), start, start + length
+        raw = memoryview(self._mm)[start : start + length]
+        try:
+            data = (
+                fmt.decompress(compression, raw, size)
+                if complete
+                else fmt.decompress_prefix(compression, raw, size)
+            )
+        finally:
+            raw.release()
+        return data, 0, len(data)
+
+    def _inner(
+        self, buf: bytes | memoryview, pos: int, end: int, rec: int
+    ) -> Iterator[tuple[int, int]]:
+        """(channel, log time) of the messages in a chunk; registers schemas and channels."""
+        try:
+            for _, op, start, stop in fmt.records(buf, pos, end):
+                if op == fmt.OP_MESSAGE:
+                    channel_id, log = struct.unpack_from("<H4xQ", buf, start)
+                    yield channel_id, log
+                elif op in (fmt.OP_SCHEMA, fmt.OP_CHANNEL):
+                    self._register(fmt.parse(op, buf, start, stop))
+        except (fmt.McapFormatError, struct.error) as err:
+            self.damaged(f"chunk at {rec} ends in a damaged record ({err})")
+
+    def _register(self, record: fmt.Record | None) -> None:
+        if isinstance(record, fmt.Schema):
+            self.schemas.setdefault(record.id, record)
+        elif isinstance(record, fmt.Channel) and record.id not in self.channels:
+            self.channels[record.id] = record
+            if self.connections:  # found while reading messages: add it now
+                self._connection(record.id)
+
+    def _connection(self, channel_id: int) -> Connection:
+        conn = self._by_id.get(channel_id)
+        if conn is None:
+            conn = channel_connection(self.channels[channel_id], self.schemas)
+            self._by_id[channel_id] = conn
+            self.connections.append(conn)
+        return conn
+
+    # -- reading ---------------------------------------------------------------------------
+
+    def info(self) -> BagInfo:
+        """The summary, from the summary section when there is a complete one."""
+        stats, scan = self.statistics, self._scan_result
+        if scan is None and stats is not None:
+            counts = dict(stats.channel_message_counts)
+            total = stats.message_count
+            start = stats.message_start_time if total else None
+            end = stats.message_end_time if total else None
+            chunks = [
+                (i.compression or "none", i.compressed_size, i.uncompressed_size)
+                for i in self.chunk_indexes
+            ]
+            attachments, metadata = stats.attachment_count, stats.metadata_count
+        else:
+            scan = scan or self._scan()
+            counts, total = scan.counts, sum(scan.counts.values())
+            start, end = scan.start, scan.end
+            chunks, attachments, metadata = scan.chunks, scan.attachments, scan.metadata
+        topics, types = summarize(self.connections, counts)
+        return BagInfo(
+            path=self.path,
+            format="mcap",
+            version="0",
+            size=self.size,
+            start_ns=start,
+            end_ns=end,
+            message_count=total,
+            indexed=self.indexed,
+            chunk_count=len(chunks),
+            compression=compression_rows(chunks),
+            connections=tuple(self.connections),
+            connection_counts=counts,
+            topics=topics,
+            types=types,
+            profile=self.profile,
+            library=self.library,
+            attachment_count=attachments,
+            metadata_count=metadata,
+        )
+
+    def messages(
+        self,
+        topics: Collection[str] | None = None,
+        start: int | None = None,
+        end: int | None = None,
+        connections: Iterable[Connection] | None = None,
+    ) -> Iterator[Message]:
+        """Messages in log-time order; see ``BagReader.messages``."""
+        wanted = dict(self.wanted(topics, connections))
+        lo = 0 if start is None else start
+        hi = MAX_TIME_NS if end is None else end
+        everything = topics is None and connections is None
+        return ordered(self.guarded(self._blocks(wanted, everything, lo, hi)))
+
+    def _blocks(self, wanted: _Wanted, everything: bool, lo: int, hi: int) -> list[Block]:
+        """One block per chunk (loaded lazily) and per run of top-level messages."""
+        mm = self._mm
+        by_offset = {i.chunk_start_offset: i for i in self.chunk_indexes}
+        blocks: list[Block] = []
+        loose: list[Entry] = []
+        for rec, op, start, stop, complete in self._top(self._data_start, self._data_end):
+            if op == fmt.OP_MESSAGE:
+                _, _, channel_id, _, log, _ = _MSG.unpack_from(mm, rec)
+                if lo <= log <= hi and self._selects(channel_id, wanted, everything):
+                    rank, conn = wanted[channel_id]
+                    data = memoryview(mm)[start + 22 : stop]
+                    loose.append((log, rank, rec, conn, data))
+                continue
+            if loose:
+                blocks.append(_loose_block(loose, len(blocks)))
+                loose = []
+            if op == fmt.OP_CHUNK:
+                first, last, _, _ = _CHUNK_HEAD.unpack_from(mm, start)
+                index = by_offset.get(rec)
+                if complete and (last < lo or first > hi):
+                    continue
+                if (
+                    index is not None
+                    and index.message_index_offsets
+                    and not everything
+                    and wanted.keys().isdisjoint(index.message_index_offsets)
+                ):
+                    continue
+                load = partial(
+                    self._entries,
+                    rec,
+                    start,
+                    stop,
+                    wanted,
+                    everything,
+                    lo,
+                    hi,
+                    complete,
+                )
+                blocks.append(Block(first, last, len(blocks), load))
+            elif op in (fmt.OP_SCHEMA, fmt.OP_CHANNEL):
+                self._register(fmt.parse(op, mm, start, stop))
+            elif op in (fmt.OP_DATA_END, fmt.OP_FOOTER):
+                break
+        if loose:
+            blocks.append(_loose_block(loose, len(blocks)))
+        return blocks
+
+    def _selects(self, channel_id: int, wanted: _Wanted, everything: bool) -> bool:
+        """Whether a read selects a channel.
+
+        A channel first seen while reading (only inside chunks) joins an unfiltered read.
+        """
+        if channel_id in wanted:
+            return True
+        if not everything:
+            return False
+        if channel_id not in self.channels:
+            self.damaged(f"messages on channel {channel_id}, which no channel record defines")
+            return False
+        wanted[channel_id] = (len(self.connections), self._connection(channel_id))
+        return True
+
+    def _entries(
+        self,
+        rec: int,
+        start: int,
+        stop: int,
+        wanted: _Wanted,
+        everything: bool,
+        lo: int,
+        hi: int,
+        complete: bool,
+    ) -> list[Entry]:
+        """The wanted messages of one chunk, sorted."""
+        try:
+            compression, size, data_start, dlen = self._chunk_fields(rec, start, stop, complete)
+            buf, pos, end = self._chunk_data(compression, size, data_start, dlen, complete)
+        except fmt.McapFormatError as err:
+            if complete:
+                raise BagFormatError(f"{self.path}: {err}") from err
+            self.damaged(f"cut-short chunk at {rec} is unreadable ({err})")
+            return []
+        view = memoryview(buf)
+        out: list[Entry] = []
+        append = out.append
+        unpack = _MSG.unpack_from
+        try:
+            while pos < end:
+                if pos + 31 > end:
+                    op, length = _PREFIX.unpack_from(buf, pos) if pos + 9 <= end else (0, 1 << 62)
+                    if pos + 9 + length > end:
+                        raise fmt.McapFormatError(f"record at {pos} in chunk {rec} is cut short")
+                    pos += 9 + length
+                    continue
+                op, length, channel_id, _, log, _ = unpack(buf, pos)
+                nxt = pos + 9 + length
+                if nxt > end:
+                    raise fmt.McapFormatError(f"record at {pos} in chunk {rec} is cut short")
+                if op == fmt.OP_MESSAGE:
+                    if length < 22:
+                        raise fmt.McapFormatError(f"message at {pos} in chunk {rec} is too short")
+                    if lo <= log <= hi and self._selects(channel_id, wanted, everything):
+                        rank, conn = wanted[channel_id]
+                        append((log, rank, pos, conn, view[pos + 31 : nxt]))
+                elif op in (fmt.OP_SCHEMA, fmt.OP_CHANNEL):
+                    self._register(fmt.parse(op, buf, pos + 9, nxt))
+                pos = nxt
+        except fmt.McapFormatError as err:
+            if complete:
+                raise BagFormatError(f"{self.path}: {err}") from err
+            self.damaged(f"cut-short chunk at {rec}: {err}")
+        out.sort()
+        return out
+
+    def close(self) -> None:
+        """Release the file map."""
+        release(getattr(self, "_mm", None))
+
+
+def _loose_block(entries: list[Entry], order: int) -> Block:
+    """A block for a run of messages outside chunks."""
+    entries.sort()
+    return Block(entries[0][0], max(e[0] for e in entries), order, lambda: entries)
+
+
+def channel_connection(channel: fmt.Channel, schemas: Mapping[int, fmt.Schema]) -> Connection:
+    """The ``Connection`` a channel stands for under the ROS 1 profile.
+
+    Metadata ``callerid``, ``latching`` ("true"/"false") and ``md5sum`` become attributes; any
+    other metadata is kept in ``extra``. A missing md5sum is computed from a ``ros1msg``
+    definition, as converters do.
+    """
+    schema = schemas.get(channel.schema_id)
+    meta = dict(channel.metadata)
+    callerid = meta.pop("callerid", "")
+    latching = meta.pop("latching", None)
+    md5sum = meta.pop("md5sum", "")
+    name = schema.name if schema else ""
+    definition = schema.data.decode("utf-8", "replace") if schema else ""
+    if not md5sum and schema is not None and schema.encoding == "ros1msg":
+        md5sum = _md5_of(name, definition)
+    return Connection(
+        id=channel.id,
+        topic=channel.topic,
+        type=name,
+        md5sum=md5sum,
+        definition=definition,
+        callerid=callerid,
+        latching=latching in ("true", "1"),
+        extra=meta,
+        absent=frozenset() if latching is not None else frozenset({"latching"}),
+    )
+
+
+def _md5_of(name: str, definition: str) -> str:
+    """The md5sum of a type from its full definition text, or "" if it does not resolve."""
+    from rostools.errors import RostoolsError
+    from rostools.msgs.spec import DefinitionError
+    from rostools.msgs.store import TypeStore
+
+    try:
+        return TypeStore([]).with_definition(name, definition).md5(name)
+    except (RostoolsError, DefinitionError, ValueError, KeyError):
+        return ""

@@ -1,0 +1,403 @@
+"""Writing MCAP files under the ROS 1 profile (what Foxglove and ``mcap`` tools expect).
+
+Profile ``ros1``; one schema per distinct type definition (encoding ``ros1msg``, the full
+``message_definition`` text) and one channel per publisher connection (message encoding
+``ros1``, metadata ``callerid``, ``latching`` as "true"/"false", and ``md5sum`` as Foxglove's
+converter stores it). Channel ids are the connection ids, from 0 like a ``.bag``'s.
+
+Chunked (zstd, lz4 or none), with message indexes after every chunk and a summary of schemas,
+channels, statistics and chunk indexes plus summary offsets. Schemas and channels go outside
+the chunks as soon as they are declared, and every chunk goes to the OS when it closes, so a
+killed writer leaves everything but the open chunk recoverable.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import sys
+from array import array
+from collections.abc import Callable, Iterable, Mapping
+from pathlib import Path
+from typing import Final
+
+from rostools import __version__
+from rostools.bag import mcap_format as fmt
+from rostools.bag.base import BagWriter, Targets
+from rostools.bag.model import BagUsageError, Connection, UnsupportedBagError
+from rostools.bag.ordering import Message
+from rostools.bag.sink import BIG_PAYLOAD, Sink, frozen
+from rostools.errors import InvalidDataError
+
+#: Chunk threshold (uncompressed bytes): rosbag's 768 KiB, close to the mcap library's 1 MiB.
+DEFAULT_CHUNK_SIZE: Final = 768 * 1024
+COMPRESSIONS: Final = ("zstd", "lz4", "none")
+#: Channel ids are u16 in MCAP.
+MAX_CHANNELS: Final = 1 << 16
+#: zstd level 3 is the library default and what the mcap writers use.
+ZSTD_LEVEL: Final = 3
+_MAX_TIME: Final = (1 << 64) - 1
+_MSG = fmt.MESSAGE_PREFIX
+_Chunk = bytes | bytearray | memoryview
+#: Compresses a chunk's records, given in pieces, into pieces of the stored bytes.
+_Compress = Callable[[list[_Chunk]], list[_Chunk]]
+
+
+class McapWriter(BagWriter):
+    """An MCAP file being written; see the module docstring."""
+
+    def __init__(
+        self,
+        path: str | Path,
+        *,
+        compression: str = "zstd",
+        chunk_size: int = DEFAULT_CHUNK_SIZE,
+        overwrite: bool = False,
+        profile: str = "ros1",
+        library: str = f"rostools {__version__}",
+    ) -> None:
+        if compression not in COMPRESSIONS:
+            raise UnsupportedBagError(
+                f"unknown MCAP compression {compression!r} (use zstd, lz4 or none)"
+            )
+        if chunk_size <= 0:
+            raise BagUsageError(f"chunk size must be positive, not {chunk_size}")
+        self.path = Path(path)
+        self.compression = compression
+        self.chunk_size = chunk_size
+        flags = os.O_WRONLY | os.O_CREAT | (os.O_TRUNC if overwrite else os.O_EXCL)
+        try:
+            self._fd = os.open(self.path, flags, 0o644)
+        except FileExistsError:
+            raise BagUsageError(f"{self.path} exists; refusing to overwrite it") from None
+        except OSError as err:
+            raise InvalidDataError(f"cannot create {self.path}: {err.strerror or err}") from err
+        self._compress = _compressor(compression)
+        self._closed = False
+        self._sink = Sink(self._fd, str(self.path))
+        self._connections: list[Connection] = []
+        self._schema_ids: dict[tuple[str, str], int] = {}
+        self._schema_records: list[bytes] = []
+        self._channel_records: list[bytes] = []
+        self._counts: list[int] = []
+        # The open chunk: its small records coalesced, big payloads kept by reference.
+        self._chunk_small = bytearray()
+        self._chunk_pieces: list[bytes | bytearray | memoryview] = []
+        self._chunk_len = 0
+        self._chunk_start = 0
+        self._chunk_end = 0
+        self._index: dict[int, array[int]] = {}
+        self._unsorted = False
+        self._chunk_indexes: list[fmt.ChunkIndex] = []
+        self._start = _MAX_TIME
+        self._end = 0
+        self._sink.write(fmt.MAGIC)
+        self._sink.write(fmt.encode_header(profile, library))
+        self._sink.flush()
+
+    # -- the public interface --------------------------------------------------------------
+
+    def add_connection(
+        self,
+        topic: str,
+        type: str,
+        md5sum: str,
+        definition: str,
+        *,
+        callerid: str = "",
+        latching: bool = False,
+        extra: Mapping[str, str] | None = None,
+        absent: frozenset[str] = frozenset(),
+    ) -> Connection:
+        """Declare a connection: a channel (and its schema, once per definition)."""
+        self._check_open()
+        if len(self._connections) >= MAX_CHANNELS:
+            raise BagUsageError(f"an MCAP file holds at most {MAX_CHANNELS} channels")
+        conn = Connection(
+            id=len(self._connections),
+            topic=topic,
+            type=type,
+            md5sum=md5sum,
+            definition=definition,
+            callerid=callerid,
+            latching=latching,
+            extra=dict(extra or {}),
+            absent=absent,
+        )
+        key = (type, definition)
+        schema_id = self._schema_ids.get(key)
+        if schema_id is None:
+            schema_id = self._schema_ids[key] = len(self._schema_records) + 1
+            record = fmt.encode_schema(schema_id, type, "ros1msg", definition.encode())
+            self._schema_records.append(record)
+            self._sink.write(record)
+        record = fmt.encode_channel(conn.id, schema_id, topic, "ros1", channel_metadata(conn))
+        self._channel_records.append(record)
+        self._sink.write(record)
+        self._connections.append(conn)
+        self._counts.append(0)
+        return conn
+
+    def write(self, conn: Connection, t_ns: int, data: bytes | bytearray | memoryview) -> None:
+        """Store one message of ``conn`` with log (and publish) time ``t_ns``."""
+        cid = conn.id
+        if self._closed or cid >= len(self._connections) or self._connections[cid] is not conn:
+            self._check_open()
+            raise BagUsageError(f"connection {cid} ({conn.topic}) was not added to this writer")
+        self._store(cid, t_ns, data)
+
+    def write_many(self, messages: Iterable[Message], targets: Targets) -> int:
+        """Store a stream of messages read from another bag; how many were written.
+
+        ``targets`` maps source connections to this writer's (see ``Targets``).
+        """
+        self._check_open()
+        ids: dict[int, int] = {}
+        store = self._store
+        n = 0
+        for conn, t, data in messages:
+            cid = ids.get(conn.id)
+            if cid is None:
+                cid = ids[conn.id] = self._target(targets, conn)
+            store(cid, t, data)
+            n += 1
+        return n
+
+    def _store(self, cid: int, t_ns: int, data: bytes | bytearray | memoryview) -> None:
+        if not 0 <= t_ns <= _MAX_TIME:
+            raise BagUsageError(f"time {t_ns} ns does not fit an MCAP file")
+        offset = self._chunk_len
+        if not offset:
+            self._chunk_start = self._chunk_end = t_ns
+        elif t_ns > self._chunk_end:
+            self._chunk_end = t_ns
+        elif t_ns < self._chunk_end:
+            self._unsorted = True  # message indexes get sorted when the chunk closes
+            if t_ns < self._chunk_start:
+                self._chunk_start = t_ns
+        index = self._index.get(cid)
+        if index is None:
+            index = self._index[cid] = array("Q")
+        seq = self._counts[cid]
+        self._counts[cid] = seq + 1
+        index.append(t_ns)
+        index.append(offset)
+        size = len(data)
+        small = self._chunk_small
+        small += _MSG.pack(5, 22 + size, cid, seq & 0xFFFFFFFF, t_ns, t_ns)
+        if size >= BIG_PAYLOAD:
+            self._chunk_pieces.append(small)
+            self._chunk_pieces.append(frozen(data))
+            self._chunk_small = bytearray()
+        else:
+            small += data
+        self._chunk_len = offset + 31 + size
+        if self._chunk_len >= self.chunk_size:
+            self._close_chunk()
+
+    def sequence(self, channel_id: int) -> int:
+        """How many messages a channel has so far (the next message's sequence number)."""
+        return self._counts[channel_id]
+
+    def end_chunk(self) -> None:
+        """Close the open chunk, if any (the next message starts a new one)."""
+        if self._chunk_len:
+            self._close_chunk()
+
+    def write_chunk(
+        self,
+        start: int,
+        end: int,
+        records: bytes | memoryview,
+        indexes: Mapping[int, bytes],
+        counts: Mapping[int, int],
+    ) -> None:
+        """Store a chunk built elsewhere (``fastcopy``): its message records, their index.
+
+        ``indexes`` maps channels to packed (log time, offset) pairs; ``counts`` says how many
+        messages of each channel the records hold.
+        """
+        self._check_open()
+        self.end_chunk()
+        self._chunk_pieces = [records]
+        self._chunk_len = len(records)
+        self._chunk_start, self._chunk_end = start, end
+        for cid, n in counts.items():
+            self._counts[cid] += n
+        self._close_chunk(indexes)
+
+    def _target(self, targets: Targets, conn: Connection) -> int:
+        target = targets.resolve(conn)
+        if target.id >= len(self._connections) or self._connections[target.id] is not target:
+            raise BagUsageError(f"connection {target.id} was not added to this writer")
+        return target.id
+
+    def _packed_index(self, cid: int) -> bytes:
+        """A channel's (log time, offset) pairs in the open chunk, sorted, as file bytes."""
+        entries = self._index[cid]
+        if self._unsorted:
+            pairs = sorted(zip(entries[::2], entries[1::2], strict=True))
+            entries = array("Q", [v for pair in pairs for v in pair])
+        return _little_endian(entries)
+
+    def flush(self) -> None:
+        """Close the open chunk and hand everything to the OS."""
+        self._check_open()
+        if self._chunk_len:
+            self._close_chunk()
+        self._sink.flush()
+
+    def close(self) -> None:
+        """Write the last chunk, the data end, the summary and the footer."""
+        if self._closed:
+            return
+        try:
+            if self._chunk_len:
+                self._close_chunk()
+            self._sink.write(fmt.encode_data_end())
+            summary_start = self._sink.tell()
+            summary = bytearray()
+            offsets = bytearray()
+            groups: list[tuple[int, list[bytes]]] = [
+                (fmt.OP_SCHEMA, self._schema_records),
+                (fmt.OP_CHANNEL, self._channel_records),
+                (fmt.OP_STATISTICS, [fmt.encode_statistics(self._statistics())]),
+                (fmt.OP_CHUNK_INDEX, [fmt.encode_chunk_index(i) for i in self._chunk_indexes]),
+            ]
+            for opcode, group in groups:
+                if group:
+                    body = b"".join(group)
+                    offsets += fmt.encode_summary_offset(
+                        opcode, summary_start + len(summary), len(body)
+                    )
+                    summary += body
+            offset_start = summary_start + len(summary)
+            summary += offsets
+            self._sink.write(summary)
+            self._sink.write(fmt.encode_footer(summary_start, offset_start, bytes(summary)))
+            self._sink.flush()
+        finally:
+            self._closed = True
+            os.close(self._fd)
+
+    def abort(self) -> None:
+        """Stop writing and delete the file."""
+        if not self._closed:
+            self._closed = True
+            os.close(self._fd)
+        with contextlib.suppress(FileNotFoundError):
+            self.path.unlink()
+
+    # -- internals -------------------------------------------------------------------------
+
+    def _check_open(self) -> None:
+        if self._closed:
+            raise BagUsageError(f"{self.path} is closed")
+
+    def _statistics(self) -> fmt.Statistics:
+        total = sum(self._counts)
+        return fmt.Statistics(
+            message_count=total,
+            schema_count=len(self._schema_records),
+            channel_count=len(self._channel_records),
+            attachment_count=0,
+            metadata_count=0,
+            chunk_count=len(self._chunk_indexes),
+            message_start_time=self._start if total else 0,
+            message_end_time=self._end if total else 0,
+            channel_message_counts={i: n for i, n in enumerate(self._counts) if n},
+        )
+
+    def _close_chunk(self, packed: Mapping[int, bytes] | None = None) -> None:
+        pieces = self._chunk_pieces
+        if self._chunk_small:
+            pieces.append(self._chunk_small)
+        size = self._chunk_len
+        start, end = self._chunk_start, self._chunk_end
+        self._start = min(self._start, start)
+        self._end = max(self._end, end)
+        compression = "" if self.compression == "none" else self.compression
+        sink = self._sink
+        chunk_pos = sink.tell()
+        stored_pieces = self._compress(pieces)
+        stored = sum(len(p) for p in stored_pieces)
+        sink.write(fmt.encode_chunk_head(start, end, size, compression, stored))
+        for piece in stored_pieces:
+            sink.write(piece)
+        index_start = sink.tell()
+        offsets: dict[int, int] = {}
+        if packed is None:
+            packed = {cid: self._packed_index(cid) for cid in self._index}
+        for cid in sorted(packed):
+            offsets[cid] = sink.tell()
+            sink.write(fmt.encode_message_index(cid, packed[cid]))
+        self._chunk_indexes.append(
+            fmt.ChunkIndex(
+                message_start_time=start,
+                message_end_time=end,
+                chunk_start_offset=chunk_pos,
+                chunk_length=index_start - chunk_pos,
+                message_index_offsets=offsets,
+                message_index_length=sink.tell() - index_start,
+                compression=compression,
+                compressed_size=stored,
+                uncompressed_size=size,
+            )
+        )
+        self._chunk_small = bytearray()
+        self._chunk_pieces = []
+        self._chunk_len = 0
+        self._index = {}
+        self._unsorted = False
+        sink.flush()
+
+
+def channel_metadata(conn: Connection) -> dict[str, str]:
+    """The ROS 1 profile's channel metadata for a connection (plus its extra header fields)."""
+    meta = dict(conn.extra)
+    if conn.callerid:
+        meta["callerid"] = conn.callerid
+    if "latching" not in conn.absent:
+        meta["latching"] = "true" if conn.latching else "false"
+    meta["md5sum"] = conn.md5sum
+    return meta
+
+
+def _compressor(kind: str) -> _Compress:
+    """Compresses a chunk given as pieces, into pieces: big payloads are never joined."""
+    if kind == "zstd":
+        import zstandard
+
+        compressor = zstandard.ZstdCompressor(level=ZSTD_LEVEL)
+
+        def zstd(pieces: list[_Chunk]) -> list[_Chunk]:
+            if len(pieces) == 1:
+                return [compressor.compress(pieces[0])]
+            stream = compressor.compressobj(size=sum(len(p) for p in pieces))
+            out: list[_Chunk] = [stream.compress(piece) for piece in pieces]
+            out.append(stream.flush())
+            return out
+
+        return zstd
+    if kind == "lz4":
+        import lz4.frame
+
+        def lz4_frame(pieces: list[_Chunk]) -> list[_Chunk]:
+            if len(pieces) == 1:
+                return [bytes(lz4.frame.compress(pieces[0]))]
+            stream = lz4.frame.LZ4FrameCompressor()
+            out: list[_Chunk] = [stream.begin()]
+            out += [stream.compress(piece) for piece in pieces]
+            out.append(stream.flush())
+            return out
+
+        return lz4_frame
+    return list
+
+
+def _little_endian(values: array[int]) -> bytes:
+    """The bytes of a u64 array as the file wants them (little-endian)."""
+    if sys.byteorder == "big":
+        values = array(values.typecode, values)
+        values.byteswap()
+    return values.tobytes()

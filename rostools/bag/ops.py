@@ -1,0 +1,311 @@
+"""Bag operations the CLI calls: convert, filter, compress, decompress.
+
+Library functions: no printing. Each reads through ``open_bag`` and writes through
+``open_writer``, so every combination of ``.bag`` and MCAP works; messages pass as raw bytes
+unless a filter expression needs the decoded message. A failure deletes the partial output.
+"""
+
+from __future__ import annotations
+
+import ast
+from collections.abc import Callable, Collection, Iterator
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Final
+
+from rostools.bag.api import format_for_name, open_bag, open_writer
+from rostools.bag.base import BagReader, BagWriter, Targets
+from rostools.bag.mcap_reader import McapReader
+from rostools.bag.model import BagUsageError, Connection, UnsupportedBagError
+from rostools.bag.ordering import Message
+from rostools.errors import RostoolsError, UsageError
+
+#: ``progress(done, total)`` is called about every this many messages (and at the end).
+PROGRESS_EVERY: Final = 4096
+#: Reports progress: messages done so far and the total the input holds.
+Progress = Callable[[int, int], None]
+
+
+@dataclass(frozen=True)
+class CopyReport:
+    """What a convert, filter or (de)compress wrote."""
+
+    source: Path
+    output: Path
+    format: str
+    compression: str
+    messages_read: int
+    messages_written: int
+    connections: int
+
+
+class FilterExpressionError(UsageError):
+    """A filter expression that does not compile, or raised on a message."""
+
+
+def convert(
+    src: str | Path,
+    dst: str | Path,
+    *,
+    compression: str | None = None,
+    chunk_size: int | None = None,
+    format: str | None = None,
+    progress: Progress | None = None,
+    overwrite: bool = False,
+) -> CopyReport:
+    """Copy every connection and message of ``src`` into ``dst`` (``.bag`` <-> MCAP).
+
+    Lossless in connection headers (callerid, latching, definitions, extra fields), message
+    bytes and times. The output format follows ``dst``'s name unless ``format`` is given.
+    """
+    return _copy(src, dst, compression, chunk_size, format, progress, overwrite, eager=True)
+
+
+def compress(
+    src: str | Path,
+    dst: str | Path,
+    compression: str = "bz2",
+    *,
+    chunk_size: int | None = None,
+    progress: Progress | None = None,
+    overwrite: bool = False,
+) -> CopyReport:
+    """Rewrite a bag with chunk ``compression`` (``.bag``: bz2 or lz4; MCAP: zstd or lz4)."""
+    fmt = _same_format(src)
+    return _copy(src, dst, compression, chunk_size, fmt, progress, overwrite, eager=True)
+
+
+def decompress(
+    src: str | Path,
+    dst: str | Path,
+    *,
+    chunk_size: int | None = None,
+    progress: Progress | None = None,
+    overwrite: bool = False,
+) -> CopyReport:
+    """Rewrite a bag with uncompressed chunks."""
+    fmt = _same_format(src)
+    return _copy(src, dst, "none", chunk_size, fmt, progress, overwrite, eager=True)
+
+
+def _same_format(src: str | Path) -> str:
+    from rostools.bag.api import detect_format
+
+    return detect_format(src)
+
+
+def filter_bag(
+    src: str | Path,
+    dst: str | Path,
+    *,
+    topics: Collection[str] | None = None,
+    start: int | None = None,
+    end: int | None = None,
+    expression: str | None = None,
+    compression: str | None = None,
+    chunk_size: int | None = None,
+    progress: Progress | None = None,
+    overwrite: bool = False,
+) -> CopyReport:
+    """Copy the messages of ``src`` that pass the filters into ``dst``.
+
+    ``topics`` and ``start``/``end`` (inclusive, ns) select without decoding. ``expression``
+    is Python over ``topic``, ``m`` and ``t`` as in ``rosbag filter`` (``t`` has ``secs``,
+    ``nsecs``, ``to_sec()``); a message is decoded only when the expression mentions ``m``.
+    Only connections that keep a message are written. The output format follows ``dst``.
+    """
+    keep = compile_filter(expression) if expression else None
+    return _copy(
+        src,
+        dst,
+        compression,
+        chunk_size,
+        None,
+        progress,
+        overwrite,
+        eager=False,
+        topics=topics,
+        start=start,
+        end=end,
+        keep=keep,
+    )
+
+
+# Filter is the public name the CLI uses; ``filter`` shadows a builtin inside this module only.
+filter = filter_bag
+
+
+@dataclass
+class _Filter:
+    """A compiled filter expression and the decoders it needs."""
+
+    source: str
+    fn: Callable[[str, Any, Any], Any]
+    needs_message: bool
+    decoders: dict[int, Callable[[Any], Any]] = field(default_factory=dict)
+
+    def __call__(self, conn: Connection, t_ns: int, data: memoryview) -> bool:
+        from rostools.msgs.message import Time
+
+        msg = self._decode(conn, data) if self.needs_message else None
+        try:
+            return bool(self.fn(conn.topic, msg, Time.from_nsec(t_ns)))
+        except Exception as err:  # the user's expression may raise anything
+            raise FilterExpressionError(
+                f"filter expression {self.source!r} failed on {conn.topic} at {t_ns} ns: "
+                f"{type(err).__name__}: {err}"
+            ) from err
+
+    def _decode(self, conn: Connection, data: memoryview) -> Any:
+        decode = self.decoders.get(conn.id)
+        if decode is None:
+            decode = self.decoders[conn.id] = _decoder(conn)
+        return decode(data)
+
+
+def compile_filter(expression: str) -> Callable[[Connection, int, memoryview], bool]:
+    """A predicate over (connection, time ns, raw data) from a ``rosbag filter`` expression."""
+    try:
+        tree = ast.parse(expression.strip(), mode="eval")
+        code = compile(f"lambda topic, m, t: ({expression.strip()})", "<filter>", "eval")
+    except SyntaxError as err:
+        raise FilterExpressionError(f"bad filter expression {expression!r}: {err.msg}") from err
+    needs = any(isinstance(n, ast.Name) and n.id == "m" for n in ast.walk(tree))
+    # The expression is the user's own Python, exactly as rosbag filter evaluates it.
+    fn = eval(code, {"__builtins__": __builtins__})  # noqa: S307
+    return _Filter(expression, fn, needs)
+
+
+def _decoder(conn: Connection) -> Callable[[Any], Any]:
+    """Decode a connection's messages with the definition stored in the bag."""
+    from rostools.msgs.codec import Codec
+    from rostools.msgs.store import TypeStore
+
+    try:
+        store = TypeStore.default().with_definition(conn.type, conn.definition)
+        codec = Codec.of(store)
+        codec.decoder(conn.type)
+    except RostoolsError as err:
+        raise UnsupportedBagError(
+            f"cannot decode {conn.topic} ({conn.type}) for the filter expression: {err}"
+        ) from err
+
+    def decode(data: Any) -> Any:
+        return codec.decode(conn.type, data)
+
+    return decode
+
+
+def _copy(
+    src: str | Path,
+    dst: str | Path,
+    compression: str | None,
+    chunk_size: int | None,
+    format: str | None,
+    progress: Progress | None,
+    overwrite: bool,
+    *,
+    eager: bool,
+    topics: Collection[str] | None = None,
+    start: int | None = None,
+    end: int | None = None,
+    keep: Callable[[Connection, int, memoryview], bool] | None = None,
+) -> CopyReport:
+    src, dst = Path(src), Path(dst)
+    if dst.exists() and src.resolve() == dst.resolve():
+        raise BagUsageError(f"cannot use the same file as input and output: {src}")
+    kind = format or format_for_name(dst)
+    with open_bag(src) as reader:
+        _check_ros1(reader, kind)
+        total = reader.info().message_count
+        writer = open_writer(dst, kind, compression, chunk_size, overwrite=overwrite)
+        try:
+            stream = reader.messages(topics=topics, start=start, end=end)
+            everything = topics is None and start is None and end is None
+            read, written, conns = _pump(
+                reader, writer, stream, everything, eager, keep, progress, total
+            )
+        except BaseException:
+            writer.abort()
+            raise
+        writer.close()
+    return CopyReport(
+        source=src,
+        output=dst,
+        format=kind,
+        compression=getattr(writer, "compression", compression or ""),
+        messages_read=read,
+        messages_written=written,
+        connections=conns,
+    )
+
+
+def _pump(
+    reader: BagReader,
+    writer: BagWriter,
+    stream: Iterator[Message],
+    everything: bool,
+    eager: bool,
+    keep: Callable[[Connection, int, memoryview], bool] | None,
+    progress: Progress | None,
+    total: int,
+) -> tuple[int, int, int]:
+    """Copy a message stream; (messages read, messages written, connections written)."""
+    out = Targets(writer, reader.connections if eager else ())
+    if keep is None:
+        written = None
+        if eager and everything:
+            written = _chunk_for_chunk(reader, writer, out, progress, total)
+        if written is None:
+            counted = stream if progress is None else _counting(stream, progress, total)
+            written = writer.write_many(counted, out)
+        if progress is not None:
+            progress(written, total)
+        return written, written, len(out)
+    write = writer.write
+    read = written = 0
+    for conn, t, data in stream:
+        read += 1
+        if progress is not None and read % PROGRESS_EVERY == 0:
+            progress(read, total)
+        if keep is not None and not keep(conn, t, data):
+            continue
+        write(out.get(conn.id) or out.resolve(conn), t, data)
+        written += 1
+    if progress is not None:
+        progress(read, total)
+    return read, written, len(out)
+
+
+def _counting(stream: Iterator[Message], progress: Progress, total: int) -> Iterator[Message]:
+    """The stream, calling ``progress`` every ``PROGRESS_EVERY`` messages."""
+    for done, message in enumerate(stream, 1):
+        if done % PROGRESS_EVERY == 0:
+            progress(done, total)
+        yield message
+
+
+def _check_ros1(reader: BagReader, kind: str) -> None:
+    """Refuse to put non-ROS 1 messages (ROS 2 CDR, JSON, ...) under the ROS 1 profile."""
+    if isinstance(reader, McapReader):
+        for channel in reader.channels.values():
+            if channel.message_encoding != "ros1":
+                raise UnsupportedBagError(
+                    f"{reader.path}: channel {channel.topic} holds {channel.message_encoding!r}"
+                    f" messages; only ROS 1 messages can go into a {kind} file"
+                )
+
+
+def _chunk_for_chunk(
+    reader: BagReader, writer: BagWriter, targets: Targets, progress: Progress | None, total: int
+) -> int | None:
+    """The whole-file .bag -> MCAP copy without per-message work, when it applies."""
+    from rostools.bag.mcap_writer import McapWriter
+    from rostools.bag.rosbag1_reader import Bag1Reader
+
+    if isinstance(reader, Bag1Reader) and isinstance(writer, McapWriter):
+        from rostools.bag.fastcopy import convert_chunks
+
+        report = None if progress is None else (lambda done: progress(done, total))
+        return convert_chunks(reader, writer, targets, report)
+    return None

@@ -1,0 +1,546 @@
+"""Reading rosbag v2.0 files: indexed ones from their index, others by scanning the chunks.
+
+Opening an indexed bag reads the bag header, the CONNECTION and CHUNK_INFO records at
+``index_pos`` and one small chunk header per chunk, which is all ``info`` needs (rosbags and
+``rosbag.Bag`` read every per-message index entry up front). The per-message INDEX_DATA records
+after a chunk are read only when that chunk's messages are. A bag without a usable index (a
+killed recorder, a cut-short copy) is read by walking its chunks, including the records of a
+chunk that was never closed and the decompressible part of one that was cut short.
+"""
+
+from __future__ import annotations
+
+import mmap
+import struct
+from collections.abc import Collection, Iterable, Iterator, Mapping
+from dataclasses import dataclass, field
+from functools import partial
+from pathlib import Path
+
+from rostools.bag import rosbag1_format as fmt
+from rostools.bag.base import MAX_TIME_NS, BagReader, map_file, release
+from rostools.bag.model import (
+    BagFormatError,
+    BagInfo,
+    Connection,
+    UnsupportedBagError,
+    compression_rows,
+    connection_from_header,
+    summarize,
+)
+from rostools.bag.ordering import Block, Entry, Message, ordered
+from rostools.wire.header import HeaderError, split_fields
+
+#: A chunk's records: the file map (uncompressed chunks) or the decompressed bytes.
+Buffer = bytes | mmap.mmap
+_ENTRY = struct.Struct("<III")
+_EMPTY = memoryview(b"")
+_U32 = fmt.U32
+_NS = 1_000_000_000
+#: A message record's header length, op field and data length, read in one go for the
+#: 38-byte headers rosbag writes: fields sorted (C++: conn, op, time) or Python's op, conn, time.
+_MSG_CPP = struct.Struct("<I13x8s17xI")
+_MSG_PY = struct.Struct("<I8s30xI")
+_OP_FIELD = b"\x04\x00\x00\x00op=\x02"
+
+
+@dataclass
+class Chunk:
+    """A chunk record: where its data is, its times, and messages per connection.
+
+    ``index_pos`` is the first INDEX_DATA record after it, or -1 when the chunk is read by
+    scanning its records. ``complete`` is False for a chunk that was never closed or is cut
+    short: only what parses (or decompresses) of it is read.
+    """
+
+    pos: int
+    compression: str
+    size: int
+    data_pos: int
+    data_len: int
+    start_ns: int = 0
+    end_ns: int = 0
+    counts: dict[int, int] = field(default_factory=dict)
+    index_pos: int = -1
+    complete: bool = True
+
+
+class Bag1Reader(BagReader):
+    """A rosbag v2.0 file; see the module docstring for how it is read."""
+
+    format = "bag"
+
+    def __init__(self, path: str | Path) -> None:
+        super().__init__()
+        self.path = Path(path)
+        self.connections: list[Connection] = []
+        self.chunks: list[Chunk] = []
+        self.indexed = False
+        self._by_id: dict[int, Connection] = {}
+        mm, self.size = map_file(self.path)
+        if mm is None:
+            raise BagFormatError(f"{self.path} is empty, not a bag")
+        self._mm = mm
+        self._view = memoryview(mm)
+        try:
+            self._open()
+        except BaseException:
+            self.close()
+            raise
+
+    # -- opening ---------------------------------------------------------------------------
+
+    def _open(self) -> None:
+        head = self._mm[: len(fmt.MAGIC)]
+        if head != fmt.MAGIC:
+            raise _not_a_bag(self.path, head)
+        try:
+            fields, data, dlen = fmt.read_record(self._mm, len(fmt.MAGIC), self.size)
+            if fmt.op_of(fields) != fmt.OP_BAG_HEADER:
+                raise fmt.RecordError("the first record is not a bag header")
+        except fmt.RecordError as err:
+            raise BagFormatError(f"{self.path}: damaged bag header ({err})") from err
+        if "encryptor" in fields:
+            raise UnsupportedBagError(
+                f"{self.path} is encrypted (rosbag encrypt); decrypt it first"
+            )
+        self._records_start = data + dlen
+        index_pos = _u64_or(fields, "index_pos", 0)
+        conn_count = _u32_or(fields, "conn_count", 0)
+        chunk_count = _u32_or(fields, "chunk_count", 0)
+        if self._records_start <= index_pos <= self.size:
+            try:
+                self._read_index(index_pos, conn_count, chunk_count)
+                self.indexed = True
+                return
+            except (fmt.RecordError, HeaderError, struct.error) as err:
+                self.note(f"index at {index_pos} is damaged ({err}); scanned chunks")
+                self.connections, self.chunks, self._by_id = [], [], {}
+        elif index_pos == 0:
+            self.note("bag is not indexed (an unclosed recording); scanned chunks")
+        else:
+            self.note(
+                f"the index at {index_pos} is past the end of the file ({self.size} bytes):"
+                " the file is cut short; scanned chunks"
+            )
+        self._scan()
+        if not self.chunks and not self.connections:
+            if self.size > self._records_start:
+                raise BagFormatError(
+                    f"{self.path}: unindexed bag with nothing readable after its header"
+                )
+            raise BagFormatError(
+                f"{self.path}: unindexed bag that ends after its header (no chunks, no index)"
+            )
+
+    def _read_index(self, pos: int, conn_count: int, chunk_count: int) -> None:
+        mm, size = self._mm, self.size
+        for _ in range(conn_count):
+            fields, data, dlen = fmt.read_record(mm, pos, size, max_data=fmt.MAX_CONNECTION_HEADER)
+            if fmt.op_of(fields) != fmt.OP_CONNECTION:
+                raise fmt.RecordError(f"expected a connection record at {pos}")
+            self._add_connection(fields, data, dlen)
+            pos = data + dlen
+        for _ in range(chunk_count):
+            fields, data, dlen = fmt.read_record(mm, pos, size)
+            if fmt.op_of(fields) != fmt.OP_CHUNK_INFO:
+                raise fmt.RecordError(f"expected a chunk info record at {pos}")
+            count = fmt.u32_field(fields, "count")
+            if dlen < 8 * count:
+                raise fmt.RecordError(f"chunk info at {pos} lists {count} connections in {dlen} B")
+            pairs = struct.unpack_from(f"<{2 * count}I", mm, data)
+            chunk = self._chunk_header(fmt.u64_field(fields, "chunk_pos"))
+            chunk.start_ns = fmt.time_field(fields, "start_time")
+            chunk.end_ns = fmt.time_field(fields, "end_time")
+            chunk.counts = dict(zip(pairs[::2], pairs[1::2], strict=True))
+            chunk.index_pos = chunk.data_pos + chunk.data_len
+            self.chunks.append(chunk)
+            pos = data + dlen
+
+    def _chunk_header(self, pos: int) -> Chunk:
+        fields, data, dlen = fmt.read_record(self._mm, pos, self.size)
+        if fmt.op_of(fields) != fmt.OP_CHUNK:
+            raise fmt.RecordError(f"chunk info points at {pos}, which is not a chunk")
+        return Chunk(
+            pos=pos,
+            compression=fields.get("compression", b"none").decode("ascii", "replace"),
+            size=fmt.u32_field(fields, "size"),
+            data_pos=data,
+            data_len=dlen,
+        )
+
+    def _add_connection(
+        self, fields: Mapping[str, bytes], data: int, dlen: int, buf: Buffer | None = None
+    ) -> Connection:
+        """Register the connection record whose header is ``buf[data:data + dlen]``.
+
+        ``buf`` is the file map unless the record sits in a decompressed chunk. The first
+        record of an id wins (the index repeats those in the chunks).
+        """
+        conn_id = fmt.u32_field(fields, "conn")
+        existing = self._by_id.get(conn_id)
+        if existing is not None:
+            return existing
+        try:
+            view = self._view if buf is None else memoryview(buf)
+            header = split_fields(view[data : data + dlen])
+        except HeaderError as err:
+            raise fmt.RecordError(f"connection {conn_id} has a malformed header: {err}") from err
+        text = {k: v.decode("utf-8", "replace") for k, v in header.items()}
+        topic = fields.get("topic", header.get("topic", b"")).decode("utf-8", "replace")
+        conn = connection_from_header(conn_id, topic, text)
+        self.connections.append(conn)
+        self._by_id[conn_id] = conn
+        return conn
+
+    def _scan(self) -> None:
+        """Walk the records after the bag header: chunks, their connections and messages."""
+        mm, size, pos = self._mm, self.size, self._records_start
+        while pos < size:
+            try:
+                fields, data, dlen = fmt.read_record(mm, pos, size)
+                op = fmt.op_of(fields)
+            except fmt.RecordError as err:
+                self._cut_short(pos, err)
+                return
+            if op == fmt.OP_CHUNK:
+                try:
+                    chunk = self._chunk_header(pos)
+                except fmt.RecordError as err:
+                    self._cut_short(pos, err)
+                    return
+                if dlen == 0 and chunk.size == 0:
+                    # Never closed: its records follow the provisional header up to EOF.
+                    chunk.data_len = size - data
+                    chunk.complete = False
+                    self._scan_chunk(chunk)
+                    if chunk.counts:
+                        self.chunks.append(chunk)
+                    return
+                self._scan_chunk(chunk)
+                if chunk.counts:
+                    self.chunks.append(chunk)
+            elif op == fmt.OP_CONNECTION:
+                try:
+                    self._add_connection(fields, data, dlen)
+                except fmt.RecordError as err:
+                    self.damaged(f"skipped a damaged connection record at {pos}: {err}")
+            elif op == fmt.OP_INDEX_DATA:
+                # rosbag reads `count` entries whatever data_len says (a known writer bug).
+                dlen = fmt.INDEX_ENTRY_SIZE * _u32_or(fields, "count", dlen // 12)
+            pos = data + dlen
+
+    def _cut_short(self, pos: int, err: Exception) -> None:
+        """The walk hit a record that does not parse: salvage a cut-short chunk, or stop."""
+        try:
+            hlen = _U32.unpack_from(self._mm, pos)[0]
+            fields = fmt.parse_header(self._mm, pos + 4, pos + 4 + hlen)
+            is_chunk = fmt.op_of(fields) == fmt.OP_CHUNK and pos + 8 + hlen <= self.size
+        except (fmt.RecordError, struct.error):
+            is_chunk = False
+        if is_chunk:
+            data = pos + 8 + hlen
+            chunk = Chunk(
+                pos=pos,
+                compression=fields.get("compression", b"none").decode("ascii", "replace"),
+                size=_u32_or(fields, "size", 0),
+                data_pos=data,
+                data_len=self.size - data,
+                complete=False,
+            )
+            self._scan_chunk(chunk)
+            if chunk.counts:
+                self.chunks.append(chunk)
+            got = sum(chunk.counts.values())
+            self.damaged(
+                f"chunk at {pos} is cut short ({self.size - data} of its bytes are in the file);"
+                f" {got} messages salvaged from it"
+            )
+        else:
+            self.damaged(f"{self.size - pos} bytes at {pos} do not parse ({err})")
+
+    def _scan_chunk(self, chunk: Chunk) -> None:
+        """Fill a chunk's counts and times by walking its records (no index)."""
+        try:
+            buf, base, end = self.chunk_data(chunk)
+        except fmt.RecordError as err:
+            self.damaged(f"chunk at {chunk.pos} is unreadable: {err}")
+            return
+        first = True
+        for t, conn_id, _ in self._walk(chunk, buf, base, end):
+            chunk.counts[conn_id] = chunk.counts.get(conn_id, 0) + 1
+            if first:
+                chunk.start_ns = chunk.end_ns = t
+                first = False
+            elif t < chunk.start_ns:
+                chunk.start_ns = t
+            elif t > chunk.end_ns:
+                chunk.end_ns = t
+
+    def _walk(
+        self, chunk: Chunk, buf: Buffer, base: int, end: int
+    ) -> Iterator[tuple[int, int, int]]:
+        """(time, connection id, record offset) of each message record, by walking records.
+
+        Connection records met on the way are registered. A record that does not parse ends
+        the walk (the rest of an unclosed or cut-short chunk), noted in ``damage``.
+        """
+        pos = base
+        unknown = 0
+        while pos < end:
+            try:
+                fields, data, dlen = fmt.read_record(buf, pos, end)
+                op = fmt.op_of(fields)
+                if op == fmt.OP_MSG_DATA:
+                    conn_id = fmt.u32_field(fields, "conn")
+                    if conn_id in self._by_id:
+                        yield fmt.time_field(fields, "time"), conn_id, pos - base
+                    else:
+                        unknown += 1
+                elif op == fmt.OP_CONNECTION:
+                    self._add_connection(fields, data, dlen, buf)
+            except fmt.RecordError as err:
+                if chunk.complete:
+                    self.damaged(f"chunk at {chunk.pos}: record at {pos - base}: {err}")
+                else:
+                    self.damaged(
+                        f"chunk at {chunk.pos} ends in a partial record ({end - pos} bytes lost)"
+                    )
+                break
+            pos = data + dlen
+        if unknown:
+            self.damaged(
+                f"chunk at {chunk.pos}: {unknown} messages of connections whose record is lost"
+            )
+
+    def chunk_data(self, chunk: Chunk) -> tuple[Buffer, int, int]:
+        """(buffer, start, end) of a chunk's uncompressed records.
+
+        Uncompressed chunks are read in place from the map; others are decompressed.
+        """
+        if chunk.compression == "none":
+            return self._mm, chunk.data_pos, chunk.data_pos + chunk.data_len
+        raw = self._view[chunk.data_pos : chunk.data_pos + chunk.data_len]
+        if chunk.compression not in fmt.COMPRESSIONS:
+            raise UnsupportedBagError(
+                f"{self.path}: chunk at {chunk.pos} uses unknown compression {chunk.compression!r}"
+            )
+        if chunk.complete:
+            data = fmt.decompress(chunk.compression, raw, chunk.size)
+        else:
+            data = fmt.decompress_prefix(chunk.compression, raw, chunk.size or fmt.MAX_CHUNK_SIZE)
+        return data, 0, len(data)
+
+    # -- reading ---------------------------------------------------------------------------
+
+    def info(self) -> BagInfo:
+        """The ``rosbag info`` summary, from the index (or the scan) alone."""
+        counts: dict[int, int] = {}
+        for chunk in self.chunks:
+            for conn_id, n in chunk.counts.items():
+                counts[conn_id] = counts.get(conn_id, 0) + n
+        total = sum(counts.values())
+        live = [c for c in self.connections if counts.get(c.id)]
+        topics, types = summarize(live, counts)
+        return BagInfo(
+            path=self.path,
+            format="bag",
+            version="2.0",
+            size=self.size,
+            start_ns=min((c.start_ns for c in self.chunks), default=None) if total else None,
+            end_ns=max((c.end_ns for c in self.chunks), default=None) if total else None,
+            message_count=total,
+            indexed=self.indexed,
+            chunk_count=len(self.chunks),
+            compression=compression_rows(
+                [(c.compression, c.data_len, c.size) for c in self.chunks]
+            ),
+            connections=tuple(self.connections),
+            connection_counts=counts,
+            topics=topics,
+            types=types,
+        )
+
+    def messages(
+        self,
+        topics: Collection[str] | None = None,
+        start: int | None = None,
+        end: int | None = None,
+        connections: Iterable[Connection] | None = None,
+    ) -> Iterator[Message]:
+        """Messages in time order; see ``BagReader.messages``."""
+        wanted = self.wanted(topics, connections)
+        lo = 0 if start is None else start
+        hi = MAX_TIME_NS if end is None else end
+        blocks = [
+            Block(
+                chunk.start_ns,
+                chunk.end_ns,
+                order,
+                partial(self._entries, chunk, wanted, lo, hi),
+            )
+            for order, chunk in enumerate(self.chunks)
+            if chunk.end_ns >= lo
+            and chunk.start_ns <= hi
+            and not wanted.keys().isdisjoint(chunk.counts)
+        ]
+        return ordered(self.guarded(blocks))
+
+    def chunk_messages(
+        self, chunk: Chunk, wanted: Mapping[int, tuple[int, Connection]]
+    ) -> Iterator[Message]:
+        """The wanted messages of one chunk, in time order."""
+        for t, _, _, conn, data in self._entries(chunk, wanted, 0, MAX_TIME_NS):
+            yield conn, t, data
+
+    def times(self, topics: Collection[str] | None = None) -> Iterator[Message]:
+        """(connection, time, empty data) of each message in time order, from the index alone.
+
+        What ``info --freq`` needs, without decompressing a chunk (unindexed bags: a full read).
+        """
+        if not self.indexed:
+            yield from self.messages(topics=topics)
+            return
+        wanted = self.wanted(topics, None)
+        blocks = [
+            Block(chunk.start_ns, chunk.end_ns, order, partial(self._index_entries, chunk, wanted))
+            for order, chunk in enumerate(self.chunks)
+            if not wanted.keys().isdisjoint(chunk.counts)
+        ]
+        yield from ordered(blocks)
+
+    def _index_entries(
+        self, chunk: Chunk, wanted: Mapping[int, tuple[int, Connection]]
+    ) -> list[Entry]:
+        out: list[Entry] = []
+        for conn_id, raw in self.index_records(chunk):
+            if conn_id in wanted:
+                rank, conn = wanted[conn_id]
+                out += [
+                    (secs * _NS + nsecs, rank, off, conn, _EMPTY)
+                    for secs, nsecs, off in _ENTRY.iter_unpack(raw)
+                ]
+        out.sort()
+        return out
+
+    def _entries(
+        self,
+        chunk: Chunk,
+        wanted: Mapping[int, tuple[int, Connection]],
+        lo: int,
+        hi: int,
+    ) -> list[Entry]:
+        """The wanted messages of one chunk, sorted."""
+        try:
+            buf, base, end = self.chunk_data(chunk)
+        except fmt.RecordError as err:
+            raise BagFormatError(f"{self.path}: chunk at {chunk.pos}: {err}") from err
+        view = memoryview(buf)
+        out: list[Entry] = []
+        append = out.append
+        if chunk.index_pos < 0:
+            unpack = _U32.unpack_from
+            for t, conn_id, off in self._walk(chunk, buf, base, end):
+                if conn_id in wanted and lo <= t <= hi:
+                    p = base + off
+                    q = p + 8 + unpack(buf, p)[0]
+                    dlen = unpack(buf, q - 4)[0]
+                    rank, conn = wanted[conn_id]
+                    append((t, rank, off, conn, view[q : q + dlen]))
+            out.sort()
+            return out
+        fast = _MSG_CPP
+        limit = end - _MSG_CPP.size
+        for conn_id, raw in self.index_records(chunk):
+            if conn_id not in wanted:
+                continue
+            rank, conn = wanted[conn_id]
+            for secs, nsecs, off in _ENTRY.iter_unpack(raw):
+                t = secs * _NS + nsecs
+                if t < lo or t > hi:
+                    continue
+                p = base + off
+                # Message record headers are 38 bytes in rosbag's C++ or Python field order;
+                # anything else (or a connection record first) takes the general path.
+                if p <= limit:
+                    hlen, op_field, dlen = fast.unpack_from(buf, p)
+                    if hlen != 38 or op_field != _OP_FIELD:
+                        fast = _MSG_PY if fast is _MSG_CPP else _MSG_CPP
+                        hlen, op_field, dlen = fast.unpack_from(buf, p)
+                    q = p + 46
+                    if hlen != 38 or op_field != _OP_FIELD:
+                        q, dlen = self._message_at(buf, p, end)
+                else:
+                    q, dlen = self._message_at(buf, p, end)
+                if q + dlen > end:
+                    raise BagFormatError(f"{self.path}: chunk at {chunk.pos}: index points past it")
+                append((t, rank, off, conn, view[q : q + dlen]))
+        out.sort()
+        return out
+
+    def index_records(self, chunk: Chunk) -> Iterator[tuple[int, memoryview]]:
+        """(connection id, raw entries) of each INDEX_DATA record after a chunk."""
+        pos = chunk.index_pos
+        for _ in range(len(chunk.counts)):
+            try:
+                fields, data, _dlen = fmt.read_record(self._mm, pos, self.size)
+                if fmt.op_of(fields) != fmt.OP_INDEX_DATA:
+                    raise fmt.RecordError(f"expected index data at {pos}")
+                if fmt.u32_field(fields, "ver") != fmt.INDEX_VERSION:
+                    raise fmt.RecordError(f"index data at {pos} has an unknown version")
+                count = fmt.u32_field(fields, "count")
+                conn_id = fmt.u32_field(fields, "conn")
+            except fmt.RecordError as err:
+                raise BagFormatError(
+                    f"{self.path}: damaged index after chunk {chunk.pos}: {err}"
+                ) from err
+            pos = data + fmt.INDEX_ENTRY_SIZE * count
+            if pos > self.size:
+                raise BagFormatError(f"{self.path}: index data at {data} is cut short")
+            yield conn_id, self._view[data:pos]
+
+    def _message_at(self, buf: Buffer, pos: int, end: int) -> tuple[int, int]:
+        """(data start, data length) of the message record at ``pos``.
+
+        Connection records before it are skipped, as rosbag does.
+        """
+        try:
+            while True:
+                fields, data, dlen = fmt.read_record(buf, pos, end)
+                op = fmt.op_of(fields)
+                if op == fmt.OP_MSG_DATA:
+                    return data, dlen
+                if op != fmt.OP_CONNECTION:
+                    raise fmt.RecordError(f"index points at a record with op {op}")
+                pos = data + dlen
+        except fmt.RecordError as err:
+            raise BagFormatError(f"{self.path}: {err}") from err
+
+    def close(self) -> None:
+        """Release the file map."""
+        view = getattr(self, "_view", None)
+        if view is not None:
+            view.release()
+        release(getattr(self, "_mm", None))
+
+
+def _u32_or(fields: Mapping[str, bytes], name: str, default: int) -> int:
+    raw = fields.get(name)
+    return int(_U32.unpack(raw)[0]) if raw is not None and len(raw) == 4 else default
+
+
+def _u64_or(fields: Mapping[str, bytes], name: str, default: int) -> int:
+    raw = fields.get(name)
+    return int(fmt.U64.unpack(raw)[0]) if raw is not None and len(raw) == 8 else default
+
+
+def _not_a_bag(path: Path, head: bytes) -> BagFormatError:
+    """The error for a file that does not start with the v2.0 magic."""
+    if not head:
+        return BagFormatError(f"{path} is empty, not a bag")
+    if head.startswith(b"#ROSBAG V"):
+        version = head[len(b"#ROSBAG V") :].split(b"\n")[0].decode("ascii", "replace")
+        return UnsupportedBagError(f"{path} is a rosbag of version {version}; only 2.0 is read")
+    if head.startswith(b"SQLite format"):
+        return BagFormatError(f"{path} is an SQLite database (a ROS 2 bag?), not a ROS 1 bag")
+    return BagFormatError(f"{path} is not a ROS 1 bag (no '#ROSBAG V2.0' line)")

@@ -1,0 +1,98 @@
+"""Sample bags for the bag tests: deterministic messages, written with our writers.
+
+Every message is a function of its index, so a test (or a killed child process) can say which
+messages a file must hold without keeping them.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import struct
+from dataclasses import dataclass
+from pathlib import Path
+
+from rostools.bag.api import open_bag, open_writer
+from rostools.bag.model import Connection
+
+STRING_MD5 = "992ce8a1687cec8c8bd883ec73ca41d1"
+INT32_MD5 = "da5909fbe378aeaf85e547e830cc1bb7"
+POINT_DEF = "float64 x\nfloat64 y\nfloat64 z\n"
+POINT_MD5 = "4a842b65f413084dc2b10fb484ea7f17"
+
+#: (topic, type, md5sum, definition, callerid, latching) of the sample connections; two
+#: connections share /chatter (two publishers), as rosbag record keeps them apart.
+SAMPLE_CONNECTIONS = (
+    ("/chatter", "std_msgs/String", STRING_MD5, "string data\n", "/talker", True),
+    ("/chatter", "std_msgs/String", STRING_MD5, "string data\n", "/talker2", False),
+    ("/count", "std_msgs/Int32", INT32_MD5, "int32 data\n", "/counter", False),
+    ("/point", "geometry_msgs/Point", POINT_MD5, POINT_DEF, "/pointer", False),
+)
+#: Times start at 0 on purpose: time 0 is a real time.
+STEP_NS = 1_000_003
+
+
+def message(i: int) -> tuple[int, int, bytes]:
+    """(connection index, time ns, serialized data) of sample message ``i``."""
+    k = i % len(SAMPLE_CONNECTIONS)
+    t = i * STEP_NS
+    if k in (0, 1):
+        text = b"hello %d " % i + b"x" * (i % 200)
+        return k, t, struct.pack("<I", len(text)) + text
+    if k == 2:
+        return k, t, struct.pack("<i", i)
+    return k, t, struct.pack("<3d", i, -i, i / 7)
+
+
+@dataclass(frozen=True)
+class Sample:
+    """A written sample bag and the stream it holds: (topic, callerid, time, data)."""
+
+    path: Path
+    stream: list[tuple[str, str, int, bytes]]
+
+
+def write_sample(
+    path: Path,
+    count: int,
+    *,
+    compression: str | None = None,
+    chunk_size: int | None = None,
+    close: bool = True,
+) -> Sample:
+    """Write ``count`` sample messages; the format follows the name."""
+    writer = open_writer(path, compression=compression, chunk_size=chunk_size)
+    conns = [
+        writer.add_connection(topic, kind, md5, definition, callerid=caller, latching=latch)
+        for topic, kind, md5, definition, caller, latch in SAMPLE_CONNECTIONS
+    ]
+    stream = []
+    for i in range(count):
+        k, t, data = message(i)
+        writer.write(conns[k], t, data)
+        stream.append((conns[k].topic, conns[k].callerid, t, data))
+    if close:
+        writer.close()
+    else:
+        writer.flush()
+    return Sample(path, stream)
+
+
+def read_stream(path: Path, **kwargs: object) -> list[tuple[str, str, int, bytes]]:
+    """The (topic, callerid, time, data) stream our reader yields."""
+    with open_bag(path) as reader:
+        return [(c.topic, c.callerid, t, bytes(d)) for c, t, d in reader.messages(**kwargs)]  # type: ignore[arg-type]
+
+
+def headers(path: Path) -> list[tuple[str, dict[str, str]]]:
+    """(topic, connection header) of every connection, in id order."""
+    with open_bag(path) as reader:
+        return [(c.topic, c.header()) for c in sorted(reader.connections, key=_id)]
+
+
+def _id(conn: Connection) -> int:
+    return conn.id
+
+
+def digest(data: bytes) -> str:
+    """A short hash for comparing message bytes across processes."""
+    return hashlib.md5(data).hexdigest()

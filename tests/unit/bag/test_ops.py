@@ -1,0 +1,151 @@
+"""convert, filter, compress and decompress over both formats."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from rostools.bag import ops
+from rostools.bag.api import bag_info, open_bag, open_writer
+from rostools.bag.model import BagUsageError, UnsupportedBagError
+from tests.support.bagdata import STEP_NS, headers, read_stream, write_sample
+
+
+@pytest.mark.parametrize(
+    ("first", "second"),
+    [("a.mcap", "b.bag"), ("a.bag", "b.mcap"), ("a.mcap", "b.mcap"), ("a.bag", "b.bag")],
+)
+def test_convert_round_trip(tmp_path: Path, first: str, second: str) -> None:
+    sample = write_sample(tmp_path / "src.bag", 300, chunk_size=3000)
+    report = ops.convert(sample.path, tmp_path / first)
+    assert (report.messages_read, report.messages_written, report.connections) == (300, 300, 4)
+    ops.convert(tmp_path / first, tmp_path / second, compression="lz4")
+    for path in (tmp_path / first, tmp_path / second):
+        assert read_stream(path) == sample.stream
+        assert headers(path) == headers(sample.path)
+
+
+def test_convert_keeps_unusual_headers(tmp_path: Path) -> None:
+    src = tmp_path / "src.bag"
+    writer = open_writer(src)
+    conn = writer.add_connection(
+        "/renamed",
+        "std_msgs/Empty",
+        "d41d8cd98f00b204e9800998ecf8427e",
+        "",
+        extra={"topic": "/original", "tcp_nodelay": "1"},
+        absent=frozenset({"latching"}),
+    )
+    writer.write(conn, 5, b"")
+    writer.close()
+    ops.convert(src, tmp_path / "a.mcap")
+    ops.convert(tmp_path / "a.mcap", tmp_path / "b.bag")
+    expected = [
+        (
+            "/renamed",
+            {
+                "topic": "/original",
+                "tcp_nodelay": "1",
+                "type": "std_msgs/Empty",
+                "md5sum": "d41d8cd98f00b204e9800998ecf8427e",
+                "message_definition": "",
+            },
+        )
+    ]
+    assert headers(src) == headers(tmp_path / "b.bag") == expected
+
+
+def test_convert_refuses_non_ros1_messages(tmp_path: Path) -> None:
+    from rostools.bag import mcap_format as fmt
+
+    path = tmp_path / "cdr.mcap"
+    out = bytearray(fmt.MAGIC)
+    out += fmt.encode_header("ros2", "")
+    out += fmt.encode_channel(1, 0, "/x", "cdr", {})
+    out += fmt.encode_data_end()
+    out += fmt.encode_footer(0, 0, b"")
+    path.write_bytes(bytes(out))
+    with pytest.raises(UnsupportedBagError, match="cdr"):
+        ops.convert(path, tmp_path / "out.bag")
+    assert not (tmp_path / "out.bag").exists()
+
+
+def test_same_file_is_refused(tmp_path: Path) -> None:
+    sample = write_sample(tmp_path / "x.bag", 5)
+    with pytest.raises(BagUsageError, match="same file"):
+        ops.convert(sample.path, sample.path, overwrite=True)
+
+
+@pytest.mark.parametrize("out", ["y.mcap", "y.bag"])
+def test_progress(tmp_path: Path, out: str) -> None:
+    sample = write_sample(tmp_path / "x.bag", 10_000, chunk_size=50_000)
+    seen: list[tuple[int, int]] = []
+    ops.convert(
+        sample.path, tmp_path / out, progress=lambda done, total: seen.append((done, total))
+    )
+    assert seen[-1] == (10_000, 10_000)
+    assert len(seen) > 2
+    assert [d for d, _ in seen] == sorted(d for d, _ in seen)
+    assert read_stream(tmp_path / out) == sample.stream
+
+
+@pytest.mark.parametrize("out", ["f.bag", "f.mcap"])
+def test_filter_by_topic_and_time(tmp_path: Path, out: str) -> None:
+    sample = write_sample(tmp_path / "x.bag", 400)
+    lo, hi = 100 * STEP_NS, 200 * STEP_NS
+    report = ops.filter(sample.path, tmp_path / out, topics=["/chatter"], start=lo, end=hi)
+    expected = [m for m in sample.stream if m[0] == "/chatter" and lo <= m[2] <= hi]
+    assert read_stream(tmp_path / out) == expected
+    assert report.messages_written == len(expected)
+    assert report.connections == 2  # both /chatter publishers, nothing else
+    assert bag_info(tmp_path / out).format == out.split(".")[1]
+
+
+def test_filter_expression_decodes_messages(tmp_path: Path) -> None:
+    sample = write_sample(tmp_path / "x.bag", 400)
+    expression = "topic == '/count' and m.data % 3 == 0 and t.secs == 0 and t.to_sec() < 1"
+    ops.filter(sample.path, tmp_path / "f.bag", expression=expression)
+    expected = [
+        m
+        for i, m in enumerate(sample.stream)
+        if m[0] == "/count" and i % 3 == 0 and m[2] < 1_000_000_000
+    ]
+    assert read_stream(tmp_path / "f.bag") == expected
+    assert expected
+
+
+def test_filter_without_m_never_decodes(tmp_path: Path) -> None:
+    src = tmp_path / "x.bag"
+    writer = open_writer(src)
+    conn = writer.add_connection("/opaque", "nobody/Knows", "0" * 32, "")
+    writer.write(conn, 1, b"not a message of any type")
+    writer.close()
+    ops.filter(src, tmp_path / "f.bag", expression="topic == '/opaque' and t.nsecs == 1")
+    assert read_stream(tmp_path / "f.bag") == [("/opaque", "", 1, b"not a message of any type")]
+    with pytest.raises(UnsupportedBagError, match="nobody/Knows"):
+        ops.filter(src, tmp_path / "g.bag", expression="m is not None")
+    assert not (tmp_path / "g.bag").exists()
+
+
+def test_filter_expression_errors(tmp_path: Path) -> None:
+    sample = write_sample(tmp_path / "x.bag", 10)
+    with pytest.raises(ops.FilterExpressionError, match="bad filter expression"):
+        ops.filter(sample.path, tmp_path / "f.bag", expression="topic ==")
+    with pytest.raises(ops.FilterExpressionError, match="ZeroDivisionError"):
+        ops.filter(sample.path, tmp_path / "f.bag", expression="1 / 0")
+    assert not (tmp_path / "f.bag").exists()
+
+
+@pytest.mark.parametrize(("name", "kind"), [("x.bag", "bz2"), ("x.bag", "lz4"), ("x.mcap", "lz4")])
+def test_compress_and_decompress(tmp_path: Path, name: str, kind: str) -> None:
+    sample = write_sample(tmp_path / name, 300, compression="none")
+    packed = tmp_path / ("packed" + Path(name).suffix)
+    plain = tmp_path / ("plain" + Path(name).suffix)
+    ops.compress(sample.path, packed, kind)
+    ops.decompress(packed, plain)
+    assert [c.compression for c in bag_info(packed).compression] == [kind]
+    assert [c.compression for c in bag_info(plain).compression] == ["none"]
+    assert read_stream(packed) == read_stream(plain) == sample.stream
+    with open_bag(packed) as reader:
+        assert reader.format == Path(name).suffix[1:]

@@ -1,0 +1,185 @@
+"""Recovery of cut-short and killed recordings, in both formats."""
+
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+import textwrap
+from pathlib import Path
+
+import pytest
+
+from rostools.bag.api import bag_info, open_bag
+from rostools.bag.mcap_reader import McapReader
+from rostools.bag.model import BagFormatError
+from rostools.bag.recover import recover, reindex
+from rostools.bag.rosbag1_reader import Bag1Reader
+from rostools.errors import DataLossError
+from tests.support.bagdata import read_stream, write_sample
+from tests.support.env import ROOT
+
+CASES = [
+    ("x.bag", "none"),
+    ("x.bag", "lz4"),
+    ("x.bag", "bz2"),
+    ("x.mcap", "zstd"),
+    ("x.mcap", "none"),
+]
+
+
+@pytest.mark.parametrize(("name", "compression"), CASES)
+def test_cut_files_recover_a_prefix(tmp_path: Path, name: str, compression: str) -> None:
+    sample = write_sample(tmp_path / name, 600, compression=compression, chunk_size=6000)
+    raw = sample.path.read_bytes()
+    suffix = Path(name).suffix
+    start = 4117 + 40 if suffix == ".bag" else 60
+    recovered_counts = []
+    for cut in range(start, len(raw), 1499):
+        part = tmp_path / f"cut{suffix}"
+        part.write_bytes(raw[:cut])
+        out = tmp_path / f"out{cut}{suffix}"
+        try:
+            report = recover(part, out)
+        except BagFormatError:  # cut before the first whole message: nothing to write
+            assert not recovered_counts or recovered_counts[-1] == 0
+            recovered_counts.append(0)
+            continue
+        got = read_stream(out)
+        assert got == sample.stream[: len(got)]
+        assert report.messages == len(got)
+        assert bag_info(out).indexed
+        recovered_counts.append(len(got))
+    assert recovered_counts == sorted(recovered_counts)
+    assert recovered_counts[-1] > 500
+
+
+def test_uncompressed_bag_cut_mid_chunk_keeps_every_whole_record(tmp_path: Path) -> None:
+    sample = write_sample(tmp_path / "x.bag", 200)  # one chunk
+    raw = sample.path.read_bytes()
+    whole = 0
+    for cut in range(4200, len(raw), 211):
+        (tmp_path / "cut.bag").write_bytes(raw[:cut])
+        try:
+            report = recover(tmp_path / "cut.bag", tmp_path / f"o{cut}.bag")
+        except BagFormatError:  # cut before the first whole message
+            assert whole == 0
+            continue
+        assert report.messages >= whole  # more bytes never salvage less
+        whole = report.messages
+        if cut < len(raw) - 2000:
+            assert not report.complete  # the record cut in two is reported lost
+            with pytest.raises(DataLossError, match="lost"):
+                report.raise_if_lost()
+    assert whole > 190  # rosbag reindex salvages 0 here: its only chunk is unterminated
+
+
+def test_recovering_a_sound_bag_loses_nothing(tmp_path: Path) -> None:
+    sample = write_sample(tmp_path / "x.bag", 100, compression="lz4")
+    report = reindex(sample.path, tmp_path / "y.bag")
+    assert report.complete
+    assert report.was_indexed
+    report.raise_if_lost()
+    assert [c.compression for c in bag_info(tmp_path / "y.bag").compression] == ["lz4"]
+    assert read_stream(tmp_path / "y.bag") == sample.stream
+
+
+def test_recover_into_the_other_format(tmp_path: Path) -> None:
+    sample = write_sample(tmp_path / "x.bag", 100, close=False)
+    report = recover(sample.path, tmp_path / "y.mcap")
+    assert report.format == "bag"
+    assert not report.was_indexed
+    assert read_stream(tmp_path / "y.mcap") == sample.stream
+
+
+def test_nothing_to_recover(tmp_path: Path) -> None:
+    raw = write_sample(tmp_path / "x.bag", 10, close=False).path.read_bytes()
+    (tmp_path / "header-only.bag").write_bytes(raw[:4117])
+    with pytest.raises(BagFormatError):
+        recover(tmp_path / "header-only.bag", tmp_path / "out.bag")
+    assert not (tmp_path / "out.bag").exists()
+
+
+CHILD = textwrap.dedent(
+    """
+    import sys, time
+    sys.path.insert(0, {root!r})
+    from tests.support.bagdata import SAMPLE_CONNECTIONS, message
+    from rostools.bag.api import open_writer
+
+    path, compression = sys.argv[1], sys.argv[2]
+    writer = open_writer(path, compression=compression, chunk_size=20_000)
+    conns = [writer.add_connection(t, k, m, d, callerid=c, latching=l)
+             for t, k, m, d, c, l in SAMPLE_CONNECTIONS]
+    i = 0
+    for _ in range(3):
+        for _ in range(700):
+            k, t, data = message(i)
+            writer.write(conns[k], t, data)
+            i += 1
+        writer.flush()
+        print(i, flush=True)
+    for _ in range(50):  # more messages that stay in the writer's hands
+        k, t, data = message(i)
+        writer.write(conns[k], t, data)
+        i += 1
+    print("ready", flush=True)
+    time.sleep(60)
+    """
+)
+
+
+@pytest.mark.parametrize(
+    ("name", "compression"), [("k.bag", "none"), ("k.bag", "lz4"), ("k.mcap", "zstd")]
+)
+def test_killed_writer_is_recovered(tmp_path: Path, name: str, compression: str) -> None:
+    path = tmp_path / name
+    code = CHILD.format(root=str(ROOT))
+    child = subprocess.Popen(
+        [sys.executable, "-c", code, str(path), compression],
+        stdout=subprocess.PIPE,
+        text=True,
+    )
+    try:
+        assert child.stdout is not None
+        lines = [child.stdout.readline().strip() for _ in range(4)]
+        assert lines[-1] == "ready", lines
+        flushed = int(lines[-2])
+    finally:
+        os.kill(child.pid, signal.SIGKILL)
+        child.wait(timeout=30)
+    assert child.returncode == -signal.SIGKILL
+    report = recover(path, tmp_path / ("out" + path.suffix))
+    expected = write_sample(tmp_path / ("ref" + path.suffix), flushed + 50).stream
+    got = read_stream(tmp_path / ("out" + path.suffix))
+    assert len(got) >= flushed  # every message handed to the OS is back
+    assert got == expected[: len(got)]
+    assert report.messages == len(got)
+
+
+@pytest.mark.parametrize(("name", "compression"), [("x.bag", "bz2"), ("x.mcap", "zstd")])
+def test_a_corrupt_chunk_is_skipped_and_reported(
+    tmp_path: Path, name: str, compression: str
+) -> None:
+    sample = write_sample(tmp_path / name, 600, compression=compression, chunk_size=6000)
+    raw = bytearray(sample.path.read_bytes())
+    with open_bag(sample.path) as reader:
+        assert reader.info().chunk_count > 3
+        if isinstance(reader, McapReader):
+            index = reader.chunk_indexes[len(reader.chunk_indexes) // 2]
+            middle = index.chunk_start_offset + index.chunk_length // 2
+        else:
+            assert isinstance(reader, Bag1Reader)
+            chunk = reader.chunks[len(reader.chunks) // 2]
+            middle = chunk.data_pos + chunk.data_len // 2
+    raw[middle : middle + 64] = b"\xa5" * 64  # garbage in the middle of a compressed chunk
+    bad = tmp_path / ("bad" + Path(name).suffix)
+    bad.write_bytes(bytes(raw))
+    with pytest.raises(BagFormatError), open_bag(bad) as reader:
+        list(reader.messages())
+    report = recover(bad, tmp_path / ("out" + Path(name).suffix))
+    assert not report.complete
+    got = read_stream(tmp_path / ("out" + Path(name).suffix))
+    assert 300 < len(got) < 600
+    assert set(got) < set(sample.stream)

@@ -1,0 +1,57 @@
+"""The writers' output: coalescing, by-reference payloads, partial writes."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import pytest
+
+from rostools.bag import sink as sink_module
+from rostools.bag.sink import BIG_PAYLOAD, Sink, frozen
+
+
+def test_partial_writes_are_completed(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    real = os.writev
+
+    def stingy(fd: int, buffers: list[bytes]) -> int:  # the kernel may take any prefix
+        first = bytes(buffers[0])[:7]
+        return real(fd, [first])
+
+    monkeypatch.setattr(sink_module.os, "writev", stingy)
+    path = tmp_path / "out"
+    fd = os.open(path, os.O_WRONLY | os.O_CREAT)
+    out = Sink(fd, str(path))
+    pieces = [b"small", os.urandom(BIG_PAYLOAD + 3), b"tail", memoryview(os.urandom(BIG_PAYLOAD))]
+    for piece in pieces:
+        out.write(piece)
+    assert out.tell() == sum(len(p) for p in pieces)
+    out.flush()
+    os.close(fd)
+    assert path.read_bytes() == b"".join(bytes(p) for p in pieces)
+    assert out.pending() == 0
+    assert out.written == out.tell()
+
+
+def test_mutable_payloads_are_copied() -> None:
+    data = bytearray(b"abc")
+    kept = frozen(data)
+    data[0] = ord("x")
+    assert kept == b"abc"
+    view = memoryview(b"read-only")
+    assert frozen(view) is view
+
+
+def test_a_reused_buffer_does_not_change_written_messages(tmp_path: Path) -> None:
+    from rostools.bag.api import open_bag, open_writer
+
+    for name in ("x.bag", "x.mcap"):
+        writer = open_writer(tmp_path / name, compression="none")
+        conn = writer.add_connection("/t", "std_msgs/Empty", "d41d8cd98f00b204e9800998ecf8427e", "")
+        buf = bytearray(BIG_PAYLOAD * 2)
+        for i in range(3):
+            buf[0] = i
+            writer.write(conn, i, buf)
+        writer.close()
+        with open_bag(tmp_path / name) as reader:
+            assert [bytes(d)[0] for _, _, d in reader.messages()] == [0, 1, 2]

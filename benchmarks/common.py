@@ -122,6 +122,22 @@ def write_report(results: list[Result], path: Path) -> None:
     path.write_text(json.dumps(payload, indent=2) + "\n")
 
 
+def merge_latest(results: list[Result], path: Path) -> None:
+    """Update ``latest.json`` with these results, keeping the newest of every other benchmark."""
+    known: dict[str, dict[str, object]] = {}
+    if path.exists():
+        for row in json.loads(path.read_text()).get("results", []):
+            known[str(row["name"])] = row
+    stamp = time.strftime("%Y-%m-%dT%H:%M:%S%z")
+    for r in results:
+        known[r.name] = {**r.as_dict(), "when": stamp}
+    payload = {
+        "machine": {"cpus": os.cpu_count(), "python": sys.version.split()[0]},
+        "results": list(known.values()),
+    }
+    path.write_text(json.dumps(payload, indent=2) + "\n")
+
+
 def free_port() -> int:
     """A loopback TCP port that was free a moment ago."""
     with socket.socket() as s:

@@ -10,7 +10,7 @@ import importlib
 import sys
 import time
 
-from benchmarks.common import ROOT, Result, write_report
+from benchmarks.common import ROOT, Result, merge_latest, write_report
 
 MODULES = [
     "benchmarks.bench_msg",
@@ -60,7 +60,7 @@ def main() -> int:
     stamp = time.strftime("%Y%m%d-%H%M%S")
     report = ROOT / "benchmarks" / "results" / f"{stamp}.json"
     write_report(results, report)
-    write_report(results, ROOT / "benchmarks" / "results" / "latest.json")
+    merge_latest(results, ROOT / "benchmarks" / "results" / "latest.json")
     print(f"\nwrote {report.relative_to(ROOT)}", file=sys.stderr)
     return 0
 

@@ -266,7 +266,7 @@ class InboundConnection(asyncio.BufferedProtocol):
             if not frames:
                 return
         self.messages_received += len(frames)
-        self.bytes_received += sum(len(f) for f in frames)
+        self.bytes_received += nbytes  # what arrived on the wire, length prefixes included
         self.subscriber.frames_received(frames, self, now)
 
     def _drop(self, reason: str) -> None:

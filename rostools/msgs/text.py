@@ -7,6 +7,7 @@ common case (short printable ASCII) is done inline and PyYAML only handles the r
 
 from __future__ import annotations
 
+import re
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any, Protocol
@@ -15,8 +16,9 @@ from rostools.msgs.codec import BYTE_TYPES, STRUCT_CODES, Codec, attr_name
 from rostools.msgs.message import Time
 from rostools.msgs.spec import Field, MsgSpec
 
-# Below this length PyYAML never folds a double-quoted scalar (its best_width is 80).
-_INLINE_QUOTE_MAX = 70
+# Printable ASCII but '"' and '\\', shorter than 70: PyYAML never folds or escapes these (its
+# best_width is 80), so they are quoted as they are, in one regex match.
+_PLAIN = re.compile(r"[ !#-\[\]-~]{1,69}").fullmatch
 
 
 class TextFormatter(Protocol):
@@ -43,16 +45,10 @@ class TextOptions:
 
 def quote(value: str) -> str:
     """A string as genpy prints it: ``''`` when empty, else YAML double-quoted."""
+    if _PLAIN(value):
+        return f'"{value}"'
     if not value:
         return "''"
-    if (
-        len(value) < _INLINE_QUOTE_MAX
-        and value.isascii()
-        and value.isprintable()
-        and '"' not in value
-        and "\\" not in value
-    ):
-        return f'"{value}"'
     import yaml
 
     return str(yaml.dump(value, default_style='"')).rstrip("\n")
@@ -195,18 +191,24 @@ class _TextGen:
 
 
 def formatter(
-    codec: Codec, value_type: Field, options: TextOptions = TextOptions(), indent: str = ""
+    codec: Codec,
+    value_type: Field,
+    options: TextOptions = TextOptions(),
+    indent: str = "",
+    suffix: str = "",
 ) -> TextFormatter:
     """``fmt(value, offset=None) -> str`` for values of ``value_type`` at ``indent``.
 
     ``value_type`` describes a message (``Field('', 'pkg/T', 'pkg/T', False, None)``), a
-    field, or an array of either (what a field path with a slice yields).
+    field, or an array of either (what a field path with a slice yields). ``suffix`` is
+    added inside the generated f-string (echo's ``---`` line), which is cheaper than after.
     """
-    key = ("text", value_type.type, value_type.is_array, options, indent)
+    key = ("text", value_type.type, value_type.is_array, options, indent, suffix)
     fn = codec.store.cache.get(key)
     if fn is None:
         gen = _TextGen(codec, options)
         gen.value(value_type, "m", indent)
+        gen.lit(suffix)
         fn = codec.store.cache[key] = gen.compile(value_type.type)
     return fn
 

@@ -74,12 +74,19 @@ class FrameReader:
         self._end += nbytes
         frames: list[bytes | memoryview] = []
         view, start, end = self._view, self._start, self._end
+        # One copy of everything received, then each frame is a slice of it: slicing bytes is
+        # one allocation, where slicing the buffer costs a memoryview and a bytes.
+        data = bytes(view[start:end])
+        base = start
+        unpack = _U32.unpack_from
+        limit = self.max_frame
         while end - start >= 4:
-            (length,) = _U32.unpack_from(view, start)
-            if length > self.max_frame:
-                raise FrameError(f"frame of {length} bytes exceeds the limit of {self.max_frame}")
+            (length,) = unpack(data, start - base)
+            if length > limit:
+                raise FrameError(f"frame of {length} bytes exceeds the limit of {limit}")
             if end - start - 4 >= length:
-                frames.append(bytes(view[start + 4 : start + 4 + length]))
+                offset = start - base + 4
+                frames.append(data[offset : offset + length])
                 start += 4 + length
             elif length >= BIG_FRAME:
                 have = end - start - 4

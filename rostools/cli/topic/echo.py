@@ -78,14 +78,22 @@ class Printer:
         else:
             self.value_type = text.message_type(type_name)
             self.get = None
+        self.fast: Any = None  # frames -> texts, when nothing needs a per-message decision
         if opts.plot:
             self.csv_opts = plain.CsvOptions(opts.nostr, opts.noarr)
             self.row = plain.csv_row(self.codec, self.value_type, self.csv_opts)
         elif opts.fmt is Format.text:
             options = text.TextOptions(opts.nostr, opts.noarr, opts.width, opts.offset)
             self.text = text.formatter(self.codec, self.value_type, options)
+            if not (opts.filter or opts.field or opts.clear or opts.offset):
+                fmt = text.formatter(self.codec, self.value_type, options, suffix="\n---\n")
+                decode = self.decode
+                self.fast = lambda frames: [fmt(decode(f, 0)[0]) for f in frames]
         else:
             self.plain = plain.to_plain(self.codec, self.value_type)
+            if opts.fmt is Format.json and not (opts.filter or opts.field):
+                to_plain, decode, dumps = self.plain, self.decode, plain.dumps
+                self.fast = lambda frames: [dumps(to_plain(decode(f, 0)[0])) + "\n" for f in frames]
 
     def render(self, data: Any, stamp_ns: int | None, header_needed: bool) -> str | None:
         """The output for one message, or None when the filter rejects it."""
@@ -147,8 +155,14 @@ class Echo:
 
     def emit(self, printer: Printer, frames: list[Any], stamp_ns: int | None = None) -> bool:
         """Print messages; False once ``-n`` is reached."""
-        out: list[str] = []
         limit = self.opts.count
+        if printer.fast is not None and limit is None:
+            texts: list[str] = printer.fast(frames)
+            self.printed += len(texts)
+            sys.stdout.write("".join(texts))
+            sys.stdout.flush()
+            return True
+        out: list[str] = []
         for data in frames:
             if limit is not None and self.printed >= limit:
                 break
@@ -165,9 +179,17 @@ class Echo:
 
 
 def _options(
-    fmt: Format, field: str, count: int | None, filter_expr: str | None, plot: bool, nostr: bool,
-    noarr: bool, clear: bool, offset: bool, width: int | None,
-) -> EchoOptions:  # fmt: skip
+    fmt: Format,
+    field: str,
+    count: int | None,
+    filter_expr: str | None,
+    plot: bool,
+    nostr: bool,
+    noarr: bool,
+    clear: bool,
+    offset: bool,
+    width: int | None,
+) -> EchoOptions:
     compiled = None
     if filter_expr:
         try:
@@ -261,8 +283,6 @@ async def _live(
 ) -> str:
     import asyncio
 
-    from rostools.graph.session import first
-
     deadline = time.monotonic() + timeout if timeout is not None else None
     ref = await _resolve(node, name, store, deadline, stop)
     if ref is None:
@@ -270,27 +290,37 @@ async def _live(
     opts.field = ref.field
     echo_ = Echo(store, opts)
     pending: list[tuple[list[Any], Any]] = []
-    ready = asyncio.Event()
+    wake = asyncio.Event()  # frames, a stop or the deadline: one event, no task per batch
 
     def on_frames(frames: list[Any], conn: Any, now: float) -> None:
         pending.append((frames, conn))
-        ready.set()
+        wake.set()
 
+    loop = asyncio.get_running_loop()
+    if deadline is not None:
+        loop.call_at(loop.time() + max(deadline - time.monotonic(), 0), wake.set)
+    watcher = loop.create_task(stop.wait())
+    watcher.add_done_callback(lambda _: wake.set())
     await node.subscribe(ref.topic, on_frames)
-    while True:
-        left = None if deadline is None else deadline - time.monotonic()
-        if left is not None and left <= 0:
-            break
-        if await first(ready.wait(), stop.wait(), timeout=left) != 0:
-            break
-        ready.clear()
-        batch, pending[:] = list(pending), []
-        for frames, conn in batch:
-            header = conn.header or {}
-            printer = echo_.printer(header.get("type", "*"), header.get("md5sum", ""),
-                                    header.get("message_definition", ""), ref.topic)  # fmt: skip
-            if not echo_.emit(printer, frames):
-                return "done"
+    try:
+        while True:
+            await wake.wait()
+            wake.clear()
+            batch, pending[:] = list(pending), []
+            for frames, conn in batch:
+                header = conn.header or {}
+                printer = echo_.printer(
+                    header.get("type", "*"),
+                    header.get("md5sum", ""),
+                    header.get("message_definition", ""),
+                    ref.topic,
+                )
+                if not echo_.emit(printer, frames):
+                    return "done"
+            if stop.is_set() or (deadline is not None and time.monotonic() >= deadline):
+                break
+    finally:
+        watcher.cancel()
     if stop.is_set():
         return "stopped"
     if (opts.count and echo_.printed < opts.count) or echo_.printed == 0:

@@ -5,6 +5,7 @@ from __future__ import annotations
 import os
 import sys
 from collections.abc import Sequence
+from typing import Any
 
 
 def report(err: BaseException, debug: bool) -> int:
@@ -25,6 +26,29 @@ def report(err: BaseException, debug: bool) -> int:
     return 1
 
 
+def click_exceptions() -> Any:
+    """Click's exception module (typer vendors click from 0.27 on)."""
+    try:
+        from typer._click import exceptions
+    except ImportError:  # pragma: no cover - older typer uses the click package
+        from click import exceptions  # type: ignore[no-redef]
+    return exceptions
+
+
+def report_usage(err: Any) -> int:
+    """A command-line mistake as one line (no-arguments help is printed whole)."""
+    if type(err).__name__ == "NoArgsIsHelpError":
+        err.show()
+        return int(err.exit_code)
+    ctx = getattr(err, "ctx", None)
+    path = ctx.command_path if ctx is not None else ""
+    where = f"{path.partition(' ')[2]}: " if " " in path else ""
+    hint = f" (see '{path} -h')" if path else ""
+    message = " ".join(err.format_message().split())
+    sys.stderr.write(f"rostools: {where}{message}{hint}\n")
+    return int(err.exit_code)
+
+
 def main(argv: Sequence[str] | None = None) -> None:
     """Run the ``rostools`` command line and exit with its status."""
     args = list(sys.argv[1:] if argv is None else argv)
@@ -39,9 +63,12 @@ def main(argv: Sequence[str] | None = None) -> None:
 
         args, remappings = split_remappings(args)
         root.REMAPPINGS.update(remappings)
-        root.app(args=args, prog_name="rostools")
+        status = root.app(args=args, prog_name="rostools", standalone_mode=False)
+        sys.exit(status if isinstance(status, int) else 0)
     except SystemExit:
         raise
+    except click_exceptions().ClickException as err:
+        sys.exit(report_usage(err))
     except KeyboardInterrupt:
         sys.exit(130)
     except BrokenPipeError:

@@ -21,6 +21,7 @@ GROUPS: dict[str, str] = {
     "param": "The parameter server: list, get, set, delete, load, dump.",
     "msg": "Message and service types: show, md5, list, package, packages, proto.",
     "node": "ROS nodes: list, info, ping, kill, machine, cleanup, and graph.",
+    "bag": "Bags (.bag and MCAP): record, play, info, filter, convert, recover, compress.",
     "core": "Run the bundled master and parameter server (roscore).",
 }
 

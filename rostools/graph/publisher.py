@@ -88,6 +88,11 @@ class Publisher:
         if link in self.links:
             self.links.remove(link)
 
+    def flush(self) -> None:
+        """Write what this loop turn queued now, not at the next turn (bag play's timing)."""
+        for link in self.links:
+            link.flush()
+
     def close(self) -> None:
         """Close every link."""
         self.closed = True

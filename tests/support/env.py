@@ -38,14 +38,19 @@ needs_ros1 = pytest.mark.skipif(_ROS1_REASON is not None, reason=_ROS1_REASON or
 
 
 def run_cli(
-    *args: str, env: dict[str, str] | None = None, input: str | None = None, timeout: float = 60
+    *args: str,
+    env: dict[str, str] | None = None,
+    input: str | None = None,
+    timeout: float = 60,
+    cwd: Path | None = None,
 ) -> subprocess.CompletedProcess[str]:
-    """Run ``python -m rostools ARGS`` and capture its output."""
+    """Run ``python -m rostools ARGS`` (in ``cwd``) and capture its output."""
     return subprocess.run(
         [sys.executable, "-m", "rostools", *args],
         capture_output=True,
         text=True,
         env=env,
+        cwd=cwd,
         input=input,
         timeout=timeout,
         check=False,

@@ -1,0 +1,256 @@
+"""Playback: bag messages published on the live graph at their recorded pace.
+
+Messages go out as the raw bytes in the file (never decoded, ``header.seq`` untouched). Each
+topic gets one publisher, latched when any recorded connection on it was latched. Timing:
+the loop sleeps on asyncio until about 2 ms before a message is due, then on ``time.sleep``
+to the due time, so sockets are served while waiting and the send is still on time.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import struct
+import time
+from collections.abc import Callable, Iterator, Sequence
+from dataclasses import dataclass, field
+from enum import Enum
+
+from rostools.bag.api import merged_messages
+from rostools.bag.base import BagReader
+from rostools.bag.model import NS_PER_SEC, Connection
+from rostools.errors import UsageError
+from rostools.graph.node import Node
+from rostools.graph.publisher import Publisher
+from rostools.graph.session import first
+from rostools.graph.topic import TopicType
+
+#: The last stretch before a due time is slept with ``time.sleep`` (asyncio wakes late).
+FINE_SLEEP = 0.002
+_CLOCK = TopicType(
+    "rosgraph_msgs/Clock",
+    "a9c97c1d230cfc112e270351a944ee47",
+    "# roslib/Clock is used for publishing simulated time in ROS. \n"
+    "# This message simply communicates the current time.\n"
+    "# For more information, see http://www.ros.org/wiki/Clock\n"
+    "time clock\n",
+)
+_TIME = struct.Struct("<II")
+
+
+@dataclass
+class PlayOptions:
+    """rosbag play's options."""
+
+    rate: float = 1.0
+    start: float = 0.0  # seconds into the bags
+    duration: float | None = None  # seconds to play
+    loop: bool = False
+    clock: bool = False
+    hz: float = 100.0
+    delay: float = 0.2
+    immediate: bool = False
+    pause: bool = False
+    topics: list[str] = field(default_factory=list)
+    prefix: str = ""
+    keep_alive: bool = False
+    skip_empty: float | None = None
+    queue_size: int = 100
+    wait_for_subscribers: bool = False
+
+
+class State(Enum):
+    """What the player is doing, as rosbag's status line says."""
+
+    RUNNING = "RUNNING"
+    PAUSED = "PAUSED "
+    DONE = "DONE   "
+
+
+@dataclass
+class Status:
+    """Where playback is: shown in the status line."""
+
+    state: State = State.RUNNING
+    bag_time: int = 0  # ns
+    elapsed: float = 0.0  # s of bag time since the start point
+    total: float = 0.0  # s of bag time to play
+    published: int = 0
+
+
+class Player:
+    """Publishes the messages of ``readers`` on ``node``."""
+
+    def __init__(self, node: Node, readers: Sequence[BagReader], opts: PlayOptions) -> None:
+        if opts.rate <= 0:
+            raise UsageError("the rate (-r) must be positive")
+        if opts.clock and opts.hz <= 0:
+            raise UsageError("--hz must be positive")
+        self.node = node
+        self.readers = readers
+        self.opts = opts
+        self.publishers: dict[str, Publisher] = {}
+        self.clock: Publisher | None = None
+        self.status = Status(state=State.PAUSED if opts.pause else State.RUNNING)
+        self.steps = 0  # messages to send while paused (the ``s`` key)
+        self.wake = asyncio.Event()
+        infos = [r.info() for r in readers]
+        starts = [i.start_ns for i in infos if i.start_ns is not None]
+        ends = [i.end_ns for i in infos if i.end_ns is not None]
+        self.bag_start: int = min(starts, default=0)
+        self.bag_end: int = max(ends, default=0)
+        self.from_ns = self.bag_start + round(opts.start * NS_PER_SEC)
+        self.until_ns = self.bag_end
+        if opts.duration is not None:
+            self.until_ns = min(self.bag_end, self.from_ns + round(opts.duration * NS_PER_SEC))
+        self.status.total = max(self.until_ns - self.from_ns, 0) / NS_PER_SEC
+
+    # controls ---------------------------------------------------------------------------
+
+    def toggle_pause(self) -> None:
+        """Space: pause or go on."""
+        running = self.status.state is State.RUNNING
+        self.status.state = State.PAUSED if running else State.RUNNING
+        self.wake.set()
+
+    def step(self) -> None:
+        """``s``: while paused, publish the next message now."""
+        if self.status.state is State.PAUSED:
+            self.steps += 1
+            self.wake.set()
+
+    # setup ------------------------------------------------------------------------------
+
+    def _topics(self) -> set[str] | None:
+        return set(self.opts.topics) if self.opts.topics else None
+
+    def connections(self) -> list[Connection]:
+        """The recorded connections that will be played."""
+        wanted = self._topics()
+        return [
+            c for r in self.readers for c in r.connections if wanted is None or c.topic in wanted
+        ]
+
+    async def advertise(self) -> None:
+        """One publisher per topic, latched if any of its connections was."""
+        latched: dict[str, bool] = {}
+        first_conn: dict[str, Connection] = {}
+        for conn in self.connections():
+            first_conn.setdefault(conn.topic, conn)
+            latched[conn.topic] = latched.get(conn.topic, False) or conn.latching
+        for topic, conn in first_conn.items():
+            topic_type = TopicType(conn.type, conn.md5sum, conn.definition)
+            name = self.opts.prefix + topic if self.opts.prefix else topic
+            self.publishers[topic] = await self.node.advertise(
+                name, topic_type, latch=latched[topic], queue_size=self.opts.queue_size
+            )
+        if self.opts.clock:
+            self.clock = await self.node.advertise("/clock", _CLOCK, queue_size=1)
+
+    def _latched_before_start(self) -> Iterator[tuple[Connection, int, memoryview]]:
+        """The last message of every latched connection before ``-s``'s start point."""
+        latched = {c.topic for c in self.connections() if c.latching}
+        if not latched or self.from_ns <= self.bag_start:
+            return iter(())
+        last: dict[tuple[str, str], tuple[Connection, int, memoryview]] = {}
+        for conn, t, data in merged_messages(self.readers, latched, None, self.from_ns - 1):
+            if conn.latching:
+                last[(conn.topic, conn.callerid)] = (conn, t, data)
+        return iter(sorted(last.values(), key=lambda m: m[1]))
+
+    # playing ----------------------------------------------------------------------------
+
+    async def run(self, stop: asyncio.Event, show: Callable[[Status], None] | None = None) -> int:
+        """Advertise, wait ``-d``, play (looping if asked); the number of messages sent."""
+        await self.advertise()
+        if self.opts.wait_for_subscribers:
+            while not stop.is_set() and any(
+                p.subscriber_count == 0 for p in self.publishers.values()
+            ):
+                await first(stop.wait(), timeout=0.05)
+        if self.opts.delay > 0:
+            await first(stop.wait(), timeout=self.opts.delay)
+        for conn, _, data in self._latched_before_start():
+            self.publishers[conn.topic].publish_raw(data)
+        while not stop.is_set():
+            await self._play_once(stop, show)
+            if not self.opts.loop:
+                break
+        self.status.state = State.DONE
+        if show is not None:
+            show(self.status)
+        if self.opts.keep_alive:
+            await stop.wait()
+        return self.status.published
+
+    async def _play_once(self, stop: asyncio.Event, show: Callable[[Status], None] | None) -> None:
+        opts = self.opts
+        scale = 1.0 / (NS_PER_SEC * opts.rate)
+        messages = merged_messages(self.readers, self._topics(), self.from_ns, self.until_ns)
+        origin: float | None = None  # monotonic time at which bag time from_ns plays
+        next_clock = 0.0
+        next_show = 0.0
+        for conn, t, data in messages:
+            if stop.is_set():
+                return
+            if origin is None:
+                origin = (
+                    time.monotonic() - (t - self.from_ns) * scale if not opts.immediate else 0.0
+                )
+            while not opts.immediate:
+                now = time.monotonic()
+                if show is not None and now >= next_show:
+                    next_show = now + 0.1
+                    self.status.bag_time = self._bag_time(now, origin, t)
+                    self.status.elapsed = (self.status.bag_time - self.from_ns) / NS_PER_SEC
+                    show(self.status)
+                if self.status.state is State.PAUSED:
+                    paused_at = time.monotonic()
+                    if self.steps:
+                        self.steps -= 1
+                        origin = time.monotonic() - (t - self.from_ns) * scale
+                        break
+                    self.wake.clear()
+                    await first(self.wake.wait(), stop.wait(), timeout=0.1)
+                    if stop.is_set():
+                        return
+                    origin += time.monotonic() - paused_at  # paused time does not count
+                    continue
+                due = origin + (t - self.from_ns) * scale
+                if opts.skip_empty is not None and due - now > opts.skip_empty / opts.rate:
+                    origin -= due - now  # a long gap in the recording: jump over it
+                    due = now
+                if self.clock is not None and next_clock <= now:
+                    next_clock = now + 1.0 / opts.hz
+                    self._publish_clock(self._bag_time(now, origin, t))
+                if due <= now:
+                    break
+                wait = (min(due, next_clock) if self.clock is not None else due) - now
+                if wait > FINE_SLEEP:
+                    self.wake.clear()
+                    await first(stop.wait(), self.wake.wait(), timeout=min(wait - FINE_SLEEP, 0.1))
+                    if stop.is_set():
+                        return
+                else:
+                    time.sleep(wait)
+            pub = self.publishers[conn.topic]
+            pub.publish_raw(data)
+            pub.flush()
+            self.status.published += 1
+            self.status.bag_time = t
+            if opts.immediate and self.status.published % 64 == 0:
+                await asyncio.sleep(0)  # let the sockets drain
+        if self.clock is not None:
+            self._publish_clock(self.until_ns)
+        self.status.bag_time = self.until_ns
+        self.status.elapsed = self.status.total
+
+    def _bag_time(self, now: float, origin: float, next_t: int) -> int:
+        """The bag time playing at ``now`` (never past the next message)."""
+        t = self.from_ns + round((now - origin) * NS_PER_SEC * self.opts.rate)
+        return min(t, next_t)
+
+    def _publish_clock(self, t_ns: int) -> None:
+        if self.clock is not None:
+            secs, nsecs = divmod(t_ns, NS_PER_SEC)
+            self.clock.publish_raw(_TIME.pack(secs, nsecs))
+            self.clock.flush()

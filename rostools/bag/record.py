@@ -1,0 +1,353 @@
+"""Recording: subscriptions on the event loop, a writer thread, raw frames in between.
+
+Frames go from the socket into a bounded queue without being decoded; a thread takes them
+out and writes them, so the disk never blocks receiving. When the queue holds more than the
+buffer allows, the oldest message is dropped and counted against its topic, as rosbag does,
+but the count is shown and makes the exit code say so. The file is written as ``NAME.active``
+and renamed when it is closed; a recording killed outright is left for ``bag recover``.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import collections
+import logging
+import re
+import threading
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from rostools.bag.api import open_writer
+from rostools.bag.base import BagWriter
+from rostools.bag.model import Connection
+from rostools.errors import RostoolsError, UsageError
+from rostools.graph.connection import Frame, InboundConnection
+from rostools.graph.node import Node
+
+log = logging.getLogger(__name__)
+
+#: How often the master is asked for new topics (rosbag record: 1 s).
+POLL_PERIOD = 1.0
+#: How often the writer hands its buffers to the OS, bounding what a crash can lose.
+FLUSH_PERIOD = 1.0
+#: How often ``run`` checks its limits and calls its ``tick`` (the live table).
+TICK_PERIOD = 0.25
+
+
+@dataclass
+class RecordOptions:
+    """What to record and how to write it."""
+
+    topics: list[str] = field(default_factory=list)
+    all: bool = False
+    regex: bool = False
+    exclude: str | None = None
+    node: str | None = None
+    base: Path = Path("recording.bag")  # the file name before .active and split numbers
+    format: str = "bag"
+    compression: str | None = None
+    chunk_size: int | None = None
+    split: bool = False
+    size: int | None = None  # bytes
+    duration: float | None = None  # seconds
+    max_splits: int | None = None
+    repeat_latched: bool = False
+    limit: int | None = None
+    tcp_nodelay: bool = False
+    buffer_bytes: int = 256 * 1024 * 1024  # 0: unlimited
+
+    def check(self) -> None:
+        """Raise ``UsageError`` for combinations rosbag record refuses."""
+        if self.split and self.size is None and self.duration is None:
+            raise UsageError("--split needs --size or --duration")
+        if self.limit is not None and (self.all or self.regex or not self.topics):
+            raise UsageError("a count (-l) needs explicit topics, not -a or -e")
+
+
+@dataclass
+class TopicStats:
+    """What was received on one topic."""
+
+    type: str = ""
+    messages: int = 0
+    bytes: int = 0
+    drops: int = 0
+    publishers: int = 0
+
+
+def file_name(base: Path, split: bool, index: int) -> Path:
+    """``base`` itself, or ``base`` with ``_N`` before its suffix when splitting."""
+    if not split:
+        return base
+    return base.with_name(f"{base.stem}_{index}{base.suffix}")
+
+
+class Selection:
+    """Which topics to record: names, regexes (full match, as rosbag), all, minus excludes."""
+
+    def __init__(self, opts: RecordOptions) -> None:
+        self.names = set(opts.topics) if not opts.regex else set()
+        try:
+            self.patterns = [re.compile(p) for p in opts.topics] if opts.regex else []
+            self.exclude = re.compile(opts.exclude) if opts.exclude else None
+        except re.error as err:
+            raise UsageError(f"bad regular expression: {err}") from None
+        # --node records what the node subscribes to; -x alone means everything but that
+        self.everything = (
+            opts.all or opts.node is not None or (opts.exclude is not None and not opts.topics)
+        )
+
+    def wants(self, topic: str) -> bool:
+        """Whether to record ``topic``."""
+        if self.exclude is not None and self.exclude.fullmatch(topic):
+            return False
+        if self.everything:
+            return True
+        return topic in self.names or any(p.fullmatch(topic) for p in self.patterns)
+
+
+class _Writer(threading.Thread):
+    """Takes queued messages and writes them; opens, splits and closes the files."""
+
+    def __init__(self, rec: Recorder) -> None:
+        super().__init__(name="rostools-bag-writer", daemon=True)
+        self.rec = rec
+        self.error: BaseException | None = None
+        self.writer: BagWriter | None = None
+        self.path: Path | None = None
+        self.index = 0
+        self.file_start = 0
+        self.written = 0
+        self.connections: dict[tuple[int, str], Connection] = {}
+        self.files: list[Path] = []
+
+    def run(self) -> None:
+        try:
+            self._loop()
+        except BaseException as err:  # noqa: BLE001 - reported by the recorder
+            self.error = err
+        finally:
+            self._close_file()
+
+    def _open_file(self, t_ns: int) -> BagWriter:
+        opts = self.rec.opts
+        self.path = file_name(opts.base, opts.split, self.index)
+        active = self.path.with_name(self.path.name + ".active")
+        self.writer = open_writer(active, opts.format, opts.compression, opts.chunk_size)
+        self.file_start = t_ns
+        self.connections.clear()
+        self.rec.current_file = active
+        if opts.repeat_latched:
+            for (header, topic), (t, data) in list(self.rec.latched.items()):
+                conn = self.writer.connection_for(topic, dict(header))
+                self.writer.write(conn, max(t, t_ns), data)
+        return self.writer
+
+    def _close_file(self) -> None:
+        if self.writer is None or self.path is None:
+            return
+        self.writer.close()
+        active = self.path.with_name(self.path.name + ".active")
+        active.replace(self.path)
+        self.files.append(self.path)
+        self.rec.closed_files.append(self.path)
+        self.writer = None
+        max_splits = self.rec.opts.max_splits
+        if self.rec.opts.split and max_splits is not None:
+            while len(self.files) > max_splits:
+                self.files.pop(0).unlink(missing_ok=True)
+
+    def _split_due(self, t_ns: int) -> bool:
+        opts = self.rec.opts
+        if opts.size is not None and self.written >= opts.size:
+            return True
+        return opts.duration is not None and t_ns - self.file_start >= opts.duration * 1e9
+
+    def _loop(self) -> None:
+        rec = self.rec
+        self._open_file(time.time_ns())  # the file exists from the start, as rosbag's does
+        last_flush = time.monotonic()
+        while True:
+            with rec.cond:
+                while not rec.queue and not rec.closing:
+                    rec.cond.wait(0.5)
+                    if time.monotonic() - last_flush > FLUSH_PERIOD and self.writer is not None:
+                        break
+                batch = rec.queue
+                rec.queue = collections.deque()
+                rec.queued_bytes = 0
+                closing = rec.closing
+            for key, header, topic, t_ns, data in batch:
+                if rec.limit_reached.is_set():
+                    break  # a size or duration limit without --split: the rest is not kept
+                if self._split_due(t_ns):
+                    if not rec.opts.split:
+                        rec.limit_reached.set()
+                        break
+                    self._close_file()
+                    self.index += 1
+                    self.written = 0
+                    self._open_file(t_ns)
+                writer = self.writer
+                assert writer is not None
+                conn = self.connections.get(key)
+                if conn is None:
+                    conn = self.connections[key] = writer.connection_for(topic, header)
+                writer.write(conn, t_ns, data)
+                self.written += len(data)
+                rec.written_bytes += len(data)
+            if self.writer is not None and time.monotonic() - last_flush > FLUSH_PERIOD:
+                self.writer.flush()
+                last_flush = time.monotonic()
+            if closing and not rec.queue:
+                return
+
+
+class Recorder:
+    """Records topics of a live graph into ``.bag`` or MCAP files."""
+
+    def __init__(self, node: Node, opts: RecordOptions) -> None:
+        opts.check()
+        if not opts.regex:
+            opts.topics = [node.resolve(t) for t in opts.topics]
+        self.node = node
+        self.opts = opts
+        self.selection = Selection(opts)
+        self.stats: dict[str, TopicStats] = {}
+        self.queue: collections.deque[tuple[Any, ...]] = collections.deque()
+        self.queued_bytes = 0
+        self.written_bytes = 0
+        self.cond = threading.Condition()
+        self.closing = False
+        self.limit_reached = threading.Event()
+        self.latched: dict[tuple[tuple[tuple[str, str], ...], str], tuple[int, Frame]] = {}
+        self.current_file: Path | None = None
+        self.closed_files: list[Path] = []
+        self.subscribed: set[str] = set()
+        self.done_topics: set[str] = set()
+        self.started = time.monotonic()
+        #: Called with each topic as it is subscribed to (rosbag's "Subscribing to" lines).
+        self.on_subscribe: Callable[[str], None] | None = None
+        self._writer = _Writer(self)
+
+    @property
+    def drops(self) -> int:
+        """Messages dropped because the buffer was full."""
+        return sum(s.drops for s in self.stats.values())
+
+    def _on_frames(self, topic: str) -> Callable[[list[Frame], InboundConnection, float], None]:
+        stats = self.stats.setdefault(topic, TopicStats())
+
+        def on_frames(frames: list[Frame], conn: InboundConnection, now: float) -> None:
+            t_ns = time.time_ns()
+            header = conn.header or {}
+            key = (conn.id, topic)
+            if not stats.type:
+                stats.type = header.get("type", "")
+            if self.closing:
+                return
+            limit = self.opts.limit
+            if limit is not None:
+                frames = frames[: max(limit - stats.messages, 0)]
+                if stats.messages + len(frames) >= limit:
+                    self.done_topics.add(topic)
+            size = sum(len(f) for f in frames)
+            stats.messages += len(frames)
+            stats.bytes += size
+            if self.opts.repeat_latched and header.get("latching") == "1" and frames:
+                self.latched[(tuple(sorted(header.items())), topic)] = (t_ns, frames[-1])
+            buffer = self.opts.buffer_bytes
+            with self.cond:
+                for data in frames:
+                    self.queue.append((key, header, topic, t_ns, data))
+                self.queued_bytes += size
+                while buffer and self.queued_bytes > buffer and len(self.queue) > 1:
+                    _, _, old_topic, _, old = self.queue.popleft()
+                    self.queued_bytes -= len(old)
+                    self.stats[old_topic].drops += 1
+                self.cond.notify()
+
+        return on_frames
+
+    async def _poll(self) -> None:
+        """Subscribe to every wanted topic the master knows of (new ones as they appear)."""
+        if self.opts.node is not None:
+            candidates = await self._node_topics(self.opts.node)
+        elif self.selection.everything or self.selection.patterns:
+            pubs, _, _ = await self.node.master_call("getSystemState")
+            candidates = [topic for topic, _ in pubs]
+        else:
+            candidates = sorted(self.selection.names)  # subscribed before anyone publishes
+        for topic in candidates:
+            if topic not in self.subscribed and self.selection.wants(topic):
+                self.subscribed.add(topic)
+                if self.on_subscribe is not None:
+                    self.on_subscribe(topic)
+                await self.node.subscribe(
+                    topic, self._on_frames(topic), tcp_nodelay=self.opts.tcp_nodelay
+                )
+
+    def publishers(self, topic: str) -> int:
+        """How many publishers ``topic`` is connected to now."""
+        sub = self.node.subscribers.get(topic)
+        return len(sub.connections) if sub is not None else 0
+
+    async def _node_topics(self, name: str) -> list[str]:
+        """The topics node ``name`` subscribes to (rosbag record --node)."""
+        from rostools.graph.xmlrpc import call
+
+        try:
+            uri = await self.node.master_call("lookupNode", self.node.resolve(name))
+            code, _, subs = await call(str(uri), "getSubscriptions", (self.node.name,))
+        except (RostoolsError, OSError) as err:
+            log.debug("node %s: %s", name, err)
+            return []
+        return [topic for topic, _ in subs] if code == 1 else []
+
+    def _finished(self) -> bool:
+        """A count, a size or a duration without --split, or the writer failed."""
+        opts = self.opts
+        if opts.limit is not None and self.done_topics >= self.selection.names:
+            return True
+        if not opts.split and opts.duration is not None and self._elapsed() >= opts.duration:
+            return True
+        return self.limit_reached.is_set() or self._writer.error is not None
+
+    def _elapsed(self) -> float:
+        return time.monotonic() - self.started
+
+    async def run(
+        self, stop: asyncio.Event, tick: Callable[[Recorder], None] | None = None
+    ) -> None:
+        """Record until ``stop`` or ``_finished``; ``tick`` is called four times a second."""
+        from rostools.graph.session import first
+
+        await self._poll()  # no master at the start: say so (no file) rather than wait forever
+        self._writer.start()
+        next_poll = time.monotonic() + POLL_PERIOD
+        try:
+            while not stop.is_set() and not self._finished():
+                if time.monotonic() >= next_poll:
+                    try:
+                        await self._poll()
+                    except RostoolsError as err:
+                        log.warning("recording goes on; the master did not answer: %s", err)
+                    next_poll = time.monotonic() + POLL_PERIOD
+                if tick is not None:
+                    tick(self)
+                await first(stop.wait(), timeout=TICK_PERIOD)
+        finally:
+            await self._finish()
+        if self._writer.error is not None:
+            raise self._writer.error
+
+    async def _finish(self) -> None:
+        for sub in list(self.node.subscribers.values()):
+            await sub.close()
+        with self.cond:
+            self.closing = True
+            self.cond.notify()
+        await asyncio.get_running_loop().run_in_executor(None, self._writer.join)

@@ -1,0 +1,169 @@
+"""``bag info`` as rosbag prints it, and as data (rosbag's ``--yaml`` keys, plus ours)."""
+
+from __future__ import annotations
+
+import time
+from typing import Any
+
+from rostools.bag.model import BagInfo
+
+_NS = 1_000_000_000
+
+
+def human_size(size: float) -> str:
+    """rosbag's 1024-based sizes, always in KB or more."""
+    for suffix in ("KB", "MB", "GB", "TB", "PB", "EB", "ZB", "YB"):
+        size /= 1024.0
+        if size < 1024.0:
+            return f"{size:.1f} {suffix}"
+    return "-"
+
+
+def human_frequency(freq: float) -> str:
+    """rosbag's 1000-based rates."""
+    for suffix in ("Hz", "kHz", "MHz", "GHz", "THz"):
+        if freq < 1000.0:
+            return f"{freq:.1f} {suffix}"
+        freq /= 1000.0
+    return "-"
+
+
+def time_text(secs: float) -> str:
+    """``Nov 22 2026 06:41:04.90``, local time, as rosbag prints it."""
+    fraction = f"{secs - int(secs):.2f}"[1:]
+    return time.strftime("%b %d %Y %H:%M:%S", time.localtime(secs)) + fraction
+
+
+def duration_text(duration: float) -> str:
+    """``3.2s``, ``3:48s (228s)`` or ``1hr 2:03s (3723s)``."""
+    secs = duration % 60
+    mins = int(duration / 60)
+    hours = int(mins / 60)
+    if hours > 0:
+        return "%dhr %d:%02ds (%ds)" % (hours, mins % 60, secs, duration)  # noqa: UP031
+    if mins > 0:
+        return "%d:%02ds (%ds)" % (mins, secs, duration)  # noqa: UP031
+    return f"{duration:.1f}s"
+
+
+def info_text(info: BagInfo, frequencies: dict[str, float] | None = None) -> str:
+    """The text ``rosbag info`` prints, for a ``.bag`` or an MCAP file."""
+    rows: list[tuple[str, str]] = [("path", str(info.path))]
+    rows.append(
+        (
+            "version",
+            info.version if info.format == "bag" else f"mcap ({info.profile or 'no'} profile)",
+        )
+    )
+    if info.format == "mcap" and info.library:
+        rows.append(("library", info.library))
+    if info.start_ns is None or info.end_ns is None:
+        rows.append(("size", human_size(info.size)))
+        return _table(rows)
+    start, end = info.start_ns / _NS, info.end_ns / _NS
+    duration = end - start
+    rows.append(("duration", duration_text(duration)))
+    rows.append(("start", f"{time_text(start)} ({start:.2f})"))
+    rows.append(("end", f"{time_text(end)} ({end:.2f})"))
+    rows.append(("size", human_size(info.size)))
+    rows.append(("messages", str(info.message_count)))
+    rows += _compression_rows(info, duration)
+    if info.format == "mcap":
+        for label, count in (
+            ("attachments", info.attachment_count),
+            ("metadata", info.metadata_count),
+        ):
+            if count:
+                rows.append((label, str(count)))
+    rows += _type_and_topic_rows(info, frequencies or {})
+    return _table(rows)
+
+
+def _compression_rows(info: BagInfo, duration: float) -> list[tuple[str, str]]:
+    if not info.compression:
+        return [("compression", "none")]
+    chunks = sum(c.chunks for c in info.compression)
+    parts = []
+    for c in info.compression:
+        if c.compression != "none" and c.uncompressed_size:
+            fraction = 100.0 * c.compressed_size / c.uncompressed_size
+            parts.append(f"{c.compression} [{c.chunks}/{chunks} chunks; {fraction:.2f}%]")
+        else:
+            parts.append(f"{c.compression} [{c.chunks}/{chunks} chunks]")
+    rows = [("compression", ", ".join(parts))]
+    if all(c.compression == "none" for c in info.compression) or not info.uncompressed_size:
+        return rows
+    raw, stored = human_size(info.uncompressed_size), human_size(info.compressed_size)
+    width = max(len(raw), len(stored))
+    if duration > 0:
+        raw_rate = human_size(info.uncompressed_size / duration)
+        stored_rate = human_size(info.compressed_size / duration)
+        rate_width = max(len(raw_rate), len(stored_rate))
+        percent = 100.0 * info.compressed_size / info.uncompressed_size
+        rows.append(("uncompressed", f"{raw:>{width}} @ {raw_rate:>{rate_width}}/s"))
+        rows.append(
+            ("compressed", f"{stored:>{width}} @ {stored_rate:>{rate_width}}/s ({percent:.2f}%)")
+        )
+    else:
+        rows.append(("uncompressed", f"{raw:>{width}}"))
+        rows.append(("compressed", f"{stored:>{width}}"))
+    return rows
+
+
+def _type_and_topic_rows(info: BagInfo, freqs: dict[str, float]) -> list[tuple[str, str]]:
+    rows: list[tuple[str, str]] = []
+    if not info.topics:
+        return rows
+    type_width = max(len(t) for t in info.types)
+    for i, (kind, md5) in enumerate(sorted(info.types.items())):
+        rows.append(("types" if i == 0 else "", f"{kind:<{type_width}} [{md5}]"))
+    topic_width = max(len(t.topic) for t in info.topics)
+    count_width = max(len(str(t.messages)) for t in info.topics)
+    freq_width = max((len(human_frequency(f)) for f in freqs.values()), default=0)
+    for i, t in enumerate(info.topics):
+        unit = "msgs" if t.messages > 1 else "msg "
+        text = f"{t.topic:<{topic_width}}   {t.messages:>{count_width}} {unit}"
+        if t.topic in freqs:
+            text += f" @ {human_frequency(freqs[t.topic]):>{freq_width}}"
+        else:
+            text += "   " + " " * freq_width
+        text += f" : {t.type:<{type_width}}"
+        if t.connections > 1:
+            text += f" ({t.connections} connections)"
+        rows.append(("topics" if i == 0 else "", text))
+    return rows
+
+
+def _table(rows: list[tuple[str, str]]) -> str:
+    width = max(len(field) for field, _ in rows) + 1
+    lines = [f"{(field + ':') if field else '':<{width}} {value}" for field, value in rows]
+    return "\n".join(lines).rstrip()
+
+
+def info_data(info: BagInfo, frequencies: dict[str, float] | None = None) -> dict[str, Any]:
+    """``rosbag info --yaml``'s keys (times in seconds, sizes in bytes), plus ours."""
+    data: dict[str, Any] = {"path": str(info.path), "version": info.version, "format": info.format}
+    if info.format == "mcap":
+        data |= {"profile": info.profile, "library": info.library}
+    if info.start_ns is not None and info.end_ns is not None:
+        data |= {
+            "duration": info.duration_ns / _NS,
+            "start": info.start_ns / _NS,
+            "end": info.end_ns / _NS,
+        }
+    data |= {"size": info.size, "messages": info.message_count, "indexed": info.indexed}
+    data["compression"] = info.compression[0].compression if info.compression else "none"
+    if any(c.compression != "none" for c in info.compression):
+        data |= {"uncompressed": info.uncompressed_size, "compressed": info.compressed_size}
+    data["chunks"] = info.chunk_count
+    data["types"] = [{"type": k, "md5": v} for k, v in sorted(info.types.items())]
+    topics = []
+    for t in info.topics:
+        row: dict[str, Any] = {"topic": t.topic, "type": t.type, "messages": t.messages}
+        if frequencies and t.topic in frequencies:
+            row["frequency"] = frequencies[t.topic]
+        if t.connections > 1:
+            row["connections"] = t.connections
+        topics.append(row)
+    data["topics"] = topics
+    return data

@@ -1,0 +1,162 @@
+"""``rostools bag play``: rosbag play, with its keys (space, s) and status line."""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import sys
+from collections.abc import Iterator
+from pathlib import Path
+from typing import TYPE_CHECKING, Annotated
+
+import typer
+
+from rostools.cli.bag import app
+from rostools.cli.common import Format, FormatOpt, node_session, output_format, render
+from rostools.errors import UsageError
+
+if TYPE_CHECKING:
+    import asyncio
+
+    from rostools.bag.play import Player, Status
+    from rostools.graph.node import Node
+
+
+def split_bags_and_topics(args: list[str], topics: list[str]) -> tuple[list[Path], list[str]]:
+    """Bags and topics from the positional arguments.
+
+    ``rosbag play x.bag --topics /a /b`` leaves ``/b`` among the positionals; with ``--topics``
+    given, a positional that is not a file but looks like a topic is taken as one more topic.
+    """
+    bags: list[Path] = []
+    extra: list[str] = []
+    for arg in args:
+        if topics and arg.startswith("/") and not Path(arg).is_file():
+            extra.append(arg)
+        else:
+            bags.append(Path(arg))
+    return bags, [t for item in [*topics, *extra] for t in item.split(",") if t]
+
+
+def status_line(status: Status) -> str:
+    """rosbag play's status line: `` [RUNNING]  Bag Time: ...   Duration: ... / ...``."""
+    return (
+        f" [{status.state.value}]  Bag Time: {status.bag_time / 1e9:13.6f}   "
+        f"Duration: {status.elapsed:.6f} / {status.total:.6f}               \r"
+    )
+
+
+@contextlib.contextmanager
+def keyboard(player: Player, loop: asyncio.AbstractEventLoop) -> Iterator[bool]:
+    """Space and ``s`` from a terminal on stdin, read without echo; False if not a terminal."""
+    if not sys.stdin.isatty():
+        yield False
+        return
+    import termios
+    import tty
+
+    fd = sys.stdin.fileno()
+    saved = termios.tcgetattr(fd)
+
+    def on_key() -> None:
+        for key in os.read(fd, 32).decode(errors="replace"):
+            if key == " ":
+                player.toggle_pause()
+            elif key == "s":
+                player.step()
+
+    tty.setcbreak(fd)
+    loop.add_reader(fd, on_key)
+    try:
+        yield True
+    finally:
+        loop.remove_reader(fd)
+        termios.tcsetattr(fd, termios.TCSADRAIN, saved)
+
+
+@app.command()
+def play(
+    ctx: typer.Context,
+    bags: Annotated[list[str], typer.Argument(help="Bags to play, merged in time order.")],
+    rate: Annotated[float, typer.Option("--rate", "-r", help="Speed factor.")] = 1.0,
+    start: Annotated[
+        float, typer.Option("--start", "-s", help="Start this many seconds into the bags.")
+    ] = 0.0,
+    duration: Annotated[
+        float | None, typer.Option("--duration", "-u", help="Play only this many seconds.")
+    ] = None,
+    loop_: Annotated[bool, typer.Option("--loop", "-l", help="Play again and again.")] = False,
+    clock: Annotated[bool, typer.Option("--clock", help="Publish bag time on /clock.")] = False,
+    hz: Annotated[float, typer.Option("--hz", help="/clock messages per second.")] = 100.0,
+    delay: Annotated[
+        float, typer.Option("--delay", "-d", help="Seconds to wait after advertising.")
+    ] = 0.2,
+    immediate: Annotated[
+        bool, typer.Option("--immediate", "-i", help="Publish everything without waiting.")
+    ] = False,
+    pause: Annotated[bool, typer.Option("--pause", help="Start paused.")] = False,
+    topics: Annotated[
+        list[str] | None, typer.Option("--topics", help="Only these topics (repeat or commas).")
+    ] = None,
+    prefix: Annotated[
+        str, typer.Option("--prefix", "-p", help="Put this before every topic name.")
+    ] = "",
+    keep_alive: Annotated[
+        bool, typer.Option("--keep-alive", "-k", help="Stay up after the end (latched topics).")
+    ] = False,
+    skip_empty: Annotated[
+        float | None, typer.Option("--skip-empty", help="Skip gaps longer than this (s).")
+    ] = None,
+    queue: Annotated[int, typer.Option("--queue", help="Publisher queue size.")] = 100,
+    wait_for_subscribers: Annotated[
+        bool,
+        typer.Option("--wait-for-subscribers", help="Wait for a subscriber on every topic."),
+    ] = False,
+    quiet: Annotated[bool, typer.Option("--quiet", "-q", help="No status line.")] = False,
+    fmt: FormatOpt = None,
+) -> None:
+    """Publish the messages of bags at their recorded pace (rosbag play).
+
+    Remap topics with old:=new arguments. Keys: space pauses, s steps while paused.
+    """
+    from rostools.bag.api import open_bag
+    from rostools.bag.play import Player, PlayOptions
+
+    paths, wanted = split_bags_and_topics(bags, topics or [])
+    if not paths:
+        raise UsageError("give at least one bag to play")
+    for value, flag in ((delay, "-d"), (start, "-s")):
+        if value < 0:
+            raise UsageError(f"{flag} cannot be negative")
+    opts = PlayOptions(
+        rate=rate, start=start, duration=duration, loop=loop_, clock=clock, hz=hz, delay=delay,
+        immediate=immediate, pause=pause, topics=wanted, prefix=prefix, keep_alive=keep_alive,
+        skip_empty=skip_empty, queue_size=queue, wait_for_subscribers=wait_for_subscribers,
+    )  # fmt: skip
+    out = output_format(ctx, fmt)
+    show_status = not quiet and out is Format.text and sys.stderr.isatty()
+    with contextlib.ExitStack() as stack:
+        readers = [stack.enter_context(open_bag(p)) for p in paths]
+
+        async def main(node: Node, stop: asyncio.Event) -> int:
+            import asyncio
+
+            player = Player(node, readers, opts)
+            if show_status:
+                for path in paths:
+                    sys.stderr.write(f"Opening {path}\n")
+            with keyboard(player, asyncio.get_running_loop()) as keys:
+                if show_status and keys:
+                    sys.stderr.write("Hit space to toggle paused, or 's' to step.\n")
+                return await player.run(stop, _show if show_status else None)
+
+        sent = node_session(ctx, main, "rostools_play")
+    if show_status:
+        sys.stderr.write("\nDone.\n")
+    elif out is not Format.text:
+        sys.stdout.write(render(out, {"published": sent}) + "\n")
+
+
+def _show(status: Status) -> None:
+    sys.stderr.write(status_line(status))
+    sys.stderr.flush()

@@ -1,0 +1,319 @@
+"""``rostools bag record`` and ``bag play`` end to end on the bundled master."""
+
+from __future__ import annotations
+
+import json
+import re
+import signal
+import struct
+import sys
+import time
+import xmlrpc.client
+from pathlib import Path
+
+import pytest
+
+from rostools.bag.api import bag_info, detect_format, open_bag, open_writer
+from tests.support.env import run_cli
+from tests.support.procs import Proc, wait_for
+
+STRING = ("std_msgs/String", "992ce8a1687cec8c8bd883ec73ca41d1", "string data\n")
+
+
+def rostools(env: dict[str, str], *args: str, cwd: Path | None = None) -> Proc:
+    return Proc([sys.executable, "-m", "rostools", *args], env=env, cwd=cwd)
+
+
+def subscribed(uri: str, topic: str, prefix: str) -> bool:
+    """Whether a node whose name starts with ``prefix`` subscribes to ``topic``."""
+    _, _, (_, subs, _) = xmlrpc.client.ServerProxy(uri).getSystemState("/test")
+    return any(t == topic and any(n.startswith(prefix) for n in nodes) for t, nodes in subs)
+
+
+def seqs(path: Path, topic: str) -> list[int]:
+    """The header.seq of every message on ``topic`` (stamped messages)."""
+    with open_bag(path) as reader:
+        return [struct.unpack_from("<I", data)[0] for c, _, data in reader.messages([topic])]
+
+
+def strings(path: Path, topic: str) -> list[str]:
+    with open_bag(path) as reader:
+        return [bytes(data[4:]).decode() for _, _, data in reader.messages([topic])]
+
+
+def start_publishers(env: dict[str, str]) -> list[Proc]:
+    return [
+        rostools(env, "topic", "pub", "-r", "100", "/h", "geometry_msgs/PointStamped", "{}"),
+        rostools(env, "topic", "pub", "-l", "/latched", "std_msgs/String", "data: kept"),
+    ]
+
+
+def stop_all(procs: list[Proc]) -> None:
+    for proc in procs:
+        proc.stop()
+
+
+def wait_growing(path: Path, timeout: float = 15) -> None:
+    """Until ``path`` holds at least one flushed message."""
+    wait_for(lambda: path.exists() and path.stat().st_size > 5000, timeout, f"{path} to grow")
+
+
+def test_record_closes_on_sigint_and_keeps_everything(
+    rostools_master: str, cli_env: dict[str, str], tmp_path: Path
+) -> None:
+    pubs = start_publishers(cli_env)
+    rec = rostools(
+        cli_env, "bag", "record", "-O", "run", "/h", "/latched", "-F", "json", cwd=tmp_path
+    )
+    try:
+        wait_for(
+            lambda: subscribed(rostools_master, "/h", "/rostools_record"), 15, "record to subscribe"
+        )
+        wait_growing(tmp_path / "run.bag.active")
+        time.sleep(0.5)
+        rec.signal(signal.SIGINT)
+        out, err = rec.output()
+        assert rec.popen.returncode == 0, err
+    finally:
+        stop_all(pubs)
+    assert "Recording to 'run.bag'." in err
+    assert not (tmp_path / "run.bag.active").exists()
+    summary = json.loads(out)
+    assert summary["files"] == ["run.bag"]
+    assert summary["drops"] == 0
+    got = seqs(tmp_path / "run.bag", "/h")
+    assert len(got) == summary["topics"]["/h"]["messages"] > 50
+    assert got == list(range(got[0], got[0] + len(got)))  # nothing lost between first and last
+    assert strings(tmp_path / "run.bag", "/latched") == ["kept"]
+    with open_bag(tmp_path / "run.bag") as reader:
+        latched = [c for c in reader.connections if c.topic == "/latched"]
+        assert [c.latching for c in latched] == [True]
+        assert latched[0].callerid.startswith("/rostools_pub")
+    assert bag_info(tmp_path / "run.bag").indexed
+
+
+def test_record_names_like_rosbag(
+    rostools_master: str, cli_env: dict[str, str], tmp_path: Path
+) -> None:
+    pubs = start_publishers(cli_env)
+    try:
+        for args in (["-o", "pre"], ["-O", "named.mcap"], ["-O", "fmt", "--format", "mcap"], []):
+            done = run_cli("bag", "record", "/latched", "-l", "1", *args, env=cli_env, cwd=tmp_path)
+            assert done.returncode == 0, done.stderr
+    finally:
+        stop_all(pubs)
+    names = sorted(p.name for p in tmp_path.iterdir())
+    stamp = r"\d{4}(-\d\d){5}"
+    assert [n for n in names if re.fullmatch(f"pre_{stamp}\\.bag", n)]
+    assert [n for n in names if re.fullmatch(f"{stamp}\\.bag", n)]
+    assert {"named.mcap", "fmt.mcap"} <= set(names)
+    assert detect_format(tmp_path / "fmt.mcap") == "mcap"
+    assert strings(tmp_path / "named.mcap", "/latched") == ["kept"]
+
+
+@pytest.mark.parametrize("storage", ["bag", "mcap"])
+def test_record_splits_keeps_newest_and_repeats_latched(
+    rostools_master: str, cli_env: dict[str, str], tmp_path: Path, storage: str
+) -> None:
+    pubs = start_publishers(cli_env)
+    rec = rostools(
+        cli_env, "bag", "record", "-O", f"s.{storage}", "--split", "--duration", "1",
+        "--max-splits", "2", "--repeat-latched", "/h", "/latched", cwd=tmp_path,
+    )  # fmt: skip
+    try:
+        wait_for(lambda: (tmp_path / f"s_3.{storage}.active").exists(), 20, "four splits")
+        assert rec.stop() == 0
+    finally:
+        stop_all(pubs)
+    files = sorted(tmp_path.glob(f"s_*.{storage}"))
+    assert len(files) == 2, files
+    assert not list(tmp_path.glob("*.active"))
+    for path in files:
+        assert strings(path, "/latched") == ["kept"]
+        with open_bag(path) as reader:
+            assert [c.latching for c in reader.connections if c.topic == "/latched"] == [True]
+        info = bag_info(path)
+        assert info.duration_ns < 1.5e9
+    first, second = (seqs(p, "/h") for p in files)
+    assert second[0] == first[-1] + 1  # the split loses nothing
+
+
+def test_record_limit_duration_regex_and_late_topics(
+    rostools_master: str, cli_env: dict[str, str], tmp_path: Path
+) -> None:
+    pubs = start_publishers(cli_env)
+    try:
+        done = run_cli("bag", "record", "-O", str(tmp_path / "l.bag"), "-l", "5", "/h", env=cli_env)
+        assert done.returncode == 0, done.stderr
+        assert len(seqs(tmp_path / "l.bag", "/h")) == 5
+        started = time.monotonic()
+        done = run_cli(
+            "bag", "record", "-O", str(tmp_path / "d.bag"), "--duration", "1", "/h", env=cli_env
+        )
+        assert done.returncode == 0 and time.monotonic() - started < 10
+        assert 50 < len(seqs(tmp_path / "d.bag", "/h")) < 150
+        rec = rostools(
+            cli_env, "bag", "record", "-O", str(tmp_path / "e.bag"), "-e", "/a/.*", "-x", "/a/y"
+        )
+        late = [
+            rostools(cli_env, "topic", "pub", "-r", "20", name, "std_msgs/String", "data: x")
+            for name in ("/a/x", "/a/y", "/a", "/b/a/x")
+        ]
+        try:
+            wait_for(
+                lambda: subscribed(rostools_master, "/a/x", "/rostools_record"),
+                15,
+                "/a/x picked up",
+            )
+            time.sleep(1.0)
+            assert rec.stop() == 0
+        finally:
+            stop_all(late)
+    finally:
+        stop_all(pubs)
+    assert {t.topic for t in bag_info(tmp_path / "e.bag").topics} == {"/a/x"}
+
+
+@pytest.mark.parametrize("storage", ["bag", "mcap"])
+def test_sigkilled_recording_is_recovered(
+    rostools_master: str, cli_env: dict[str, str], tmp_path: Path, storage: str
+) -> None:
+    pubs = start_publishers(cli_env)
+    active = tmp_path / f"k.{storage}.active"
+    rec = rostools(cli_env, "bag", "record", "-O", f"k.{storage}", "/h", "/latched", cwd=tmp_path)
+    try:
+        wait_growing(active)
+        time.sleep(1.6)
+        rec.signal(signal.SIGKILL)
+        rec.stop()
+    finally:
+        stop_all(pubs)
+    with open_bag(active) as reader:
+        reader.skip_damaged = True
+        on_disk = [(c.topic, t, bytes(d)) for c, t, d in reader.messages()]
+    done = run_cli("bag", "recover", str(active), "-F", "json", env=cli_env)
+    assert done.returncode == 0, done.stderr
+    report = json.loads(done.stdout)
+    out = tmp_path / f"k.{storage}"
+    assert report["output"] == str(out) and report["lost"] == []
+    with open_bag(out) as reader:
+        recovered = [(c.topic, t, bytes(d)) for c, t, d in reader.messages()]
+    assert recovered == on_disk
+    got = seqs(out, "/h")
+    assert len(got) > 100 and got == list(range(got[0], got[0] + len(got)))
+    assert bag_info(out).indexed
+
+
+def write_play_bag(path: Path) -> None:
+    """/chatter "m0".."m9" every 0.1 s from t = 100 s, and /latched "old" at 100 s (latched)."""
+    with open_writer(path) as writer:
+        chatter = writer.add_connection("/chatter", *STRING, callerid="/talker")
+        latched = writer.add_connection("/latched", *STRING, callerid="/latcher", latching=True)
+        writer.write(latched, 100 * 10**9, struct.pack("<I", 3) + b"old")
+        for i in range(10):
+            text = f"m{i}".encode()
+            writer.write(chatter, 100 * 10**9 + i * 10**8, struct.pack("<I", len(text)) + text)
+
+
+def echo(env: dict[str, str], topic: str, count: int) -> Proc:
+    return rostools(env, "topic", "echo", topic, "-n", str(count), "-F", "json")
+
+
+def received(proc: Proc) -> list[str]:
+    assert proc.popen.wait(30) == 0
+    out, _ = proc.output()
+    return [json.loads(line)["data"] for line in out.splitlines()]
+
+
+def test_play_paces_remaps_and_prefixes(
+    rostools_master: str, cli_env: dict[str, str], tmp_path: Path
+) -> None:
+    bag = tmp_path / "p.bag"
+    write_play_bag(bag)
+    # echo subscribes once the topic exists: the 3 s delay after advertising lets it
+    player = rostools(cli_env, "bag", "play", str(bag), "-d", "3", "-p", "/r", "/r/latched:=/moved")
+    listeners = [echo(cli_env, "/r/chatter", 10), echo(cli_env, "/moved", 1)]
+    started = time.monotonic()
+    assert player.popen.wait(30) == 0
+    took = time.monotonic() - started
+    assert received(listeners[0]) == [f"m{i}" for i in range(10)]
+    assert received(listeners[1]) == ["old"]
+    assert took > 0.9  # 0.9 s of bag time
+    started = time.monotonic()
+    done = run_cli("bag", "play", str(bag), "-r", "10", "-d", "0", env=cli_env)
+    assert done.returncode == 0 and time.monotonic() - started < took
+
+
+def test_play_start_still_delivers_latched_and_keep_alive(
+    rostools_master: str, cli_env: dict[str, str], tmp_path: Path
+) -> None:
+    bag = tmp_path / "p.bag"
+    write_play_bag(bag)
+    player = rostools(cli_env, "bag", "play", str(bag), "-s", "0.5", "-d", "3", "-k")
+    try:
+        chatter = echo(cli_env, "/chatter", 5)
+        assert received(chatter) == [f"m{i}" for i in range(5, 10)]
+        late = echo(cli_env, "/latched", 1)  # "old" was before -s: sent anyway, and kept
+        assert received(late) == ["old"]
+        assert player.popen.poll() is None  # -k: still up after the end
+    finally:
+        assert player.stop() == 0
+
+
+def test_play_topics_clock_and_immediate(
+    rostools_master: str, cli_env: dict[str, str], tmp_path: Path
+) -> None:
+    bag = tmp_path / "p.mcap"
+    write_play_bag(bag)
+    player = rostools(
+        cli_env, "bag", "play", str(bag), "--clock", "--topics", "/chatter", "-d", "3", "-k"
+    )
+    try:
+        clock = rostools(cli_env, "topic", "echo", "/clock", "-n", "3", "-F", "json")
+        assert clock.popen.wait(30) == 0
+        stamps = [json.loads(line)["clock"]["secs"] for line in clock.output()[0].splitlines()]
+        assert len(stamps) == 3 and all(100 <= s <= 101 for s in stamps)
+        listed = run_cli("topic", "list", env=cli_env).stdout.split()
+        assert "/chatter" in listed and "/latched" not in listed
+    finally:
+        player.stop()
+    done = run_cli("bag", "play", str(bag), "-i", "-d", "0", "-F", "json", env=cli_env)
+    assert done.returncode == 0 and json.loads(done.stdout) == {"published": 11}
+
+
+@pytest.mark.parametrize("command", ["play", "info", "recover"])
+def test_bad_files_are_one_line_errors(
+    cli_env: dict[str, str], tmp_path: Path, command: str
+) -> None:
+    (tmp_path / "empty.bag").write_bytes(b"")
+    (tmp_path / "text.bag").write_text("hello\n")
+    (tmp_path / "db.bag").write_bytes(b"SQLite format 3\x00" + bytes(100))
+    cases = {"missing.bag": 3, "empty.bag": 1, "text.bag": 1, "db.bag": 1}
+    for name, code in cases.items():
+        done = run_cli("bag", command, str(tmp_path / name), env=cli_env)
+        assert done.returncode == code, (name, done.stderr)
+        assert done.stderr.count("\n") == 1 and "Traceback" not in done.stderr, done.stderr
+        assert name in done.stderr
+
+
+def test_record_usage_errors(cli_env: dict[str, str], tmp_path: Path) -> None:
+    for args, words in (
+        ([], "give topics"),
+        (["-a", "/x"], "do not also name"),
+        (["/x", "--split"], "--split needs"),
+        (["/x", "-O", "a", "-o", "b"], "cannot be combined"),
+        (["/x", "--duration", "soon"], "bad duration"),
+        (["/x", "--format", "mcap", "--bz2"], "cannot use bz2"),
+        (["/x", "-O", str(tmp_path / "nowhere" / "x.bag")], "no such folder"),
+        (["-a", "-l", "3"], "-l"),
+    ):
+        done = run_cli("bag", "record", *args, env=cli_env)
+        assert done.returncode == 2, (args, done.stderr)
+        assert words in done.stderr and done.stderr.count("\n") == 1, done.stderr
+
+
+def test_record_without_master_is_unreachable(cli_env: dict[str, str], tmp_path: Path) -> None:
+    done = run_cli("bag", "record", "-O", str(tmp_path / "x.bag"), "/x", env=cli_env)
+    assert done.returncode == 4, done.stderr
+    assert done.stderr.splitlines()[-1].startswith("rostools: cannot reach the master")
+    assert list(tmp_path.iterdir()) == []

@@ -13,11 +13,10 @@ from pathlib import Path
 
 import pytest
 
-from rostools.bag.api import bag_info, detect_format, open_bag, open_writer
+from rostools.bag.api import bag_info, detect_format, open_bag
+from tests.support.bagdata import write_play_bag
 from tests.support.env import run_cli
 from tests.support.procs import Proc, wait_for
-
-STRING = ("std_msgs/String", "992ce8a1687cec8c8bd883ec73ca41d1", "string data\n")
 
 
 def rostools(env: dict[str, str], *args: str, cwd: Path | None = None) -> Proc:
@@ -202,17 +201,6 @@ def test_sigkilled_recording_is_recovered(
     got = seqs(out, "/h")
     assert len(got) > 100 and got == list(range(got[0], got[0] + len(got)))
     assert bag_info(out).indexed
-
-
-def write_play_bag(path: Path) -> None:
-    """/chatter "m0".."m9" every 0.1 s from t = 100 s, and /latched "old" at 100 s (latched)."""
-    with open_writer(path) as writer:
-        chatter = writer.add_connection("/chatter", *STRING, callerid="/talker")
-        latched = writer.add_connection("/latched", *STRING, callerid="/latcher", latching=True)
-        writer.write(latched, 100 * 10**9, struct.pack("<I", 3) + b"old")
-        for i in range(10):
-            text = f"m{i}".encode()
-            writer.write(chatter, 100 * 10**9 + i * 10**8, struct.pack("<I", len(text)) + text)
 
 
 def echo(env: dict[str, str], topic: str, count: int) -> Proc:

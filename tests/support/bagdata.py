@@ -96,3 +96,23 @@ def _id(conn: Connection) -> int:
 def digest(data: bytes) -> str:
     """A short hash for comparing message bytes across processes."""
     return hashlib.md5(data).hexdigest()
+
+
+def write_play_bag(path: Path, compression: str | None = None) -> None:
+    """/chatter "m0".."m9" every 0.1 s from t = 100 s, and /latched "old" at 100 s (latched)."""
+    with open_writer(path, compression=compression) as writer:
+        chatter = writer.add_connection(
+            "/chatter", "std_msgs/String", STRING_MD5, "string data\n", callerid="/talker"
+        )
+        latched = writer.add_connection(
+            "/latched",
+            "std_msgs/String",
+            STRING_MD5,
+            "string data\n",
+            callerid="/latcher",
+            latching=True,
+        )
+        writer.write(latched, 100 * 10**9, struct.pack("<I", 3) + b"old")
+        for i in range(10):
+            text = f"m{i}".encode()
+            writer.write(chatter, 100 * 10**9 + i * 10**8, struct.pack("<I", len(text)) + text)

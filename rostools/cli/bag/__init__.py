@@ -6,6 +6,7 @@ decompress); record and play live beside it.
 
 from __future__ import annotations
 
+import dataclasses
 import sys
 from collections.abc import Callable
 from functools import partial
@@ -44,7 +45,7 @@ CompressionOpt = Annotated[
 @app.command()
 def info(
     ctx: typer.Context,
-    bags: Annotated[list[Path], typer.Argument(help="One or more .bag or .mcap files.")],
+    bags: Annotated[list[str], typer.Argument(help="One or more .bag or .mcap files.")],
     freq: Annotated[bool, typer.Option("--freq", help="Median rate of each topic.")] = False,
     fmt: FormatOpt = None,
 ) -> None:
@@ -54,15 +55,15 @@ def info(
 
     fmt = output_format(ctx, fmt)
     results = []
-    for path in bags:
-        with open_bag(path) as reader:
+    for name in bags:
+        with open_bag(name) as reader:
             summary = reader.info()
             freqs = topic_frequencies(reader) if freq else None
-        results.append((summary, freqs))
+        results.append((summary, freqs, name))
     if fmt is Format.text:
-        sys.stdout.write("\n---\n".join(info_text(s, f) for s, f in results) + "\n")
+        sys.stdout.write("\n---\n".join(info_text(*r) for r in results) + "\n")
     else:
-        data = [info_data(s, f) for s, f in results]
+        data = [info_data(*r) for r in results]
         emit(fmt, data[0] if len(data) == 1 else data)
 
 
@@ -117,6 +118,10 @@ def _report(fmt: Format, report: CopyReport) -> None:
             f"wrote {report.messages_written} of {report.messages_read} messages to "
             f"{report.output} ({report.format}, {report.compression})\n"
         )
+    elif fmt is Format.json:
+        import json
+
+        sys.stdout.write(json.dumps(data) + "\n")  # the last line of the NDJSON progress stream
     else:
         emit(fmt, data)
 
@@ -227,7 +232,11 @@ def _in_place(
         if backup.exists() and not force:
             raise UsageError(f"{backup} exists; use --force to replace it")
         temp = path.with_name(path.name + ".tmp")
-        _copy_command(ctx, fmt, quiet, label, partial(run, path, temp))
+
+        def in_place(progress: Any, path: Path = path, temp: Path = temp) -> CopyReport:
+            return dataclasses.replace(run(path, temp, progress), output=path)
+
+        _copy_command(ctx, fmt, quiet, label, in_place)
         path.replace(backup)
         temp.replace(path)
 

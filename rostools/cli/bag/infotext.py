@@ -46,9 +46,11 @@ def duration_text(duration: float) -> str:
     return f"{duration:.1f}s"
 
 
-def info_text(info: BagInfo, frequencies: dict[str, float] | None = None) -> str:
+def info_text(
+    info: BagInfo, frequencies: dict[str, float] | None = None, name: str | None = None
+) -> str:
     """The text ``rosbag info`` prints, for a ``.bag`` or an MCAP file."""
-    rows: list[tuple[str, str]] = [("path", str(info.path))]
+    rows: list[tuple[str, str]] = [("path", name or str(info.path))]
     rows.append(
         (
             "version",
@@ -140,9 +142,15 @@ def _table(rows: list[tuple[str, str]]) -> str:
     return "\n".join(lines).rstrip()
 
 
-def info_data(info: BagInfo, frequencies: dict[str, float] | None = None) -> dict[str, Any]:
+def info_data(
+    info: BagInfo, frequencies: dict[str, float] | None = None, name: str | None = None
+) -> dict[str, Any]:
     """``rosbag info --yaml``'s keys (times in seconds, sizes in bytes), plus ours."""
-    data: dict[str, Any] = {"path": str(info.path), "version": info.version, "format": info.format}
+    data: dict[str, Any] = {
+        "path": name or str(info.path),
+        "version": info.version,
+        "format": info.format,
+    }
     if info.format == "mcap":
         data |= {"profile": info.profile, "library": info.library}
     if info.start_ns is not None and info.end_ns is not None:

@@ -1,0 +1,138 @@
+"""The file commands of ``rostools bag``: info, filter, convert, compress, decompress, recover."""
+
+from __future__ import annotations
+
+import json
+import re
+from pathlib import Path
+
+import pytest
+import yaml
+
+from rostools.bag.api import bag_info
+from tests.support.bagdata import STEP_NS, read_stream, write_sample
+from tests.support.env import run_cli
+
+
+def test_info_text_json_yaml_and_freq(tmp_path: Path) -> None:
+    sample = write_sample(tmp_path / "s.bag", 400, compression="bz2")
+    text = run_cli("bag", "info", str(sample.path), "--freq")
+    assert text.returncode == 0, text.stderr
+    assert re.search(r"^compression:\s+bz2 \[1/1 chunks", text.stdout, re.M)
+    assert re.search(r"/count\s+100 msgs @\s+250.0 Hz : std_msgs/Int32", text.stdout)
+    assert "(2 connections)" in text.stdout
+    data = json.loads(run_cli("bag", "info", str(sample.path), "-F", "json").stdout)
+    assert data["messages"] == 400 and data["indexed"] is True
+    assert {t["topic"]: t["messages"] for t in data["topics"]} == {
+        "/chatter": 200,
+        "/count": 100,
+        "/point": 100,
+    }
+    assert (
+        yaml.safe_load(run_cli("--format", "yaml", "bag", "info", str(sample.path)).stdout) == data
+    )
+    two = json.loads(
+        run_cli("bag", "info", str(sample.path), str(sample.path), "-F", "json").stdout
+    )
+    assert two == [data, data]
+
+
+def test_filter_by_expression_topics_and_time(tmp_path: Path) -> None:
+    sample = write_sample(tmp_path / "s.bag", 400)
+    out = tmp_path / "f.mcap"
+    expr = 'topic == "/count" and m.data % 8 == 2 and t.to_sec() >= 0'
+    done = run_cli("bag", "filter", str(sample.path), str(out), expr, "-F", "json")
+    assert done.returncode == 0, done.stderr
+    assert json.loads(done.stdout.splitlines()[-1])["messages_written"] == 50
+    kept = read_stream(out)
+    assert [(topic, t) for topic, _, t, _ in kept] == [
+        (topic, t)
+        for topic, _, t, _ in sample.stream
+        if topic == "/count" and (t // STEP_NS) % 8 == 2
+    ]
+    window = tmp_path / "w.bag"
+    done = run_cli(
+        "bag",
+        "filter",
+        str(sample.path),
+        str(window),
+        "-t",
+        "/point",
+        "--start",
+        "0.1",
+        "--end",
+        "0.2",
+    )
+    assert done.returncode == 0, done.stderr
+    times = [t for _, _, t, _ in read_stream(window)]
+    assert times and all(0.1e9 <= t <= 0.2e9 for t in times)
+    assert {topic for topic, *_ in read_stream(window)} == {"/point"}
+
+
+@pytest.mark.parametrize(
+    ("expr", "words"),
+    [("m.nosuch", "failed on"), ("(", "bad filter expression")],
+)
+def test_filter_expression_errors_leave_no_output(tmp_path: Path, expr: str, words: str) -> None:
+    sample = write_sample(tmp_path / "s.bag", 40)
+    done = run_cli("bag", "filter", str(sample.path), str(tmp_path / "o.bag"), expr)
+    assert done.returncode == 2 and words in done.stderr, done.stderr
+    assert done.stderr.count("\n") == 1
+    assert not (tmp_path / "o.bag").exists()
+
+
+def test_convert_round_trip_and_refusals(tmp_path: Path) -> None:
+    sample = write_sample(tmp_path / "s.bag", 500, compression="lz4")
+    mcap = tmp_path / "s.mcap"
+    back = tmp_path / "back.bag"
+    for src, dst, extra in ((sample.path, mcap, ["-c", "lz4"]), (mcap, back, ["-c", "bz2"])):
+        done = run_cli("bag", "convert", str(src), str(dst), *extra)
+        assert done.returncode == 0, done.stderr
+    assert read_stream(back) == read_stream(sample.path) == sample.stream
+    assert bag_info(mcap).compression[0].compression == "lz4"
+    assert bag_info(back).compression[0].compression == "bz2"
+    again = run_cli("bag", "convert", str(sample.path), str(mcap))
+    assert again.returncode == 2 and "exists" in again.stderr, again.stderr
+    same = run_cli("bag", "convert", str(sample.path), str(sample.path))
+    assert same.returncode == 2 and "same file" in same.stderr
+    bad = run_cli("bag", "convert", str(sample.path), str(tmp_path / "x.mcap"), "-c", "bz2")
+    assert bad.returncode == 2 and "bz2" in bad.stderr
+
+
+def test_compress_and_decompress_in_place(tmp_path: Path) -> None:
+    sample = write_sample(tmp_path / "s.bag", 300)
+    done = run_cli("bag", "compress", "--lz4", str(sample.path))
+    assert done.returncode == 0, done.stderr
+    assert f"to {sample.path} " in done.stderr  # the final name, not a temporary one
+    assert bag_info(sample.path).compression[0].compression == "lz4"
+    assert bag_info(tmp_path / "s.orig.bag").compression[0].compression == "none"
+    assert read_stream(sample.path) == sample.stream
+    refused = run_cli("bag", "decompress", str(sample.path))
+    assert refused.returncode == 2 and "--force" in refused.stderr
+    done = run_cli("bag", "decompress", "-f", str(sample.path))
+    assert done.returncode == 0, done.stderr
+    assert bag_info(sample.path).compression[0].compression == "none"
+    assert read_stream(sample.path) == sample.stream
+    outdir = tmp_path / "out"
+    outdir.mkdir()
+    done = run_cli("bag", "compress", str(sample.path), "--output-dir", str(outdir))
+    assert done.returncode == 0 and bag_info(outdir / "s.bag").compression[0].compression == "bz2"
+
+
+def test_recover_reports_loss_with_exit_6(tmp_path: Path) -> None:
+    sample = write_sample(
+        tmp_path / "s.bag", 3000, compression="bz2", chunk_size=20_000, close=False
+    )
+    size = sample.path.stat().st_size
+    cut = tmp_path / "cut.bag"
+    cut.write_bytes(sample.path.read_bytes()[: size - 5000])  # inside the last chunk
+    done = run_cli("bag", "recover", str(cut), "-F", "json")
+    assert done.returncode == 6, done.stderr
+    report = json.loads(done.stdout)
+    assert report["lost"] and report["output"] == str(tmp_path / "cut.recovered.bag")
+    recovered = read_stream(tmp_path / "cut.recovered.bag")
+    assert 0 < len(recovered) < 3000 and recovered == sample.stream[: len(recovered)]
+    whole = write_sample(tmp_path / "w.bag", 500, close=False)
+    done = run_cli("bag", "reindex", str(whole.path))
+    assert done.returncode == 0, done.stderr
+    assert read_stream(tmp_path / "w.recovered.bag") == whole.stream

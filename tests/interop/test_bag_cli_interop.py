@@ -1,0 +1,169 @@
+"""``bag record`` and ``bag play`` with real ROS 1: rospy and roscpp nodes, rosbag and rosbag play.
+
+Each test runs on ``rostools core`` and on a real ``roscore``. What is checked against real ROS
+1 code: we record what rospy and roscpp publishers send (and real rosbag reads that file the
+same way we do); real ``rosbag play`` plays our files to our subscriber; real rospy and roscpp
+subscribers receive what ``bag play`` sends, latched topics included.
+"""
+
+from __future__ import annotations
+
+import re
+import signal
+import subprocess
+import sys
+import time
+import xmlrpc.client
+from pathlib import Path
+
+import pytest
+
+from rostools.bag.api import open_bag
+from tests.conftest import MasterInfo
+from tests.interop.test_bag_interop import as_rosbag_sees, rosbag_view
+from tests.support import cppbuild
+from tests.support.bagdata import write_play_bag
+from tests.support.env import needs_ros1
+from tests.support.procs import Proc, start_ros1_node, wait_for
+
+pytestmark = [pytest.mark.interop, needs_ros1]
+_CPP_REASON = cppbuild.cpp_missing()
+needs_cpp = pytest.mark.skipif(_CPP_REASON is not None, reason=_CPP_REASON or "")
+
+
+def rostools(info: MasterInfo, *args: str, cwd: Path | None = None) -> Proc:
+    return Proc([sys.executable, "-m", "rostools", *args], env=info.cli_env, cwd=cwd)
+
+
+def subscribed(uri: str, topic: str, prefix: str) -> bool:
+    _, _, (_, subs, _) = xmlrpc.client.ServerProxy(uri).getSystemState("/test")
+    return any(t == topic and any(n.startswith(prefix) for n in nodes) for t, nodes in subs)
+
+
+def hellos(path: Path, topic: str) -> list[int]:
+    with open_bag(path) as reader:
+        texts = [bytes(d[4:]).decode() for _, _, d in reader.messages([topic])]
+    return [int(t.split()[1]) for t in texts]
+
+
+@needs_cpp
+@pytest.mark.parametrize("storage", ["bag", "mcap"])
+def test_record_captures_rospy_and_roscpp(
+    any_master: MasterInfo, tmp_path: Path, storage: str
+) -> None:
+    talker = cppbuild.build("talker")
+    out = tmp_path / f"x.{storage}"
+    flags = ["--lz4"] if storage == "bag" else []
+    rec = rostools(any_master, "bag", "record", "-O", out.name, "/py", "/cpp", *flags, cwd=tmp_path)
+    pubs = [
+        start_ros1_node("talker.py", ["/py", "50"], any_master.ros_env),
+        Proc([str(talker), "/cpp", "--rate", "50", "--name", "cpp_talker"], env=any_master.ros_env),
+    ]
+    try:
+        wait_for(lambda: subscribed(any_master.uri, "/cpp", "/rostools_record"), 20, "record")
+        time.sleep(3.0)
+        rec.signal(signal.SIGINT)
+        assert rec.popen.wait(20) == 0, rec.output()[1]
+    finally:
+        rec.stop()
+        for pub in pubs:
+            pub.stop()
+    for topic, callerid in (("/py", "/talker"), ("/cpp", "/cpp_talker")):
+        got = hellos(out, topic)
+        assert len(got) > 50, topic
+        assert got == list(range(got[0], got[0] + len(got))), topic  # none lost
+        with open_bag(out) as reader:
+            conns = [c for c in reader.connections if c.topic == topic]
+        assert [(c.callerid, c.type, c.latching) for c in conns] == [
+            (callerid, "std_msgs/String", False)
+        ]
+    if storage == "bag":
+        view = rosbag_view(out)[out]
+        assert "error" not in view, view
+        stream, headers = as_rosbag_sees(out)
+        assert view["stream"] == stream
+        assert view["headers"] == headers
+        assert view["info"]["compression"] == "lz4"
+
+
+@pytest.mark.parametrize("compression", ["none", "bz2", "lz4"])
+def test_real_rosbag_play_plays_our_bags(
+    any_master: MasterInfo, tmp_path: Path, compression: str
+) -> None:
+    bag = tmp_path / "p.bag"
+    write_play_bag(bag, compression)
+    echo = rostools(any_master, "topic", "echo", "/chatter", "-n", "10")
+    player = Proc(["rosbag", "play", "-d", "3", "-q", str(bag)], env=any_master.ros_env)
+    try:
+        assert echo.popen.wait(30) == 0
+        assert player.popen.wait(30) == 0
+        out, _ = echo.output()
+        assert re.findall(r'data: "(m\d)"', out) == [f"m{i}" for i in range(10)]
+    finally:
+        player.stop()
+        echo.stop()
+
+
+def listen(info: MasterInfo, topic: str, cpp: bool = False) -> Proc:
+    if cpp:
+        listener = cppbuild.build("listener")
+        return Proc([str(listener), topic, "--anonymous"], env=info.ros_env)
+    return start_ros1_node("listener.py", [topic], info.ros_env)
+
+
+def lines(proc: Proc, count: int) -> list[str]:
+    return [proc.expect(r"^got ").split(" ", 1)[1].strip() for _ in range(count)]
+
+
+@pytest.mark.parametrize(
+    "cpp", [False, pytest.param(True, marks=needs_cpp)], ids=["rospy", "roscpp"]
+)
+def test_real_subscribers_get_what_we_play(
+    any_master: MasterInfo, tmp_path: Path, cpp: bool
+) -> None:
+    bag = tmp_path / "p.bag"
+    write_play_bag(bag)
+    # -s 0.5: /latched's only message is before the start, and must still be sent (latched)
+    player = rostools(any_master, "bag", "play", str(bag), "-s", "0.5", "-d", "4", "-k")
+    chatter = listen(any_master, "/chatter", cpp)
+    try:
+        chatter.expect("ready", 20)
+        assert lines(chatter, 5) == [f"m{i}" for i in range(5, 10)]
+        late = listen(any_master, "/latched", cpp)  # after the end: the latched copy is kept
+        try:
+            assert lines(late, 1) == ["old"]
+        finally:
+            late.stop()
+    finally:
+        chatter.stop()
+        assert player.stop() == 0
+
+
+def test_real_rosbag_info_reads_our_recording(any_master: MasterInfo, tmp_path: Path) -> None:
+    pub = rostools(any_master, "topic", "pub", "-r", "50", "/t", "std_msgs/String", "data: x")
+    rec = rostools(any_master, "bag", "record", "-O", "r.bag", "--bz2", "/t", cwd=tmp_path)
+    try:
+        wait_for(lambda: subscribed(any_master.uri, "/t", "/rostools_record"), 20, "record")
+        time.sleep(1.5)
+        rec.signal(signal.SIGINT)
+        assert rec.popen.wait(20) == 0
+    finally:
+        rec.stop()
+        pub.stop()
+    done = subprocess.run(
+        ["rosbag", "info", str(tmp_path / "r.bag")],
+        env=any_master.ros_env,
+        capture_output=True,
+        text=True,
+        timeout=60,
+        check=False,
+    )
+    assert done.returncode == 0, done.stderr
+    assert re.search(r"compression:\s+bz2", done.stdout)
+    count = int(re.search(r"/t\s+(\d+) msgs", done.stdout).group(1))  # type: ignore[union-attr]
+    assert count == len(raw_messages(tmp_path / "r.bag", "/t")) > 20
+
+
+def raw_messages(path: Path, topic: str) -> list[bytes]:
+    with open_bag(path) as reader:
+        return [bytes(d) for _, _, d in reader.messages([topic])]

@@ -31,7 +31,7 @@ def click_exceptions() -> Any:
     try:
         from typer._click import exceptions
     except ImportError:  # pragma: no cover - older typer uses the click package
-        from click import exceptions  # type: ignore[no-redef]
+        from click import exceptions  # type: ignore[no-redef,import-not-found,unused-ignore]
     return exceptions
 
 

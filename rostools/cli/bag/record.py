@@ -157,12 +157,11 @@ class LiveTable:
         for topic, s in sorted(rec.stats.items()):
             hz, bw = self.rates.get(topic, (0.0, 0.0))
             drops = f"[bold red]{s.drops}[/]" if s.drops else "0"
+            kind = s.type or "[dim]no publisher yet[/]"
+            pubs = str(rec.publishers(topic))
             table.add_row(
-                topic, s.type, str(rec.publishers(topic)), str(s.messages),
-                f"{hz:.1f} Hz", f"{_size(bw)}/s", drops,
-            )  # fmt: skip
-        for topic in sorted(rec.subscribed - rec.stats.keys()):
-            table.add_row(topic, "[dim]waiting[/]", "0", "0", "", "", "0")
+                topic, kind, pubs, str(s.messages), f"{hz:.1f} Hz", f"{_size(bw)}/s", drops
+            )
         return table
 
 

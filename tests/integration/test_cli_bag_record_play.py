@@ -305,3 +305,29 @@ def test_record_without_master_is_unreachable(cli_env: dict[str, str], tmp_path:
     assert done.returncode == 4, done.stderr
     assert done.stderr.splitlines()[-1].startswith("rostools: cannot reach the master")
     assert list(tmp_path.iterdir()) == []
+
+
+def test_play_keys_step_and_pause(
+    rostools_master: str, cli_env: dict[str, str], tmp_path: Path
+) -> None:
+    import pexpect
+
+    bag = tmp_path / "p.bag"
+    write_play_bag(bag)
+    argv = ["-m", "rostools", "bag", "play", str(bag), "--pause", "-d", "0"]
+    child = pexpect.spawn(sys.executable, argv, env=cli_env, timeout=20, encoding="utf-8")
+    try:
+        child.expect("Hit space to toggle paused, or 's' to step.")
+        child.expect(r"\[PAUSED \]")
+        chatter = echo(cli_env, "/chatter", 3)
+        wait_for(lambda: subscribed(rostools_master, "/chatter", "/rostools_echo"), 15, "echo")
+        time.sleep(1.0)  # registered; give the TCP connection time to come up
+        child.send("ssss")  # /latched "old", then m0, m1, m2
+        assert received(chatter) == ["m0", "m1", "m2"]
+        child.expect(r"\[PAUSED \]")  # still paused after the steps
+        child.send(" ")
+        child.expect("Done.")
+        child.expect(pexpect.EOF)
+    finally:
+        child.close(force=True)
+    assert child.exitstatus == 0

@@ -22,6 +22,8 @@ packages=(
   libstereo-msgs-dev libtrajectory-msgs-dev libvisualization-msgs-dev libtf2-msgs-dev
   libmap-msgs-dev libroscpp-msg-dev libros-rosgraph-msgs-dev
   g++ make
+  # the shells the completion tests drive, and rosbash (rostopic's own completion) to compare
+  zsh fish rosbash
 )
 
 missing=()

@@ -23,6 +23,7 @@ GROUPS: dict[str, str] = {
     "node": "ROS nodes: list, info, ping, kill, machine, cleanup, and graph.",
     "bag": "Bags (.bag and MCAP): record, play, info, filter, convert, recover, compress.",
     "core": "Run the bundled master and parameter server (roscore).",
+    "completion": "Shell completion for bash, zsh and fish: show or install the script.",
 }
 
 
@@ -49,6 +50,7 @@ app = typer.Typer(
     help="The ROS 1 command-line tools in one CLI, no ROS installation needed.",
     no_args_is_help=True,
     pretty_exceptions_enable=False,
+    add_completion=False,  # ``rostools completion`` replaces Typer's own
     context_settings={"help_option_names": ["-h", "--help"]},
 )
 

@@ -1,0 +1,278 @@
+"""Tab completion, answered without importing typer: ``rostools __complete SHELL CWORD WORDS...``.
+
+The shell scripts in ``completions/`` call this with the words of the command line. It walks
+``tree.json`` (the command tree, generated from the Typer app) to see what the word under the
+cursor is: a group, a command, an option, an option's value or a positional argument of some
+kind. Live names (topics, services, nodes, parameters) come from the master; types from the
+type store; a topic's type and a message's YAML template after ``topic pub /t``, as rosbash
+offered. Everything runs under a hard deadline (``DEADLINE``): a master that is down or slow
+costs at most that, and completes what it can offline.
+
+Output: one candidate per line, ``value<TAB>description``; or one directive line
+``:files EXT...`` / ``:dirs`` asking the shell for its own file completion.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import sys
+import time
+from collections.abc import Callable, Iterator, Sequence
+from pathlib import Path
+from typing import Any
+
+#: Seconds a completion may take in all, start-up included (``ROSTOOLS_COMPLETE_DEADLINE``).
+DEADLINE = 0.3
+TREE = Path(__file__).with_name("tree.json")
+Candidates = list[tuple[str, str]]
+
+
+class _DeadlineError(Exception):
+    """The deadline passed."""
+
+
+def main(argv: Sequence[str]) -> int:
+    """``SHELL CWORD WORDS...``: print the candidates for ``WORDS[CWORD]``."""
+    started = _process_start()
+    if len(argv) < 2 or not argv[1].isdigit():
+        sys.stderr.write("usage: rostools __complete SHELL CWORD WORDS...\n")
+        return 2
+    cword, words = int(argv[1]), list(argv[2:])
+    budget = float(os.environ.get("ROSTOOLS_COMPLETE_DEADLINE", DEADLINE))
+    deadline = started + budget
+    lines: list[str] = []
+
+    def late(signum: int, frame: Any) -> None:
+        raise _DeadlineError
+
+    signal.signal(signal.SIGALRM, late)
+    signal.setitimer(signal.ITIMER_REAL, max(deadline - time.monotonic(), 0.001))
+    try:
+        for value, help_text in Completer(words, cword, deadline, argv[0]).complete():
+            lines.append(f"{value}\t{help_text}" if help_text else value)
+    except _DeadlineError:
+        pass  # print what there is
+    finally:
+        signal.setitimer(signal.ITIMER_REAL, 0)
+    sys.stdout.write("".join(line + "\n" for line in lines))
+    return 0
+
+
+def _process_start() -> float:
+    """When this process started, on the monotonic clock (the budget includes start-up)."""
+    try:
+        with open(f"/proc/{os.getpid()}/stat") as f:
+            ticks = int(f.read().rsplit(")", 1)[1].split()[19])
+        with open("/proc/uptime") as f:
+            uptime = float(f.read().split()[0])
+        age = uptime - ticks / os.sysconf("SC_CLK_TCK")
+        return time.monotonic() - max(min(age, 1.0), 0.0)
+    except (OSError, ValueError, IndexError):
+        return time.monotonic()
+
+
+def load_tree() -> dict[str, Any]:
+    """The command tree (see ``rostools.cli.completion.build_tree``)."""
+    with TREE.open() as f:
+        tree: dict[str, Any] = json.load(f)
+    return tree
+
+
+class Completer:
+    """What can go at ``words[cword]``."""
+
+    def __init__(self, words: list[str], cword: int, deadline: float, shell: str = "bash") -> None:
+        self.shell = shell
+        self.words = words
+        self.cword = cword
+        self.cur = words[cword] if cword < len(words) else ""
+        self.deadline = deadline
+        self.master_uri = os.environ.get("ROS_MASTER_URI") or "http://localhost:11311"
+        self.positionals: list[str] = []
+
+    def left(self) -> float:
+        """Seconds left before the deadline."""
+        return max(self.deadline - time.monotonic(), 0.001)
+
+    def complete(self) -> Iterator[tuple[str, str]]:
+        """The candidates that start with the current word."""
+        for value, help_text in self._candidates():
+            if value.startswith(self.cur) or value.startswith(":"):
+                yield value, help_text
+
+    def _candidates(self) -> Candidates:
+        node = load_tree()
+        i = 1
+        while i < self.cword:
+            word = self.words[i]
+            name = word.split("=", 1)[0]
+            option = node["options"].get(name) if word.startswith("-") else None
+            if option is not None:
+                if option["value"] and "=" not in word:
+                    if i + 1 == self.cword:
+                        return self._value(option["value"], node)
+                    if name == "--master-uri":
+                        self.master_uri = self.words[i + 1]
+                    i += 2
+                    continue
+                if name == "--master-uri":
+                    self.master_uri = word.split("=", 1)[1]
+            elif ":=" in word or word.startswith("-"):
+                pass  # a remapping, or an option we do not know
+            elif word in node.get("commands", {}):
+                node = node["commands"][word]
+                self.positionals = []
+            else:
+                self.positionals.append(word)
+            i += 1
+        if self.cur.startswith("-"):
+            return [(name, o["help"]) for name, o in sorted(node["options"].items())]
+        if node.get("commands"):
+            return [(name, c["help"]) for name, c in node["commands"].items()]
+        args = node.get("args", [])
+        if not args:
+            return []
+        index = min(len(self.positionals), len(args) - 1)
+        if len(self.positionals) >= len(args) and not args[-1]["many"]:
+            return []
+        return self._value(args[index]["kind"], node)
+
+    # values -----------------------------------------------------------------------------
+
+    def _value(self, kind: str, node: dict[str, Any]) -> Candidates:
+        if kind.startswith("choice:"):
+            return [(c, "") for c in kind[len("choice:") :].split(",")]
+        if kind.startswith("files"):
+            return [(":" + kind, "")]
+        if kind == "dirs":
+            return [(":dirs", "")]
+        source = _KINDS.get(kind)
+        return source(self) if source is not None else []
+
+    def _master(self) -> Any:
+        from rostools.graph.masterapi import MasterProxy
+
+        return MasterProxy(self.master_uri, "/rostools_complete", timeout=self.left())
+
+    def _state(self) -> tuple[list[Any], list[Any], list[Any]]:
+        from rostools.errors import RostoolsError
+
+        try:
+            pubs, subs, services = self._master().raw("getSystemState")[2]
+        except (RostoolsError, OSError, ValueError, TypeError):
+            return [], [], []
+        return pubs, subs, services
+
+    def topics(self) -> Candidates:
+        """Topics with a publisher or a subscriber."""
+        pubs, subs, _ = self._state()
+        return [(t, "") for t in sorted({t for t, _ in pubs} | {t for t, _ in subs})]
+
+    def services(self) -> Candidates:
+        """Services with a provider."""
+        return [(s, "") for s in sorted({s for s, _ in self._state()[2]})]
+
+    def nodes(self) -> Candidates:
+        """Nodes with any registration."""
+        names: set[str] = set()
+        for entries in self._state():
+            for _, nodes in entries:
+                names.update(nodes)
+        return [(n, "") for n in sorted(names)]
+
+    def params(self) -> Candidates:
+        """Parameter names, and the namespaces above them."""
+        from rostools.errors import RostoolsError
+
+        try:
+            names = self._master().raw("getParamNames")[2]
+        except (RostoolsError, OSError, ValueError, TypeError):
+            return []
+        found = set(names)
+        for name in names:
+            parts = name.split("/")
+            found.update("/".join(parts[:k]) + "/" for k in range(2, len(parts)))
+        return [(n, "") for n in sorted(found)]
+
+    def _types(self, kind: str) -> Candidates:
+        from rostools.msgs.store import TypeStore
+
+        return [(t, kind) for t in TypeStore.default().types(kind)]  # type: ignore[arg-type]
+
+    def msg_types(self) -> Candidates:
+        """Message types the store knows."""
+        return self._types("msg")
+
+    def srv_types(self) -> Candidates:
+        """Service types the store knows."""
+        return self._types("srv")
+
+    def all_types(self) -> Candidates:
+        """Message and service types."""
+        return self._types("msg") + self._types("srv")
+
+    def topic_type(self) -> Candidates:
+        """``topic pub /t <TAB>``: the topic's current type, else every message type."""
+        from rostools.errors import RostoolsError
+
+        if self.positionals:
+            try:
+                types = dict(self._master().raw("getTopicTypes")[2])
+            except (RostoolsError, OSError, ValueError, TypeError):
+                types = {}
+            topic = self.positionals[0]
+            current = types.get(topic if topic.startswith("/") else "/" + topic)
+            if current:
+                return [(current, "the topic's type")]
+        return self.msg_types()
+
+    def message_template(self) -> Candidates:
+        """``topic pub /t TYPE <TAB>``: the message as one line of YAML, quoted."""
+        if len(self.positionals) < 2 or self.cur:
+            return []
+        return self._template(lambda store: store.msg(self.positionals[1]))
+
+    def request_template(self) -> Candidates:
+        """``service call /s <TAB>``: the request as one line of YAML, quoted."""
+        if not self.positionals or self.cur:
+            return []
+        from rostools.errors import RostoolsError
+        from rostools.graph.blocking import BlockingServiceClient
+
+        name = self.positionals[0]
+        name = name if name.startswith("/") else "/" + name
+        try:
+            client = BlockingServiceClient(self._master(), name, timeout=self.left())
+            srv_type = client.probe("/rostools_complete").get("type", "")
+        except (RostoolsError, OSError):
+            return []
+        return self._template(lambda store: store.srv(srv_type).request)
+
+    def _template(self, spec_of: Callable[[Any], Any]) -> Candidates:
+        from rostools.errors import RostoolsError
+        from rostools.msgs.describe import proto
+        from rostools.msgs.store import TypeStore
+
+        store = TypeStore.default()
+        try:
+            text = proto(store, spec_of(store), flow=True)
+        except (RostoolsError, KeyError, ValueError):
+            return []
+        # fish escapes what it inserts; bash and zsh insert the quotes we give
+        return [(text if self.shell == "fish" else f'"{text}"', "YAML template")]
+
+
+_KINDS: dict[str, Callable[[Completer], Candidates]] = {
+    "topic": Completer.topics,
+    "service": Completer.services,
+    "node": Completer.nodes,
+    "param": Completer.params,
+    "msg": Completer.msg_types,
+    "srv": Completer.srv_types,
+    "type": Completer.all_types,
+    "topic_type": Completer.topic_type,
+    "message": Completer.message_template,
+    "request": Completer.request_template,
+}

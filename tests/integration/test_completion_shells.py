@@ -1,0 +1,153 @@
+"""Tab completion in real bash, zsh and fish, with a live master and without one."""
+
+from __future__ import annotations
+
+import socket
+import sys
+import time
+from collections.abc import Iterator
+from pathlib import Path
+
+import pytest
+
+from rostools.cli.complete import TREE
+from rostools.cli.completion import SCRIPT_NAMES, script, tree_text
+from tests.support.procs import Proc, wait_for
+from tests.support.shells import ROOT, Shell, shell_missing
+
+SHELLS = [
+    pytest.param(
+        s, marks=pytest.mark.skipif(shell_missing(s) is not None, reason=shell_missing(s) or "")
+    )
+    for s in ("bash", "zsh", "fish")
+]
+
+
+def test_checked_in_scripts_and_tree_are_fresh() -> None:
+    hint = "stale: run python -m rostools.cli.completion"
+    assert TREE.read_text() == tree_text(), hint
+    for shell, name in SCRIPT_NAMES.items():
+        assert (ROOT / "completions" / name).read_text() == script(shell), hint
+
+
+@pytest.fixture
+def graph(rostools_master: str, cli_env: dict[str, str]) -> Iterator[dict[str, str]]:
+    """A publisher on /chatter_demo and the test services on the master."""
+    procs = [
+        Proc([sys.executable, "-m", "rostools", "topic", "pub", "-r", "5", "/chatter_demo",
+              "std_msgs/String", "data: hi"], env=cli_env),
+        Proc([sys.executable, str(ROOT / "tests/support/rt_nodes/rt_services.py")], env=cli_env),
+    ]  # fmt: skip
+    try:
+        wait_for(lambda: _registered(rostools_master), 20, "publisher and services")
+        yield cli_env
+    finally:
+        for proc in procs:
+            proc.stop()
+
+
+def _registered(uri: str) -> bool:
+    import xmlrpc.client
+
+    pubs, _, services = xmlrpc.client.ServerProxy(uri).getSystemState("/t")[2]
+    return any(t == "/chatter_demo" for t, _ in pubs) and any(
+        s == "/add_two_ints" for s, _ in services
+    )
+
+
+@pytest.fixture
+def shell_in(request: pytest.FixtureRequest, tmp_path: Path) -> Iterator[object]:
+    opened: list[Shell] = []
+
+    def open_shell(name: str, env: dict[str, str]) -> Shell:
+        shell = Shell(name, env, tmp_path)
+        opened.append(shell)
+        return shell
+
+    yield open_shell
+    for shell in opened:
+        shell.close()
+
+
+@pytest.mark.parametrize("shell", SHELLS)
+def test_live_names_types_and_templates(
+    shell: str, graph: dict[str, str], shell_in: object, tmp_path: Path
+) -> None:
+    sh: Shell = shell_in(shell, graph)  # type: ignore[operator]
+    assert sh.complete("rostools topic ec") == "rostools topic echo"
+    assert sh.complete("rostools topic echo /chatter_d") == "rostools topic echo /chatter_demo"
+    assert sh.complete("rostools topic pub /chatter_demo ") == (
+        "rostools topic pub /chatter_demo std_msgs/String"
+    )
+    assert sh.complete("rostools topic pub /chatter_demo std_msgs/String ") == (
+        "rostools topic pub /chatter_demo std_msgs/String {data: ''}"
+    )
+    assert sh.complete("rostools service call /add_t") == "rostools service call /add_two_ints"
+    assert sh.complete("rostools service call /add_two_ints ") == (
+        "rostools service call /add_two_ints {a: 0, b: 0}"
+    )
+    assert sh.complete("rostools param get /rosd") == "rostools param get /rosdistro"
+    assert sh.complete("rostools --format ya") == "rostools --format yaml"
+
+
+@pytest.mark.parametrize("shell", SHELLS)
+def test_bag_files_offered(
+    shell: str, cli_env: dict[str, str], shell_in: object, tmp_path: Path
+) -> None:
+    for name in ("run.bag", "trip.mcap", "notes.txt"):
+        (tmp_path / name).write_text("")
+    sh: Shell = shell_in(shell, cli_env)  # type: ignore[operator]
+    assert sh.complete("rostools bag info ru") == "rostools bag info run.bag"
+    assert sh.complete("rostools bag info no") == "rostools bag info no"  # not a bag: not offered
+    shown = sh.offers("rostools bag play ")
+    assert "run.bag" in shown and "trip.mcap" in shown and "notes.txt" not in shown
+
+
+@pytest.mark.parametrize("shell", SHELLS)
+def test_without_a_master_completes_offline_and_fast(
+    shell: str, cli_env: dict[str, str], shell_in: object
+) -> None:
+    sh: Shell = shell_in(shell, cli_env)  # type: ignore[operator]  # master: the discard port
+    assert sh.complete("rostools node ki") == "rostools node kill"
+    assert sh.complete("rostools msg show geometry_msgs/PointSt") == (
+        "rostools msg show geometry_msgs/PointStamped"
+    )
+    started = time.monotonic()
+    assert sh.complete("rostools topic echo /nothing_her") == "rostools topic echo /nothing_her"
+    assert time.monotonic() - started < 3  # includes the harness's own settling waits
+
+
+def test_a_silent_master_cannot_hold_completion_past_the_deadline(
+    cli_env: dict[str, str],
+) -> None:
+    import subprocess
+
+    with socket.socket() as silent:  # accepts connections, never answers
+        silent.bind(("127.0.0.1", 0))
+        silent.listen(8)
+        env = dict(cli_env, ROS_MASTER_URI=f"http://127.0.0.1:{silent.getsockname()[1]}")
+        argv = [sys.executable, "-m", "rostools", "__complete", "bash", "3",
+                "rostools", "topic", "echo", "/"]  # fmt: skip
+        started = time.monotonic()
+        done = subprocess.run(argv, env=env, capture_output=True, text=True, timeout=10)
+        took = time.monotonic() - started
+    assert done.returncode == 0 and done.stdout == ""
+    assert took < 0.6, took  # 300 ms deadline, plus the interpreter's exit
+
+
+@pytest.mark.parametrize("shell", ["bash", "zsh", "fish"])
+def test_show_and_install(shell: str, cli_env: dict[str, str], tmp_path: Path) -> None:
+    from rostools.cli.completion import install_target
+    from tests.support.env import run_cli
+
+    shown = run_cli("completion", "show", shell, env=cli_env)
+    assert shown.returncode == 0 and shown.stdout == script(shell)
+    for _ in range(2):  # a second install changes nothing more
+        done = run_cli("completion", "install", shell, env=cli_env)
+        assert done.returncode == 0, done.stderr
+    target, rc, line = install_target(shell, Path(cli_env["HOME"]))
+    assert target.read_text() == script(shell)
+    if rc is not None:
+        assert rc.read_text().count(line) == 1
+    bad = run_cli("completion", "show", "tcsh", env=cli_env)
+    assert bad.returncode == 2 and "unknown shell" in bad.stderr

@@ -72,10 +72,10 @@ class TopicStats:
     """What was received on one topic."""
 
     type: str = ""
-    messages: int = 0
+    messages: int = 0  # received
     bytes: int = 0
     drops: int = 0
-    publishers: int = 0
+    written: int = 0  # less than received by the drops and what came after a size/time limit
 
 
 def file_name(base: Path, split: bool, index: int) -> Path:
@@ -199,6 +199,7 @@ class _Writer(threading.Thread):
                 writer.write(conn, t_ns, data)
                 self.written += len(data)
                 rec.written_bytes += len(data)
+                rec.stats[topic].written += 1
             if self.writer is not None and time.monotonic() - last_flush > FLUSH_PERIOD:
                 self.writer.flush()
                 last_flush = time.monotonic()

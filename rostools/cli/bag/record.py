@@ -86,11 +86,11 @@ def summary_data(rec: Recorder) -> dict[str, Any]:
     """What was recorded: files, and per topic its type, messages, bytes and drops."""
     return {
         "files": [str(p) for p in rec.closed_files],
-        "messages": sum(s.messages for s in rec.stats.values()),
+        "messages": sum(s.written for s in rec.stats.values()),
         "bytes": rec.written_bytes,
         "drops": rec.drops,
         "topics": {
-            topic: {"type": s.type, "messages": s.messages, "bytes": s.bytes, "drops": s.drops}
+            topic: {"type": s.type, "messages": s.written, "received": s.messages, "drops": s.drops}
             for topic, s in sorted(rec.stats.items())
         },
     }
@@ -100,7 +100,8 @@ def summary_text(data: dict[str, Any]) -> str:
     """The end-of-recording summary for people."""
     lines = [
         f"recorded {data['messages']} messages ({_size(data['bytes'])}) on "
-        f"{len(data['topics'])} topics into {', '.join(data['files']) or 'no file'}"
+        f"{len(data['topics'])} topic{'' if len(data['topics']) == 1 else 's'} into "
+        f"{', '.join(data['files']) or 'no file'}"
     ]
     for topic, t in data["topics"].items():
         drops = f", {t['drops']} DROPPED" if t["drops"] else ""

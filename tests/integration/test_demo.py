@@ -1,0 +1,39 @@
+"""``rostools demo``: the first five minutes, on a machine without ROS."""
+
+from __future__ import annotations
+
+import re
+import socket
+import time
+from pathlib import Path
+
+from rostools.bag.api import bag_info
+from tests.support.env import run_cli
+
+
+def test_demo_runs_the_main_job_in_under_ten_seconds(
+    cli_env: dict[str, str], tmp_path: Path
+) -> None:
+    env = {k: v for k, v in cli_env.items() if k != "ROS_MASTER_URI"}
+    started = time.monotonic()
+    done = run_cli("demo", env=env, cwd=tmp_path, timeout=60)
+    took = time.monotonic() - started
+    assert done.returncode == 0, done.stdout + done.stderr
+    assert took < 10, took
+    out = done.stdout
+    for shown in (
+        "$ rostools topic list\n/chatter",
+        'data: "hello world',
+        "average rate: ",
+        "sum: 5",
+        "robot_name: demo_bot",
+        "$ rostools bag info demo.mcap",
+    ):
+        assert shown in out, shown
+    info = bag_info(tmp_path / "demo.mcap")
+    assert 20 <= info.message_count <= 35  # three seconds at 10 Hz
+    recorded = re.search(r"recorded (\d+) messages", out)
+    assert recorded and int(recorded.group(1)) == info.message_count
+    port = int(re.search(r"a master at http://[^:]+:(\d+)/", out).group(1))  # type: ignore[union-attr]
+    with socket.socket() as probe:  # nothing is left listening
+        assert probe.connect_ex(("127.0.0.1", port)) != 0

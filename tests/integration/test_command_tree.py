@@ -1,0 +1,153 @@
+"""Every command of the tree, run for real with ``--format json``: valid JSON, one way or the other.
+
+The tree is ``rostools/cli/tree.json`` (generated from the app, and checked fresh by the
+completion tests). A command added without a recipe here fails ``test_every_command_has_a_recipe``.
+"""
+
+from __future__ import annotations
+
+import json
+import sys
+from collections.abc import Iterator
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+from rostools.cli.complete import load_tree
+from tests.support.bagdata import write_sample
+from tests.support.env import run_cli
+from tests.support.procs import Proc, free_port, start_rostools_core, wait_for
+
+ROOT = Path(__file__).resolve().parent.parent.parent
+
+#: Commands that print no data (they act, or print a script): no --format to test.
+NOT_DATA = {"topic pub", "param set", "param delete", "param load", "completion show", "demo"}
+
+#: command -> its arguments; ``{bag}``, ``{tmp}`` are filled in. ``-F json`` is added.
+RECIPES: dict[str, list[str]] = {
+    "topic list": ["-v"],
+    "topic info": ["/chatter_demo"],
+    "topic find": ["std_msgs/String"],
+    "topic type": ["/stamped/header"],
+    "topic echo": ["/stamped", "-n", "2"],
+    "topic hz": ["/chatter_demo", "--timeout", "1.5"],
+    "topic bw": ["/chatter_demo", "--timeout", "1.5"],
+    "topic delay": ["/stamped", "--timeout", "1.5"],
+    "service list": ["-n"],
+    "service info": ["/add_two_ints"],
+    "service type": ["/add_two_ints"],
+    "service find": ["std_srvs/Trigger"],
+    "service uri": ["/add_two_ints"],
+    "service args": ["/add_two_ints"],
+    "service call": ["/add_two_ints", "{a: 1, b: 2}"],
+    "param list": [],
+    "param get": ["/demo"],
+    "param dump": ["-"],
+    "msg show": ["geometry_msgs/PoseStamped"],
+    "msg md5": ["std_srvs/Trigger"],
+    "msg list": [],
+    "msg package": ["std_msgs"],
+    "msg packages": [],
+    "msg proto": ["geometry_msgs/Point"],
+    "node list": ["-a"],
+    "node info": ["/rosout"],
+    "node ping": ["/rosout", "-c", "2"],
+    "node kill": ["/victim"],
+    "node machine": [],
+    "node cleanup": ["--dry-run"],
+    "node graph": [],
+    "bag info": ["{bag}", "--freq"],
+    "bag filter": ["{bag}", "{tmp}/filtered.mcap", "topic == '/count'"],
+    "bag convert": ["{bag}", "{tmp}/converted.mcap"],
+    "bag compress": ["{tmp}/copy.bag"],
+    "bag decompress": ["{tmp}/copy.bag", "-f"],
+    "bag recover": ["{bag}", "{tmp}/recovered.bag"],
+    "bag reindex": ["{bag}", "{tmp}/reindexed.bag"],
+    "bag play": ["{bag}", "-i", "-d", "0"],
+    "bag record": ["/chatter_demo", "-l", "2", "-O", "{tmp}/rec.bag"],
+    "completion install": ["fish"],
+}
+
+
+def commands() -> list[str]:
+    found = []
+    for group, node in load_tree()["commands"].items():
+        if "commands" in node:
+            found += [f"{group} {name}" for name in node["commands"]]
+        else:
+            found.append(group)
+    return found
+
+
+def test_every_command_has_a_recipe() -> None:
+    missing = set(commands()) - RECIPES.keys() - NOT_DATA - {"core"}
+    assert not missing, f"add a --format json recipe for: {sorted(missing)}"
+    assert not (RECIPES.keys() - set(commands())), "recipes for commands that do not exist"
+
+
+def parse(text: str) -> list[Any]:
+    """One JSON document, or NDJSON: one document per line. Raises on anything else."""
+    try:
+        return [json.loads(text)]
+    except json.JSONDecodeError:
+        return [json.loads(line) for line in text.splitlines() if line.strip()]
+
+
+@pytest.fixture(scope="module")
+def graph(tmp_path_factory: pytest.TempPathFactory) -> Iterator[tuple[dict[str, str], Path]]:
+    """A master with a talker, a stamped topic, services, parameters and a node to kill."""
+    import os
+
+    tmp = tmp_path_factory.mktemp("tree")
+    env = {k: v for k, v in os.environ.items() if not k.startswith("ROS")}
+    env |= {"HOME": str(tmp / "home"), "ROS_PACKAGE_PATH": ""}
+    port = free_port()
+    env["ROS_MASTER_URI"] = f"http://127.0.0.1:{port}"
+    core = start_rostools_core(port, env)
+    rostools = [sys.executable, "-m", "rostools"]
+    pub = [*rostools, "topic", "pub"]
+    procs = [
+        Proc([*pub, "-r", "20", "/chatter_demo", "std_msgs/String", "data: x"], env=env),
+        Proc(
+            [*pub, "-r", "20", "/stamped", "geometry_msgs/PointStamped", "{header: auto}"], env=env
+        ),
+        Proc([*pub, "/victim_topic", "std_msgs/Empty", "{}", "__name:=victim"], env=env),
+        Proc([sys.executable, str(ROOT / "tests/support/rt_nodes/rt_services.py")], env=env),
+    ]
+    try:
+        assert run_cli("param", "set", "/demo", "{a: 1, b: [x, y]}", env=env).returncode == 0
+        wait_for(lambda: len(run_cli("topic", "list", env=env).stdout.split()) >= 5, 20, "graph")
+        wait_for(lambda: "/add_two_ints" in run_cli("service", "list", env=env).stdout, 20, "srv")
+        write_sample(tmp / "sample.bag", 400)
+        yield env, tmp
+    finally:
+        for proc in procs:
+            proc.stop()
+        core.stop()
+
+
+@pytest.mark.parametrize("command", sorted(RECIPES))
+def test_format_json_is_valid_json(command: str, graph: tuple[dict[str, str], Path]) -> None:
+    env, tmp = graph
+    if command == "bag compress" or command == "bag decompress":
+        (tmp / "copy.bag").write_bytes((tmp / "sample.bag").read_bytes())
+    args = [
+        a.replace("{bag}", str(tmp / "sample.bag")).replace("{tmp}", str(tmp))
+        for a in RECIPES[command]
+    ]
+    done = run_cli(*command.split(), *args, "-F", "json", env=env, timeout=60)
+    assert done.returncode == 0, done.stderr
+    documents = parse(done.stdout)
+    assert documents, f"{command} printed nothing"
+
+
+def test_core_format_json(graph: tuple[dict[str, str], Path]) -> None:
+    env, _ = graph
+    port = free_port()
+    core = Proc([sys.executable, "-m", "rostools", "core", "-p", str(port), "-F", "json"], env=env)
+    try:
+        line = core.expect(r"^\{", timeout=20)
+        assert json.loads(line)["uri"].endswith(f":{port}/")
+    finally:
+        assert core.stop() == 0

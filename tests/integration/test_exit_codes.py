@@ -1,0 +1,91 @@
+"""The README's exit codes, case by case, from real runs: one line on stderr, no traceback."""
+
+from __future__ import annotations
+
+import signal
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from rostools.errors import EXIT_CODES
+from tests.support.bagdata import write_sample
+from tests.support.env import run_cli
+from tests.support.procs import Proc
+
+CODES = {name: code for code, name, _ in EXIT_CODES}
+
+
+def one_line(stderr: str) -> None:
+    assert stderr.count("\n") == 1 and stderr.startswith("rostools: "), stderr
+    assert "Traceback" not in stderr
+
+
+@pytest.mark.parametrize(
+    ("name", "argv"),
+    [
+        ("usage", ["topic", "list", "--no-such-flag"]),
+        ("usage", ["topic", "pub", "/t", "std_msgs/Int32", "data: [1"]),
+        ("usage", ["bag", "record"]),
+        ("not found", ["msg", "show", "nosuch_msgs/Nothing"]),
+        ("not found", ["bag", "info", "no-such-file.bag"]),
+        ("unreachable", ["topic", "list"]),
+        ("unreachable", ["param", "get", "/x"]),
+    ],
+)
+def test_offline_exit_codes(name: str, argv: list[str], cli_env: dict[str, str]) -> None:
+    done = run_cli(*argv, env=cli_env)  # cli_env's master is the discard port: nobody there
+    assert done.returncode == CODES[name], done.stderr
+    one_line(done.stderr)
+
+
+def test_live_exit_codes(rostools_master: str, cli_env: dict[str, str], tmp_path: Path) -> None:
+    ok = run_cli("topic", "list", env=cli_env)
+    assert ok.returncode == CODES["ok"]
+    for name, argv in (
+        ("not found", ["topic", "info", "/nosuch"]),
+        ("not found", ["param", "get", "/nosuch"]),
+        ("not found", ["node", "kill", "/nosuch"]),
+        ("timeout", ["topic", "echo", "/nosuch", "-n", "1", "--timeout", "1"]),
+        ("timeout", ["service", "call", "/nosuch", "--wait", "--timeout", "1"]),
+    ):
+        done = run_cli(*argv, env=cli_env)
+        assert done.returncode == CODES[name], (argv, done.stderr)
+        one_line(done.stderr.splitlines(keepends=True)[-1])
+
+
+def test_error_and_data_loss(cli_env: dict[str, str], tmp_path: Path) -> None:
+    text = tmp_path / "notes.bag"
+    text.write_text("not a bag\n")
+    done = run_cli("bag", "info", str(text), env=cli_env)
+    assert done.returncode == CODES["error"]
+    one_line(done.stderr)
+    sample = write_sample(tmp_path / "s.bag", 2000, compression="bz2", chunk_size=20_000)
+    cut = tmp_path / "cut.bag"
+    cut.write_bytes(sample.path.read_bytes()[: sample.path.stat().st_size * 2 // 3])
+    done = run_cli("bag", "recover", str(cut), env=cli_env)
+    assert done.returncode == CODES["data loss"], done.stderr
+    assert "lost" in done.stderr.splitlines()[-1]
+
+
+def test_interrupted_wait_is_130(rostools_master: str, cli_env: dict[str, str]) -> None:
+    waiting = Proc(
+        [
+            sys.executable,
+            "-m",
+            "rostools",
+            "service",
+            "call",
+            "/nosuch",
+            "--wait",
+            "--timeout",
+            "60",
+        ],
+        env=cli_env,
+    )
+    time.sleep(1.5)
+    waiting.signal(signal.SIGINT)
+    assert waiting.popen.wait(10) == CODES["interrupted"]
+    _, err = waiting.output()
+    assert "Traceback" not in err

@@ -130,13 +130,9 @@ def _mixed_bag() -> Path:
 
 def bench_info() -> Result:
     bag = _small_bag()
-    code = (
-        "import sys; from rostools.bag.api import bag_info; i = bag_info(sys.argv[1]); "
-        "print(i.message_count, i.start_ns, i.end_ns, [(t.topic, t.messages) for t in i.topics])"
-    )
-    ours = [_python(), "-c", code, str(bag)]
+    ours = [*rostools_cmd(), "bag", "info", str(bag)]
     name = "bag info, 1M-message bag (wall, whole process)"
-    note = "ours: python -c bag_info() (library; no CLI command yet), includes interpreter start"
+    note = "rostools bag info FILE vs rosbag info FILE, median of 10, interpreter start included"
     if not have("rosbag"):
         t = time_commands({"ours": ours}, runs=10, warmup=2)
         return Result(name, "ms", t["ours"] * 1e3, None, "<= 0.5x rosbag info", None, note)

@@ -19,6 +19,7 @@ MODULES = [
     "benchmarks.bench_topic_cpp",
     "benchmarks.bench_service",
     "benchmarks.bench_bag",
+    "benchmarks.bench_bag_live",
 ]
 
 

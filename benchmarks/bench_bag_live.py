@@ -1,0 +1,422 @@
+"""Live bags: ``bag record`` and ``bag play`` against the C++ rosbag, in the same run.
+
+Recording: a roscpp ``pub_rate`` publishes a known number of messages into one recorder at a
+time (ours to .bag and MCAP, then ``/usr/lib/rosbag/record``); the file is counted afterwards.
+Playing: a bag of small messages exactly 1 ms apart is played by each player into the same
+roscpp subscriber (``benchmarks/peers/sub_stamps.cpp``), which notes every arrival time.
+Files go to benchmarks/build/bag_live/ (gitignored) and are deleted once counted.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import hashlib
+import json
+import os
+import signal
+import statistics
+import subprocess
+import sys
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+from benchmarks.common import (
+    ROOT,
+    Result,
+    have,
+    master,
+    ros_env,
+    rostools_cmd,
+    start,
+    stop,
+)
+
+sys.path.insert(0, str(ROOT))
+BUILD = ROOT / "benchmarks" / "build" / "bag_live"
+PEERS = Path(__file__).with_name("peers")
+TOPIC = "/bench"
+RUN = 5.0  # seconds of publishing per recording
+LINGER = 2.0  # seconds the publisher stays up after its run, so queued messages reach the recorder
+SETTLE = 1.0  # seconds after the publisher exits before the recorder is told to stop
+CLOSE_TIMEOUT = 120.0  # seconds a recorder may take to write out its queue and close the file
+RECORD_ROUNDS = 3  # recordings by each recorder, interleaved
+PLAY_MESSAGES = 3000
+PLAY_PERIOD_NS = 1_000_000
+PLAY_RUNS = 5  # runs of each player, interleaved; their errors are pooled
+
+
+def _cpp(name: str) -> str:
+    """A roscpp peer from tests/support/cpp, built once and cached."""
+    from tests.support.cppbuild import build, cpp_missing
+
+    reason = cpp_missing()
+    if reason is not None:
+        raise RuntimeError(f"cannot build the roscpp source: {reason}")
+    return str(build(name))
+
+
+def _bench_peer(name: str) -> str:
+    """A roscpp peer from benchmarks/peers, compiled like the test peers (same flags, peer.h)."""
+    from tests.support import cppbuild
+
+    reason = cppbuild.cpp_missing()
+    if reason is not None:
+        raise RuntimeError(f"cannot build the roscpp source: {reason}")
+    source = PEERS / f"{name}.cpp"
+    flags = [*cppbuild.CXXFLAGS, f"-I{cppbuild.SOURCES}"]
+    libs = list(cppbuild.LIBS)
+    digest = hashlib.sha256(" ".join([cppbuild.CXX, *flags, *libs]).encode())
+    digest.update(source.read_bytes())
+    digest.update((cppbuild.SOURCES / "peer.h").read_bytes())
+    target = cppbuild.CACHE / f"{name}-{digest.hexdigest()[:16]}"
+    if not os.access(target, os.X_OK):
+        target.parent.mkdir(parents=True, exist_ok=True)
+        temp = target.with_name(f".{target.name}.{os.getpid()}.tmp")
+        proc = subprocess.run(
+            [cppbuild.CXX, *flags, str(source), "-o", str(temp), *libs],
+            capture_output=True,
+            text=True,
+            check=False,
+        )
+        if proc.returncode != 0:
+            temp.unlink(missing_ok=True)
+            raise RuntimeError(f"g++ failed to build {name}:\n{proc.stderr[-4000:]}")
+        os.replace(temp, target)
+    return str(target)
+
+
+def _rosbag(tool: str) -> list[str] | None:
+    """The C++ rosbag program itself (no Python wrapper start-up), else ``rosbag TOOL``."""
+    binary = Path("/usr/lib/rosbag") / tool
+    if os.access(binary, os.X_OK):
+        return [str(binary)]
+    return ["rosbag", tool] if have("rosbag") else None
+
+
+def _finish(proc: subprocess.Popen[bytes], timeout: float) -> None:
+    """SIGINT to the process group, then wait for it to close its file; ``stop`` if it hangs."""
+    if proc.poll() is None:
+        with contextlib.suppress(ProcessLookupError):
+            os.killpg(proc.pid, signal.SIGINT)
+    try:
+        proc.wait(timeout)
+    except subprocess.TimeoutExpired:
+        stop(proc)
+
+
+def _last_json(text: str) -> dict[str, float]:
+    lines = [line for line in text.splitlines() if line.startswith("{")]
+    if not lines:
+        raise RuntimeError(f"no JSON result in: {text[-500:]!r}")
+    data: dict[str, float] = json.loads(lines[-1])
+    return data
+
+
+@dataclass
+class Recording:
+    """What one recorder made of one publishing run."""
+
+    published: int
+    recorded: int
+    message_bytes: int  # serialized size of one message
+    span_s: float  # first to last receive time stamped in the file
+    file_bytes: int
+
+    @property
+    def kept_percent(self) -> float:
+        """Messages in the file per message published, in percent."""
+        return 100.0 * self.recorded / self.published
+
+    @property
+    def written_mb_s(self) -> float:
+        """Message bytes in the file per second of recording (1 MB = 10^6 bytes)."""
+        return self.recorded * self.message_bytes / self.span_s / 1e6 if self.span_s else 0.0
+
+
+def _record(
+    recorder: list[str],
+    out: Path,
+    env: dict[str, str],
+    kind: str,
+    size: int,
+    rate: float,
+    tag: str,
+) -> Recording:
+    """Run ``recorder`` (which writes ``out``) through one publishing run; count the file."""
+    from rostools.bag.api import bag_info
+
+    BUILD.mkdir(parents=True, exist_ok=True)
+    out.unlink(missing_ok=True)
+    log = BUILD / f"{tag}.log"
+    with log.open("wb") as sink:
+        rec = start(recorder, env, stdout=sink, stderr=subprocess.STDOUT, cwd=BUILD)
+        pub = start(
+            [
+                _cpp("pub_rate"),
+                TOPIC,
+                kind,
+                str(size),
+                str(rate),
+                str(RUN),
+                # The clock starts once the recorder is connected: nothing is sent before it
+                # listens, so every message not in the file was lost by the recorder's path.
+                "--wait-subscribers",
+                "1",
+                "--linger",
+                str(LINGER),
+            ],
+            env,
+            stdout=subprocess.PIPE,
+            stderr=subprocess.DEVNULL,
+        )
+        try:
+            out_text, _ = pub.communicate(timeout=RUN + LINGER + 60)
+            time.sleep(SETTLE)
+        except subprocess.TimeoutExpired:
+            raise RuntimeError(f"{tag}: the publisher never finished; see {log}") from None
+        finally:
+            stop(pub)
+            _finish(rec, CLOSE_TIMEOUT)
+    truth = _last_json(out_text.decode())
+    active = out.with_name(out.name + ".active")
+    if not out.exists():
+        raise RuntimeError(f"{tag}: no {out.name} (active file left: {active.exists()}); see {log}")
+    info = bag_info(out)
+    recording = Recording(
+        published=int(truth["published"]),
+        recorded=info.message_count,
+        message_bytes=int(truth["bytes"]),
+        span_s=info.duration_ns / 1e9,
+        file_bytes=out.stat().st_size,
+    )
+    out.unlink()
+    return recording
+
+
+def _recorders() -> dict[str, tuple[list[str], str]]:
+    """Recorder command lines (run in BUILD) and the file each writes, by label."""
+    ours = [*rostools_cmd(), "bag", "record", "-q"]
+    found = {
+        "ours .bag": ([*ours, "-O", "ours.bag", TOPIC], "ours.bag"),
+        "ours .mcap": ([*ours, "-O", "ours.mcap", TOPIC], "ours.mcap"),
+    }
+    theirs = _rosbag("record")
+    if theirs is not None:
+        found["rosbag"] = ([*theirs, "-q", "-O", "theirs.bag", TOPIC], "theirs.bag")
+    return found
+
+
+def _rounds(
+    recorders: dict[str, tuple[list[str], str]], kind: str, size: int, rate: float, prefix: str
+) -> dict[str, list[Recording]]:
+    """RECORD_ROUNDS recordings by each recorder, interleaved so drift and load hit all alike."""
+    got: dict[str, list[Recording]] = {label: [] for label in recorders}
+    with master() as uri:
+        env = ros_env(uri)
+        for _ in range(RECORD_ROUNDS):
+            for label, (argv, name) in recorders.items():
+                tag = prefix + label.replace(" .", "_")
+                got[label].append(_record(argv, BUILD / name, env, kind, size, rate, tag))
+    return got
+
+
+def _kept(recs: list[Recording]) -> float:
+    """Messages in the files per message published over all rounds, in percent."""
+    return 100.0 * sum(r.recorded for r in recs) / sum(r.published for r in recs)
+
+
+def bench_record_small() -> list[Result]:
+    """20 kHz of 16-byte std_msgs/String for 5 s: messages in the file per message published."""
+    got = _rounds(_recorders(), "std_msgs/String", 16, 20000, "small_")
+    theirs = got.get("rosbag")
+    results = []
+    for label in ("ours .bag", "ours .mcap"):
+        recs = got[label]
+        per_round = "; ".join(
+            f"{name} " + ", ".join(f"{r.recorded:,}" for r in rs) + f" of {rs[0].published:,}"
+            for name, rs in (("ours", recs), ("rosbag", theirs or []))
+            if rs
+        )
+        results.append(
+            Result(
+                f"bag record 20 kHz small msgs, kept ({label[5:]})",
+                "%",
+                _kept(recs),
+                None if theirs is None else _kept(theirs),
+                "100% (no drops)",
+                all(r.recorded == r.published for r in recs),
+                f"{RECORD_ROUNDS} rounds: {per_round}",
+            )
+        )
+    return results
+
+
+def bench_record_big() -> list[Result]:
+    """1 MB sensor_msgs/Image as fast as pub_rate goes for 5 s: MB/s of messages written."""
+    recorders = _recorders()
+    # Uncompressed MCAP: 1 MB images are the case where compression costs most and saves least.
+    argv, name = recorders["ours .mcap"]
+    recorders["ours .mcap"] = ([*argv[:-1], "--compression", "none", argv[-1]], name)
+    got = _rounds(recorders, "sensor_msgs/Image", 1_000_000, 0, "big_")
+    theirs = got.get("rosbag")
+    their_rate = None if theirs is None else statistics.median(r.written_mb_s for r in theirs)
+    results = []
+    for label in ("ours .bag", "ours .mcap"):
+        recs = got[label]
+        rate = statistics.median(r.written_mb_s for r in recs)
+        fmt = label[5:] + (" none" if label.endswith("mcap") else "")
+        rounds = "; ".join(
+            f"{name} " + ", ".join(f"{r.written_mb_s:.0f}" for r in rs)
+            for name, rs in (("ours", recs), ("rosbag", theirs or []))
+            if rs
+        )
+        results.append(
+            Result(
+                f"bag record 1 MB images, written ({fmt})",
+                "MB/s",
+                rate,
+                their_rate,
+                ">= 2x rosbag record",
+                None if their_rate is None else rate >= 2 * their_rate,
+                f"median of {RECORD_ROUNDS} ({rounds}); message bytes in file / first-to-last "
+                "receive stamp",
+            )
+        )
+        results.append(
+            Result(
+                f"bag record 1 MB images, dropped ({fmt})",
+                "%",
+                100.0 - _kept(recs),
+                None if theirs is None else 100.0 - _kept(theirs),
+                "report",
+                None,
+                "pub_rate offers far more than any link takes; most drops are in its own queue",
+            )
+        )
+    return results
+
+
+def _play_bag() -> Path:
+    """PLAY_MESSAGES std_msgs/String, data = the index, exactly PLAY_PERIOD_NS apart."""
+    import struct
+
+    from rostools.bag.api import open_writer
+
+    path = BUILD / f"play-{PLAY_MESSAGES}.bag"
+    if path.exists():
+        return path
+    BUILD.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_suffix(".tmp")
+    tmp.unlink(missing_ok=True)
+    writer = open_writer(tmp, format="bag")
+    conn = writer.add_connection(
+        TOPIC, "std_msgs/String", "992ce8a1687cec8c8bd883ec73ca41d1", "string data\n"
+    )
+    for k in range(PLAY_MESSAGES):
+        text = str(k).encode()
+        writer.write(
+            conn,
+            1_700_000_000_000_000_000 + k * PLAY_PERIOD_NS,
+            struct.pack("<I", len(text)) + text,
+        )
+    writer.close()
+    tmp.rename(path)
+    return path
+
+
+def _play_errors(player: list[str], env: dict[str, str], bag: Path) -> tuple[list[float], int]:
+    """|timing error| in ms of every message the subscriber got from one play, and the count."""
+    sub = start(
+        [_bench_peer("sub_stamps"), TOPIC, "--count", str(PLAY_MESSAGES), "--idle", "2"],
+        env,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.DEVNULL,
+    )
+    assert sub.stdout is not None
+    if sub.stdout.readline().strip() != b"ready":
+        stop(sub)
+        raise RuntimeError("sub_stamps did not start")
+    # Let the subscription reach the master before the player advertises.
+    time.sleep(0.5)
+    play = start(
+        [*player, str(bag)],
+        env,
+        stdin=subprocess.DEVNULL,
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+    )
+    try:
+        out, _ = sub.communicate(timeout=PLAY_MESSAGES * PLAY_PERIOD_NS / 1e9 + 60)
+        play.wait(20)
+    finally:
+        stop(sub)
+        stop(play)
+    arrivals = [
+        (int(k), int(t))
+        for k, t in (line.split() for line in out.decode().splitlines() if line[:1].isdigit())
+    ]
+    if len(arrivals) < 2:
+        raise RuntimeError(f"{player[0]} play: the subscriber got {len(arrivals)} messages")
+    k0, a0 = arrivals[0]
+    errors = [abs((a - a0) - (k - k0) * PLAY_PERIOD_NS) / 1e6 for k, a in arrivals]
+    return errors, len(arrivals)
+
+
+def _percentile(values: list[float], q: float) -> float:
+    ordered = sorted(values)
+    return ordered[min(len(ordered) - 1, round(q * (len(ordered) - 1)))]
+
+
+def bench_play() -> list[Result]:
+    """1 kHz playback: p50 and p99 of |arrival gap - bag gap| at one roscpp subscriber."""
+    bag = _play_bag()
+    # --wait-for-subscribers for both: our player serves no socket while messages are under
+    # 2 ms apart, so a subscriber still connecting when playback starts would get nothing.
+    players = {"ours": [*rostools_cmd(), "bag", "play", "-q", "--wait-for-subscribers"]}
+    theirs_cmd = _rosbag("play")
+    if theirs_cmd is not None:
+        players["theirs"] = [*theirs_cmd, "-q", "--wait-for-subscribers"]
+    errors: dict[str, list[float]] = {k: [] for k in players}
+    counts: dict[str, list[int]] = {k: [] for k in players}
+    with master() as uri:
+        env = ros_env(uri)
+        for _ in range(PLAY_RUNS):
+            for key, argv in players.items():
+                errs, n = _play_errors(argv, env, bag)
+                errors[key].extend(errs)
+                counts[key].append(n)
+    got = {
+        k: f"{statistics.median(v):,.0f}/{PLAY_MESSAGES:,} msgs (median of {PLAY_RUNS})"
+        for k, v in counts.items()
+    }
+    note = f"ours got {got['ours']}" + (f"; rosbag got {got['theirs']}" if "theirs" in got else "")
+    p = {k: (_percentile(v, 0.5), _percentile(v, 0.99)) for k, v in errors.items()}
+    theirs = p.get("theirs")
+    return [
+        Result(
+            "bag play 1 kHz, |timing error| p50",
+            "ms",
+            p["ours"][0],
+            None if theirs is None else theirs[0],
+            "report",
+            None,
+            note,
+        ),
+        Result(
+            "bag play 1 kHz, |timing error| p99",
+            "ms",
+            p["ours"][1],
+            None if theirs is None else theirs[1],
+            "<= rosbag play",
+            None if theirs is None else p["ours"][1] <= theirs[1],
+            f"error_k = (arrival_k - arrival_0) - (bag_k - bag_0), {PLAY_RUNS} runs pooled",
+        ),
+    ]
+
+
+BENCHMARKS = {
+    "bag_record_small": bench_record_small,
+    "bag_record_big": bench_record_big,
+    "bag_play": bench_play,
+}

@@ -26,6 +26,8 @@ from rostools.graph.topic import TopicType
 
 #: The last stretch before a due time is slept with ``time.sleep`` (asyncio wakes late).
 FINE_SLEEP = 0.002
+#: The longest the event loop goes unserved while messages are sent back to back.
+YIELD_PERIOD = 0.001
 _CLOCK = TopicType(
     "rosgraph_msgs/Clock",
     "a9c97c1d230cfc112e270351a944ee47",
@@ -93,6 +95,8 @@ class Player:
         self.status = Status(state=State.PAUSED if opts.pause else State.RUNNING)
         self.steps = 0  # messages to send while paused (the ``s`` key)
         self.wake = asyncio.Event()
+        self._origin: float | None = None  # when (monotonic) bag time from_ns plays
+        self._next_clock = self._next_show = self._yielded = 0.0  # monotonic times
         infos = [r.info() for r in readers]
         starts = [i.start_ns for i in infos if i.start_ns is not None]
         ends = [i.end_ns for i in infos if i.end_ns is not None]
@@ -183,70 +187,80 @@ class Player:
         return self.status.published
 
     async def _play_once(self, stop: asyncio.Event, show: Callable[[Status], None] | None) -> None:
-        opts = self.opts
-        scale = 1.0 / (NS_PER_SEC * opts.rate)
         messages = merged_messages(self.readers, self._topics(), self.from_ns, self.until_ns)
-        origin: float | None = None  # monotonic time at which bag time from_ns plays
-        next_clock = 0.0
-        next_show = 0.0
+        self._origin = None
+        self._next_clock = self._next_show = self._yielded = 0.0
         for conn, t, data in messages:
             if stop.is_set():
                 return
-            if origin is None:
-                origin = (
-                    time.monotonic() - (t - self.from_ns) * scale if not opts.immediate else 0.0
-                )
-            while not opts.immediate:
-                now = time.monotonic()
-                if show is not None and now >= next_show:
-                    next_show = now + 0.1
-                    self.status.bag_time = self._bag_time(now, origin, t)
-                    self.status.elapsed = (self.status.bag_time - self.from_ns) / NS_PER_SEC
-                    show(self.status)
-                if self.status.state is State.PAUSED:
-                    paused_at = time.monotonic()
-                    if self.steps:
-                        self.steps -= 1
-                        origin = time.monotonic() - (t - self.from_ns) * scale
-                        break
-                    self.wake.clear()
-                    await first(self.wake.wait(), stop.wait(), timeout=0.1)
-                    if stop.is_set():
-                        return
-                    origin += time.monotonic() - paused_at  # paused time does not count
-                    continue
-                due = origin + (t - self.from_ns) * scale
-                if opts.skip_empty is not None and due - now > opts.skip_empty / opts.rate:
-                    origin -= due - now  # a long gap in the recording: jump over it
-                    due = now
-                if self.clock is not None and next_clock <= now:
-                    next_clock = now + 1.0 / opts.hz
-                    self._publish_clock(self._bag_time(now, origin, t))
-                if due <= now:
-                    break
-                wait = (min(due, next_clock) if self.clock is not None else due) - now
-                if wait > FINE_SLEEP:
-                    self.wake.clear()
-                    await first(stop.wait(), self.wake.wait(), timeout=min(wait - FINE_SLEEP, 0.1))
-                    if stop.is_set():
-                        return
-                else:
-                    time.sleep(wait)
+            if not self.opts.immediate and not await self._wait_for(t, stop, show):
+                return
             pub = self.publishers[conn.topic]
             pub.publish_raw(data)
             pub.flush()
             self.status.published += 1
             self.status.bag_time = t
-            if opts.immediate and self.status.published % 64 == 0:
-                await asyncio.sleep(0)  # let the sockets drain
+            if time.monotonic() - self._yielded > YIELD_PERIOD:
+                # Back-to-back messages: still serve new subscribers, the keys and Ctrl-C.
+                await asyncio.sleep(0)
+                self._yielded = time.monotonic()
         if self.clock is not None:
             self._publish_clock(self.until_ns)
         self.status.bag_time = self.until_ns
         self.status.elapsed = self.status.total
 
-    def _bag_time(self, now: float, origin: float, next_t: int) -> int:
+    async def _wait_for(
+        self, t: int, stop: asyncio.Event, show: Callable[[Status], None] | None
+    ) -> bool:
+        """Until bag time ``t`` is due (pauses, steps, /clock and the status on the way).
+
+        False when stopped.
+        """
+        opts = self.opts
+        scale = 1.0 / (NS_PER_SEC * opts.rate)
+        if self._origin is None:
+            self._origin = time.monotonic() - (t - self.from_ns) * scale
+        while True:
+            now = time.monotonic()
+            if show is not None and now >= self._next_show:
+                self._next_show = now + 0.1
+                self.status.bag_time = self._bag_time(now, t)
+                self.status.elapsed = (self.status.bag_time - self.from_ns) / NS_PER_SEC
+                show(self.status)
+            if self.status.state is State.PAUSED:
+                if self.steps:
+                    self.steps -= 1
+                    self._origin = now - (t - self.from_ns) * scale
+                    return True
+                self.wake.clear()
+                await first(self.wake.wait(), stop.wait(), timeout=0.1)
+                self._origin += time.monotonic() - now  # paused time does not count
+                if stop.is_set():
+                    return False
+                continue
+            due = self._origin + (t - self.from_ns) * scale
+            if opts.skip_empty is not None and due - now > opts.skip_empty / opts.rate:
+                self._origin -= due - now  # a long gap in the recording: jump over it
+                due = now
+            if self.clock is not None and self._next_clock <= now:
+                self._next_clock = now + 1.0 / opts.hz
+                self._publish_clock(self._bag_time(now, t))
+            if due <= now:
+                return True
+            wait = (min(due, self._next_clock) if self.clock is not None else due) - now
+            if wait > FINE_SLEEP:
+                self.wake.clear()
+                await first(stop.wait(), self.wake.wait(), timeout=min(wait - FINE_SLEEP, 0.1))
+                self._yielded = time.monotonic()
+                if stop.is_set():
+                    return False
+            else:
+                time.sleep(wait)
+
+    def _bag_time(self, now: float, next_t: int) -> int:
         """The bag time playing at ``now`` (never past the next message)."""
-        t = self.from_ns + round((now - origin) * NS_PER_SEC * self.opts.rate)
+        assert self._origin is not None
+        t = self.from_ns + round((now - self._origin) * NS_PER_SEC * self.opts.rate)
         return min(t, next_t)
 
     def _publish_clock(self, t_ns: int) -> None:

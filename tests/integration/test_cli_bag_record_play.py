@@ -331,3 +331,26 @@ def test_play_keys_step_and_pause(
     finally:
         child.close(force=True)
     assert child.exitstatus == 0
+
+
+def test_play_of_dense_messages_serves_late_subscribers_and_ctrl_c(
+    rostools_master: str, cli_env: dict[str, str], tmp_path: Path
+) -> None:
+    from rostools.bag.api import open_writer
+    from tests.support.bagdata import STRING_MD5
+
+    bag = tmp_path / "dense.bag"
+    with open_writer(bag) as writer:  # 8 s of messages 1 ms apart
+        conn = writer.add_connection("/dense", "std_msgs/String", STRING_MD5, "string data\n")
+        for i in range(8000):
+            writer.write(conn, 10**9 + i * 10**6, struct.pack("<I", 1) + b"x")
+    player = rostools(cli_env, "bag", "play", str(bag), "-d", "0")
+    try:
+        late = echo(cli_env, "/dense", 10)  # subscribes while playback runs back to back
+        assert received(late) == ["x"] * 10
+        player.signal(signal.SIGINT)
+        started = time.monotonic()
+        assert player.popen.wait(10) == 0
+        assert time.monotonic() - started < 1.0
+    finally:
+        player.stop()

@@ -68,7 +68,8 @@ class FrameReader:
             self._big_filled += nbytes
             if self._big_filled < len(self._big):
                 return []
-            done = memoryview(self._big)
+            # Read-only: nobody writes to it again, and writers may then keep it without a copy.
+            done = memoryview(self._big).toreadonly()
             self._big = None
             return [done]
         self._end += nbytes

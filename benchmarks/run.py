@@ -20,6 +20,7 @@ MODULES = [
     "benchmarks.bench_service",
     "benchmarks.bench_bag",
     "benchmarks.bench_bag_live",
+    "benchmarks.bench_completion",
 ]
 
 

@@ -77,6 +77,8 @@ class BlockingServiceClient:
             raise TimeoutExpired(
                 f"service {self.name} did not respond within {self.timeout:g} s"
             ) from None
+        except ConnectionResetError:
+            data = b""  # a server that died mid-call: the same as one that closed
         except OSError as err:
             raise RostoolsError(f"service {self.name}: {err.strerror or err}") from None
         if not data:

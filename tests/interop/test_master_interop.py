@@ -102,13 +102,16 @@ def test_real_tools_answer_the_same_on_both_masters(
             start_rostools_core(port, cli_env) if kind == "rostools" else start_roscore(port, env)
         )
         info = MasterInfo(kind, uri, env, cli_env)
-        talker = start_ros1_node("talker.py", ["/chatter", "20"], env)
+        # One after the other: the order they register in is the order tools list them.
         listener = start_ros1_node(
             "listener.py", ["/chatter", "std_msgs/String", "__name:=listener"], env
         )
+        talker: Proc | None = None
         params = tmp_path / f"{kind}.yaml"
         params.write_text("gains: {p: 1.5, i: 0}\nname: r2\nlist: [1, 2.5, x]\n")
         try:
+            listener.expect("ready", timeout=20)
+            talker = start_ros1_node("talker.py", ["/chatter", "20"], env)
             listener.expect("got hello", timeout=20)
             runs = [
                 ros_tool(info, "rostopic", "list"),
@@ -129,7 +132,8 @@ def test_real_tools_answer_the_same_on_both_masters(
             ]
             outputs[kind] = [normalize(r) for r in runs]
         finally:
-            talker.stop()
+            if talker is not None:
+                talker.stop()
             listener.stop()
             master.stop()
     for ours, theirs in zip(outputs["rostools"], outputs["roscore"], strict=True):

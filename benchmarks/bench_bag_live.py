@@ -371,8 +371,7 @@ def _percentile(values: list[float], q: float) -> float:
 def bench_play() -> list[Result]:
     """1 kHz playback: p50 and p99 of |arrival gap - bag gap| at one roscpp subscriber."""
     bag = _play_bag()
-    # --wait-for-subscribers for both: our player serves no socket while messages are under
-    # 2 ms apart, so a subscriber still connecting when playback starts would get nothing.
+    # --wait-for-subscribers for both: timing starts with the subscriber connected.
     players = {"ours": [*rostools_cmd(), "bag", "play", "-q", "--wait-for-subscribers"]}
     theirs_cmd = _rosbag("play")
     if theirs_cmd is not None:

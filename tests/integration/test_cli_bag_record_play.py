@@ -9,6 +9,7 @@ import struct
 import sys
 import time
 import xmlrpc.client
+from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
@@ -18,9 +19,21 @@ from tests.support.bagdata import write_play_bag
 from tests.support.env import run_cli
 from tests.support.procs import Proc, wait_for
 
+_STARTED: list[Proc] = []
+
+
+@pytest.fixture(autouse=True)
+def _stop_everything_started() -> Iterator[None]:
+    """Whatever a test started here is stopped after it, even when an assertion failed."""
+    yield
+    while _STARTED:
+        _STARTED.pop().stop()
+
 
 def rostools(env: dict[str, str], *args: str, cwd: Path | None = None) -> Proc:
-    return Proc([sys.executable, "-m", "rostools", *args], env=env, cwd=cwd)
+    proc = Proc([sys.executable, "-m", "rostools", *args], env=env, cwd=cwd)
+    _STARTED.append(proc)
+    return proc
 
 
 def subscribed(uri: str, topic: str, prefix: str) -> bool:

@@ -84,8 +84,11 @@ def test_interrupted_wait_is_130(rostools_master: str, cli_env: dict[str, str]) 
         ],
         env=cli_env,
     )
-    time.sleep(1.5)
-    waiting.signal(signal.SIGINT)
-    assert waiting.popen.wait(10) == CODES["interrupted"]
-    _, err = waiting.output()
-    assert "Traceback" not in err
+    try:
+        time.sleep(1.5)
+        waiting.signal(signal.SIGINT)
+        assert waiting.popen.wait(10) == CODES["interrupted"]
+        _, err = waiting.output()
+        assert "Traceback" not in err
+    finally:
+        waiting.stop()

@@ -15,10 +15,12 @@ from rostools.bag.model import (
     BagFormatError,
     BagInfo,
     BagNotFoundError,
+    BagUsageError,
     Connection,
     connection_from_header,
 )
 from rostools.bag.ordering import Block, Entry, Message
+from rostools.bag.sink import Sink
 from rostools.errors import InvalidDataError
 
 #: Times are u32 seconds in a ``.bag`` and u64 ns in MCAP; this bound covers both.
@@ -157,12 +159,25 @@ class BagWriter(ABC):
 
     ``add_connection`` declares a publisher connection and returns its ``Connection`` (with
     the id in the file); ``write`` stores one raw message; ``close`` writes the index. Leaving
-    a ``with`` block by an exception calls ``abort``.
+    a ``with`` block by an exception calls ``abort``. A format implements ``_declare`` (what a
+    new connection needs in the file) and ``_store`` (one message), plus flush and close.
     """
 
-    path: Path
+    def __init__(self, path: str | Path, overwrite: bool) -> None:
+        """Create the file; an existing one is refused unless ``overwrite``."""
+        self.path = Path(path)
+        flags = os.O_WRONLY | os.O_CREAT | (os.O_TRUNC if overwrite else os.O_EXCL)
+        try:
+            self._fd = os.open(self.path, flags, 0o644)
+        except FileExistsError:
+            raise BagUsageError(f"{self.path} exists; refusing to overwrite it") from None
+        except OSError as err:
+            raise InvalidDataError(f"cannot create {self.path}: {err.strerror or err}") from err
+        self._closed = False
+        self._sink = Sink(self._fd, str(self.path))
+        self._connections: list[Connection] = []
+        self._by_header: dict[tuple[str, tuple[tuple[str, str], ...]], Connection] = {}
 
-    @abstractmethod
     def add_connection(
         self,
         topic: str,
@@ -176,22 +191,69 @@ class BagWriter(ABC):
         absent: frozenset[str] = frozenset(),
     ) -> Connection:
         """Declare a connection; messages are written against the returned one."""
+        self._check_open()
+        conn = Connection(
+            id=len(self._connections),
+            topic=topic,
+            type=type,
+            md5sum=md5sum,
+            definition=definition,
+            callerid=callerid,
+            latching=latching,
+            extra=dict(extra or {}),
+            absent=absent,
+        )
+        self._declare(conn)
+        self._connections.append(conn)
+        return conn
 
     @abstractmethod
+    def _declare(self, conn: Connection) -> None:
+        """Prepare the file for a new connection (it may refuse with ``BagUsageError``)."""
+
     def write(self, conn: Connection, t_ns: int, data: bytes | bytearray | memoryview) -> None:
-        """Store one serialized message received at ``t_ns``."""
+        """Store one serialized message of ``conn`` received at ``t_ns``."""
+        cid = conn.id
+        if self._closed or cid >= len(self._connections) or self._connections[cid] is not conn:
+            self._check_open()
+            raise BagUsageError(f"connection {cid} ({conn.topic}) was not added to this writer")
+        self._store(cid, t_ns, data)
+
+    @abstractmethod
+    def _store(self, cid: int, t_ns: int, data: bytes | bytearray | memoryview) -> None:
+        """Store one message of connection ``cid`` (already checked)."""
 
     def write_many(self, messages: Iterable[Message], targets: Targets) -> int:
         """Store a stream of messages read from another bag; how many were written.
 
         ``targets`` maps source connections to this writer's (see ``Targets``).
         """
+        self._check_open()
+        ids: dict[int, int] = {}
+        store = self._store
         n = 0
         for conn, t, data in messages:
-            target = targets.get(conn.id) or targets.resolve(conn)
-            self.write(target, t, data)
+            cid = ids.get(conn.id)
+            if cid is None:
+                cid = ids[conn.id] = self._target(targets, conn)
+            store(cid, t, data)
             n += 1
         return n
+
+    def _target(self, targets: Targets, conn: Connection) -> int:
+        target = targets.resolve(conn)
+        if target.id >= len(self._connections) or self._connections[target.id] is not target:
+            raise BagUsageError(f"connection {target.id} was not added to this writer")
+        return target.id
+
+    def _check_open(self) -> None:
+        if self._closed:
+            raise BagUsageError(f"{self.path} is closed")
+
+    def _release(self) -> None:
+        """The file is finished (or given up): no more writes."""
+        self._closed = True
+        os.close(self._fd)
 
     @abstractmethod
     def flush(self) -> None:
@@ -201,9 +263,12 @@ class BagWriter(ABC):
     def close(self) -> None:
         """Finish the file: last chunk, index or summary, header."""
 
-    @abstractmethod
     def abort(self) -> None:
-        """Stop and delete the unfinished file."""
+        """Stop writing and delete the unfinished file."""
+        if not self._closed:
+            self._release()
+        with contextlib.suppress(FileNotFoundError):
+            self.path.unlink()
 
     def connection_for(self, topic: str, header: Mapping[str, str]) -> Connection:
         """The connection for a publisher's connection header, declared on first use.
@@ -212,12 +277,11 @@ class BagWriter(ABC):
         connection; each other publisher (callerid, latching, definition) gets its own, as
         ``rosbag record`` keeps them.
         """
-        cache: dict[tuple[str, tuple[tuple[str, str], ...]], Connection]
-        cache = self.__dict__.setdefault("_by_header", {})
         key = (topic, tuple(sorted(header.items())))
-        conn = cache.get(key)
+        conn = self._by_header.get(key)
         if conn is None:
-            conn = cache[key] = self.copy_connection(connection_from_header(0, topic, header))
+            conn = self.copy_connection(connection_from_header(0, topic, header))
+            self._by_header[key] = conn
         return conn
 
     def copy_connection(self, conn: Connection) -> Connection:

@@ -13,21 +13,16 @@ killed writer leaves everything but the open chunk recoverable.
 
 from __future__ import annotations
 
-import contextlib
-import os
-import sys
 from array import array
-from collections.abc import Callable, Iterable, Mapping
+from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import Final
 
 from rostools import __version__
 from rostools.bag import mcap_format as fmt
-from rostools.bag.base import BagWriter, Targets
+from rostools.bag.base import BagWriter
 from rostools.bag.model import BagUsageError, Connection, UnsupportedBagError
-from rostools.bag.ordering import Message
-from rostools.bag.sink import BIG_PAYLOAD, Sink, frozen
-from rostools.errors import InvalidDataError
+from rostools.bag.sink import BIG_PAYLOAD, frozen, little_endian
 
 #: Chunk threshold (uncompressed bytes): rosbag's 768 KiB, close to the mcap library's 1 MiB.
 DEFAULT_CHUNK_SIZE: Final = 768 * 1024
@@ -62,20 +57,11 @@ class McapWriter(BagWriter):
             )
         if chunk_size <= 0:
             raise BagUsageError(f"chunk size must be positive, not {chunk_size}")
-        self.path = Path(path)
+        compress = _compressor(compression)
+        super().__init__(path, overwrite)
         self.compression = compression
         self.chunk_size = chunk_size
-        flags = os.O_WRONLY | os.O_CREAT | (os.O_TRUNC if overwrite else os.O_EXCL)
-        try:
-            self._fd = os.open(self.path, flags, 0o644)
-        except FileExistsError:
-            raise BagUsageError(f"{self.path} exists; refusing to overwrite it") from None
-        except OSError as err:
-            raise InvalidDataError(f"cannot create {self.path}: {err.strerror or err}") from err
-        self._compress = _compressor(compression)
-        self._closed = False
-        self._sink = Sink(self._fd, str(self.path))
-        self._connections: list[Connection] = []
+        self._compress = compress
         self._schema_ids: dict[tuple[str, str], int] = {}
         self._schema_records: list[bytes] = []
         self._channel_records: list[bytes] = []
@@ -97,71 +83,22 @@ class McapWriter(BagWriter):
 
     # -- the public interface --------------------------------------------------------------
 
-    def add_connection(
-        self,
-        topic: str,
-        type: str,
-        md5sum: str,
-        definition: str,
-        *,
-        callerid: str = "",
-        latching: bool = False,
-        extra: Mapping[str, str] | None = None,
-        absent: frozenset[str] = frozenset(),
-    ) -> Connection:
-        """Declare a connection: a channel (and its schema, once per definition)."""
-        self._check_open()
+    def _declare(self, conn: Connection) -> None:
+        """A channel (and its schema, once per definition), written at once."""
         if len(self._connections) >= MAX_CHANNELS:
             raise BagUsageError(f"an MCAP file holds at most {MAX_CHANNELS} channels")
-        conn = Connection(
-            id=len(self._connections),
-            topic=topic,
-            type=type,
-            md5sum=md5sum,
-            definition=definition,
-            callerid=callerid,
-            latching=latching,
-            extra=dict(extra or {}),
-            absent=absent,
-        )
-        key = (type, definition)
+        key = (conn.type, conn.definition)
         schema_id = self._schema_ids.get(key)
         if schema_id is None:
             schema_id = self._schema_ids[key] = len(self._schema_records) + 1
-            record = fmt.encode_schema(schema_id, type, "ros1msg", definition.encode())
+            record = fmt.encode_schema(schema_id, conn.type, "ros1msg", conn.definition.encode())
             self._schema_records.append(record)
             self._sink.write(record)
-        record = fmt.encode_channel(conn.id, schema_id, topic, "ros1", channel_metadata(conn))
+        meta = channel_metadata(conn)
+        record = fmt.encode_channel(conn.id, schema_id, conn.topic, "ros1", meta)
         self._channel_records.append(record)
         self._sink.write(record)
-        self._connections.append(conn)
         self._counts.append(0)
-        return conn
-
-    def write(self, conn: Connection, t_ns: int, data: bytes | bytearray | memoryview) -> None:
-        """Store one message of ``conn`` with log (and publish) time ``t_ns``."""
-        cid = conn.id
-        if self._closed or cid >= len(self._connections) or self._connections[cid] is not conn:
-            self._check_open()
-            raise BagUsageError(f"connection {cid} ({conn.topic}) was not added to this writer")
-        self._store(cid, t_ns, data)
-
-    def write_many(self, messages: Iterable[Message], targets: Targets) -> int:
-        """Store a stream of messages read from another bag; how many were written.
-
-        ``targets`` maps source connections to this writer's (see ``Targets``).
-        """
-        self._check_open()
-        ids: dict[int, int] = {}
-        store = self._store
-        n = 0
-        for conn, t, data in messages:
-            cid = ids.get(conn.id)
-            if cid is None:
-                cid = ids[conn.id] = self._target(targets, conn)
-            store(cid, t, data)
-            n += 1
-        return n
 
     def _store(self, cid: int, t_ns: int, data: bytes | bytearray | memoryview) -> None:
         if not 0 <= t_ns <= _MAX_TIME:
@@ -226,19 +163,13 @@ class McapWriter(BagWriter):
             self._counts[cid] += n
         self._close_chunk(indexes)
 
-    def _target(self, targets: Targets, conn: Connection) -> int:
-        target = targets.resolve(conn)
-        if target.id >= len(self._connections) or self._connections[target.id] is not target:
-            raise BagUsageError(f"connection {target.id} was not added to this writer")
-        return target.id
-
     def _packed_index(self, cid: int) -> bytes:
         """A channel's (log time, offset) pairs in the open chunk, sorted, as file bytes."""
         entries = self._index[cid]
         if self._unsorted:
             pairs = sorted(zip(entries[::2], entries[1::2], strict=True))
             entries = array("Q", [v for pair in pairs for v in pair])
-        return _little_endian(entries)
+        return little_endian(entries)
 
     def flush(self) -> None:
         """Close the open chunk and hand everything to the OS."""
@@ -277,22 +208,9 @@ class McapWriter(BagWriter):
             self._sink.write(fmt.encode_footer(summary_start, offset_start, bytes(summary)))
             self._sink.flush()
         finally:
-            self._closed = True
-            os.close(self._fd)
-
-    def abort(self) -> None:
-        """Stop writing and delete the file."""
-        if not self._closed:
-            self._closed = True
-            os.close(self._fd)
-        with contextlib.suppress(FileNotFoundError):
-            self.path.unlink()
+            self._release()
 
     # -- internals -------------------------------------------------------------------------
-
-    def _check_open(self) -> None:
-        if self._closed:
-            raise BagUsageError(f"{self.path} is closed")
 
     def _statistics(self) -> fmt.Statistics:
         total = sum(self._counts)
@@ -393,11 +311,3 @@ def _compressor(kind: str) -> _Compress:
 
         return lz4_frame
     return list
-
-
-def _little_endian(values: array[int]) -> bytes:
-    """The bytes of a u64 array as the file wants them (little-endian)."""
-    if sys.byteorder == "big":
-        values = array(values.typecode, values)
-        values.byteswap()
-    return values.tobytes()

@@ -14,21 +14,15 @@ the part still being collected.
 
 from __future__ import annotations
 
-import contextlib
-import os
 import struct
-import sys
 from array import array
-from collections.abc import Iterable, Mapping
 from pathlib import Path
 from typing import Final
 
 from rostools.bag import rosbag1_format as fmt
-from rostools.bag.base import BagWriter, Targets
+from rostools.bag.base import BagWriter
 from rostools.bag.model import NS_PER_SEC, BagUsageError, Connection, UnsupportedBagError
-from rostools.bag.ordering import Message
-from rostools.bag.sink import Sink
-from rostools.errors import InvalidDataError
+from rostools.bag.sink import little_endian
 from rostools.wire.header import encode_fields
 
 #: Pending output is handed to the OS in pieces of this size (and at every chunk close, and
@@ -60,20 +54,10 @@ class Bag1Writer(BagWriter):
             )
         if chunk_size <= 0:
             raise BagUsageError(f"chunk size must be positive, not {chunk_size}")
-        self.path = Path(path)
+        super().__init__(path, overwrite)
         self.compression = compression
         self.chunk_size = chunk_size
         self._plain = compression == "none"  # records go straight to the file
-        flags = os.O_WRONLY | os.O_CREAT | (os.O_TRUNC if overwrite else os.O_EXCL)
-        try:
-            self._fd = os.open(self.path, flags, 0o644)
-        except FileExistsError:
-            raise BagUsageError(f"{self.path} exists; refusing to overwrite it") from None
-        except OSError as err:
-            raise InvalidDataError(f"cannot create {self.path}: {err.strerror or err}") from err
-        self._closed = False
-        self._sink = Sink(self._fd, str(self.path))
-        self._connections: list[Connection] = []
         self._prefixes: list[bytes] = []
         self._in_file: set[int] = set()
         self._chunk_infos: list[tuple[int, int, int, dict[int, int]]] = []
@@ -91,32 +75,8 @@ class Bag1Writer(BagWriter):
 
     # -- the public interface --------------------------------------------------------------
 
-    def add_connection(
-        self,
-        topic: str,
-        type: str,
-        md5sum: str,
-        definition: str,
-        *,
-        callerid: str = "",
-        latching: bool = False,
-        extra: Mapping[str, str] | None = None,
-        absent: frozenset[str] = frozenset(),
-    ) -> Connection:
-        """Declare a connection (written into the chunk of its first message)."""
-        self._check_open()
-        conn = Connection(
-            id=len(self._connections),
-            topic=topic,
-            type=type,
-            md5sum=md5sum,
-            definition=definition,
-            callerid=callerid,
-            latching=latching,
-            extra=dict(extra or {}),
-            absent=absent,
-        )
-        self._connections.append(conn)
+    def _declare(self, conn: Connection) -> None:
+        """Written into the chunk of its first message; here only its record prefix."""
         # Every message record header of this connection: conn, op, then time (sorted).
         self._prefixes.append(
             _U32.pack(38)
@@ -128,32 +88,6 @@ class Bag1Writer(BagWriter):
             + _U32.pack(13)
             + b"time="
         )
-        return conn
-
-    def write(self, conn: Connection, t_ns: int, data: bytes | bytearray | memoryview) -> None:
-        """Store one message of ``conn`` received at ``t_ns``."""
-        cid = conn.id
-        if self._closed or cid >= len(self._connections) or self._connections[cid] is not conn:
-            self._check_open()
-            raise BagUsageError(f"connection {cid} ({conn.topic}) was not added to this writer")
-        self._store(cid, t_ns, data)
-
-    def write_many(self, messages: Iterable[Message], targets: Targets) -> int:
-        """Store a stream of messages read from another bag; how many were written.
-
-        ``targets`` maps source connections to this writer's (see ``Targets``).
-        """
-        self._check_open()
-        ids: dict[int, int] = {}
-        store = self._store
-        n = 0
-        for conn, t, data in messages:
-            cid = ids.get(conn.id)
-            if cid is None:
-                cid = ids[conn.id] = self._target(targets, conn)
-            store(cid, t, data)
-            n += 1
-        return n
 
     def _store(self, cid: int, t_ns: int, data: bytes | bytearray | memoryview) -> None:
         if not 0 <= t_ns <= MAX_BAG_TIME_NS:
@@ -183,12 +117,6 @@ class Bag1Writer(BagWriter):
             self._close_chunk()
         elif self._sink.pending() >= FLUSH_SIZE:
             self._sink.flush()
-
-    def _target(self, targets: Targets, conn: Connection) -> int:
-        target = targets.resolve(conn)
-        if target.id >= len(self._connections) or self._connections[target.id] is not target:
-            raise BagUsageError(f"connection {target.id} was not added to this writer")
-        return target.id
 
     def flush(self) -> None:
         """Hand everything so far to the OS: after this, a killed writer loses none of it.
@@ -229,22 +157,9 @@ class Bag1Writer(BagWriter):
             header = self._bag_header(index_pos, len(self._connections), len(self._chunk_infos))
             self._sink.pwrite(header, len(fmt.MAGIC))
         finally:
-            self._closed = True
-            os.close(self._fd)
-
-    def abort(self) -> None:
-        """Stop writing and delete the file."""
-        if not self._closed:
-            self._closed = True
-            os.close(self._fd)
-        with contextlib.suppress(FileNotFoundError):
-            self.path.unlink()
+            self._release()
 
     # -- records ---------------------------------------------------------------------------
-
-    def _check_open(self) -> None:
-        if self._closed:
-            raise BagUsageError(f"{self.path} is closed")
 
     @staticmethod
     def _bag_header(index_pos: int, conn_count: int, chunk_count: int) -> bytes:
@@ -323,17 +238,9 @@ class Bag1Writer(BagWriter):
                         "conn": _U32.pack(cid),
                         "count": _U32.pack(len(entries) // 3),
                     },
-                    _little_endian(entries),
+                    little_endian(entries),
                 )
             )
         counts = {cid: len(entries) // 3 for cid, entries in index.items()}
         self._chunk_infos.append((self._chunk_pos, self._chunk_start, self._chunk_end, counts))
         self._sink.flush()
-
-
-def _little_endian(values: array[int]) -> bytes:
-    """The bytes of a u32 array as the file wants them (little-endian)."""
-    if sys.byteorder == "big":
-        values = array(values.typecode, values)
-        values.byteswap()
-    return values.tobytes()

@@ -8,6 +8,8 @@ its bytes once (into the page cache) instead of three or four times through Pyth
 from __future__ import annotations
 
 import os
+import sys
+from array import array
 from typing import Final
 
 from rostools.errors import InvalidDataError
@@ -107,3 +109,11 @@ class Sink:
             os.pwrite(self.fd, data, pos)
         except OSError as err:
             raise InvalidDataError(f"cannot write {self.name}: {err.strerror or err}") from err
+
+
+def little_endian(values: array[int]) -> bytes:
+    """The bytes of an integer array as the file formats want them (little-endian)."""
+    if sys.byteorder == "big":
+        values = array(values.typecode, values)
+        values.byteswap()
+    return values.tobytes()

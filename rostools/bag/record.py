@@ -227,7 +227,6 @@ class Recorder:
         self.latched: dict[tuple[tuple[tuple[str, str], ...], str], tuple[int, Frame]] = {}
         self.current_file: Path | None = None
         self.closed_files: list[Path] = []
-        self.subscribed: set[str] = set()
         self.done_topics: set[str] = set()
         self.started = time.monotonic()
         #: Called with each topic as it is subscribed to (rosbag's "Subscribing to" lines).
@@ -283,8 +282,7 @@ class Recorder:
         else:
             candidates = sorted(self.selection.names)  # subscribed before anyone publishes
         for topic in candidates:
-            if topic not in self.subscribed and self.selection.wants(topic):
-                self.subscribed.add(topic)
+            if topic not in self.node.subscribers and self.selection.wants(topic):
                 if self.on_subscribe is not None:
                     self.on_subscribe(topic)
                 await self.node.subscribe(

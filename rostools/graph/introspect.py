@@ -24,7 +24,7 @@ from typing import Any
 from urllib.parse import urlsplit
 
 from rostools.errors import NotFoundError, RostoolsError, TimeoutExpired, UnreachableError
-from rostools.graph.masterapi import MasterError, MasterProxy, XmlRpcNode
+from rostools.graph.masterapi import MasterError, MasterProxy, TimeoutTransport, XmlRpcNode
 from rostools.names import make_global_ns
 
 #: Seconds to wait for a node's answer; rosnode's ping uses 3 s (and 5 s for info).
@@ -162,22 +162,13 @@ def _went_away(err: BaseException) -> bool:
     )
 
 
-class _OneShotTransport(xmlrpc.client.Transport):
+class _OneShotTransport(TimeoutTransport):
     """HTTP with a socket timeout that sends each request once.
 
     The standard transport sends a request again when the connection drops before the
     answer. A node told to shut down may drop it so, and the second try is then refused:
     that would turn a node that did as asked into one that could not be reached.
     """
-
-    def __init__(self, timeout: float) -> None:
-        super().__init__()
-        self.timeout = timeout
-
-    def make_connection(self, host: Any) -> http.client.HTTPConnection:
-        conn = super().make_connection(host)
-        conn.timeout = self.timeout
-        return conn
 
     def request(
         self, host: Any, handler: str, request_body: Any, verbose: bool = False

@@ -26,7 +26,7 @@ def master_timeout() -> float:
         return DEFAULT_TIMEOUT
 
 
-class _Transport(xmlrpc.client.Transport):
+class TimeoutTransport(xmlrpc.client.Transport):
     """Keep-alive HTTP with a socket timeout."""
 
     def __init__(self, timeout: float) -> None:
@@ -34,6 +34,7 @@ class _Transport(xmlrpc.client.Transport):
         self.timeout = timeout
 
     def make_connection(self, host: Any) -> http.client.HTTPConnection:
+        """A connection with this transport's timeout."""
         conn = super().make_connection(host)
         conn.timeout = self.timeout
         return conn
@@ -59,7 +60,7 @@ class XmlRpcNode:
         self.what = what
         self.timeout = master_timeout() if timeout is None else timeout
         self.proxy = xmlrpc.client.ServerProxy(
-            uri, transport=_Transport(self.timeout), allow_none=False
+            uri, transport=TimeoutTransport(self.timeout), allow_none=False
         )
 
     def raw(self, method: str, *args: Any) -> Any:

@@ -306,9 +306,18 @@ def recovered_name(src: Path) -> Path:
     return src.with_name(src.name.removesuffix(suffix) + ".recovered" + suffix)
 
 
-def _recover(
-    ctx: typer.Context, src: Path, dst: Path | None, force: bool, fmt: Format | None
+DstOpt = Annotated[Path | None, typer.Argument(help="Output (default: NAME.recovered.bag|mcap).")]
+
+
+@app.command()
+def recover(
+    ctx: typer.Context,
+    src: BagArg,
+    dst: DstOpt = None,
+    force: ForceOpt = False,
+    fmt: FormatOpt = None,
 ) -> None:
+    """Rebuild an unindexed or cut-short bag or MCAP; exit 6 if anything was lost."""
     from rostools.bag.recover import recover as run_recover
 
     report = run_recover(src, dst or recovered_name(src), overwrite=force)
@@ -327,31 +336,8 @@ def _recover(
     report.raise_if_lost()
 
 
-DstOpt = Annotated[Path | None, typer.Argument(help="Output (default: NAME.recovered.bag|mcap).")]
-
-
-@app.command()
-def recover(
-    ctx: typer.Context,
-    src: BagArg,
-    dst: DstOpt = None,
-    force: ForceOpt = False,
-    fmt: FormatOpt = None,
-) -> None:
-    """Rebuild an unindexed or cut-short bag or MCAP; exit 6 if anything was lost."""
-    _recover(ctx, src, dst, force, fmt)
-
-
-@app.command()
-def reindex(
-    ctx: typer.Context,
-    src: BagArg,
-    dst: DstOpt = None,
-    force: ForceOpt = False,
-    fmt: FormatOpt = None,
-) -> None:
-    """The same as recover (rosbag reindex), without touching the original."""
-    _recover(ctx, src, dst, force, fmt)
+_REINDEX_HELP = "The same as recover (rosbag reindex), without touching the original."
+app.command("reindex", help=_REINDEX_HELP)(recover)
 
 
 from rostools.cli.bag import play, record  # noqa: E402, F401 - they add their commands to app

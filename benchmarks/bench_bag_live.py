@@ -10,7 +10,6 @@ Files go to benchmarks/build/bag_live/ (gitignored) and are deleted once counted
 from __future__ import annotations
 
 import contextlib
-import hashlib
 import json
 import os
 import signal
@@ -24,6 +23,7 @@ from pathlib import Path
 from benchmarks.common import (
     ROOT,
     Result,
+    cpp_peer,
     have,
     master,
     ros_env,
@@ -44,46 +44,6 @@ RECORD_ROUNDS = 3  # recordings by each recorder, interleaved
 PLAY_MESSAGES = 3000
 PLAY_PERIOD_NS = 1_000_000
 PLAY_RUNS = 5  # runs of each player, interleaved; their errors are pooled
-
-
-def _cpp(name: str) -> str:
-    """A roscpp peer from tests/support/cpp, built once and cached."""
-    from tests.support.cppbuild import build, cpp_missing
-
-    reason = cpp_missing()
-    if reason is not None:
-        raise RuntimeError(f"cannot build the roscpp source: {reason}")
-    return str(build(name))
-
-
-def _bench_peer(name: str) -> str:
-    """A roscpp peer from benchmarks/peers, compiled like the test peers (same flags, peer.h)."""
-    from tests.support import cppbuild
-
-    reason = cppbuild.cpp_missing()
-    if reason is not None:
-        raise RuntimeError(f"cannot build the roscpp source: {reason}")
-    source = PEERS / f"{name}.cpp"
-    flags = [*cppbuild.CXXFLAGS, f"-I{cppbuild.SOURCES}"]
-    libs = list(cppbuild.LIBS)
-    digest = hashlib.sha256(" ".join([cppbuild.CXX, *flags, *libs]).encode())
-    digest.update(source.read_bytes())
-    digest.update((cppbuild.SOURCES / "peer.h").read_bytes())
-    target = cppbuild.CACHE / f"{name}-{digest.hexdigest()[:16]}"
-    if not os.access(target, os.X_OK):
-        target.parent.mkdir(parents=True, exist_ok=True)
-        temp = target.with_name(f".{target.name}.{os.getpid()}.tmp")
-        proc = subprocess.run(
-            [cppbuild.CXX, *flags, str(source), "-o", str(temp), *libs],
-            capture_output=True,
-            text=True,
-            check=False,
-        )
-        if proc.returncode != 0:
-            temp.unlink(missing_ok=True)
-            raise RuntimeError(f"g++ failed to build {name}:\n{proc.stderr[-4000:]}")
-        os.replace(temp, target)
-    return str(target)
 
 
 def _rosbag(tool: str) -> list[str] | None:
@@ -153,7 +113,7 @@ def _record(
         rec = start(recorder, env, stdout=sink, stderr=subprocess.STDOUT, cwd=BUILD)
         pub = start(
             [
-                _cpp("pub_rate"),
+                cpp_peer("pub_rate"),
                 TOPIC,
                 kind,
                 str(size),
@@ -328,7 +288,7 @@ def _play_bag() -> Path:
 def _play_errors(player: list[str], env: dict[str, str], bag: Path) -> tuple[list[float], int]:
     """|timing error| in ms of every message the subscriber got from one play, and the count."""
     sub = start(
-        [_bench_peer("sub_stamps"), TOPIC, "--count", str(PLAY_MESSAGES), "--idle", "2"],
+        [cpp_peer("sub_stamps", PEERS), TOPIC, "--count", str(PLAY_MESSAGES), "--idle", "2"],
         env,
         stdout=subprocess.PIPE,
         stderr=subprocess.DEVNULL,

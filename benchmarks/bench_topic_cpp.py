@@ -16,6 +16,7 @@ from benchmarks.common import (
     BENCH_VENV,
     SYSTEM_PYTHON,
     Result,
+    cpp_peer,
     have,
     master,
     ros_env,
@@ -28,15 +29,6 @@ ROOT = Path(__file__).resolve().parent.parent
 PEERS = Path(__file__).with_name("peers")
 sys.path.insert(0, str(ROOT))
 RUN = 5.0  # seconds of publishing per measurement
-
-
-def _cpp(name: str) -> str:
-    from tests.support.cppbuild import build, cpp_missing
-
-    reason = cpp_missing()
-    if reason is not None:
-        raise RuntimeError(f"cannot build the roscpp source: {reason}")
-    return str(build(name))
 
 
 def _wait_json(proc: subprocess.Popen[bytes], timeout: float) -> dict[str, float]:
@@ -75,7 +67,7 @@ def _publisher(
     rate: float, size: int, kind: str, env: dict[str, str], subscribers: int = 1
 ) -> subprocess.Popen[bytes]:
     argv = [
-        _cpp("pub_rate"),
+        cpp_peer("pub_rate"),
         "/bench",
         kind,
         str(size),
@@ -189,7 +181,7 @@ def bench_echo() -> Result:
 
 def _received(pub_argv: list[str], env: dict[str, str]) -> float:
     sub = start(
-        [_cpp("sub_count"), "/bench", "--duration", "4", "--timeout", "20"],
+        [cpp_peer("sub_count"), "/bench", "--duration", "4", "--timeout", "20"],
         env,
         stdout=subprocess.PIPE,
         stderr=subprocess.DEVNULL,
@@ -268,7 +260,7 @@ def bench_big_messages() -> list[Result]:
             return float(data["bytes"]) / float(data["seconds"]) / 1e9
 
         ours = measure([ours_py, str(PEERS / "rt_pubsub.py"), "sub", uri, "/bench", "3"])
-        cpp = measure([_cpp("sub_count"), "/bench", "--duration", "3", "--timeout", "30"])
+        cpp = measure([cpp_peer("sub_count"), "/bench", "--duration", "3", "--timeout", "30"])
         rospy = None
         if have("rostopic"):
             rospy = measure([SYSTEM_PYTHON, str(PEERS / "rospy_pubsub.py"), "sub", "/bench", "3"])

@@ -210,3 +210,13 @@ def cpu_seconds(pid: int) -> float:
     fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
     ticks = os.sysconf("SC_CLK_TCK")
     return (int(fields[11]) + int(fields[12])) / ticks
+
+
+def cpp_peer(name: str, folder: Path | None = None) -> str:
+    """A roscpp peer (tests/support/cpp, or ``folder``), built once and cached."""
+    from tests.support.cppbuild import SOURCES, build, cpp_missing
+
+    reason = cpp_missing()
+    if reason is not None:
+        raise RuntimeError(f"cannot build the roscpp source: {reason}")
+    return str(build(name, folder or SOURCES))

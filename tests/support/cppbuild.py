@@ -112,34 +112,36 @@ def _compiler_id() -> str:
     return proc.stdout.splitlines()[0] if proc.stdout else CXX
 
 
-def command(name: str, output: Path) -> list[str]:
-    """The g++ command line that builds ``name`` into ``output``."""
+def command(name: str, output: Path, folder: Path = SOURCES) -> list[str]:
+    """The g++ command line that builds ``folder/name.cpp`` into ``output``."""
     extra = TOPIC_TOOLS if has_topic_tools() else []
-    source = SOURCES / f"{name}.cpp"
+    source = folder / f"{name}.cpp"
     return [CXX, *CXXFLAGS, f"-I{SOURCES}", str(source), "-o", str(output), *extra, *LIBS]
 
 
-def _key(name: str) -> str:
+def _key(name: str, folder: Path) -> str:
     digest = hashlib.sha256()
     digest.update(_compiler_id().encode())
     # Flags without the paths in them: moving the checkout keeps the cache valid.
-    digest.update(" ".join(command(name, Path("OUT"))).replace(str(SOURCES), "SRC").encode())
-    digest.update((SOURCES / f"{name}.cpp").read_bytes())
+    line = " ".join(command(name, Path("OUT"), folder))
+    digest.update(line.replace(str(folder), "SRC").replace(str(SOURCES), "SRC").encode())
+    digest.update((folder / f"{name}.cpp").read_bytes())
     for header in sorted(SOURCES.glob("*.h")):
         digest.update(header.name.encode() + b"\0" + header.read_bytes())
     return digest.hexdigest()[:16]
 
 
-def build(name: str) -> Path:
-    """The executable for ``tests/support/cpp/<name>.cpp``, compiled now if not cached.
+def build(name: str, folder: Path = SOURCES) -> Path:
+    """The executable for ``<folder>/<name>.cpp`` (default: tests/support/cpp), built if new.
 
+    Other folders' peers (benchmarks/peers) include ``peer.h`` from tests/support/cpp too.
     Raises CppBuildError when the toolchain is missing or the compiler fails (with its output).
     """
-    if not (SOURCES / f"{name}.cpp").is_file():
-        raise CppBuildError(f"no such peer: {SOURCES / name}.cpp")
+    if not (folder / f"{name}.cpp").is_file():
+        raise CppBuildError(f"no such peer: {folder / name}.cpp")
     if reason := cpp_missing():
         raise CppBuildError(reason)
-    target = CACHE / f"{name}-{_key(name)}"
+    target = CACHE / f"{name}-{_key(name, folder)}"
     if os.access(target, os.X_OK):
         return target
     CACHE.mkdir(parents=True, exist_ok=True)
@@ -154,7 +156,11 @@ def build(name: str) -> Path:
         temp = target.with_name(f".{target.name}.{os.getpid()}.tmp")
         try:
             proc = subprocess.run(
-                command(name, temp), capture_output=True, text=True, timeout=600, check=False
+                command(name, temp, folder),
+                capture_output=True,
+                text=True,
+                timeout=600,
+                check=False,
             )
             if proc.returncode != 0:
                 raise CppBuildError(f"g++ failed to build {name}:\n{proc.stderr[-4000:]}")

@@ -214,9 +214,9 @@ def cpu_seconds(pid: int) -> float:
 
 def cpp_peer(name: str, folder: Path | None = None) -> str:
     """A roscpp peer (tests/support/cpp, or ``folder``), built once and cached."""
-    from tests.support.cppbuild import SOURCES, build, cpp_missing
+    from tests.support.cppbuild import build, cpp_missing
 
     reason = cpp_missing()
     if reason is not None:
         raise RuntimeError(f"cannot build the roscpp source: {reason}")
-    return str(build(name, folder or SOURCES))
+    return str(build(name, folder))

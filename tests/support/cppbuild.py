@@ -112,8 +112,9 @@ def _compiler_id() -> str:
     return proc.stdout.splitlines()[0] if proc.stdout else CXX
 
 
-def command(name: str, output: Path, folder: Path = SOURCES) -> list[str]:
-    """The g++ command line that builds ``folder/name.cpp`` into ``output``."""
+def command(name: str, output: Path, folder: Path | None = None) -> list[str]:
+    """The g++ command line that builds ``folder/name.cpp`` (default SOURCES) into ``output``."""
+    folder = folder or SOURCES
     extra = TOPIC_TOOLS if has_topic_tools() else []
     source = folder / f"{name}.cpp"
     return [CXX, *CXXFLAGS, f"-I{SOURCES}", str(source), "-o", str(output), *extra, *LIBS]
@@ -131,12 +132,13 @@ def _key(name: str, folder: Path) -> str:
     return digest.hexdigest()[:16]
 
 
-def build(name: str, folder: Path = SOURCES) -> Path:
+def build(name: str, folder: Path | None = None) -> Path:
     """The executable for ``<folder>/<name>.cpp`` (default: tests/support/cpp), built if new.
 
     Other folders' peers (benchmarks/peers) include ``peer.h`` from tests/support/cpp too.
     Raises CppBuildError when the toolchain is missing or the compiler fails (with its output).
     """
+    folder = folder or SOURCES
     if not (folder / f"{name}.cpp").is_file():
         raise CppBuildError(f"no such peer: {folder / name}.cpp")
     if reason := cpp_missing():

@@ -123,6 +123,8 @@ def test_real_subscribers_get_what_we_play(
 ) -> None:
     bag = tmp_path / "p.bag"
     write_play_bag(bag)
+    if cpp:  # compile before the player's 4 s delay starts: a first build takes longer than that
+        cppbuild.build("listener")
     # -s 0.5: /latched's only message is before the start, and must still be sent (latched)
     player = rostools(any_master, "bag", "play", str(bag), "-s", "0.5", "-d", "4", "-k")
     chatter = listen(any_master, "/chatter", cpp)

@@ -109,6 +109,7 @@ def test_real_tools_answer_the_same_on_both_masters(
         talker: Proc | None = None
         params = tmp_path / f"{kind}.yaml"
         params.write_text("gains: {p: 1.5, i: 0}\nname: r2\nlist: [1, 2.5, x]\n")
+        dump = tmp_path / f"{kind}-dump.yaml"
         try:
             listener.expect("ready", timeout=20)
             talker = start_ros1_node("talker.py", ["/chatter", "20"], env)
@@ -125,7 +126,8 @@ def test_real_tools_answer_the_same_on_both_masters(
                 ros_tool(info, "rosparam", "get", "/robot"),
                 ros_tool(info, "rosparam", "load", str(params), "/loaded"),
                 ros_tool(info, "rosparam", "get", "/loaded/list"),
-                ros_tool(info, "rosparam", "dump", "-", "/loaded"),
+                # real rosparam dump has no "-" for stdout: it writes a file of that name
+                ros_tool(info, "rosparam", "dump", str(dump), "/loaded") + dump.read_text(),
                 ros_tool(info, "rosparam", "delete", "/loaded/gains"),
                 ros_tool(info, "rosparam", "list", "/loaded"),
                 ros_tool(info, "rosparam", "get", "/nope"),

@@ -106,15 +106,18 @@ def filter_bag(
     chunk_size: int | None = None,
     progress: Progress | None = None,
     overwrite: bool = False,
+    show: tuple[str, Callable[[bool, Any], None]] | None = None,
 ) -> CopyReport:
     """Copy the messages of ``src`` that pass the filters into ``dst``.
 
     ``topics`` and ``start``/``end`` (inclusive, ns) select without decoding. ``expression``
     is Python over ``topic``, ``m`` and ``t`` as in ``rosbag filter`` (``t`` has ``secs``,
     ``nsecs``, ``to_sec()``); a message is decoded only when the expression mentions ``m``.
+    ``show`` is rosbag filter's ``--print``: an expression over the same names, whose value
+    goes to the callback with the verdict for every message the expression judges.
     Only connections that keep a message are written. The output format follows ``dst``.
     """
-    keep = compile_filter(expression) if expression else None
+    keep = compile_filter(expression or "True", show) if expression or show else None
     return _copy(
         src,
         dst,
@@ -142,19 +145,28 @@ class _Filter:
     source: str
     fn: Callable[[str, Any, Any], Any]
     needs_message: bool
+    show: tuple[str, Callable[[str, Any, Any], Any], Callable[[bool, Any], None]] | None = None
     decoders: dict[int, Callable[[Any], Any]] = field(default_factory=dict)
 
     def __call__(self, conn: Connection, t_ns: int, data: memoryview) -> bool:
         from rostools.msgs.message import Time
 
         msg = self._decode(conn, data) if self.needs_message else None
+        t = Time.from_nsec(t_ns)
+        source, shown = self.source, None
         try:
-            return bool(self.fn(conn.topic, msg, Time.from_nsec(t_ns)))
+            verdict = bool(self.fn(conn.topic, msg, t))
+            if self.show is not None:
+                source = self.show[0]
+                shown = self.show[1](conn.topic, msg, t)
         except Exception as err:  # the user's expression may raise anything
             raise FilterExpressionError(
-                f"filter expression {self.source!r} failed on {conn.topic} at {t_ns} ns: "
+                f"filter expression {source!r} failed on {conn.topic} at {t_ns} ns: "
                 f"{type(err).__name__}: {err}"
             ) from err
+        if self.show is not None:
+            self.show[2](verdict, shown)
+        return verdict
 
     def _decode(self, conn: Connection, data: memoryview) -> Any:
         decode = self.decoders.get(conn.id)
@@ -163,8 +175,22 @@ class _Filter:
         return decode(data)
 
 
-def compile_filter(expression: str) -> Callable[[Connection, int, memoryview], bool]:
-    """A predicate over (connection, time ns, raw data) from a ``rosbag filter`` expression."""
+def compile_filter(
+    expression: str, show: tuple[str, Callable[[bool, Any], None]] | None = None
+) -> Callable[[Connection, int, memoryview], bool]:
+    """A predicate over (connection, time ns, raw data) from a ``rosbag filter`` expression.
+
+    ``show`` is (expression, callback): see ``filter_bag``.
+    """
+    fn, needs = _compile(expression)
+    if show is None:
+        return _Filter(expression, fn, needs)
+    show_fn, show_needs = _compile(show[0])
+    return _Filter(expression, fn, needs or show_needs, (show[0], show_fn, show[1]))
+
+
+def _compile(expression: str) -> tuple[Callable[[str, Any, Any], Any], bool]:
+    """The expression as a function of (topic, m, t), and whether it reads ``m``."""
     try:
         tree = ast.parse(expression.strip(), mode="eval")
         code = compile(f"lambda topic, m, t: ({expression.strip()})", "<filter>", "eval")
@@ -172,8 +198,7 @@ def compile_filter(expression: str) -> Callable[[Connection, int, memoryview], b
         raise FilterExpressionError(f"bad filter expression {expression!r}: {err.msg}") from err
     needs = any(isinstance(n, ast.Name) and n.id == "m" for n in ast.walk(tree))
     # The expression is the user's own Python, exactly as rosbag filter evaluates it.
-    fn = eval(code, {"__builtins__": __builtins__})  # noqa: S307
-    return _Filter(expression, fn, needs)
+    return eval(code, {"__builtins__": __builtins__}), needs  # noqa: S307
 
 
 def _decoder(conn: Connection) -> Callable[[Any], Any]:

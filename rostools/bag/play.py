@@ -18,6 +18,7 @@ from enum import Enum
 from rostools.bag.api import merged_messages
 from rostools.bag.base import BagReader
 from rostools.bag.model import NS_PER_SEC, Connection
+from rostools.bag.play_control import SET_BOOL, RateControl, set_bool_reply
 from rostools.errors import UsageError
 from rostools.graph.node import Node
 from rostools.graph.publisher import Publisher
@@ -58,6 +59,9 @@ class PlayOptions:
     skip_empty: float | None = None
     queue_size: int = 100
     wait_for_subscribers: bool = False
+    pause_topics: list[str] = field(default_factory=list)  # pause before their messages
+    rate_control_topic: str | None = None
+    rate_control_max_delay: float = 1.0
 
 
 class State(Enum):
@@ -65,6 +69,7 @@ class State(Enum):
 
     RUNNING = "RUNNING"
     PAUSED = "PAUSED "
+    DELAYED = "DELAYED"  # waiting for the rate-control topic
     DONE = "DONE   "
 
 
@@ -77,6 +82,7 @@ class Status:
     elapsed: float = 0.0  # s of bag time since the start point
     total: float = 0.0  # s of bag time to play
     published: int = 0
+    delay: float = 0.0  # s the rate-control topic lags, while DELAYED
 
 
 class Player:
@@ -95,6 +101,11 @@ class Player:
         self.status = Status(state=State.PAUSED if opts.pause else State.RUNNING)
         self.steps = 0  # messages to send while paused (the ``s`` key)
         self.wake = asyncio.Event()
+        self.pause_topics = set(opts.pause_topics)
+        self.pausing_on_topics = bool(self.pause_topics)  # the ``t`` key toggles it
+        self.rate_control: RateControl | None = None
+        if opts.rate_control_topic:
+            self.rate_control = RateControl(opts.rate_control_max_delay, self.wake.set)
         self._origin: float | None = None  # when (monotonic) bag time from_ns plays
         self._next_clock = self._next_show = self._yielded = 0.0  # monotonic times
         infos = [r.info() for r in readers]
@@ -112,9 +123,17 @@ class Player:
 
     def toggle_pause(self) -> None:
         """Space: pause or go on."""
-        running = self.status.state is State.RUNNING
-        self.status.state = State.PAUSED if running else State.RUNNING
+        self.set_paused(self.status.state is not State.PAUSED)
+
+    def set_paused(self, paused: bool) -> None:
+        """Pause or go on (also the ``~pause_playback`` service)."""
+        if self.status.state is not State.DONE:
+            self.status.state = State.PAUSED if paused else State.RUNNING
         self.wake.set()
+
+    def toggle_pause_topics(self) -> None:
+        """``t``: whether ``--pause-topics`` pause playback."""
+        self.pausing_on_topics = not self.pausing_on_topics
 
     def step(self) -> None:
         """``s``: while paused, publish the next message now."""
@@ -149,6 +168,12 @@ class Player:
             )
         if self.opts.clock:
             self.clock = await self.node.advertise("/clock", _CLOCK, queue_size=1)
+        if self.rate_control is not None and self.opts.rate_control_topic:
+            await self.rate_control.subscribe(self.node, self.opts.rate_control_topic)
+        await self.node.advertise_service("~pause_playback", SET_BOOL, self._pause_service)
+
+    def _pause_service(self, request: bytes) -> bytes:
+        return set_bool_reply(request, self.status.state is State.PAUSED, self.set_paused)
 
     def _latched_before_start(self) -> Iterator[tuple[Connection, int, memoryview]]:
         """The last message of every latched connection before ``-s``'s start point."""
@@ -175,6 +200,8 @@ class Player:
             await first(stop.wait(), timeout=self.opts.delay)
         for conn, _, data in self._latched_before_start():
             self.publishers[conn.topic].publish_raw(data)
+        if self.rate_control is not None:
+            self.rate_control.start(self.from_ns)
         while not stop.is_set():
             await self._play_once(stop, show)
             if not self.opts.loop:
@@ -193,6 +220,12 @@ class Player:
         for conn, t, data in messages:
             if stop.is_set():
                 return
+            if (
+                self.pausing_on_topics
+                and conn.topic in self.pause_topics
+                and self.status.state is State.RUNNING
+            ):
+                self.status.state = State.PAUSED  # as rosbag: before the message; ``s`` sends it
             if not self.opts.immediate and not await self._wait_for(t, stop, show):
                 return
             pub = self.publishers[conn.topic]
@@ -238,6 +271,17 @@ class Player:
                 if stop.is_set():
                     return False
                 continue
+            if self.rate_control is not None and self.rate_control.holds(t):
+                self.status.state = State.DELAYED
+                self.status.delay = self.rate_control.lag(t)
+                self.wake.clear()
+                await first(self.wake.wait(), stop.wait(), timeout=0.1)
+                self._origin += time.monotonic() - now  # so is delayed time
+                if stop.is_set():
+                    return False
+                continue
+            if self.status.state is State.DELAYED:
+                self.status.state = State.RUNNING
             due = self._origin + (t - self.from_ns) * scale
             if opts.skip_empty is not None and due - now > opts.skip_empty / opts.rate:
                 self._origin -= due - now  # a long gap in the recording: jump over it

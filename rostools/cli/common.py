@@ -110,7 +110,8 @@ def render(fmt: Format, data: Any, text: Callable[[Any], str] | None = None) -> 
     if fmt is Format.yaml:
         import yaml
 
-        return str(yaml.safe_dump(data, sort_keys=False, allow_unicode=True)).rstrip("\n")
+        text_ = str(yaml.safe_dump(data, sort_keys=False, allow_unicode=True))
+        return text_.removesuffix("\n...\n").rstrip("\n")  # a scalar has no end-of-document mark
     return text(data) if text is not None else str(data)
 
 

@@ -4,6 +4,7 @@ the MCAP conformance suite's expected output, and rosbag2's own counts."""
 from __future__ import annotations
 
 import json
+import re
 import subprocess
 from pathlib import Path
 from typing import Any
@@ -129,6 +130,46 @@ def test_info_text_is_rosbag_infos() -> None:
     mine = run_cli("bag", "info", *names, cwd=ROS1, timeout=600)
     assert theirs.returncode == 0 == mine.returncode, mine.stderr
     assert mine.stdout.split("\n---\n") == theirs.stdout.split("\n---\n")
+
+
+@needs_ros1
+@pytest.mark.parametrize(
+    "key", ["duration", "messages", "compression", "topics[0].topic", "types[0].md5"]
+)
+def test_info_keys_are_rosbag_infos(key: str) -> None:
+    """``bag info -y -k KEY`` gives rosbag's value for every corpus bag that has topics."""
+    names = [n for n in bags() if n != UNSORTED and bag_info(ROS1 / n).topics]
+    theirs = subprocess.run(
+        ["rosbag", "info", "-y", "-k", key, *names],
+        cwd=ROS1, capture_output=True, text=True, timeout=600, check=True,
+    )  # fmt: skip
+    mine = run_cli("bag", "info", "-y", "-k", key, *names, cwd=ROS1, timeout=600)
+    assert mine.returncode == 0, mine.stderr
+    expected = [yaml.safe_load(doc) for doc in theirs.stdout.split("---\n")]
+    got = yaml.safe_load(mine.stdout)
+    if key == "duration":  # rosbag subtracts float seconds, then prints 6 decimals
+        assert got == pytest.approx(expected, abs=2e-6)
+    else:
+        assert got == expected
+
+
+@needs_ros1
+def test_filter_print_is_rosbag_filters(tmp_path: Path) -> None:
+    """``filter -p`` prints rosbag filter's MATCH / NO MATCH lines, messages decoded alike."""
+    src = ROS1 / "roswire" / "hello_world_example.bag"
+    expression = "'1' in (m.data if topic == '/chatter' else m.msg)"
+    show = "topic + ' ' + str(t.to_sec()) + ' ' + str(m.header.seq if topic != '/chatter' else 0)"
+    theirs = subprocess.run(
+        ["rosbag", "filter", str(src), str(tmp_path / "r.bag"), expression, "-p", show],
+        capture_output=True, text=True, timeout=600, check=True,
+    )  # fmt: skip
+    mine = run_cli("bag", "filter", str(src), str(tmp_path / "o.bag"), expression, "-p", show)
+    assert mine.returncode == 0, mine.stderr
+    # rosbag's progress meter shares stdout with the lines ("...ETAMATCH /t ...")
+    verdicts = re.findall(r"(?:NO )?MATCH [^\r\n]*", theirs.stdout)
+    assert mine.stdout.splitlines() == verdicts
+    assert len(verdicts) == bag_info(src).message_count
+    assert ours(tmp_path / "o.bag") == ours(tmp_path / "r.bag")
 
 
 @pytest.mark.parametrize(("name", "words"), sorted(NOT_BAGS.items()))

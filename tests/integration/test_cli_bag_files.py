@@ -37,6 +37,29 @@ def test_info_text_json_yaml_and_freq(tmp_path: Path) -> None:
     assert two == [data, data]
 
 
+def test_info_yaml_flag_and_keys(tmp_path: Path) -> None:
+    sample = write_sample(tmp_path / "s.bag", 40)
+    path = str(sample.path)
+    data = yaml.safe_load(run_cli("bag", "info", "-y", path).stdout)
+    assert data == json.loads(run_cli("bag", "info", path, "-F", "json").stdout)
+    assert run_cli("bag", "info", "-k", "messages", path).stdout == "40\n"  # -k implies YAML
+    assert run_cli("bag", "info", "-y", "-k", "topics[1].topic", path).stdout == "/count\n"
+    assert yaml.safe_load(run_cli("bag", "info", "-k", "topics[-1]", path).stdout) == {
+        "topic": "/point", "type": "geometry_msgs/Point", "messages": 10
+    }  # fmt: skip
+    assert json.loads(run_cli("bag", "info", "-F", "json", "-k", "size", path, path).stdout) == [
+        data["size"]
+    ] * 2
+    for key, words in [
+        ("nope", "has no key 'nope' (keys here: path, version"),
+        ("topics[7]", "has no key 'topics[7]' (3 entries here)"),
+        ("topics..x", "bad key 'topics..x'"),
+    ]:
+        done = run_cli("bag", "info", "-k", key, path)
+        assert done.returncode == 2 and done.stdout == ""
+        assert done.stderr.count("\n") == 1 and words in done.stderr, done.stderr
+
+
 def test_filter_by_expression_topics_and_time(tmp_path: Path) -> None:
     sample = write_sample(tmp_path / "s.bag", 400)
     out = tmp_path / "f.mcap"

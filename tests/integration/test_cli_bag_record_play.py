@@ -367,3 +367,74 @@ def test_play_of_dense_messages_serves_late_subscribers_and_ctrl_c(
         assert time.monotonic() - started < 1.0
     finally:
         player.stop()
+
+
+def pause_service(env: dict[str, str]) -> str:
+    """The name of the player's ``~pause_playback`` service, once it is registered."""
+    found: list[str] = []
+
+    def listed() -> bool:
+        names = run_cli("service", "list", env=env).stdout.split()
+        found[:] = [n for n in names if n.endswith("/pause_playback")]
+        return bool(found)
+
+    wait_for(listed, 15, "~pause_playback")
+    return found[0]
+
+
+def set_paused(env: dict[str, str], service: str, paused: bool) -> dict[str, object]:
+    done = run_cli("service", "call", service, "true" if paused else "false", "-F", "json", env=env)
+    assert done.returncode == 0, done.stderr
+    reply: dict[str, object] = json.loads(done.stdout)
+    return reply
+
+
+def test_play_pause_topics_and_pause_service(
+    rostools_master: str, cli_env: dict[str, str], tmp_path: Path
+) -> None:
+    bag = tmp_path / "p.bag"
+    write_play_bag(bag)
+    player = rostools(
+        cli_env, "bag", "play", str(bag), "--topics", "/chatter", "--pause-topics", "/chatter",
+        "--wait-for-subscribers", "-d", "0",
+    )  # fmt: skip
+    chatter = rostools(cli_env, "topic", "echo", "/chatter", "-F", "json")
+    service = pause_service(cli_env)
+    already = {"success": False, "message": "Bag is already paused."}
+    # Paused with m0 next: by --pause-topics, or by this call if it came first.
+    wait_for(lambda: set_paused(cli_env, service, True) == already, 15, "the pause before m0")
+    for i in range(3):  # a resume sends the pending message and pauses before the next
+        reply = set_paused(cli_env, service, False)
+        assert reply == {"success": True, "message": "Playback is now resumed"}
+        assert json.loads(chatter.expect(r'"data"'))["data"] == f"m{i}"
+        wait_for(lambda: set_paused(cli_env, service, True) == already, 15, "the next pause")
+    with pytest.raises(AssertionError, match="printed no line"):
+        chatter.expect(r'"data"', timeout=1.0)  # m3 stays pending while paused
+    assert player.popen.poll() is None
+
+
+def test_play_waits_for_the_rate_control_topic(
+    rostools_master: str, cli_env: dict[str, str], tmp_path: Path
+) -> None:
+    bag = tmp_path / "p.bag"
+    write_play_bag(bag)  # /chatter m0..m9 at 100.0, 100.1, ... 100.9 s
+    player = rostools(
+        cli_env, "bag", "play", str(bag), "--topics", "/chatter", "--wait-for-subscribers",
+        "-d", "0", "--rate-control-topic", "/ctl", "--rate-control-max-delay", "0.25",
+    )  # fmt: skip
+    chatter = rostools(cli_env, "topic", "echo", "/chatter", "-F", "json")
+
+    def played(count: int) -> list[str]:
+        return [json.loads(chatter.expect(r'"data"'))["data"] for _ in range(count)]
+
+    # No stamp yet: bag time may run 0.25 s past the start, so m0..m2 go and m3 waits.
+    assert played(3) == ["m0", "m1", "m2"]
+    with pytest.raises(AssertionError, match="printed no line"):
+        chatter.expect(r'"data"', timeout=1.5)
+    stamp = "{header: {stamp: {secs: 100, nsecs: 500000000}}}"
+    ctl = run_cli("topic", "pub", "-1", "/ctl", "geometry_msgs/PointStamped", stamp, env=cli_env)
+    assert ctl.returncode == 0, ctl.stderr
+    assert played(5) == ["m3", "m4", "m5", "m6", "m7"]  # up to 100.75 s
+    with pytest.raises(AssertionError, match="printed no line"):
+        chatter.expect(r'"data"', timeout=1.5)
+    assert player.popen.poll() is None

@@ -169,3 +169,67 @@ def test_real_rosbag_info_reads_our_recording(any_master: MasterInfo, tmp_path: 
 def raw_messages(path: Path, topic: str) -> list[bytes]:
     with open_bag(path) as reader:
         return [bytes(d) for _, _, d in reader.messages([topic])]
+
+
+def ros_tool(info: MasterInfo, *argv: str) -> subprocess.CompletedProcess[str]:
+    """A real ROS 1 command-line tool, run to its end."""
+    return subprocess.run(
+        list(argv), env=info.ros_env, capture_output=True, text=True, timeout=60, check=False
+    )
+
+
+def test_real_rosservice_pauses_our_player(any_master: MasterInfo, tmp_path: Path) -> None:
+    bag = tmp_path / "p.bag"
+    write_play_bag(bag)
+    player = rostools(
+        any_master, "bag", "play", str(bag), "--topics", "/chatter", "--pause-topics", "/chatter",
+        "--wait-for-subscribers", "-d", "0",
+    )  # fmt: skip
+    chatter = listen(any_master, "/chatter")
+    found: list[str] = []
+
+    def registered() -> bool:
+        names = ros_tool(any_master, "rosservice", "list").stdout.split()
+        found[:] = [n for n in names if n.endswith("/pause_playback")]
+        return bool(found)
+
+    def call(data: str) -> str:
+        done = ros_tool(any_master, "rosservice", "call", found[0], f"data: {data}")
+        assert done.returncode == 0, done.stderr
+        return done.stdout
+
+    try:
+        wait_for(registered, 20, "~pause_playback")
+        assert "std_srvs/SetBool" in ros_tool(any_master, "rosservice", "info", found[0]).stdout
+        already = 'success: False\nmessage: "Bag is already paused."\n'
+        for i in range(2):  # paused before each /chatter message; a resume sends one
+            wait_for(lambda: call("true") == already, 20, f"the pause before m{i}")
+            assert call("false") == 'success: True\nmessage: "Playback is now resumed"\n'
+            assert lines(chatter, 1) == [f"m{i}"]
+    finally:
+        chatter.stop()
+        player.stop()
+
+
+def test_real_rostopic_paces_our_player(any_master: MasterInfo, tmp_path: Path) -> None:
+    bag = tmp_path / "p.bag"
+    write_play_bag(bag)  # /chatter m0..m9 at 100.0, 100.1, ... 100.9 s
+    player = rostools(
+        any_master, "bag", "play", str(bag), "--topics", "/chatter", "--wait-for-subscribers",
+        "-d", "0", "--rate-control-topic", "/ctl", "--rate-control-max-delay", "0.25",
+    )  # fmt: skip
+    chatter = listen(any_master, "/chatter")
+    try:
+        assert lines(chatter, 3) == ["m0", "m1", "m2"]  # m3 waits for a stamp
+        with pytest.raises(AssertionError, match="printed no line"):
+            chatter.expect("^got ", timeout=1.5)
+        stamp = "{header: {stamp: {secs: 100, nsecs: 500000000}}}"
+        done = ros_tool(any_master, "rostopic", "pub", "-1", "/ctl", "geometry_msgs/PointStamped",
+                        stamp)  # fmt: skip
+        assert done.returncode == 0, done.stderr
+        assert lines(chatter, 5) == ["m3", "m4", "m5", "m6", "m7"]  # up to 100.75 s
+        with pytest.raises(AssertionError, match="printed no line"):
+            chatter.expect("^got ", timeout=1.5)
+    finally:
+        chatter.stop()
+        player.stop()

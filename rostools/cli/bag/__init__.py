@@ -47,13 +47,20 @@ def info(
     ctx: typer.Context,
     bags: Annotated[list[str], typer.Argument(help="One or more .bag or .mcap files.")],
     freq: Annotated[bool, typer.Option("--freq", help="Median rate of each topic.")] = False,
+    yaml_: Annotated[bool, typer.Option("--yaml", "-y", help="The same as -F yaml.")] = False,
+    key: Annotated[
+        str | None,
+        typer.Option("--key", "-k", help="Only this key, e.g. duration or topics[0].messages."),
+    ] = None,
     fmt: FormatOpt = None,
 ) -> None:
     """Summarise bags from their index alone (rosbag info)."""
     from rostools.bag.api import open_bag, topic_frequencies
-    from rostools.cli.bag.infotext import info_data, info_text
+    from rostools.cli.bag.infotext import info_data, info_key, info_text
 
-    fmt = output_format(ctx, fmt)
+    fmt = Format.yaml if yaml_ and fmt is None else output_format(ctx, fmt)
+    if key is not None and fmt is Format.text:
+        fmt = Format.yaml  # a key is a path into the YAML document; rosbag demands -y for it
     results = []
     for name in bags:
         with open_bag(name) as reader:
@@ -62,9 +69,11 @@ def info(
         results.append((summary, freqs, name))
     if fmt is Format.text:
         sys.stdout.write("\n---\n".join(info_text(*r) for r in results) + "\n")
-    else:
-        data = [info_data(*r) for r in results]
-        emit(fmt, data[0] if len(data) == 1 else data)
+        return
+    data = [info_data(*r) for r in results]
+    if key is not None:
+        data = [info_key(d, key) for d in data]
+    emit(fmt, data[0] if len(data) == 1 else data)
 
 
 class Progress:
@@ -166,6 +175,12 @@ def filter_(
     end: Annotated[
         float | None, typer.Option("--end", help="Seconds from the bag's start.")
     ] = None,
+    print_: Annotated[
+        str | None,
+        typer.Option(
+            "--print", "-p", help="Print MATCH or NO MATCH and this expression for each message."
+        ),
+    ] = None,
     compression: CompressionOpt = None,
     force: ForceOpt = False,
     quiet: QuietOpt = False,
@@ -179,10 +194,22 @@ def filter_(
     begin = bag_info(src).start_ns or 0 if (start is not None or end is not None) else 0
     lo = None if start is None else begin + (_time(start) or 0)
     hi = None if end is None else begin + (_time(end) or 0)
-    _copy_command(ctx, fmt, quiet, "filter", lambda progress: filter_bag(
+    show = None if print_ is None else (print_, partial(_say, output_format(ctx, fmt)))
+    _copy_command(ctx, fmt, quiet or show is not None, "filter", lambda progress: filter_bag(
         src, dst, topics=topics or None, start=lo, end=hi, expression=expression,
-        compression=compression, progress=progress, overwrite=force,
+        compression=compression, progress=progress, overwrite=force, show=show,
     ))  # fmt: skip
+
+
+def _say(fmt: Format, matched: bool, value: Any) -> None:
+    """One line of ``filter --print``: text as rosbag prints it, or an NDJSON object."""
+    if fmt is Format.json:
+        import json
+
+        line = json.dumps({"match": matched, "print": value}, default=str)
+    else:
+        line = f"{'MATCH' if matched else 'NO MATCH'} {value}"
+    sys.stdout.write(line + "\n")
 
 
 def _same_file(src: Path, dst: Path) -> None:

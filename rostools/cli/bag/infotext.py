@@ -2,10 +2,12 @@
 
 from __future__ import annotations
 
+import re
 import time
 from typing import Any
 
 from rostools.bag.model import BagInfo
+from rostools.errors import UsageError
 
 _NS = 1_000_000_000
 
@@ -175,3 +177,27 @@ def info_data(
         topics.append(row)
     data["topics"] = topics
     return data
+
+
+_KEY_STEP = re.compile(r"\.?([A-Za-z_]\w*)|\[(-?\d+)\]")
+
+
+def info_key(data: dict[str, Any], key: str) -> Any:
+    """The part of ``info_data`` at ``key``: ``duration``, ``topics[0].type`` (rosbag info -k)."""
+    value: Any = data
+    pos = 0
+    while pos < len(key):
+        step = _KEY_STEP.match(key, pos)
+        if step is None or (pos == 0 and key.startswith(".")):
+            raise UsageError(f"bad key {key!r}: use names and [index], e.g. topics[0].type")
+        name, index = step.groups()
+        try:
+            value = value[name] if name is not None else value[int(index)]
+        except (KeyError, IndexError, TypeError):
+            if isinstance(value, dict):
+                known = "keys here: " + ", ".join(value)
+            else:
+                known = f"{len(value)} entries here" if isinstance(value, list) else "a value here"
+            raise UsageError(f"bag info has no key {key!r} ({known})") from None
+        pos = step.end()
+    return value

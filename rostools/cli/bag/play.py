@@ -40,15 +40,18 @@ def split_bags_and_topics(args: list[str], topics: list[str]) -> tuple[list[Path
 
 def status_line(status: Status) -> str:
     """rosbag play's status line: `` [RUNNING]  Bag Time: ...   Duration: ... / ...``."""
+    from rostools.bag.play import State
+
+    tail = f"   Delay: {status.delay:.2f} " if status.state is State.DELAYED else " " * 15
     return (
         f" [{status.state.value}]  Bag Time: {status.bag_time / 1e9:13.6f}   "
-        f"Duration: {status.elapsed:.6f} / {status.total:.6f}               \r"
+        f"Duration: {status.elapsed:.6f} / {status.total:.6f}{tail}\r"
     )
 
 
 @contextlib.contextmanager
 def keyboard(player: Player, loop: asyncio.AbstractEventLoop) -> Iterator[bool]:
-    """Space and ``s`` from a terminal on stdin, read without echo; False if not a terminal."""
+    """Space, ``s`` and ``t`` from a terminal on stdin, read without echo; False if not one."""
     if not sys.stdin.isatty():
         yield False
         return
@@ -64,6 +67,8 @@ def keyboard(player: Player, loop: asyncio.AbstractEventLoop) -> Iterator[bool]:
                 player.toggle_pause()
             elif key == "s":
                 player.step()
+            elif key == "t":
+                player.toggle_pause_topics()
 
     tty.setcbreak(fd)
     loop.add_reader(fd, on_key)
@@ -112,12 +117,30 @@ def play(
         bool,
         typer.Option("--wait-for-subscribers", help="Wait for a subscriber on every topic."),
     ] = False,
+    pause_topics: Annotated[
+        list[str] | None,
+        typer.Option(
+            "--pause-topics", help="Pause before each message on these topics (repeat or commas)."
+        ),
+    ] = None,
+    rate_control_topic: Annotated[
+        str | None,
+        typer.Option(
+            "--rate-control-topic",
+            help="Hold playback while this topic's header stamps lag bag time.",
+        ),
+    ] = None,
+    rate_control_max_delay: Annotated[
+        float,
+        typer.Option("--rate-control-max-delay", help="The lag (s) allowed before holding."),
+    ] = 1.0,
     quiet: Annotated[bool, typer.Option("--quiet", "-q", help="No status line.")] = False,
     fmt: FormatOpt = None,
 ) -> None:
     """Publish the messages of bags at their recorded pace (rosbag play).
 
-    Remap topics with old:=new arguments. Keys: space pauses, s steps while paused.
+    Remap topics with old:=new arguments. Keys: space pauses, s steps while paused, t turns
+    --pause-topics on and off. The service ~pause_playback (std_srvs/SetBool) pauses too.
     """
     from rostools.bag.api import open_bag
     from rostools.bag.play import Player, PlayOptions
@@ -132,6 +155,8 @@ def play(
         rate=rate, start=start, duration=duration, loop=loop_, clock=clock, hz=hz, delay=delay,
         immediate=immediate, pause=pause, topics=wanted, prefix=prefix, keep_alive=keep_alive,
         skip_empty=skip_empty, queue_size=queue, wait_for_subscribers=wait_for_subscribers,
+        pause_topics=[t for item in pause_topics or [] for t in item.split(",") if t],
+        rate_control_topic=rate_control_topic, rate_control_max_delay=rate_control_max_delay,
     )  # fmt: skip
     out = output_format(ctx, fmt)
     show_status = not quiet and out is Format.text and sys.stderr.isatty()
@@ -148,6 +173,8 @@ def play(
             with keyboard(player, asyncio.get_running_loop()) as keys:
                 if show_status and keys:
                     sys.stderr.write("Hit space to toggle paused, or 's' to step.\n")
+                    if opts.pause_topics:
+                        sys.stderr.write("Hit 't' to toggle pausing on --pause-topics.\n")
                 return await player.run(stop, _show if show_status else None)
 
         sent = node_session(ctx, main, "rostools_play")

@@ -137,6 +137,20 @@ def test_filter_expression_errors(tmp_path: Path) -> None:
     assert not (tmp_path / "f.bag").exists()
 
 
+def test_filter_print_shows_every_verdict(tmp_path: Path) -> None:
+    sample = write_sample(tmp_path / "x.bag", 8)
+    said: list[tuple[bool, object]] = []
+    show = ("(topic, m.data) if topic == '/count' else topic", lambda v, x: said.append((v, x)))
+    ops.filter(sample.path, tmp_path / "f.bag", expression="topic != '/point'", show=show)
+    expected = [
+        (m[0] != "/point", (m[0], i) if m[0] == "/count" else m[0])
+        for i, m in enumerate(sample.stream)
+    ]
+    assert said == expected
+    with pytest.raises(ops.FilterExpressionError, match="'1 / 0' failed"):
+        ops.filter(sample.path, tmp_path / "g.bag", show=("1 / 0", lambda v, x: None))
+
+
 @pytest.mark.parametrize(("name", "kind"), [("x.bag", "bz2"), ("x.bag", "lz4"), ("x.mcap", "lz4")])
 def test_compress_and_decompress(tmp_path: Path, name: str, kind: str) -> None:
     sample = write_sample(tmp_path / name, 300, compression="none")

@@ -1,0 +1,77 @@
+"""``bag play``'s controls: the rate-control topic, ``~pause_playback``, the status line."""
+
+from __future__ import annotations
+
+import struct
+
+import pytest
+
+from rostools.bag.play import State, Status
+from rostools.bag.play_control import RateControl, header_first, set_bool_reply
+from rostools.cli.bag.play import status_line
+from rostools.graph.service import ServiceType
+from rostools.msgs.store import TypeStore
+
+
+def test_set_bool_type_is_std_srvs() -> None:
+    from rostools.bag.play_control import SET_BOOL
+
+    assert ServiceType.of(TypeStore.default(), "std_srvs/SetBool") == SET_BOOL
+
+
+@pytest.mark.parametrize(
+    ("definition", "expected"),
+    [
+        ("# comment\n\nHeader header\nfloat64 x\n", True),
+        ("std_msgs/Header header  # spelt out\n", True),
+        ("uint32 seq\ntime stamp\nstring frame_id\n", False),  # a Header itself: no header
+        ("float64 x\nHeader header\n", False),
+        ("", False),
+    ],
+)
+def test_header_first(definition: str, expected: bool) -> None:
+    assert header_first(definition) is expected
+
+
+def reply(data: bytes) -> tuple[bool, str]:
+    success, size = struct.unpack_from("<?I", data)
+    return success, data[5 : 5 + size].decode()
+
+
+def test_pause_playback_answers_as_rosbag() -> None:
+    changes: list[bool] = []
+    assert reply(set_bool_reply(b"\x01", False, changes.append)) == (
+        True, "Playback is now paused"
+    )  # fmt: skip
+    assert reply(set_bool_reply(b"\x01", True, changes.append)) == (
+        False, "Bag is already paused."
+    )  # fmt: skip
+    assert reply(set_bool_reply(b"\x00", True, changes.append)) == (
+        True, "Playback is now resumed"
+    )  # fmt: skip
+    assert reply(set_bool_reply(b"\x00", False, changes.append)) == (
+        False, "Bag is already running."
+    )  # fmt: skip
+    assert changes == [True, False]
+
+
+def test_rate_control_holds_when_stamps_lag() -> None:
+    woken: list[int] = []
+    control = RateControl(0.25, lambda: woken.append(1))
+    assert not control.holds(10**12)  # not started: nothing to compare with
+    control.start(100 * 10**9)
+    assert not control.holds(100_250_000_000)
+    assert control.holds(100_250_000_001)
+    assert control.lag(100_500_000_000) == 0.5
+    control.last_ns = 100_400_000_000
+    assert not control.holds(100_600_000_000)
+    control.start(0)  # a second start (a loop) keeps the newest stamp
+    assert control.last_ns == 100_400_000_000
+
+
+def test_delayed_status_line_shows_the_delay() -> None:
+    line = status_line(Status(state=State.DELAYED, bag_time=100 * 10**9, total=1.0, delay=0.42))
+    assert line.startswith(" [DELAYED]  Bag Time:    100.000000   Duration: 0.000000 / 1.000000")
+    assert line.endswith("   Delay: 0.42 \r")
+    running = status_line(Status(bag_time=100 * 10**9, total=1.0))
+    assert running.startswith(" [RUNNING]") and "Delay" not in running

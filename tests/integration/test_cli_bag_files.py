@@ -47,9 +47,10 @@ def test_info_yaml_flag_and_keys(tmp_path: Path) -> None:
     assert yaml.safe_load(run_cli("bag", "info", "-k", "topics[-1]", path).stdout) == {
         "topic": "/point", "type": "geometry_msgs/Point", "messages": 10
     }  # fmt: skip
-    assert json.loads(run_cli("bag", "info", "-F", "json", "-k", "size", path, path).stdout) == [
-        data["size"]
-    ] * 2
+    assert (
+        json.loads(run_cli("bag", "info", "-F", "json", "-k", "size", path, path).stdout)
+        == [data["size"]] * 2
+    )
     for key, words in [
         ("nope", "has no key 'nope' (keys here: path, version"),
         ("topics[7]", "has no key 'topics[7]' (3 entries here)"),

@@ -13,6 +13,8 @@ import asyncio
 import collections
 import logging
 import re
+import shutil
+import struct
 import threading
 import time
 from collections.abc import Callable
@@ -26,6 +28,8 @@ from rostools.bag.model import Connection
 from rostools.errors import RostoolsError, UsageError
 from rostools.graph.connection import Frame, InboundConnection
 from rostools.graph.node import Node
+from rostools.graph.publisher import Publisher
+from rostools.graph.topic import TopicType
 
 log = logging.getLogger(__name__)
 
@@ -35,6 +39,11 @@ POLL_PERIOD = 1.0
 FLUSH_PERIOD = 1.0
 #: How often ``run`` checks its limits and calls its ``tick`` (the live table).
 TICK_PERIOD = 0.25
+#: How often the free disk space is checked against ``min_space`` (rosbag: 20 s).
+DISK_PERIOD = 1.0
+#: ``-p``: the name of each new file goes out latched on ``begin_write`` (rosbag record).
+BEGIN_WRITE = "begin_write"
+_STRING = TopicType("std_msgs/String", "992ce8a1687cec8c8bd883ec73ca41d1", "string data\n")
 
 
 @dataclass
@@ -58,6 +67,8 @@ class RecordOptions:
     limit: int | None = None
     tcp_nodelay: bool = False
     buffer_bytes: int = 256 * 1024 * 1024  # 0: unlimited
+    min_space: int = 1024**3  # stop when the disk has less free (bytes; 0: never)
+    publish: bool = False  # announce each file on begin_write
 
     def check(self) -> None:
         """Raise ``UsageError`` for combinations rosbag record refuses."""
@@ -76,6 +87,11 @@ class TopicStats:
     bytes: int = 0
     drops: int = 0
     written: int = 0  # less than received by the drops and what came after a size/time limit
+
+
+def free_bytes(folder: Path) -> int:
+    """Free space on the disk that holds ``folder``."""
+    return shutil.disk_usage(folder).free
 
 
 def file_name(base: Path, split: bool, index: int) -> Path:
@@ -140,6 +156,7 @@ class _Writer(threading.Thread):
         self.file_start = t_ns
         self.connections.clear()
         self.rec.current_file = active
+        self.rec.file_opened(self.path)
         if opts.repeat_latched:
             for (header, topic), (t, data) in list(self.rec.latched.items()):
                 conn = self.writer.connection_for(topic, dict(header))
@@ -169,8 +186,11 @@ class _Writer(threading.Thread):
     def _loop(self) -> None:
         rec = self.rec
         self._open_file(time.time_ns())  # the file exists from the start, as rosbag's does
-        last_flush = time.monotonic()
+        last_flush = last_disk_check = time.monotonic()
         while True:
+            if time.monotonic() - last_disk_check > DISK_PERIOD:
+                rec.check_disk()  # raises, and so closes the file, when the disk is nearly full
+                last_disk_check = time.monotonic()
             with rec.cond:
                 while not rec.queue and not rec.closing:
                     rec.cond.wait(0.5)
@@ -232,6 +252,38 @@ class Recorder:
         #: Called with each topic as it is subscribed to (rosbag's "Subscribing to" lines).
         self.on_subscribe: Callable[[str], None] | None = None
         self._writer = _Writer(self)
+        self._begin_write: Publisher | None = None
+        self._loop: asyncio.AbstractEventLoop | None = None
+        self._space_warned = False
+
+    def check_disk(self, started: bool = True) -> None:
+        """Raise ``RostoolsError`` when the output disk has less than ``min_space`` free."""
+        need = self.opts.min_space
+        if not need:
+            return
+        folder = self.opts.base.parent.resolve()
+        free = free_bytes(folder)
+        if free < need:
+            outcome = "recording stopped; what was written is kept" if started else "not recording"
+            raise RostoolsError(
+                f"less than {_gib(need)} free on the disk of {folder} ({_gib(free)}): {outcome}",
+                hint="free some space, or lower the limit with -L/--min-space",
+            )
+        if free < 5 * need and not self._space_warned:
+            self._space_warned = True
+            log.warning("less than 5 x %s free on the disk of %s", _gib(need), folder)
+
+    def file_opened(self, path: Path) -> None:
+        """A new file is being written (writer thread): announce it on ``begin_write``."""
+        if self._begin_write is not None and self._loop is not None:
+            name = str(path).encode()
+            data = struct.pack("<I", len(name)) + name
+            self._loop.call_soon_threadsafe(self._announce, self._begin_write, data)
+
+    @staticmethod
+    def _announce(pub: Publisher, data: bytes) -> None:
+        pub.publish_raw(data)
+        pub.flush()
 
     @property
     def drops(self) -> int:
@@ -324,7 +376,11 @@ class Recorder:
         """Record until ``stop`` or ``_finished``; ``tick`` is called four times a second."""
         from rostools.graph.session import first
 
+        self.check_disk(started=False)
         await self._poll()  # no master at the start: say so (no file) rather than wait forever
+        if self.opts.publish:
+            self._loop = asyncio.get_running_loop()
+            self._begin_write = await self.node.advertise(BEGIN_WRITE, _STRING, latch=True)
         self._writer.start()
         next_poll = time.monotonic() + POLL_PERIOD
         try:
@@ -350,3 +406,11 @@ class Recorder:
             self.closing = True
             self.cond.notify()
         await asyncio.get_running_loop().run_in_executor(None, self._writer.join)
+
+
+def _gib(size: int) -> str:
+    """A byte count as rosbag writes -L limits: ``1G``, ``500M``, ``64K``."""
+    for unit, scale in (("G", 1024**3), ("M", 1024**2), ("K", 1024)):
+        if size >= scale:
+            return f"{size / scale:.1f}".removesuffix(".0") + unit
+    return f"{size}B"

@@ -307,10 +307,41 @@ def test_record_usage_errors(cli_env: dict[str, str], tmp_path: Path) -> None:
         (["/x", "--format", "mcap", "--bz2"], "cannot use bz2"),
         (["/x", "-O", str(tmp_path / "nowhere" / "x.bag")], "no such folder"),
         (["-a", "-l", "3"], "-l"),
+        (["/x", "-L", "lots"], "bad size 'lots' for -L"),
     ):
         done = run_cli("bag", "record", *args, env=cli_env)
         assert done.returncode == 2, (args, done.stderr)
         assert words in done.stderr and done.stderr.count("\n") == 1, done.stderr
+
+
+def test_record_refuses_a_disk_below_min_space(
+    rostools_master: str, cli_env: dict[str, str], tmp_path: Path
+) -> None:
+    done = run_cli("bag", "record", "-L", "1000000G", "/x", env=cli_env, cwd=tmp_path)
+    assert done.returncode == 1, done.stderr
+    assert done.stderr.startswith("rostools: less than 1000000G free on the disk of ")
+    assert ": not recording (hint: free some space" in done.stderr
+    assert done.stderr.count("\n") == 1
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_record_publish_announces_every_file(
+    rostools_master: str, cli_env: dict[str, str], tmp_path: Path
+) -> None:
+    pubs = start_publishers(cli_env)
+    rec = rostools(
+        cli_env, "bag", "record", "-p", "-O", "a.bag", "--split", "--duration", "1", "/h",
+        cwd=tmp_path,
+    )  # fmt: skip
+    try:
+        # latched: a late subscriber still hears of the file being written
+        wait_for(lambda: (tmp_path / "a_1.bag.active").exists(), 20, "the second file")
+        assert received(echo(cli_env, "/begin_write", 1)) == ["a_1.bag"]
+        topic_type = run_cli("topic", "type", "/begin_write", env=cli_env).stdout
+        assert topic_type == "std_msgs/String\n"
+        assert rec.stop() == 0
+    finally:
+        stop_all(pubs)
 
 
 def test_record_without_master_is_unreachable(cli_env: dict[str, str], tmp_path: Path) -> None:

@@ -37,6 +37,18 @@ def parse_duration(text: str) -> float:
     return value
 
 
+def parse_space(text: str) -> int:
+    """``1G``, ``500M``, ``64k`` or a plain number of bytes (rosbag record -L)."""
+    scale = {"g": 1024**3, "m": 1024**2, "k": 1024}.get(text[-1:].lower())
+    try:
+        value = int(text[:-1] if scale else text) * (scale or 1)
+    except ValueError:
+        raise UsageError(f"bad size {text!r} for -L (examples: 1G, 500M, 64K, 0)") from None
+    if value < 0:
+        raise UsageError(f"-L cannot be negative, not {text!r}")
+    return value
+
+
 def output_name(
     name: str | None, prefix: str | None, storage: str | None, now: float | None = None
 ) -> tuple[Path, str]:
@@ -223,6 +235,16 @@ def record(
     tcp_nodelay: Annotated[
         bool, typer.Option("--tcpnodelay", help="Ask publishers for TCP_NODELAY.")
     ] = False,
+    min_space: Annotated[
+        str,
+        typer.Option(
+            "--min-space", "-L", help="Stop when the disk has less free: 1G, 500M, 64K, 0 (off)."
+        ),
+    ] = "1G",
+    publish: Annotated[
+        bool,
+        typer.Option("--publish", "-p", help="Announce each new file on begin_write (latched)."),
+    ] = False,
     quiet: Annotated[bool, typer.Option("--quiet", "-q", help="No live table.")] = False,
     fmt: Annotated[
         Format | None,
@@ -248,7 +270,8 @@ def record(
         size=size * 1024 * 1024 if size else None,
         duration=parse_duration(duration) if duration else None, max_splits=max_splits,
         repeat_latched=repeat_latched, limit=limit, tcp_nodelay=tcp_nodelay,
-        buffer_bytes=max(buffer, 0) * 1024 * 1024,
+        buffer_bytes=max(buffer, 0) * 1024 * 1024, min_space=parse_space(min_space),
+        publish=publish,
     )  # fmt: skip
     opts.check()
     _check_writable(opts)
@@ -257,6 +280,7 @@ def record(
 
     async def main(n: Node, stop: asyncio.Event) -> Recorder:
         rec = Recorder(n, opts)
+        rec.check_disk(started=False)  # before saying "Recording to"
         if not live:
             if not quiet:
                 rec.on_subscribe = _say_subscribing

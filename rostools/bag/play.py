@@ -9,7 +9,6 @@ to the due time, so sockets are served while waiting and the send is still on ti
 from __future__ import annotations
 
 import asyncio
-import struct
 import time
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, field
@@ -20,6 +19,7 @@ from rostools.bag.base import BagReader
 from rostools.bag.model import NS_PER_SEC, Connection
 from rostools.bag.play_control import SET_BOOL, RateControl, set_bool_reply
 from rostools.errors import UsageError
+from rostools.graph.clock import CLOCK, TIME
 from rostools.graph.node import Node
 from rostools.graph.publisher import Publisher
 from rostools.graph.session import first
@@ -29,15 +29,6 @@ from rostools.graph.topic import TopicType
 FINE_SLEEP = 0.002
 #: The longest the event loop goes unserved while messages are sent back to back.
 YIELD_PERIOD = 0.001
-_CLOCK = TopicType(
-    "rosgraph_msgs/Clock",
-    "a9c97c1d230cfc112e270351a944ee47",
-    "# roslib/Clock is used for publishing simulated time in ROS. \n"
-    "# This message simply communicates the current time.\n"
-    "# For more information, see http://www.ros.org/wiki/Clock\n"
-    "time clock\n",
-)
-_TIME = struct.Struct("<II")
 
 
 @dataclass
@@ -167,7 +158,7 @@ class Player:
                 name, topic_type, latch=latched[topic], queue_size=self.opts.queue_size
             )
         if self.opts.clock:
-            self.clock = await self.node.advertise("/clock", _CLOCK, queue_size=1)
+            self.clock = await self.node.advertise("/clock", CLOCK, queue_size=1)
         if self.rate_control is not None and self.opts.rate_control_topic:
             await self.rate_control.subscribe(self.node, self.opts.rate_control_topic)
         await self.node.advertise_service("~pause_playback", SET_BOOL, self._pause_service)
@@ -310,5 +301,5 @@ class Player:
     def _publish_clock(self, t_ns: int) -> None:
         if self.clock is not None:
             secs, nsecs = divmod(t_ns, NS_PER_SEC)
-            self.clock.publish_raw(_TIME.pack(secs, nsecs))
+            self.clock.publish_raw(TIME.pack(secs, nsecs))
             self.clock.flush()

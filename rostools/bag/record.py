@@ -26,6 +26,7 @@ from rostools.bag.api import open_writer
 from rostools.bag.base import BagWriter
 from rostools.bag.model import Connection
 from rostools.errors import RostoolsError, UsageError
+from rostools.graph.clock import RosClock
 from rostools.graph.connection import Frame, InboundConnection
 from rostools.graph.node import Node
 from rostools.graph.publisher import Publisher
@@ -185,7 +186,7 @@ class _Writer(threading.Thread):
 
     def _loop(self) -> None:
         rec = self.rec
-        self._open_file(time.time_ns())  # the file exists from the start, as rosbag's does
+        self._open_file(rec.clock.now())  # the file exists from the start, as rosbag's does
         last_flush = last_disk_check = time.monotonic()
         while True:
             if time.monotonic() - last_disk_check > DISK_PERIOD:
@@ -249,6 +250,9 @@ class Recorder:
         self.closed_files: list[Path] = []
         self.done_topics: set[str] = set()
         self.started = time.monotonic()
+        #: Message times: ROS time, so /clock under /use_sim_time (as rosbag record).
+        self.clock = RosClock()
+        self.start_ns = 0
         #: Called with each topic as it is subscribed to (rosbag's "Subscribing to" lines).
         self.on_subscribe: Callable[[str], None] | None = None
         self._writer = _Writer(self)
@@ -294,7 +298,7 @@ class Recorder:
         stats = self.stats.setdefault(topic, TopicStats())
 
         def on_frames(frames: list[Frame], conn: InboundConnection, now: float) -> None:
-            t_ns = time.time_ns()
+            t_ns = self.clock.now()
             header = conn.header or {}
             key = (conn.id, topic)
             if not stats.type:
@@ -334,12 +338,21 @@ class Recorder:
         else:
             candidates = sorted(self.selection.names)  # subscribed before anyone publishes
         for topic in candidates:
-            if topic not in self.node.subscribers and self.selection.wants(topic):
-                if self.on_subscribe is not None:
-                    self.on_subscribe(topic)
+            if not self.selection.wants(topic):
+                continue
+            if topic == "/clock" and self.clock.sim:  # already subscribed, for the time
+                if self.clock.forward is None:
+                    self._say_subscribing(topic)
+                    self.clock.forward = self._on_frames(topic)
+            elif topic not in self.node.subscribers:
+                self._say_subscribing(topic)
                 await self.node.subscribe(
                     topic, self._on_frames(topic), tcp_nodelay=self.opts.tcp_nodelay
                 )
+
+    def _say_subscribing(self, topic: str) -> None:
+        if self.on_subscribe is not None:
+            self.on_subscribe(topic)
 
     def publishers(self, topic: str) -> int:
         """How many publishers ``topic`` is connected to now."""
@@ -368,7 +381,7 @@ class Recorder:
         return self.limit_reached.is_set() or self._writer.error is not None
 
     def _elapsed(self) -> float:
-        return time.monotonic() - self.started
+        return (self.clock.now() - self.start_ns) / 1e9
 
     async def run(
         self, stop: asyncio.Event, tick: Callable[[Recorder], None] | None = None
@@ -377,7 +390,11 @@ class Recorder:
         from rostools.graph.session import first
 
         self.check_disk(started=False)
-        await self._poll()  # no master at the start: say so (no file) rather than wait forever
+        await self.clock.start(self.node)  # no master: say so (no file) rather than wait forever
+        if not await self._clock_valid(stop):
+            return
+        self.start_ns = self.clock.now()
+        await self._poll()
         if self.opts.publish:
             self._loop = asyncio.get_running_loop()
             self._begin_write = await self.node.advertise(BEGIN_WRITE, _STRING, latch=True)
@@ -398,6 +415,19 @@ class Recorder:
             await self._finish()
         if self._writer.error is not None:
             raise self._writer.error
+
+    async def _clock_valid(self, stop: asyncio.Event) -> bool:
+        """Under sim time, wait for the first /clock (False if stopped first), as rosbag."""
+        from rostools.graph.session import first
+
+        warn_at = time.monotonic() + 2.0
+        while not self.clock.valid:
+            if await first(stop.wait(), timeout=0.05) is not None:
+                return False
+            if time.monotonic() >= warn_at and not self.clock.valid:
+                warn_at += 2.0
+                log.warning("/use_sim_time is set and no clock is published; still waiting")
+        return True
 
     async def _finish(self) -> None:
         for sub in list(self.node.subscribers.values()):

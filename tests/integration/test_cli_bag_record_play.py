@@ -469,3 +469,31 @@ def test_play_waits_for_the_rate_control_topic(
     with pytest.raises(AssertionError, match="printed no line"):
         chatter.expect(r'"data"', timeout=1.5)
     assert player.popen.poll() is None
+
+
+def test_record_stamps_with_sim_time(
+    rostools_master: str, cli_env: dict[str, str], tmp_path: Path
+) -> None:
+    assert run_cli("param", "set", "/use_sim_time", "true", env=cli_env).returncode == 0
+    rec = rostools(cli_env, "bag", "record", "-O", "sim.bag", "/chatter", "/clock", cwd=tmp_path)
+    time.sleep(2.5)  # no /clock yet: nothing is recorded, not even a file
+    assert list(tmp_path.iterdir()) == []
+    bag = tmp_path / "p.bag"
+    write_play_bag(bag)  # bag time 100.0 .. 100.9 s
+    player = rostools(cli_env, "bag", "play", str(bag), "--clock", "-l", "-d", "0.5")
+    try:
+        wait_for(lambda: (tmp_path / "sim.bag.active").exists(), 20, "the first /clock")
+        time.sleep(3.0)  # three loops of the bag
+        rec.signal(signal.SIGINT)
+        assert rec.popen.wait(20) == 0
+    finally:
+        player.stop()
+    assert "no clock is published; still waiting" in rec.output()[1]
+    with open_bag(tmp_path / "sim.bag") as reader:
+        times = {c.topic: [] for c in reader.connections}
+        for conn, t, _ in reader.messages():
+            times[conn.topic].append(t)
+    assert set(times) == {"/chatter", "/clock"}  # /clock is recorded as well as followed
+    assert len(times["/chatter"]) >= 10
+    for stamps in times.values():
+        assert stamps and all(100 * 10**9 <= t <= 101 * 10**9 for t in stamps), stamps

@@ -233,3 +233,24 @@ def test_real_rostopic_paces_our_player(any_master: MasterInfo, tmp_path: Path) 
     finally:
         chatter.stop()
         player.stop()
+
+
+def test_record_follows_real_rosbag_play_clock(any_master: MasterInfo, tmp_path: Path) -> None:
+    """Under /use_sim_time, messages are stamped with the /clock real rosbag play publishes."""
+    assert ros_tool(any_master, "rosparam", "set", "/use_sim_time", "true").returncode == 0
+    bag = tmp_path / "p.bag"
+    write_play_bag(bag)  # bag time 100.0 .. 100.9 s
+    rec = rostools(any_master, "bag", "record", "-O", "sim.bag", "/chatter", cwd=tmp_path)
+    player = Proc(["rosbag", "play", "--clock", "-l", "-q", str(bag)], env=any_master.ros_env)
+    try:
+        wait_for(lambda: (tmp_path / "sim.bag.active").exists(), 30, "the first /clock")
+        time.sleep(3.0)
+        rec.signal(signal.SIGINT)
+        assert rec.popen.wait(20) == 0, rec.output()[1]
+    finally:
+        player.stop()
+        rec.stop()
+    with open_bag(tmp_path / "sim.bag") as reader:
+        stamps = [t for _, t, _ in reader.messages(["/chatter"])]
+    assert len(stamps) >= 10
+    assert all(100 * 10**9 <= t <= 101 * 10**9 for t in stamps), stamps

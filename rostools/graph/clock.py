@@ -1,0 +1,68 @@
+"""ROS time: the ``/clock`` topic when ``/use_sim_time`` is set, else the wall clock."""
+
+from __future__ import annotations
+
+import struct
+import time
+from typing import TYPE_CHECKING
+
+from rostools.graph.connection import Frame, InboundConnection
+from rostools.graph.topic import TopicType
+
+if TYPE_CHECKING:
+    from rostools.graph.node import Node
+    from rostools.graph.subscriber import FramesCallback
+
+#: rosgraph_msgs/Clock, as roscpp and rospy announce it.
+CLOCK = TopicType(
+    "rosgraph_msgs/Clock",
+    "a9c97c1d230cfc112e270351a944ee47",
+    "# roslib/Clock is used for publishing simulated time in ROS. \n"
+    "# This message simply communicates the current time.\n"
+    "# For more information, see http://www.ros.org/wiki/Clock\n"
+    "time clock\n",
+)
+TIME = struct.Struct("<II")
+
+
+async def uses_sim_time(node: Node) -> bool:
+    """Whether the parameter ``/use_sim_time`` is true."""
+    if not await node.master_call("hasParam", "/use_sim_time"):
+        return False
+    value = await node.master_call("getParam", "/use_sim_time")
+    return value is True or str(value).lower() == "true"
+
+
+class RosClock:
+    """Now, in ns of ROS time; ``valid`` once sim time has had its first ``/clock``.
+
+    ``forward`` receives the ``/clock`` frames too, for a node that also records them: a
+    node subscribes to a topic once.
+    """
+
+    def __init__(self) -> None:
+        self.sim = False
+        self.last_ns = 0
+        self.forward: FramesCallback | None = None
+
+    async def start(self, node: Node) -> None:
+        """Follow ``/clock`` if ``/use_sim_time`` says so."""
+        self.sim = await uses_sim_time(node)
+        if self.sim:
+            await node.subscribe("/clock", self._frames, CLOCK)
+
+    @property
+    def valid(self) -> bool:
+        """Whether ``now`` means anything yet (sim time starts at zero, as ROS's)."""
+        return not self.sim or self.last_ns > 0
+
+    def now(self) -> int:
+        """ROS time now, in ns."""
+        return self.last_ns if self.sim else time.time_ns()
+
+    def _frames(self, frames: list[Frame], conn: InboundConnection, now: float) -> None:
+        if frames and len(frames[-1]) >= TIME.size:
+            secs, nsecs = TIME.unpack_from(frames[-1])
+            self.last_ns = secs * 1_000_000_000 + nsecs
+        if self.forward is not None:
+            self.forward(frames, conn, now)

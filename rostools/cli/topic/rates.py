@@ -102,7 +102,8 @@ def hz(
     window: WindowOpt = None,
     filter_expr: FilterOpt = None,
     wall_time: Annotated[
-        bool, typer.Option("--wall-time", help="Wall-clock time even with /use_sim_time.")
+        bool,
+        typer.Option("--wall-time", help="rostopic's flag; rates always use the wall clock."),
     ] = False,
     timeout: TimeoutOpt = None,
     fmt: FormatOpt = None,

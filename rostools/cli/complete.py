@@ -85,9 +85,10 @@ class Completer:
 
     def __init__(self, words: list[str], cword: int, deadline: float, shell: str = "bash") -> None:
         self.shell = shell
-        self.words = words
-        self.cword = cword
-        self.cur = words[cword] if cword < len(words) else ""
+        self.words, self.cword = _join_breaks(words, cword) if shell == "bash" else (words, cword)
+        self.cur = self.words[self.cword] if self.cword < len(self.words) else ""
+        #: What the shell replaces: bash only the part after "=" of ``--opt=value``.
+        self.prefix = ""
         self.deadline = deadline
         self.master_uri = os.environ.get("ROS_MASTER_URI") or "http://localhost:11311"
         self.positionals: list[str] = []
@@ -100,10 +101,13 @@ class Completer:
         """The candidates that start with the current word."""
         for value, help_text in self._candidates():
             if value.startswith(self.cur) or value.startswith(":"):
-                yield value, help_text
+                yield (value if value.startswith(":") else value[len(self.prefix) :]), help_text
 
     def _candidates(self) -> Candidates:
         node = load_tree()
+        values = self._option_value(node)
+        if values is not None:
+            return values
         i = 1
         while i < self.cword:
             word = self.words[i]
@@ -138,6 +142,21 @@ class Completer:
         if len(self.positionals) >= len(args) and not args[-1]["many"]:
             return []
         return self._value(args[index]["kind"], node)
+
+    def _option_value(self, node: dict[str, Any]) -> Candidates | None:
+        """Values for ``--opt=VALUE`` being typed (the options of the command so far)."""
+        if not self.cur.startswith("-") or "=" not in self.cur:
+            return None
+        for word in self.words[1 : self.cword]:
+            if word in node.get("commands", {}):
+                node = node["commands"][word]
+        name, _ = self.cur.split("=", 1)
+        option = node["options"].get(name)
+        if option is None or not option["value"]:
+            return []
+        if self.shell == "bash":  # readline replaces only what follows the "="
+            self.prefix = name + "="
+        return [(f"{name}={v}", h) for v, h in self._value(option["value"], node)]
 
     # values -----------------------------------------------------------------------------
 
@@ -276,3 +295,18 @@ _KINDS: dict[str, Callable[[Completer], Candidates]] = {
     "message": Completer.message_template,
     "request": Completer.request_template,
 }
+
+
+def _join_breaks(words: list[str], cword: int) -> tuple[list[str], int]:
+    """Words as typed: bash splits ``--opt=value`` and ``a:=b`` at its COMP_WORDBREAKS."""
+    joined: list[str] = []
+    new_cword = cword
+    for i, word in enumerate(words):
+        glue = word in ("=", ":=")
+        if joined and (glue or (i > 1 and words[i - 1] in ("=", ":="))) and i != 1:
+            joined[-1] += word
+            if i <= cword:
+                new_cword -= 1
+        else:
+            joined.append(word)
+    return joined, new_cword

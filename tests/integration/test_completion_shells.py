@@ -112,6 +112,11 @@ def test_without_a_master_completes_offline_and_fast(
     assert sh.complete("rostools msg show geometry_msgs/PointSt") == (
         "rostools msg show geometry_msgs/PointStamped"
     )
+    # --opt=value, which bash splits at "=": the value is completed, the option kept
+    assert sh.complete("rostools topic echo --format=ya") == "rostools topic echo --format=yaml"
+    assert sh.complete("rostools bag info --format=json -F te") == (
+        "rostools bag info --format=json -F text"
+    )
     started = time.monotonic()
     assert sh.complete("rostools topic echo /nothing_her") == "rostools topic echo /nothing_her"
     assert time.monotonic() - started < 3  # includes the harness's own settling waits

@@ -497,3 +497,24 @@ def test_record_stamps_with_sim_time(
     assert len(times["/chatter"]) >= 10
     for stamps in times.values():
         assert stamps and all(100 * 10**9 <= t <= 101 * 10**9 for t in stamps), stamps
+
+
+def test_play_t_key_turns_pause_topics_off(
+    rostools_master: str, cli_env: dict[str, str], tmp_path: Path
+) -> None:
+    import pexpect
+
+    bag = tmp_path / "p.bag"
+    write_play_bag(bag)
+    argv = ["-m", "rostools", "bag", "play", str(bag), "--pause-topics", "/chatter", "-d", "0"]
+    child = pexpect.spawn(sys.executable, argv, env=cli_env, timeout=20, encoding="utf-8")
+    try:
+        child.expect("Hit 't' to toggle pausing on --pause-topics.")
+        child.expect(r"\[PAUSED \]")  # before m0
+        child.send("t")  # no more pauses on /chatter
+        child.send(" ")
+        child.expect("Done.")  # all ten played: it would stop again before m1 otherwise
+        child.expect(pexpect.EOF)
+    finally:
+        child.close(force=True)
+    assert child.exitstatus == 0

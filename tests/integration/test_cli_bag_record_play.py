@@ -17,7 +17,7 @@ import pytest
 from rostools.bag.api import bag_info, detect_format, open_bag
 from tests.support.bagdata import write_play_bag
 from tests.support.env import run_cli
-from tests.support.procs import Proc, wait_for
+from tests.support.procs import Proc, wait_for, wait_for_name
 
 _STARTED: list[Proc] = []
 
@@ -402,15 +402,9 @@ def test_play_of_dense_messages_serves_late_subscribers_and_ctrl_c(
 
 def pause_service(env: dict[str, str]) -> str:
     """The name of the player's ``~pause_playback`` service, once it is registered."""
-    found: list[str] = []
-
-    def listed() -> bool:
-        names = run_cli("service", "list", env=env).stdout.split()
-        found[:] = [n for n in names if n.endswith("/pause_playback")]
-        return bool(found)
-
-    wait_for(listed, 15, "~pause_playback")
-    return found[0]
+    return wait_for_name(
+        lambda: run_cli("service", "list", env=env).stdout.split(), "/pause_playback"
+    )
 
 
 def set_paused(env: dict[str, str], service: str, paused: bool) -> dict[str, object]:

@@ -24,7 +24,7 @@ from tests.interop.test_bag_interop import as_rosbag_sees, rosbag_view
 from tests.support import cppbuild
 from tests.support.bagdata import write_play_bag
 from tests.support.env import needs_ros1
-from tests.support.procs import Proc, start_ros1_node, wait_for
+from tests.support.procs import Proc, start_ros1_node, wait_for, wait_for_name
 
 pytestmark = [pytest.mark.interop, needs_ros1]
 _CPP_REASON = cppbuild.cpp_missing()
@@ -186,21 +186,18 @@ def test_real_rosservice_pauses_our_player(any_master: MasterInfo, tmp_path: Pat
         "--wait-for-subscribers", "-d", "0",
     )  # fmt: skip
     chatter = listen(any_master, "/chatter")
-    found: list[str] = []
-
-    def registered() -> bool:
-        names = ros_tool(any_master, "rosservice", "list").stdout.split()
-        found[:] = [n for n in names if n.endswith("/pause_playback")]
-        return bool(found)
+    service = ""
 
     def call(data: str) -> str:
-        done = ros_tool(any_master, "rosservice", "call", found[0], f"data: {data}")
+        done = ros_tool(any_master, "rosservice", "call", service, f"data: {data}")
         assert done.returncode == 0, done.stderr
         return done.stdout
 
     try:
-        wait_for(registered, 20, "~pause_playback")
-        assert "std_srvs/SetBool" in ros_tool(any_master, "rosservice", "info", found[0]).stdout
+        service = wait_for_name(
+            lambda: ros_tool(any_master, "rosservice", "list").stdout.split(), "/pause_playback"
+        )
+        assert "std_srvs/SetBool" in ros_tool(any_master, "rosservice", "info", service).stdout
         already = 'success: False\nmessage: "Bag is already paused."\n'
         for i in range(2):  # paused before each /chatter message; a resume sends one
             wait_for(lambda: call("true") == already, 20, f"the pause before m{i}")

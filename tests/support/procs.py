@@ -41,6 +41,18 @@ def wait_for(predicate: Callable[[], bool], timeout: float = 10.0, what: str = "
     raise AssertionError(f"timed out after {timeout} s waiting for {what}")
 
 
+def wait_for_name(names: Callable[[], list[str]], suffix: str, timeout: float = 15.0) -> str:
+    """The first of ``names()`` that ends with ``suffix``, polling until there is one."""
+    found: list[str] = []
+
+    def listed() -> bool:
+        found[:] = [n for n in names() if n.endswith(suffix)]
+        return bool(found)
+
+    wait_for(listed, timeout, f"a name ending in {suffix}")
+    return found[0]
+
+
 def master_answers(uri: str) -> bool:
     """Whether an XML-RPC master answers ``getPid`` at ``uri``."""
     try:

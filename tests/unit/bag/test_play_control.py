@@ -38,21 +38,21 @@ def reply(data: bytes) -> tuple[bool, str]:
     return success, data[5 : 5 + size].decode()
 
 
-def test_pause_playback_answers_as_rosbag() -> None:
+@pytest.mark.parametrize(
+    ("request_", "paused", "answer", "change"),
+    [
+        (b"\x01", False, (True, "Playback is now paused"), [True]),
+        (b"\x01", True, (False, "Bag is already paused."), []),
+        (b"\x00", True, (True, "Playback is now resumed"), [False]),
+        (b"\x00", False, (False, "Bag is already running."), []),
+    ],
+)
+def test_pause_playback_answers_as_rosbag(
+    request_: bytes, paused: bool, answer: tuple[bool, str], change: list[bool]
+) -> None:
     changes: list[bool] = []
-    assert reply(set_bool_reply(b"\x01", False, changes.append)) == (
-        True, "Playback is now paused"
-    )  # fmt: skip
-    assert reply(set_bool_reply(b"\x01", True, changes.append)) == (
-        False, "Bag is already paused."
-    )  # fmt: skip
-    assert reply(set_bool_reply(b"\x00", True, changes.append)) == (
-        True, "Playback is now resumed"
-    )  # fmt: skip
-    assert reply(set_bool_reply(b"\x00", False, changes.append)) == (
-        False, "Bag is already running."
-    )  # fmt: skip
-    assert changes == [True, False]
+    assert reply(set_bool_reply(request_, paused, changes.append)) == answer
+    assert changes == change
 
 
 def test_rate_control_holds_when_stamps_lag() -> None:

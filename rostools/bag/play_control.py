@@ -78,7 +78,7 @@ class RateControl:
 
 def set_bool_reply(request: bytes, paused: bool, set_paused: Callable[[bool], None]) -> bytes:
     """Answer ``~pause_playback`` as rosbag play does, pausing or resuming on the way."""
-    want = bool(request[:1] != b"\x00") if request else False
+    want = request[:1] not in (b"", b"\x00")
     changed = want != paused
     if changed:
         set_paused(want)

@@ -297,13 +297,15 @@ _KINDS: dict[str, Callable[[Completer], Candidates]] = {
 }
 
 
+_BREAKS = ("=", ":=")
+
+
 def _join_breaks(words: list[str], cword: int) -> tuple[list[str], int]:
     """Words as typed: bash splits ``--opt=value`` and ``a:=b`` at its COMP_WORDBREAKS."""
     joined: list[str] = []
     new_cword = cword
     for i, word in enumerate(words):
-        glue = word in ("=", ":=")
-        if joined and (glue or (i > 1 and words[i - 1] in ("=", ":="))) and i != 1:
+        if i > 1 and (word in _BREAKS or words[i - 1] in _BREAKS):
             joined[-1] += word
             if i <= cword:
                 new_cword -= 1

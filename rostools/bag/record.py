@@ -68,7 +68,7 @@ class RecordOptions:
     limit: int | None = None
     tcp_nodelay: bool = False
     buffer_bytes: int = 256 * 1024 * 1024  # 0: unlimited
-    min_space: int = 1024**3  # stop when the disk has less free (bytes; 0: never)
+    min_space: int = 100 * 1024**2  # stop when the disk has less free (bytes; 0: never)
     publish: bool = False  # announce each file on begin_write
 
     def check(self) -> None:

@@ -240,7 +240,7 @@ def record(
         typer.Option(
             "--min-space", "-L", help="Stop when the disk has less free: 1G, 500M, 64K, 0 (off)."
         ),
-    ] = "1G",
+    ] = "100M",
     publish: Annotated[
         bool,
         typer.Option("--publish", "-p", help="Announce each new file on begin_write (latched)."),

@@ -323,6 +323,22 @@ def _ping_all(graph: Graph, fmt: Format) -> None:
 # --------------------------------------------------------------------------- kill
 
 
+def _choose(known: list[str]) -> list[str]:
+    """rosnode kill's menu on a terminal: the node whose number is typed (none if none run)."""
+    if not known:
+        return []
+    print("\n".join(f"{i}. {n}" for i, n in enumerate(known, 1)))
+    print("\nPlease enter the number of the node you wish to kill.")
+    while True:
+        try:
+            answer = input("> ").strip()
+        except EOFError:  # Ctrl-D
+            raise UsageError("no node chosen") from None
+        if answer.isdigit() and 1 <= int(answer) <= len(known):
+            return [known[int(answer) - 1]]
+        print(f"ERROR: enter a number from 1 to {len(known)} (Ctrl-C to cancel)")
+
+
 @app.command()
 def kill(
     ctx: typer.Context,
@@ -333,16 +349,22 @@ def kill(
     timeout: TimeoutOpt = NODE_TIMEOUT,
     fmt: FormatOpt = None,
 ) -> None:
-    """Ask nodes to shut down (their shutdown call, reason "user request")."""
+    """Ask nodes to shut down (their shutdown call, reason "user request").
+
+    With no names on a terminal, pick one from a numbered menu, as rosnode kill.
+    """
     from rostools.graph.introspect import kill_nodes
 
     if all_ and nodes:
         raise UsageError("give node names or -a/--all, not both")
-    if not all_ and not nodes:
+    menu = not all_ and not nodes
+    if menu and not (sys.stdin.isatty() and sys.stdout.isatty()):
         raise UsageError("give the nodes to kill, or -a/--all to kill every node")
     graph = _graph(ctx, timeout)
     known = graph.state().nodes()
-    if all_:
+    if menu:
+        names = _choose(sorted(known))
+    elif all_:
         names = known
     else:
         names = list(dict.fromkeys(_resolve(n) for n in nodes or []))

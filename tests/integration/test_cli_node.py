@@ -505,3 +505,27 @@ def test_cleanup_asks_on_a_terminal(
         assert ("/dead" not in json.dumps(state(rostools_master))) is purged
         assert out.endswith("Unregistering /dead\ndone\n") is purged
         assert ("aborted: nothing was changed" in err) is not purged
+
+
+def test_kill_without_names_offers_rosnodes_menu_on_a_terminal(
+    nodes: dict[str, FakeNode], cli_env: dict[str, str]
+) -> None:
+    import pexpect
+
+    argv = ["-m", "rostools", "node", "kill"]
+    child = pexpect.spawn(sys.executable, argv, env=cli_env, timeout=20, encoding="utf-8")
+    try:
+        child.expect("Please enter the number of the node you wish to kill.")
+        menu = [line.strip() for line in child.before.splitlines() if line.strip()]
+        assert menu == ["1. /ns/listener", "2. /talker"]
+        child.sendline("7")  # not on the menu: asked again
+        child.expect("ERROR: enter a number from 1 to 2")
+        child.sendline("2")
+        child.expect("killing /talker")
+        child.expect("killed")
+        child.expect(pexpect.EOF)
+    finally:
+        child.close(force=True)
+    assert child.exitstatus == 0
+    assert nodes["talker"].shutdown_called.is_set()
+    assert not nodes["listener"].shutdown_called.is_set()

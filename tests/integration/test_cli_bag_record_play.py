@@ -512,3 +512,23 @@ def test_play_t_key_turns_pause_topics_off(
     finally:
         child.close(force=True)
     assert child.exitstatus == 0
+
+
+def test_play_takes_rosbags_greedy_topics_and_bags(
+    rostools_master: str, cli_env: dict[str, str], tmp_path: Path
+) -> None:
+    bag = tmp_path / "p.bag"
+    write_play_bag(bag)  # 10 on /chatter, 1 on /latched
+    for args, published in (
+        ([str(bag), "--topics", "/latched"], 1),
+        ([str(bag), "--topics", "/latched", "/chatter"], 11),  # /chatter: not a file, a topic
+        (["--topics", "/latched", "--bags", str(bag)], 1),
+        (["--topics", "/chatter", "/latched", "--bags", str(bag)], 11),
+    ):
+        done = run_cli("bag", "play", *args, "-i", "-d", "0", "-F", "json", env=cli_env)
+        assert done.returncode == 0, (args, done.stderr)
+        assert json.loads(done.stdout) == {"published": published}, args
+    missing = run_cli("bag", "play", "--bags", str(tmp_path / "gone.bag"), env=cli_env)
+    assert missing.returncode == 3 and "gone.bag" in missing.stderr
+    none = run_cli("bag", "play", "--topics", "/chatter", env=cli_env)
+    assert none.returncode == 2 and "give at least one bag" in none.stderr

@@ -82,7 +82,10 @@ def keyboard(player: Player, loop: asyncio.AbstractEventLoop) -> Iterator[bool]:
 @app.command()
 def play(
     ctx: typer.Context,
-    bags: Annotated[list[str], typer.Argument(help="Bags to play, merged in time order.")],
+    bags: Annotated[
+        list[str] | None,
+        typer.Argument(help="Bags to play, merged in time order.", show_default=False),
+    ] = None,
     rate: Annotated[float, typer.Option("--rate", "-r", help="Speed factor.")] = 1.0,
     start: Annotated[
         float, typer.Option("--start", "-s", help="Start this many seconds into the bags.")
@@ -134,6 +137,10 @@ def play(
         float,
         typer.Option("--rate-control-max-delay", help="The lag (s) allowed before holding."),
     ] = 1.0,
+    bag_list: Annotated[
+        list[str] | None,
+        typer.Option("--bags", help="More bags (rosbag's form after --topics /a /b)."),
+    ] = None,
     quiet: Annotated[bool, typer.Option("--quiet", "-q", help="No status line.")] = False,
     fmt: FormatOpt = None,
 ) -> None:
@@ -145,7 +152,8 @@ def play(
     from rostools.bag.api import open_bag
     from rostools.bag.play import Player, PlayOptions
 
-    paths, wanted = split_bags_and_topics(bags, topics or [])
+    paths, wanted = split_bags_and_topics(bags or [], topics or [])
+    paths += [Path(b) for b in bag_list or []]
     if not paths:
         raise UsageError("give at least one bag to play")
     for value, flag in ((delay, "-d"), (start, "-s")):

@@ -54,7 +54,7 @@ class RecordOptions:
     topics: list[str] = field(default_factory=list)
     all: bool = False
     regex: bool = False
-    exclude: str | None = None
+    exclude: list[str] = field(default_factory=list)  # regexes; a topic matching any is left out
     node: str | None = None
     base: Path = Path("recording.bag")  # the file name before .active and split numbers
     format: str = "bag"
@@ -109,17 +109,17 @@ class Selection:
         self.names = set(opts.topics) if not opts.regex else set()
         try:
             self.patterns = [re.compile(p) for p in opts.topics] if opts.regex else []
-            self.exclude = re.compile(opts.exclude) if opts.exclude else None
+            self.exclude = [re.compile(x) for x in opts.exclude]
         except re.error as err:
             raise UsageError(f"bad regular expression: {err}") from None
         # --node records what the node subscribes to; -x alone means everything but that
         self.everything = (
-            opts.all or opts.node is not None or (opts.exclude is not None and not opts.topics)
+            opts.all or opts.node is not None or (bool(opts.exclude) and not opts.topics)
         )
 
     def wants(self, topic: str) -> bool:
         """Whether to record ``topic``."""
-        if self.exclude is not None and self.exclude.fullmatch(topic):
+        if any(x.fullmatch(topic) for x in self.exclude):
             return False
         if self.everything:
             return True

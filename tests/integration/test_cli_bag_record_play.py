@@ -165,11 +165,12 @@ def test_record_limit_duration_regex_and_late_topics(
         assert done.returncode == 0 and time.monotonic() - started < 10
         assert 50 < len(seqs(tmp_path / "d.bag", "/h")) < 150
         rec = rostools(
-            cli_env, "bag", "record", "-O", str(tmp_path / "e.bag"), "-e", "/a/.*", "-x", "/a/y"
-        )
+            cli_env, "bag", "record", "-O", str(tmp_path / "e.bag"), "-e", "/a/.*", "-x", "/a/y",
+            "-x", "/a/z.*",  # several excludes: any one leaves a topic out
+        )  # fmt: skip
         late = [
             rostools(cli_env, "topic", "pub", "-r", "20", name, "std_msgs/String", "data: x")
-            for name in ("/a/x", "/a/y", "/a", "/b/a/x")
+            for name in ("/a/x", "/a/y", "/a/zz", "/a", "/b/a/x")
         ]
         try:
             wait_for(

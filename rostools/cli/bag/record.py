@@ -187,7 +187,8 @@ def record(
         bool, typer.Option("--regex", "-e", help="The topics are regexes (full match).")
     ] = False,
     exclude: Annotated[
-        str | None, typer.Option("--exclude", "-x", help="Leave out topics matching this regex.")
+        list[str] | None,
+        typer.Option("--exclude", "-x", help="Leave out topics matching this regex (repeatable)."),
     ] = None,
     node: Annotated[
         str | None, typer.Option("--node", help="Record what this node subscribes to.")
@@ -264,7 +265,7 @@ def record(
             raise UsageError(f"{flag} must be positive")
     path, kind = output_name(output_name_, output_prefix, storage)
     opts = RecordOptions(
-        topics=topics, all=all_, regex=regex, exclude=exclude, node=node, base=path,
+        topics=topics, all=all_, regex=regex, exclude=exclude or [], node=node, base=path,
         format=kind, compression=compression_choice(kind, bz2, lz4, compression),
         chunk_size=chunk_size * 1024 if chunk_size else None, split=split,
         size=size * 1024 * 1024 if size else None,

@@ -8,7 +8,7 @@ raise the errors of ``rostools.errors`` with a one-line message naming the probl
 from __future__ import annotations
 
 import statistics
-from collections.abc import Collection, Iterable, Iterator
+from collections.abc import Collection, Iterable, Iterator, Sequence
 from pathlib import Path
 from typing import Final
 
@@ -133,6 +133,28 @@ def merged_messages(
 ) -> Iterator[Message]:
     """The messages of several bags in one time order (``bag play a.bag b.bag``)."""
     return merge(r.messages(topics=topics, start=start, end=end) for r in readers)
+
+
+def latched_before(
+    readers: Sequence[BagReader], topics: Collection[str] | None, before: int
+) -> list[Message]:
+    """The last message of every latched connection before ``before`` (ns), in time order.
+
+    What a late subscriber would still get: ``play -s`` and ``filter --latched`` send them.
+    """
+    latched = {
+        c.topic
+        for r in readers
+        for c in r.connections
+        if c.latching and (topics is None or c.topic in topics)
+    }
+    if not latched:
+        return []
+    last: dict[tuple[str, str], Message] = {}
+    for conn, t, data in merged_messages(readers, latched, None, before - 1):
+        if conn.latching:
+            last[(conn.topic, conn.callerid)] = (conn, t, data)
+    return sorted(last.values(), key=lambda m: m[1])
 
 
 def topic_frequencies(reader: BagReader) -> dict[str, float]:

@@ -8,12 +8,13 @@ unless a filter expression needs the decoded message. A failure deletes the part
 from __future__ import annotations
 
 import ast
+import itertools
 from collections.abc import Callable, Collection, Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Final
 
-from rostools.bag.api import format_for_name, open_bag, open_writer
+from rostools.bag.api import format_for_name, latched_before, open_bag, open_writer
 from rostools.bag.base import BagReader, BagWriter, Targets
 from rostools.bag.mcap_reader import McapReader
 from rostools.bag.model import BagUsageError, Connection, UnsupportedBagError
@@ -107,6 +108,7 @@ def filter_bag(
     progress: Progress | None = None,
     overwrite: bool = False,
     show: tuple[str, Callable[[bool, Any], None]] | None = None,
+    latched: bool = False,
 ) -> CopyReport:
     """Copy the messages of ``src`` that pass the filters into ``dst``.
 
@@ -115,6 +117,8 @@ def filter_bag(
     ``nsecs``, ``to_sec()``); a message is decoded only when the expression mentions ``m``.
     ``show`` is rosbag filter's ``--print``: an expression over the same names, whose value
     goes to the callback with the verdict for every message the expression judges.
+    ``latched`` also copies, stamped at ``start``, the last message before ``start`` of every
+    latched connection, so the cut file starts with what a late subscriber would have had.
     Only connections that keep a message are written. The output format follows ``dst``.
     """
     keep = compile_filter(expression or "True", show) if expression or show else None
@@ -131,6 +135,7 @@ def filter_bag(
         start=start,
         end=end,
         keep=keep,
+        latched=latched,
     )
 
 
@@ -235,6 +240,7 @@ def _copy(
     start: int | None = None,
     end: int | None = None,
     keep: Callable[[Connection, int, memoryview], bool] | None = None,
+    latched: bool = False,
 ) -> CopyReport:
     src, dst = Path(src), Path(dst)
     if dst.exists() and src.resolve() == dst.resolve():
@@ -246,6 +252,9 @@ def _copy(
         writer = open_writer(dst, kind, compression, chunk_size, overwrite=overwrite)
         try:
             stream = reader.messages(topics=topics, start=start, end=end)
+            if latched and start is not None:
+                kept = [(c, start, d) for c, _, d in latched_before([reader], topics, start)]
+                stream = itertools.chain(kept, stream)
             everything = topics is None and start is None and end is None
             read, written, conns = _pump(
                 reader, writer, stream, everything, eager, keep, progress, total

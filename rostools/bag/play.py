@@ -10,11 +10,11 @@ from __future__ import annotations
 
 import asyncio
 import time
-from collections.abc import Callable, Iterator, Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from enum import Enum
 
-from rostools.bag.api import merged_messages
+from rostools.bag.api import latched_before, merged_messages
 from rostools.bag.base import BagReader
 from rostools.bag.model import NS_PER_SEC, Connection
 from rostools.bag.play_control import SET_BOOL, RateControl, set_bool_reply
@@ -166,17 +166,6 @@ class Player:
     def _pause_service(self, request: bytes) -> bytes:
         return set_bool_reply(request, self.status.state is State.PAUSED, self.set_paused)
 
-    def _latched_before_start(self) -> Iterator[tuple[Connection, int, memoryview]]:
-        """The last message of every latched connection before ``-s``'s start point."""
-        latched = {c.topic for c in self.connections() if c.latching}
-        if not latched or self.from_ns <= self.bag_start:
-            return iter(())
-        last: dict[tuple[str, str], tuple[Connection, int, memoryview]] = {}
-        for conn, t, data in merged_messages(self.readers, latched, None, self.from_ns - 1):
-            if conn.latching:
-                last[(conn.topic, conn.callerid)] = (conn, t, data)
-        return iter(sorted(last.values(), key=lambda m: m[1]))
-
     # playing ----------------------------------------------------------------------------
 
     async def run(self, stop: asyncio.Event, show: Callable[[Status], None] | None = None) -> int:
@@ -189,8 +178,9 @@ class Player:
                 await first(stop.wait(), timeout=0.05)
         if self.opts.delay > 0:
             await first(stop.wait(), timeout=self.opts.delay)
-        for conn, _, data in self._latched_before_start():
-            self.publishers[conn.topic].publish_raw(data)
+        if self.from_ns > self.bag_start:  # -s: what a late subscriber would still get
+            for conn, _, data in latched_before(self.readers, self._topics(), self.from_ns):
+                self.publishers[conn.topic].publish_raw(data)
         if self.rate_control is not None:
             self.rate_control.start(self.from_ns)
         while not stop.is_set():

@@ -9,8 +9,8 @@ from pathlib import Path
 import pytest
 import yaml
 
-from rostools.bag.api import bag_info
-from tests.support.bagdata import STEP_NS, read_stream, write_sample
+from rostools.bag.api import bag_info, open_bag
+from tests.support.bagdata import STEP_NS, read_stream, write_play_bag, write_sample
 from tests.support.env import run_cli
 
 
@@ -160,3 +160,20 @@ def test_recover_reports_loss_with_exit_6(tmp_path: Path) -> None:
     done = run_cli("bag", "reindex", str(whole.path))
     assert done.returncode == 0, done.stderr
     assert read_stream(tmp_path / "w.recovered.bag") == whole.stream
+
+
+@pytest.mark.parametrize("out", ["cut.bag", "cut.mcap"])
+def test_filter_latched_keeps_what_a_late_subscriber_had(tmp_path: Path, out: str) -> None:
+    src = tmp_path / "p.bag"
+    write_play_bag(src)  # /latched "old" (latched) at 100 s; /chatter m0..m9 from 100.0 s
+    done = run_cli("bag", "filter", str(src), str(tmp_path / out), "--start", "0.45", "--latched")
+    assert done.returncode == 0, done.stderr
+    with open_bag(tmp_path / out) as reader:
+        got = [(c.topic, t, bytes(d[4:]).decode(), c.latching) for c, t, d in reader.messages()]
+    start = 100_450_000_000
+    assert got[0] == ("/latched", start, "old", True)  # moved to the cut, still latched
+    assert [g[2] for g in got[1:]] == ["m5", "m6", "m7", "m8", "m9"]
+    plain = run_cli("bag", "filter", str(src), str(tmp_path / "plain.bag"), "--start", "0.45")
+    assert plain.returncode == 0
+    with open_bag(tmp_path / "plain.bag") as reader:
+        assert [c.topic for c, _, _ in reader.messages()] == ["/chatter"] * 5

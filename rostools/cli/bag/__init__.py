@@ -181,6 +181,12 @@ def filter_(
             "--print", "-p", help="Print MATCH or NO MATCH and this expression for each message."
         ),
     ] = None,
+    latched: Annotated[
+        bool,
+        typer.Option(
+            "--latched", help="With --start: keep each latched topic's last earlier message."
+        ),
+    ] = False,
     compression: CompressionOpt = None,
     force: ForceOpt = False,
     quiet: QuietOpt = False,
@@ -197,7 +203,7 @@ def filter_(
     show = None if print_ is None else (print_, partial(_say, output_format(ctx, fmt)))
     _copy_command(ctx, fmt, quiet or show is not None, "filter", lambda progress: filter_bag(
         src, dst, topics=topics or None, start=lo, end=hi, expression=expression,
-        compression=compression, progress=progress, overwrite=force, show=show,
+        compression=compression, progress=progress, overwrite=force, show=show, latched=latched,
     ))  # fmt: skip
 
 

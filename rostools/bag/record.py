@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import asyncio
 import collections
+import fnmatch
 import logging
 import re
 import shutil
@@ -55,6 +56,8 @@ class RecordOptions:
     all: bool = False
     regex: bool = False
     exclude: list[str] = field(default_factory=list)  # regexes; a topic matching any is left out
+    types: list[str] = field(default_factory=list)  # globs: topics of these types too
+    exclude_types: list[str] = field(default_factory=list)  # globs: never these types
     node: str | None = None
     base: Path = Path("recording.bag")  # the file name before .active and split numbers
     format: str = "bag"
@@ -103,9 +106,15 @@ def file_name(base: Path, split: bool, index: int) -> Path:
 
 
 class Selection:
-    """Which topics to record: names, regexes (full match, as rosbag), all, minus excludes."""
+    """Which topics to record: names, regexes (full match, as rosbag), types, all, minus excludes.
+
+    Types are globs (``sensor_msgs/*``), as rosbag2's ``--topic-types``; a topic whose type is
+    not known yet waits for the next poll when types decide.
+    """
 
     def __init__(self, opts: RecordOptions) -> None:
+        self.types = opts.types
+        self.exclude_types = opts.exclude_types
         self.names = set(opts.topics) if not opts.regex else set()
         try:
             self.patterns = [re.compile(p) for p in opts.topics] if opts.regex else []
@@ -117,13 +126,24 @@ class Selection:
             opts.all or opts.node is not None or (bool(opts.exclude) and not opts.topics)
         )
 
-    def wants(self, topic: str) -> bool:
-        """Whether to record ``topic``."""
+    @property
+    def by_type(self) -> bool:
+        """Whether topic types take part in the choice."""
+        return bool(self.types or self.exclude_types)
+
+    def wants(self, topic: str, topic_type: str | None = None) -> bool:
+        """Whether to record ``topic`` (of ``topic_type``, if known)."""
         if any(x.fullmatch(topic) for x in self.exclude):
             return False
-        if self.everything:
+        if self.exclude_types and (topic_type is None or _matches(topic_type, self.exclude_types)):
+            return False
+        if self.everything or topic in self.names or any(p.fullmatch(topic) for p in self.patterns):
             return True
-        return topic in self.names or any(p.fullmatch(topic) for p in self.patterns)
+        return topic_type is not None and _matches(topic_type, self.types)
+
+
+def _matches(topic_type: str, globs: list[str]) -> bool:
+    return any(fnmatch.fnmatchcase(topic_type, g) for g in globs)
 
 
 class _Writer(threading.Thread):
@@ -332,13 +352,16 @@ class Recorder:
         """Subscribe to every wanted topic the master knows of (new ones as they appear)."""
         if self.opts.node is not None:
             candidates = await self._node_topics(self.opts.node)
-        elif self.selection.everything or self.selection.patterns:
+        elif self.selection.everything or self.selection.patterns or self.selection.types:
             pubs, _, _ = await self.node.master_call("getSystemState")
             candidates = [topic for topic, _ in pubs]
         else:
             candidates = sorted(self.selection.names)  # subscribed before anyone publishes
+        types: dict[str, str] = {}
+        if self.selection.by_type:
+            types = dict(await self.node.master_call("getTopicTypes"))
         for topic in candidates:
-            if not self.selection.wants(topic):
+            if not self.selection.wants(topic, types.get(topic)):
                 continue
             if topic == "/clock" and self.clock.sim:  # already subscribed, for the time
                 if self.clock.forward is None:

@@ -533,3 +533,35 @@ def test_play_takes_rosbags_greedy_topics_and_bags(
     assert missing.returncode == 3 and "gone.bag" in missing.stderr
     none = run_cli("bag", "play", "--topics", "/chatter", env=cli_env)
     assert none.returncode == 2 and "give at least one bag" in none.stderr
+
+
+def test_record_chooses_topics_by_type(
+    rostools_master: str, cli_env: dict[str, str], tmp_path: Path
+) -> None:
+    pubs = [
+        rostools(cli_env, "topic", "pub", "-r", "20", topic, topic_type, "{}")
+        for topic, topic_type in (
+            ("/img", "sensor_msgs/Image"),
+            ("/s", "std_msgs/String"),
+            ("/p", "geometry_msgs/PointStamped"),
+        )
+    ]
+    by_type = rostools(
+        cli_env, "bag", "record", "-O", "t.bag", "--topic-types", "sensor_msgs/*",
+        "--topic-types", "geometry_msgs/PointStamped", cwd=tmp_path,
+    )  # fmt: skip
+    but_type = rostools(
+        cli_env, "bag", "record", "-O", "x.bag", "-a", "--exclude-topic-types", "std_msgs/*",
+        cwd=tmp_path,
+    )  # fmt: skip
+    try:
+        for topic in ("/img", "/p"):
+            wait_for(lambda t=topic: subscribed(rostools_master, t, "/rostools_record"), 20, topic)
+        time.sleep(2.0)  # both recorders have polled the master since, and got messages
+        for rec in (by_type, but_type):
+            assert rec.stop() == 0
+    finally:
+        stop_all(pubs)
+    assert {t.topic for t in bag_info(tmp_path / "t.bag").topics} == {"/img", "/p"}
+    rest = {t.topic for t in bag_info(tmp_path / "x.bag").topics}
+    assert {"/img", "/p"} <= rest and "/s" not in rest

@@ -251,3 +251,26 @@ def test_record_follows_real_rosbag_play_clock(any_master: MasterInfo, tmp_path:
         stamps = [t for _, t, _ in reader.messages(["/chatter"])]
     assert len(stamps) >= 10
     assert all(100 * 10**9 <= t <= 101 * 10**9 for t in stamps), stamps
+
+
+def test_record_by_type_asks_the_masters_topic_types(
+    any_master: MasterInfo, tmp_path: Path
+) -> None:
+    pubs = [
+        start_ros1_node("talker.py", ["/py", "50"], any_master.ros_env),
+        rostools(any_master, "topic", "pub", "-r", "20", "/img", "sensor_msgs/Image", "{}"),
+    ]
+    rec = rostools(
+        any_master, "bag", "record", "-O", "t.bag", "--topic-types", "std_msgs/*", cwd=tmp_path
+    )
+    try:
+        wait_for(lambda: subscribed(any_master.uri, "/py", "/rostools_record"), 20, "record")
+        time.sleep(1.5)
+        rec.signal(signal.SIGINT)
+        assert rec.popen.wait(20) == 0, rec.output()[1]
+    finally:
+        rec.stop()
+        for pub in pubs:
+            pub.stop()
+    with open_bag(tmp_path / "t.bag") as reader:
+        assert {c.topic for c in reader.connections} == {"/py"}

@@ -193,6 +193,14 @@ def record(
     node: Annotated[
         str | None, typer.Option("--node", help="Record what this node subscribes to.")
     ] = None,
+    types: Annotated[
+        list[str] | None,
+        typer.Option("--topic-types", help="Also topics of these types (globs: sensor_msgs/*)."),
+    ] = None,
+    exclude_types: Annotated[
+        list[str] | None,
+        typer.Option("--exclude-topic-types", help="Never topics of these types (globs)."),
+    ] = None,
     output_name_: Annotated[
         str | None, typer.Option("--output-name", "-O", help="The file name (.bag added).")
     ] = None,
@@ -256,8 +264,8 @@ def record(
     from rostools.bag.record import Recorder, RecordOptions
 
     topics = topics or []
-    if not (topics or all_ or node or (regex and topics) or exclude):
-        raise UsageError("give topics to record, or -a, -e REGEX or --node NAME")
+    if not (topics or all_ or node or (regex and topics) or exclude or types):
+        raise UsageError("give topics to record, or -a, -e REGEX, --topic-types or --node NAME")
     if all_ and topics:
         raise UsageError("-a records every topic; do not also name topics")
     for value, flag in ((size, "--size"), (max_splits, "--max-splits"), (limit, "-l")):
@@ -266,6 +274,7 @@ def record(
     path, kind = output_name(output_name_, output_prefix, storage)
     opts = RecordOptions(
         topics=topics, all=all_, regex=regex, exclude=exclude or [], node=node, base=path,
+        types=types or [], exclude_types=exclude_types or [],
         format=kind, compression=compression_choice(kind, bz2, lz4, compression),
         chunk_size=chunk_size * 1024 if chunk_size else None, split=split,
         size=size * 1024 * 1024 if size else None,

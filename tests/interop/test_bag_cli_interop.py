@@ -46,6 +46,19 @@ def hellos(path: Path, topic: str) -> list[int]:
     return [int(t.split()[1]) for t in texts]
 
 
+def record_while(info: MasterInfo, rec: Proc, pubs: list[Proc], topic: str, seconds: float) -> None:
+    """Once ``rec`` subscribes to ``topic``, record ``seconds`` more; then stop everything."""
+    try:
+        wait_for(lambda: subscribed(info.uri, topic, "/rostools_record"), 20, "record")
+        time.sleep(seconds)
+        rec.signal(signal.SIGINT)
+        assert rec.popen.wait(20) == 0, rec.output()[1]
+    finally:
+        rec.stop()
+        for pub in pubs:
+            pub.stop()
+
+
 @needs_cpp
 @pytest.mark.parametrize("storage", ["bag", "mcap"])
 def test_record_captures_rospy_and_roscpp(
@@ -59,15 +72,7 @@ def test_record_captures_rospy_and_roscpp(
         start_ros1_node("talker.py", ["/py", "50"], any_master.ros_env),
         Proc([str(talker), "/cpp", "--rate", "50", "--name", "cpp_talker"], env=any_master.ros_env),
     ]
-    try:
-        wait_for(lambda: subscribed(any_master.uri, "/cpp", "/rostools_record"), 20, "record")
-        time.sleep(3.0)
-        rec.signal(signal.SIGINT)
-        assert rec.popen.wait(20) == 0, rec.output()[1]
-    finally:
-        rec.stop()
-        for pub in pubs:
-            pub.stop()
+    record_while(any_master, rec, pubs, "/cpp", 3.0)
     for topic, callerid in (("/py", "/talker"), ("/cpp", "/cpp_talker")):
         got = hellos(out, topic)
         assert len(got) > 50, topic
@@ -263,14 +268,6 @@ def test_record_by_type_asks_the_masters_topic_types(
     rec = rostools(
         any_master, "bag", "record", "-O", "t.bag", "--topic-types", "std_msgs/*", cwd=tmp_path
     )
-    try:
-        wait_for(lambda: subscribed(any_master.uri, "/py", "/rostools_record"), 20, "record")
-        time.sleep(1.5)
-        rec.signal(signal.SIGINT)
-        assert rec.popen.wait(20) == 0, rec.output()[1]
-    finally:
-        rec.stop()
-        for pub in pubs:
-            pub.stop()
+    record_while(any_master, rec, pubs, "/py", 1.5)
     with open_bag(tmp_path / "t.bag") as reader:
         assert {c.topic for c in reader.connections} == {"/py"}

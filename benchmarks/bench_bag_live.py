@@ -17,6 +17,7 @@ import statistics
 import subprocess
 import sys
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -186,6 +187,21 @@ def _kept(recs: list[Recording]) -> float:
     return 100.0 * sum(r.recorded for r in recs) / sum(r.published for r in recs)
 
 
+def _per_round(
+    ours: list[Recording],
+    theirs: list[Recording] | None,
+    value: Callable[[Recording], str],
+    published: bool = False,
+) -> str:
+    """Each recorder's figure per round: ``ours a, b, c; rosbag x, y, z``."""
+    parts = []
+    for name, rounds in (("ours", ours), ("rosbag", theirs or [])):
+        if rounds:
+            tail = f" of {rounds[0].published:,}" if published else ""
+            parts.append(f"{name} " + ", ".join(value(r) for r in rounds) + tail)
+    return "; ".join(parts)
+
+
 def bench_record_small() -> list[Result]:
     """20 kHz of 16-byte std_msgs/String for 5 s: messages in the file per message published."""
     got = _rounds(_recorders(), "std_msgs/String", 16, 20000, "small_")
@@ -193,11 +209,7 @@ def bench_record_small() -> list[Result]:
     results = []
     for label in ("ours .bag", "ours .mcap"):
         recs = got[label]
-        per_round = "; ".join(
-            f"{name} " + ", ".join(f"{r.recorded:,}" for r in rs) + f" of {rs[0].published:,}"
-            for name, rs in (("ours", recs), ("rosbag", theirs or []))
-            if rs
-        )
+        per_round = _per_round(recs, theirs, lambda r: f"{r.recorded:,}", published=True)
         results.append(
             Result(
                 f"bag record 20 kHz small msgs, kept ({label[5:]})",
@@ -226,11 +238,7 @@ def bench_record_big() -> list[Result]:
         recs = got[label]
         rate = statistics.median(r.written_mb_s for r in recs)
         fmt = label[5:] + (" none" if label.endswith("mcap") else "")
-        rounds = "; ".join(
-            f"{name} " + ", ".join(f"{r.written_mb_s:.0f}" for r in rs)
-            for name, rs in (("ours", recs), ("rosbag", theirs or []))
-            if rs
-        )
+        rounds = _per_round(recs, theirs, lambda r: f"{r.written_mb_s:.0f}")
         results.append(
             Result(
                 f"bag record 1 MB images, written ({fmt})",

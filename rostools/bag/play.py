@@ -96,7 +96,9 @@ class Player:
         self.pausing_on_topics = bool(self.pause_topics)  # the ``t`` key toggles it
         self.rate_control: RateControl | None = None
         if opts.rate_control_topic:
-            self.rate_control = RateControl(opts.rate_control_max_delay, self.wake.set)
+            self.rate_control = RateControl(
+                opts.rate_control_topic, opts.rate_control_max_delay, self.wake.set
+            )
         self._origin: float | None = None  # when (monotonic) bag time from_ns plays
         self._next_clock = self._next_show = self._yielded = 0.0  # monotonic times
         infos = [r.info() for r in readers]
@@ -159,8 +161,8 @@ class Player:
             )
         if self.opts.clock:
             self.clock = await self.node.advertise("/clock", CLOCK, queue_size=1)
-        if self.rate_control is not None and self.opts.rate_control_topic:
-            await self.rate_control.subscribe(self.node, self.opts.rate_control_topic)
+        if self.rate_control is not None:
+            await self.rate_control.subscribe(self.node)
         await self.node.advertise_service("~pause_playback", SET_BOOL, self._pause_service)
 
     def _pause_service(self, request: bytes) -> bytes:

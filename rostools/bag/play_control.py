@@ -39,15 +39,16 @@ def header_first(definition: str) -> bool:
 class RateControl:
     """The newest ``header.stamp`` seen on the rate-control topic, in ns."""
 
-    def __init__(self, max_delay: float, on_stamp: Callable[[], None]) -> None:
+    def __init__(self, topic: str, max_delay: float, on_stamp: Callable[[], None]) -> None:
+        self.topic = topic
         self.max_delay_ns = round(max_delay * NS_PER_SEC)
         self.on_stamp = on_stamp
         self.last_ns: int | None = None
         self._warned = False
 
-    async def subscribe(self, node: Node, topic: str) -> None:
-        """Listen on ``topic`` (any type with a Header first)."""
-        await node.subscribe(topic, self._frames)
+    async def subscribe(self, node: Node) -> None:
+        """Listen on the topic (any type with a Header first)."""
+        await node.subscribe(self.topic, self._frames)
 
     def start(self, t_ns: int) -> None:
         """Playback starts at bag time ``t_ns``: count the delay from there."""

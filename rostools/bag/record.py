@@ -98,6 +98,11 @@ def free_bytes(folder: Path) -> int:
     return shutil.disk_usage(folder).free
 
 
+def active_name(path: Path) -> Path:
+    """Where ``path`` is written until it is closed (rosbag's ``.active``)."""
+    return path.with_name(path.name + ".active")
+
+
 def file_name(base: Path, split: bool, index: int) -> Path:
     """``base`` itself, or ``base`` with ``_N`` before its suffix when splitting."""
     if not split:
@@ -172,7 +177,7 @@ class _Writer(threading.Thread):
     def _open_file(self, t_ns: int) -> BagWriter:
         opts = self.rec.opts
         self.path = file_name(opts.base, opts.split, self.index)
-        active = self.path.with_name(self.path.name + ".active")
+        active = active_name(self.path)
         self.writer = open_writer(active, opts.format, opts.compression, opts.chunk_size)
         self.file_start = t_ns
         self.connections.clear()
@@ -188,8 +193,7 @@ class _Writer(threading.Thread):
         if self.writer is None or self.path is None:
             return
         self.writer.close()
-        active = self.path.with_name(self.path.name + ".active")
-        active.replace(self.path)
+        active_name(self.path).replace(self.path)
         self.files.append(self.path)
         self.rec.closed_files.append(self.path)
         self.writer = None

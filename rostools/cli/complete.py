@@ -175,13 +175,17 @@ class Completer:
 
         return MasterProxy(self.master_uri, "/rostools_complete", timeout=self.left())
 
-    def _state(self) -> tuple[list[Any], list[Any], list[Any]]:
+    def _ask(self, method: str) -> Any:
+        """The master's answer to ``method``; None when it cannot say in time."""
         from rostools.errors import RostoolsError
 
         try:
-            pubs, subs, services = self._master().raw("getSystemState")[2]
+            return self._master().raw(method)[2]
         except (RostoolsError, OSError, ValueError, TypeError):
-            return [], [], []
+            return None
+
+    def _state(self) -> tuple[list[Any], list[Any], list[Any]]:
+        pubs, subs, services = self._ask("getSystemState") or ([], [], [])
         return pubs, subs, services
 
     def topics(self) -> Candidates:
@@ -203,12 +207,7 @@ class Completer:
 
     def params(self) -> Candidates:
         """Parameter names, and the namespaces above them."""
-        from rostools.errors import RostoolsError
-
-        try:
-            names = self._master().raw("getParamNames")[2]
-        except (RostoolsError, OSError, ValueError, TypeError):
-            return []
+        names = self._ask("getParamNames") or []
         found = set(names)
         for name in names:
             parts = name.split("/")
@@ -234,13 +233,8 @@ class Completer:
 
     def topic_type(self) -> Candidates:
         """``topic pub /t <TAB>``: the topic's current type, else every message type."""
-        from rostools.errors import RostoolsError
-
         if self.positionals:
-            try:
-                types = dict(self._master().raw("getTopicTypes")[2])
-            except (RostoolsError, OSError, ValueError, TypeError):
-                types = {}
+            types = dict(self._ask("getTopicTypes") or [])
             topic = self.positionals[0]
             current = types.get(topic if topic.startswith("/") else "/" + topic)
             if current:

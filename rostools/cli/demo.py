@@ -121,8 +121,7 @@ def demo(
     """Try rostools in ten seconds: a master, a talker, a service, a recording."""
     from rostools.master.server import MasterThread
 
-    master = MasterThread().start()
-    try:
+    with MasterThread() as master:
         env = dict(os.environ, ROS_MASTER_URI=master.uri)
         sys.stdout.write(
             f"rostools demo: a master at {master.uri} (in this process), a talker on /chatter,\n"
@@ -131,8 +130,6 @@ def demo(
         with Graph(master.uri):
             for title, argv in STEPS:
                 _run_step(title, [a.replace("{out}", str(output)) for a in argv], env)
-    finally:
-        master.stop()
     sys.stdout.write(
         f"\nDone; nothing is left running, and {output} is yours. Next: 'rostools core' in one\n"
         "terminal, then any of these commands in another ('rostools -h' lists them all).\n"

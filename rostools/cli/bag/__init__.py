@@ -196,7 +196,6 @@ def filter_(
     from rostools.bag.api import bag_info
     from rostools.bag.ops import filter_bag
 
-    _same_file(src, dst)
     begin = bag_info(src).start_ns or 0 if (start is not None or end is not None) else 0
     lo = None if start is None else begin + (_time(start) or 0)
     hi = None if end is None else begin + (_time(end) or 0)
@@ -218,11 +217,6 @@ def _say(fmt: Format, matched: bool, value: Any) -> None:
     sys.stdout.write(line + "\n")
 
 
-def _same_file(src: Path, dst: Path) -> None:
-    if src.resolve() == dst.resolve():
-        raise UsageError(f"cannot use the same file as input and output: {src}")
-
-
 @app.command()
 def convert(
     ctx: typer.Context,
@@ -237,7 +231,6 @@ def convert(
     """Convert .bag to MCAP or back, losslessly."""
     from rostools.bag.ops import convert as run_convert
 
-    _same_file(src, dst)
     size = chunk_size * 1024 if chunk_size else None
     _copy_command(ctx, fmt, quiet, "convert", lambda progress: run_convert(
         src, dst, compression=compression, chunk_size=size, progress=progress, overwrite=force,

@@ -57,7 +57,7 @@ def test_pause_playback_answers_as_rosbag(
 
 def test_rate_control_holds_when_stamps_lag() -> None:
     woken: list[int] = []
-    control = RateControl(0.25, lambda: woken.append(1))
+    control = RateControl("/ctl", 0.25, lambda: woken.append(1))
     assert not control.holds(10**12)  # not started: nothing to compare with
     control.start(100 * 10**9)
     assert not control.holds(100_250_000_000)

@@ -83,14 +83,24 @@ async def run_core(address: Address, ready: Callable[[Master, str], None]) -> No
     for sig in (signal.SIGINT, signal.SIGTERM):
         loop.add_signal_handler(sig, master.stopped.set)
     rosout = await start_rosout(f"http://127.0.0.1:{master.port}/", address.advertise)
+    step_aside = asyncio.create_task(_close_when_replaced(rosout))
     try:
         ready(master, run_id)
         await master.wait()
     finally:
         for sig in (signal.SIGINT, signal.SIGTERM):
             loop.remove_signal_handler(sig)
-        await rosout.close()
+        step_aside.cancel()
+        if not rosout.shutdown_requested.is_set():
+            await rosout.close()
         await master.stop()
+
+
+async def _close_when_replaced(node: Node) -> None:
+    # Another /rosout (a real one, say) registered and the master told ours to go: leave as
+    # roscpp's rosout would, rather than keep serving connections the master has forgotten.
+    await node.shutdown_requested.wait()
+    await node.close()
 
 
 async def start_rosout(master_uri: str, host: str) -> Node:

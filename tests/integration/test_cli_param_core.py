@@ -7,6 +7,7 @@ import signal
 import socket
 import sys
 import time
+import xmlrpc.client
 from pathlib import Path
 
 from tests.support.env import run_cli
@@ -120,3 +121,23 @@ def test_namespace_and_master_uri_option(rostools_master: str, cli_env: dict[str
         ).stdout.count("/robot/speed")
         == 1
     )
+
+
+def test_core_rosout_steps_aside_for_a_new_rosout(rostools_master: str) -> None:
+    """Another node registering as /rosout makes the master shut ours down; ours then leaves."""
+    master = xmlrpc.client.ServerProxy(rostools_master)
+    old_uri = master.lookupNode("/probe", "/rosout")[2]
+    master.registerSubscriber("/rosout", "/rosout", "rosgraph_msgs/Log", "http://127.0.0.1:9/")
+
+    def old_gone() -> bool:
+        try:
+            xmlrpc.client.ServerProxy(old_uri).getPid("/probe")
+        except OSError:
+            return True
+        return False
+
+    wait_for(old_gone, 10, "the replaced /rosout to close its XML-RPC server")
+    publishers, subscribers, _ = master.getSystemState("/probe")[2]
+    assert "/rosout_agg" not in dict(publishers)
+    assert dict(subscribers)["/rosout"] == ["/rosout"]  # ours took none of the newcomer's away
+    assert master.lookupNode("/probe", "/rosout")[2] == "http://127.0.0.1:9/"

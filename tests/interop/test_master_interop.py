@@ -71,10 +71,14 @@ def test_rospy_talker_and_listener_exchange_messages(
 def test_roscpp_nodes_register_and_connect(any_master: MasterInfo, tmp_path: Path) -> None:
     """roscpp's rosout node subscribes to a rospy talker's /rosout and republishes it."""
     env = any_master.ros_env
-    nodes = [start_ros1_node("listener.py", ["/rosout_agg", "rosgraph_msgs/Log"], env)]
-    if any_master.kind == "rostools":
-        nodes.append(Proc(["/usr/lib/rosout/rosout"], env=env))  # roscore already runs one
-    nodes.append(start_ros1_node("talker.py", ["/chatter", "20"], env))
+    # Under its own name and output, beside the master's own /rosout, so that only the C++
+    # node can have delivered what the listener hears.
+    cpp_rosout = ["/usr/lib/rosout/rosout", "__name:=rosout_cpp", "/rosout_agg:=/rosout_cpp"]
+    nodes = [
+        start_ros1_node("listener.py", ["/rosout_cpp", "rosgraph_msgs/Log"], env),
+        Proc(cpp_rosout, env=env),
+        start_ros1_node("talker.py", ["/chatter", "20"], env),
+    ]
     bag = tmp_path / "rec.bag"
     recorder = Proc(
         ["/usr/lib/rosbag/record", "-O", str(bag), "/chatter", "__name:=record"], env=env

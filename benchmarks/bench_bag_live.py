@@ -95,6 +95,16 @@ class Recording:
         return self.recorded * self.message_bytes / self.span_s / 1e6 if self.span_s else 0.0
 
 
+def _publisher(kind: str, size: int, rate: float) -> list[str]:
+    """One pub_rate run of RUN seconds whose clock starts once a subscriber is connected.
+
+    Nothing is sent before the subscriber listens, so every message it misses was lost on its
+    own path.
+    """
+    start_when = ["--wait-subscribers", "1", "--linger", str(LINGER)]
+    return [cpp_peer("pub_rate"), TOPIC, kind, str(size), str(rate), str(RUN), *start_when]
+
+
 def _record(
     recorder: list[str],
     out: Path,
@@ -113,23 +123,7 @@ def _record(
     with log.open("wb") as sink:
         rec = start(recorder, env, stdout=sink, stderr=subprocess.STDOUT, cwd=BUILD)
         pub = start(
-            [
-                cpp_peer("pub_rate"),
-                TOPIC,
-                kind,
-                str(size),
-                str(rate),
-                str(RUN),
-                # The clock starts once the recorder is connected: nothing is sent before it
-                # listens, so every message not in the file was lost by the recorder's path.
-                "--wait-subscribers",
-                "1",
-                "--linger",
-                str(LINGER),
-            ],
-            env,
-            stdout=subprocess.PIPE,
-            stderr=subprocess.DEVNULL,
+            _publisher(kind, size, rate), env, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL
         )
         try:
             out_text, _ = pub.communicate(timeout=RUN + LINGER + 60)
@@ -153,6 +147,37 @@ def _record(
     )
     out.unlink()
     return recording
+
+
+def _link_mb_s(env: dict[str, str], size: int) -> float:
+    """MB/s a bare roscpp subscriber takes from one full-speed pub_rate run of ``size`` images.
+
+    It only counts, so this is the most the publisher's link delivers: no recorder can write
+    more than it receives.
+    """
+    sub = start(
+        [cpp_peer("sub_count"), TOPIC, "--type", "sensor_msgs/Image", "--idle", "1"],
+        env,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.DEVNULL,
+    )
+    assert sub.stdout is not None
+    try:
+        if sub.stdout.readline().strip() != b"ready":
+            raise RuntimeError("sub_count did not start")
+        pub = start(
+            _publisher("sensor_msgs/Image", size, 0),
+            env,
+            stdout=subprocess.DEVNULL,
+            stderr=subprocess.DEVNULL,
+        )
+        try:
+            out, _ = sub.communicate(timeout=RUN + LINGER + 60)
+        finally:
+            stop(pub)
+    finally:
+        stop(sub)
+    return _last_json(out.decode())["bytes_per_second"] / 1e6
 
 
 def _recorders() -> dict[str, tuple[list[str], str]]:
@@ -233,7 +258,20 @@ def bench_record_big() -> list[Result]:
     got = _rounds(recorders, "sensor_msgs/Image", 1_000_000, 0, "big_")
     theirs = got.get("rosbag")
     their_rate = None if theirs is None else statistics.median(r.written_mb_s for r in theirs)
-    results = []
+    with master() as uri:
+        links = [_link_mb_s(ros_env(uri), 1_000_000) for _ in range(RECORD_ROUNDS)]
+    results = [
+        Result(
+            "bag record 1 MB images, link ceiling (bare roscpp subscriber)",
+            "MB/s",
+            statistics.median(links),
+            their_rate,
+            "report",
+            None,
+            f"median of {RECORD_ROUNDS} ({', '.join(f'{v:.0f}' for v in links)}): what the "
+            "publisher delivers to a subscriber that only counts; 'theirs' is rosbag record",
+        )
+    ]
     for label in ("ours .bag", "ours .mcap"):
         recs = got[label]
         rate = statistics.median(r.written_mb_s for r in recs)

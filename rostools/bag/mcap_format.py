@@ -414,9 +414,9 @@ def decompress_prefix(compression: str, data: bytes | memoryview, limit: int) ->
                 out += piece
             return bytes(out)
         if compression == "lz4":
-            import lz4.frame
+            from rostools.bag import lz4cut
 
-            return bytes(lz4.frame.LZ4FrameDecompressor().decompress(data, limit))
+            return lz4cut.salvage(data, limit)  # every sequence before the cut
     except (OSError, ValueError, RuntimeError) as err:
         raise McapFormatError(f"{compression} chunk does not decompress: {err}") from err
     raise UnsupportedBagError(f"unsupported MCAP chunk compression {compression!r}")

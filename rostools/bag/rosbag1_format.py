@@ -205,7 +205,7 @@ def decompress(kind: str, data: bytes | memoryview, size: int) -> bytes:
         return bytes(data)
     if size > MAX_CHUNK_SIZE:
         raise RecordError(f"chunk of {size} bytes exceeds the {MAX_CHUNK_SIZE}-byte limit")
-    out = decompress_prefix(kind, data, size + 1)  # one more byte shows a lying header
+    out = _decode(kind, data, size + 1)  # one more byte shows a lying header
     if len(out) != size:
         raise RecordError(f"{kind} chunk holds {len(out)} bytes, its header says {size}")
     return out
@@ -214,10 +214,22 @@ def decompress(kind: str, data: bytes | memoryview, size: int) -> bytes:
 def decompress_prefix(kind: str, data: bytes | memoryview, limit: int) -> bytes:
     """As much of the chunk as decompresses from ``data`` (which may be cut short).
 
-    Salvages the complete blocks of a partly written bz2 or lz4 chunk; never more than
-    ``limit`` bytes. Corrupt data raises ``RecordError``.
+    Salvages the complete bz2 blocks of a partly written chunk, and of an lz4 one every
+    sequence before the cut; never more than ``limit`` bytes. Corrupt data raises
+    ``RecordError``.
     """
     limit = min(limit, MAX_CHUNK_SIZE)
+    if kind != "lz4":
+        return _decode(kind, data, limit)
+    from rostools.bag import lz4cut
+
+    try:
+        return lz4cut.salvage(data, limit)
+    except ValueError as err:
+        raise RecordError(f"lz4 chunk does not decompress: {err}") from err
+
+
+def _decode(kind: str, data: bytes | memoryview, limit: int) -> bytes:
     try:
         if kind == "none":
             return bytes(data[:limit])

@@ -14,7 +14,7 @@ import yaml
 from rostools.bag import ops
 from rostools.bag.api import bag_info
 from rostools.bag.recover import recover
-from tests.support.bagdata import digest, headers, read_stream, write_sample
+from tests.support.bagdata import digest, first_chunk_data, headers, read_stream, write_sample
 from tests.support.env import SYSTEM_PYTHON, needs_ros1, run_system_python
 
 pytestmark = [pytest.mark.interop, needs_ros1]
@@ -134,3 +134,32 @@ def test_convert_round_trip_is_read_by_rosbag(tmp_path: Path) -> None:
     views = rosbag_view(sample.path, tmp_path / "c.bag")
     assert views[sample.path]["stream"] == views[tmp_path / "c.bag"]["stream"]
     assert views[sample.path]["headers"] == views[tmp_path / "c.bag"]["headers"]
+
+
+def test_we_salvage_a_cut_lz4_chunk_that_rosbag_reindex_drops(tmp_path: Path) -> None:
+    """A real rosbag lz4 bag cut inside its one chunk: reindex keeps nothing, recover half."""
+    path = tmp_path / "theirs.bag"
+    run_system_python(WRITE_ONE_CHUNK, str(path))
+    full = rosbag_view(path)[path]["stream"]
+    raw = path.read_bytes()
+    start, length = first_chunk_data(raw)
+    cut = tmp_path / "cut.bag"
+    cut.write_bytes(raw[: start + length // 2])
+    theirs = tmp_path / "reindexed.bag"
+    shutil.copy(cut, theirs)
+    subprocess.run(["rosbag", "reindex", "-q", str(theirs)], capture_output=True, check=False)
+    their_view = rosbag_view(theirs)[theirs]
+    assert their_view.get("stream", []) == []  # rosbag throws the cut chunk away
+    report = recover(cut, tmp_path / "ours.bag")
+    view = rosbag_view(tmp_path / "ours.bag")[tmp_path / "ours.bag"]
+    assert view["stream"] == full[: len(view["stream"])]
+    assert 0.3 * len(full) < report.messages == len(view["stream"]) < len(full)
+
+
+WRITE_ONE_CHUNK = r"""
+import sys, rosbag, genpy
+from std_msgs.msg import String
+with rosbag.Bag(sys.argv[1], "w", compression="lz4") as bag:
+    for i in range(3000):
+        bag.write("/s", String(data="message %d of a recording" % i), genpy.Time(i, 7))
+"""

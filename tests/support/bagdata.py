@@ -116,3 +116,16 @@ def write_play_bag(path: Path, compression: str | None = None) -> None:
         for i in range(10):
             text = f"m{i}".encode()
             writer.write(chatter, 100 * 10**9 + i * 10**8, struct.pack("<I", len(text)) + text)
+
+
+def first_chunk_data(raw: bytes) -> tuple[int, int]:
+    """(offset, length) of the data of a ``.bag``'s first chunk, the record after its header."""
+    import struct
+
+    pos = 13  # after "#ROSBAG V2.0\n"
+    for _ in range(2):  # skip the bag header record, then stop at the chunk's data
+        header_len = struct.unpack_from("<I", raw, pos)[0]
+        data_at = pos + 4 + header_len + 4
+        data_len = struct.unpack_from("<I", raw, data_at - 4)[0]
+        pos = data_at + data_len
+    return data_at, data_len

@@ -17,7 +17,7 @@ from rostools.bag.model import BagFormatError
 from rostools.bag.recover import recover, reindex
 from rostools.bag.rosbag1_reader import Bag1Reader
 from rostools.errors import DataLossError
-from tests.support.bagdata import read_stream, write_sample
+from tests.support.bagdata import first_chunk_data, read_stream, write_sample
 from tests.support.env import ROOT
 
 CASES = [
@@ -73,6 +73,18 @@ def test_uncompressed_bag_cut_mid_chunk_keeps_every_whole_record(tmp_path: Path)
             with pytest.raises(DataLossError, match="lost"):
                 report.raise_if_lost()
     assert whole > 190  # rosbag reindex salvages 0 here: its only chunk is unterminated
+
+
+def test_lz4_bag_cut_mid_chunk_keeps_the_records_before_the_cut(tmp_path: Path) -> None:
+    sample = write_sample(tmp_path / "x.bag", 2000, compression="lz4")  # one chunk, one block
+    raw = sample.path.read_bytes()
+    start, length = first_chunk_data(raw)
+    (tmp_path / "cut.bag").write_bytes(raw[: start + length // 2])
+    report = recover(tmp_path / "cut.bag", tmp_path / "out.bag")
+    got = read_stream(tmp_path / "out.bag")
+    assert got == sample.stream[: len(got)]
+    assert 0.3 * 2000 < report.messages < 2000  # liblz4 alone salvages none of this chunk
+    assert not report.complete
 
 
 def test_recovering_a_sound_bag_loses_nothing(tmp_path: Path) -> None:

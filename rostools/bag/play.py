@@ -1,9 +1,12 @@
 """Playback: bag messages published on the live graph at their recorded pace.
 
 Messages go out as the raw bytes in the file (never decoded, ``header.seq`` untouched). Each
-topic gets one publisher, latched when any recorded connection on it was latched. Timing:
-the loop sleeps on asyncio until about 2 ms before a message is due, then on ``time.sleep``
-to the due time, so sockets are served while waiting and the send is still on time.
+topic gets one publisher, latched when any recorded connection on it was latched; like
+rosbag's publisher per recorded connection, it keeps the last message of each latched one,
+so a late subscriber gets them all.
+Timing: the loop sleeps on asyncio until about 2 ms before a message is due, then on
+``time.sleep`` to the due time, so sockets are served while waiting and the send is still on
+time.
 """
 
 from __future__ import annotations
@@ -20,6 +23,7 @@ from rostools.bag.model import NS_PER_SEC, Connection
 from rostools.bag.play_control import SET_BOOL, RateControl, set_bool_reply
 from rostools.errors import UsageError
 from rostools.graph.clock import CLOCK, TIME
+from rostools.graph.connection import Frame
 from rostools.graph.node import Node
 from rostools.graph.publisher import Publisher
 from rostools.graph.session import first
@@ -165,6 +169,12 @@ class Player:
             await self.rate_control.subscribe(self.node)
         await self.node.advertise_service("~pause_playback", SET_BOOL, self._pause_service)
 
+    def _publish(self, conn: Connection, data: Frame) -> Publisher:
+        # Latched per recorded publisher, as rosbag's latched_before keys them.
+        pub = self.publishers[conn.topic]
+        pub.publish_raw(data, (conn.topic, conn.callerid), conn.latching)
+        return pub
+
     def _pause_service(self, request: bytes) -> bytes:
         return set_bool_reply(request, self.status.state is State.PAUSED, self.set_paused)
 
@@ -182,7 +192,7 @@ class Player:
             await first(stop.wait(), timeout=self.opts.delay)
         if self.from_ns > self.bag_start:  # -s: what a late subscriber would still get
             for conn, _, data in latched_before(self.readers, self._topics(), self.from_ns):
-                self.publishers[conn.topic].publish_raw(data)
+                self._publish(conn, data)
         if self.rate_control is not None:
             self.rate_control.start(self.from_ns)
         while not stop.is_set():
@@ -211,9 +221,7 @@ class Player:
                 self.status.state = State.PAUSED  # as rosbag: before the message; ``s`` sends it
             if not self.opts.immediate and not await self._wait_for(t, stop, show):
                 return
-            pub = self.publishers[conn.topic]
-            pub.publish_raw(data)
-            pub.flush()
+            self._publish(conn, data).flush()
             self.status.published += 1
             self.status.bag_time = t
             if time.monotonic() - self._yielded > YIELD_PERIOD:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import struct
+from collections.abc import Hashable
 from typing import TYPE_CHECKING
 
 from rostools.graph.connection import Frame, Outbound, ServerConnection, set_nodelay
@@ -32,7 +33,8 @@ class Publisher:
         self.latch = latch
         self.queue_size = queue_size
         self.links: list[Outbound] = []
-        self.latched: Frame | None = None
+        #: The last message of each source, oldest first: what a late subscriber gets.
+        self.latched: dict[Hashable, Frame] = {}
         self.seq = 0
         self.closed = False
 
@@ -53,10 +55,17 @@ class Publisher:
             payload = bytes(data)
         self.publish_raw(payload)
 
-    def publish_raw(self, payload: Frame) -> None:
-        """Send bytes exactly as given (bag play, relays)."""
-        if self.latch:
-            self.latched = payload
+    def publish_raw(self, payload: Frame, source: Hashable = None, keep: bool = True) -> None:
+        """Send bytes exactly as given (bag play, relays).
+
+        A latching publisher keeps the last message of each ``source`` (when ``keep``) for
+        subscribers that connect later, oldest first. bag play names each recorded publisher
+        as a source, so a late subscriber to ``/tf_static`` gets every recorded publisher's
+        last message, as rosbag play's one publisher per recorded connection gives.
+        """
+        if self.latch and keep:
+            self.latched.pop(source, None)  # re-inserted last: the order is that of sending
+            self.latched[source] = payload
         for link in self.links:
             link.send(payload)
 
@@ -80,8 +89,8 @@ class Publisher:
         )
         link.on_close = self._lost
         self.links.append(link)
-        if self.latched is not None:
-            link.send(self.latched)
+        for payload in self.latched.values():
+            link.send(payload)
         return link
 
     def _lost(self, link: Outbound) -> None:

@@ -15,7 +15,7 @@ from pathlib import Path
 import pytest
 
 from rostools.bag.api import bag_info, detect_format, open_bag
-from tests.support.bagdata import write_play_bag
+from tests.support.bagdata import write_play_bag, write_static_bag
 from tests.support.env import run_cli
 from tests.support.procs import Proc, wait_for, wait_for_name
 
@@ -258,6 +258,23 @@ def test_play_start_still_delivers_latched_and_keep_alive(
         late = echo(cli_env, "/latched", 1)  # "old" was before -s: sent anyway, and kept
         assert received(late) == ["old"]
         assert player.popen.poll() is None  # -k: still up after the end
+    finally:
+        assert player.stop() == 0
+
+
+def test_play_latches_the_last_message_of_every_recorded_publisher(
+    rostools_master: str, cli_env: dict[str, str], tmp_path: Path
+) -> None:
+    bag = tmp_path / "static.bag"
+    write_static_bag(bag)
+    player = rostools(cli_env, "bag", "play", str(bag), "-d", "0", "-k", "--wait-for-subscribers")
+    try:
+        assert received(echo(cli_env, "/static", 4)) == ["a1", "b1", "c1", "a2"]  # all played
+        late = rostools(cli_env, "topic", "echo", "/static", "-n", "3", "--timeout", "3", "-F",
+                        "json")  # fmt: skip
+        assert late.popen.wait(30) == 5  # only two come: c1 was not latched, a1 was replaced
+        out, _ = late.output()
+        assert [json.loads(line)["data"] for line in out.splitlines()] == ["b1", "a2"]
     finally:
         assert player.stop() == 0
 

@@ -22,7 +22,7 @@ from rostools.bag.api import open_bag
 from tests.conftest import MasterInfo
 from tests.interop.test_bag_interop import as_rosbag_sees, rosbag_view
 from tests.support import cppbuild
-from tests.support.bagdata import write_play_bag
+from tests.support.bagdata import write_play_bag, write_static_bag
 from tests.support.env import needs_ros1
 from tests.support.procs import Proc, start_ros1_node, wait_for, wait_for_name
 
@@ -271,3 +271,34 @@ def test_record_by_type_asks_the_masters_topic_types(
     record_while(any_master, rec, pubs, "/py", 1.5)
     with open_bag(tmp_path / "t.bag") as reader:
         assert {c.topic for c in reader.connections} == {"/py"}
+
+
+@pytest.mark.parametrize("player", ["rostools", "rosbag"])
+def test_a_late_real_subscriber_gets_every_recorded_latched_publisher(
+    any_master: MasterInfo, tmp_path: Path, player: str
+) -> None:
+    """/static was latched by /a and /b: a late rospy subscriber gets the last of each."""
+    bag = tmp_path / "static.bag"
+    write_static_bag(bag)
+    flags = ["-k", "--wait-for-subscribers"]
+    proc = (
+        rostools(any_master, "bag", "play", str(bag), "-d", "0", *flags)
+        if player == "rostools"
+        else Proc(["rosbag", "play", str(bag), *flags], env=any_master.ros_env)
+    )
+    first = listen(any_master, "/static")
+    late: Proc | None = None
+    try:
+        assert lines(first, 4) == ["a1", "b1", "c1", "a2"]
+        late = listen(any_master, "/static")
+        got = lines(late, 2)
+        if player == "rostools":  # in the order they were played
+            assert got == ["b1", "a2"]
+        else:  # rosbag play latches per recorded publisher too, in advertising order
+            assert sorted(got) == ["a2", "b1"]
+        with pytest.raises(AssertionError, match="printed no line"):
+            late.expect("^got ", timeout=2)  # c1 was not latched
+    finally:
+        for node in (first, late, proc):
+            if node is not None:
+                node.stop()

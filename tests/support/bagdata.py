@@ -129,3 +129,21 @@ def first_chunk_data(raw: bytes) -> tuple[int, int]:
         data_len = struct.unpack_from("<I", raw, data_at - 4)[0]
         pos = data_at + data_len
     return data_at, data_len
+
+
+def write_static_bag(path: Path) -> None:
+    """/static from three recorded publishers, as /tf_static often is.
+
+    /a "a1" at 100.0 s, /b "b1" at 100.1 s (both latched), /c "c1" at 100.2 s (not latched)
+    and /a "a2" at 100.3 s: a late subscriber should get "b1" then "a2".
+    """
+    with open_writer(path) as writer:
+        conns = {}
+        for name in ("/a", "/b", "/c"):
+            conns[name] = writer.add_connection(
+                "/static", "std_msgs/String", STRING_MD5, "string data\n", callerid=name,
+                latching=name != "/c",
+            )  # fmt: skip
+        for k, text in enumerate(["a1", "b1", "c1", "a2"]):
+            payload = struct.pack("<I", 2) + text.encode()
+            writer.write(conns["/" + text[0]], 100 * 10**9 + k * 10**8, payload)

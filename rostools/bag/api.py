@@ -157,6 +157,33 @@ def latched_before(
     return sorted(last.values(), key=lambda m: m[1])
 
 
+def copy_extras(
+    reader: BagReader, writer: BagWriter, start: int | None = None, end: int | None = None
+) -> tuple[int, int]:
+    """Copy MCAP attachments and metadata into an MCAP output: (copied, left out).
+
+    Left out: all of them when the output is a ``.bag``, which has no place for them, and
+    attachments logged outside ``start``..``end`` (ns, inclusive), as ``mcap filter`` does.
+    """
+    from rostools.bag.mcap_reader import McapReader
+    from rostools.bag.mcap_writer import McapWriter
+
+    if not isinstance(reader, McapReader):
+        return 0, 0
+    extras = reader.extras()
+    if not isinstance(writer, McapWriter):
+        return 0, len(extras)
+    copied = 0
+    for record in extras:
+        if isinstance(record, mcap_format.Attachment) and not (
+            (start is None or record.log_time >= start) and (end is None or record.log_time <= end)
+        ):
+            continue
+        writer.add_extra(record)
+        copied += 1
+    return copied, len(extras) - copied
+
+
 def topic_frequencies(reader: BagReader) -> dict[str, float]:
     """Topic -> median message rate in Hz, as ``rosbag info --freq`` computes it.
 

@@ -532,6 +532,40 @@ def encode_metadata(name: str, metadata: Mapping[str, str]) -> bytes:
     return _record(OP_METADATA, _str(name) + _str_map(metadata))
 
 
+def encode_attachment(att: Attachment) -> bytes:
+    """An Attachment record, its CRC computed over the fields before it."""
+    content = (
+        _U64.pack(att.log_time)
+        + _U64.pack(att.create_time)
+        + _str(att.name)
+        + _str(att.media_type)
+        + _U64.pack(len(att.data))
+        + att.data
+    )
+    return _record(OP_ATTACHMENT, content + _U32.pack(zlib.crc32(content)))
+
+
+def encode_attachment_index(index: AttachmentIndex) -> bytes:
+    """An AttachmentIndex record."""
+    content = (
+        _U64.pack(index.offset)
+        + _U64.pack(index.length)
+        + _U64.pack(index.log_time)
+        + _U64.pack(index.create_time)
+        + _U64.pack(index.data_size)
+        + _str(index.name)
+        + _str(index.media_type)
+    )
+    return _record(OP_ATTACHMENT_INDEX, content)
+
+
+def encode_metadata_index(index: MetadataIndex) -> bytes:
+    """A MetadataIndex record."""
+    return _record(
+        OP_METADATA_INDEX, _U64.pack(index.offset) + _U64.pack(index.length) + _str(index.name)
+    )
+
+
 def encode_summary_offset(opcode: int, start: int, length: int) -> bytes:
     """A SummaryOffset record."""
     return _record(OP_SUMMARY_OFFSET, _U8.pack(opcode) + _U64.pack(start) + _U64.pack(length))

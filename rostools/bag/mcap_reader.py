@@ -210,6 +210,26 @@ class McapReader(BagReader):
             scan.start, scan.end = min(times), max(times)
         return scan
 
+    def extras(self) -> list[fmt.Attachment | fmt.Metadata]:
+        """The file's attachments and metadata records, in file order.
+
+        They lie outside chunks, so a walk over the top-level records finds them, summary or
+        not; a damaged one is skipped and noted.
+        """
+        found: list[fmt.Attachment | fmt.Metadata] = []
+        for _, op, start, stop, _ in self._top(self._data_start, self._data_end):
+            if op in (fmt.OP_ATTACHMENT, fmt.OP_METADATA):
+                try:
+                    record = fmt.parse(op, self._mm, start, stop)
+                except fmt.McapFormatError as err:
+                    self.damaged(f"unreadable attachment or metadata record ({err})")
+                    continue
+                assert isinstance(record, fmt.Attachment | fmt.Metadata)
+                found.append(record)
+            elif op in (fmt.OP_DATA_END, fmt.OP_FOOTER):
+                break
+        return found
+
     def _chunk_fields(
         self, rec: int, start: int, stop: int, complete: bool = True
     ) -> tuple[str, int, int, int]:

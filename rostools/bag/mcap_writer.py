@@ -75,6 +75,8 @@ class McapWriter(BagWriter):
         self._index: dict[int, array[int]] = {}
         self._unsorted = False
         self._chunk_indexes: list[fmt.ChunkIndex] = []
+        self._attachment_indexes: list[bytes] = []
+        self._metadata_indexes: list[bytes] = []
         self._start = _MAX_TIME
         self._end = 0
         self._sink.write(fmt.MAGIC)
@@ -171,6 +173,26 @@ class McapWriter(BagWriter):
             entries = array("Q", [v for pair in pairs for v in pair])
         return little_endian(entries)
 
+    def add_extra(self, record: fmt.Attachment | fmt.Metadata) -> None:
+        """Write an attachment or a metadata record (outside chunks) and index it."""
+        self._check_open()
+        pos = self._sink.tell()
+        if isinstance(record, fmt.Attachment):
+            raw = fmt.encode_attachment(record)
+            index = fmt.encode_attachment_index(
+                fmt.AttachmentIndex(
+                    pos, len(raw), record.log_time, record.create_time, len(record.data),
+                    record.name, record.media_type,
+                )
+            )  # fmt: skip
+            self._attachment_indexes.append(index)
+        else:
+            raw = fmt.encode_metadata(record.name, record.metadata)
+            self._metadata_indexes.append(
+                fmt.encode_metadata_index(fmt.MetadataIndex(pos, len(raw), record.name))
+            )
+        self._sink.write(raw)
+
     def flush(self) -> None:
         """Close the open chunk and hand everything to the OS."""
         self._check_open()
@@ -194,6 +216,8 @@ class McapWriter(BagWriter):
                 (fmt.OP_CHANNEL, self._channel_records),
                 (fmt.OP_STATISTICS, [fmt.encode_statistics(self._statistics())]),
                 (fmt.OP_CHUNK_INDEX, [fmt.encode_chunk_index(i) for i in self._chunk_indexes]),
+                (fmt.OP_ATTACHMENT_INDEX, self._attachment_indexes),
+                (fmt.OP_METADATA_INDEX, self._metadata_indexes),
             ]
             for opcode, group in groups:
                 if group:
@@ -218,8 +242,8 @@ class McapWriter(BagWriter):
             message_count=total,
             schema_count=len(self._schema_records),
             channel_count=len(self._channel_records),
-            attachment_count=0,
-            metadata_count=0,
+            attachment_count=len(self._attachment_indexes),
+            metadata_count=len(self._metadata_indexes),
             chunk_count=len(self._chunk_indexes),
             message_start_time=self._start if total else 0,
             message_end_time=self._end if total else 0,

@@ -14,7 +14,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Final
 
-from rostools.bag.api import format_for_name, latched_before, open_bag, open_writer
+from rostools.bag.api import copy_extras, format_for_name, latched_before, open_bag, open_writer
 from rostools.bag.base import BagReader, BagWriter, Targets
 from rostools.bag.mcap_reader import McapReader
 from rostools.bag.model import BagUsageError, Connection, UnsupportedBagError
@@ -38,6 +38,9 @@ class CopyReport:
     messages_read: int
     messages_written: int
     connections: int
+    #: MCAP attachments and metadata records copied, and left out (see ``copy_extras``).
+    extras_copied: int = 0
+    extras_left_out: int = 0
 
 
 class FilterExpressionError(UsageError):
@@ -259,6 +262,7 @@ def _copy(
             read, written, conns = _pump(
                 reader, writer, stream, everything, eager, keep, progress, total
             )
+            extras = copy_extras(reader, writer, start, end)
         except BaseException:
             writer.abort()
             raise
@@ -271,6 +275,8 @@ def _copy(
         messages_read=read,
         messages_written=written,
         connections=conns,
+        extras_copied=extras[0],
+        extras_left_out=extras[1],
     )
 
 

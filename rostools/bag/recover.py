@@ -11,7 +11,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
-from rostools.bag.api import format_for_name, open_bag, open_writer
+from rostools.bag.api import copy_extras, format_for_name, open_bag, open_writer
 from rostools.bag.base import Targets
 from rostools.bag.model import BagDataLossError, BagUsageError, CompressionStats
 
@@ -75,6 +75,7 @@ def recover(
         try:
             out = Targets(writer, reader.connections)
             count = writer.write_many(reader.messages(), out)
+            copy_extras(reader, writer)
         except BaseException:
             writer.abort()
             raise

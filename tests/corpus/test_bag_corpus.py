@@ -296,3 +296,45 @@ def test_no_traceback_for_any_corpus_file() -> None:
                         pass
             except RostoolsError as err:
                 assert "\n" not in str(err)
+
+
+def conformance_extras() -> list[Path]:
+    return [p for p in conformance_files() if p.parent.name in ("OneAttachment", "OneMetadata")]
+
+
+@pytest.mark.parametrize("path", conformance_extras(), ids=lambda p: p.stem)
+def test_convert_keeps_mcap_attachments_and_metadata(path: Path, tmp_path: Path) -> None:
+    """What the suite says the file holds comes out of our copy, indexed for the mcap library."""
+    from mcap.reader import make_reader
+
+    from rostools.bag.ops import convert
+
+    expected = [
+        r for r in json.loads(path.with_suffix(".json").read_text())["records"]
+        if r["type"] in ("Attachment", "Metadata")
+    ]  # fmt: skip
+    report = convert(path, tmp_path / "out.mcap")
+    assert (report.extras_copied, report.extras_left_out) == (len(expected), 0)
+    with McapReader(tmp_path / "out.mcap") as reader:
+        extras = reader.extras()
+    got = []
+    for record in extras:
+        fields = record._asdict()
+        fields.pop("crc", None)
+        got.append(
+            {
+                "type": type(record).__name__,
+                "fields": sorted([k, to_json(v)] for k, v in fields.items()),
+            }
+        )
+    assert got == expected
+    with (tmp_path / "out.mcap").open("rb") as f:
+        theirs = make_reader(f)
+        indexed = [*theirs.iter_attachments(), *theirs.iter_metadata()]
+        stats = theirs.get_summary().statistics  # type: ignore[union-attr]
+    assert [(type(r).__name__, r.name) for r in indexed] == [
+        (type(r).__name__, r.name) for r in extras
+    ]
+    assert stats is not None and stats.attachment_count + stats.metadata_count == len(expected)
+    to_bag = convert(path, tmp_path / "out.bag")
+    assert (to_bag.extras_copied, to_bag.extras_left_out) == (0, len(expected))

@@ -10,7 +10,7 @@ import pytest
 import yaml
 
 from rostools.bag.api import bag_info, open_bag
-from tests.support.bagdata import STEP_NS, read_stream, write_play_bag, write_sample
+from tests.support.bagdata import STEP_NS, STRING_MD5, read_stream, write_play_bag, write_sample
 from tests.support.env import run_cli
 
 
@@ -177,3 +177,26 @@ def test_filter_latched_keeps_what_a_late_subscriber_had(tmp_path: Path, out: st
     assert plain.returncode == 0
     with open_bag(tmp_path / "plain.bag") as reader:
         assert [c.topic for c, _, _ in reader.messages()] == ["/chatter"] * 5
+
+
+def test_convert_says_what_a_bag_cannot_hold(tmp_path: Path) -> None:
+    from rostools.bag import mcap_format as fmt
+    from rostools.bag.mcap_writer import McapWriter
+
+    with McapWriter(tmp_path / "x.mcap") as writer:
+        conn = writer.add_connection("/s", "std_msgs/String", STRING_MD5, "string data\n")
+        writer.write(conn, 10, b"\x01\x00\x00\x00x")
+        writer.add_extra(fmt.Metadata("robot", {"name": "r2"}))
+    done = run_cli("bag", "convert", str(tmp_path / "x.mcap"), str(tmp_path / "x.bag"))
+    assert done.returncode == 0, done.stderr
+    assert "left out 1 MCAP attachment/metadata record(s): a .bag has no place for them" in (
+        done.stderr
+    )
+    again = run_cli(
+        "bag", "convert", str(tmp_path / "x.mcap"), str(tmp_path / "y.mcap"), "-F", "json"
+    )
+    assert json.loads(again.stdout.splitlines()[-1])["extras_copied"] == 1
+    info = json.loads(run_cli("bag", "info", str(tmp_path / "y.mcap"), "-F", "json").stdout)
+    assert (info["attachments"], info["metadata"]) == (0, 1)
+    text = run_cli("bag", "info", str(tmp_path / "y.mcap")).stdout
+    assert re.search(r"^metadata:\s+1$", text, re.M)

@@ -121,12 +121,23 @@ def _report(fmt: Format, report: CopyReport) -> None:
         "messages_read": report.messages_read,
         "messages_written": report.messages_written,
         "connections": report.connections,
+        "extras_copied": report.extras_copied,
+        "extras_left_out": report.extras_left_out,
     }
     if fmt is Format.text:
         sys.stderr.write(
             f"wrote {report.messages_written} of {report.messages_read} messages to "
             f"{report.output} ({report.format}, {report.compression})\n"
         )
+        if report.extras_left_out:
+            sys.stderr.write(
+                f"left out {report.extras_left_out} MCAP attachment/metadata record(s): "
+                + (
+                    "a .bag has no place for them\n"
+                    if report.format == "bag"
+                    else "outside the time range\n"
+                )
+            )
     elif fmt is Format.json:
         import json
 

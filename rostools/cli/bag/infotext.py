@@ -63,7 +63,7 @@ def info_text(
         rows.append(("library", info.library))
     if info.start_ns is None or info.end_ns is None:
         rows.append(("size", human_size(info.size)))
-        return _table(rows)
+        return _table(rows + _extras_rows(info))
     start, end = info.start_ns / _NS, info.end_ns / _NS
     duration = end - start
     rows.append(("duration", duration_text(duration)))
@@ -72,15 +72,15 @@ def info_text(
     rows.append(("size", human_size(info.size)))
     rows.append(("messages", str(info.message_count)))
     rows += _compression_rows(info, duration)
-    if info.format == "mcap":
-        for label, count in (
-            ("attachments", info.attachment_count),
-            ("metadata", info.metadata_count),
-        ):
-            if count:
-                rows.append((label, str(count)))
+    rows += _extras_rows(info)
     rows += _type_and_topic_rows(info, frequencies or {})
     return _table(rows)
+
+
+def _extras_rows(info: BagInfo) -> list[tuple[str, str]]:
+    """MCAP attachments and metadata records, when there are any."""
+    counts = (("attachments", info.attachment_count), ("metadata", info.metadata_count))
+    return [(label, str(n)) for label, n in counts if n and info.format == "mcap"]
 
 
 def _compression_rows(info: BagInfo, duration: float) -> list[tuple[str, str]]:
@@ -166,6 +166,8 @@ def info_data(
     if any(c.compression != "none" for c in info.compression):
         data |= {"uncompressed": info.uncompressed_size, "compressed": info.compressed_size}
     data["chunks"] = info.chunk_count
+    if info.format == "mcap":
+        data |= {"attachments": info.attachment_count, "metadata": info.metadata_count}
     data["types"] = [{"type": k, "md5": v} for k, v in sorted(info.types.items())]
     topics = []
     for t in info.topics:

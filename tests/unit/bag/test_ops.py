@@ -9,7 +9,7 @@ import pytest
 from rostools.bag import ops
 from rostools.bag.api import bag_info, open_bag, open_writer
 from rostools.bag.model import BagUsageError, UnsupportedBagError
-from tests.support.bagdata import STEP_NS, headers, read_stream, write_sample
+from tests.support.bagdata import STEP_NS, STRING_MD5, headers, read_stream, write_sample
 
 
 @pytest.mark.parametrize(
@@ -163,3 +163,34 @@ def test_compress_and_decompress(tmp_path: Path, name: str, kind: str) -> None:
     assert read_stream(packed) == read_stream(plain) == sample.stream
     with open_bag(packed) as reader:
         assert reader.format == Path(name).suffix[1:]
+
+
+def test_mcap_extras_follow_filter_recover_and_compress(tmp_path: Path) -> None:
+    from rostools.bag import mcap_format as fmt
+    from rostools.bag.mcap_reader import McapReader
+    from rostools.bag.mcap_writer import McapWriter
+    from rostools.bag.recover import recover
+
+    src = tmp_path / "src.mcap"
+    with McapWriter(src) as writer:
+        conn = writer.add_connection("/s", "std_msgs/String", STRING_MD5, "string data\n")
+        writer.add_extra(fmt.Attachment(15, 1, "calib.yaml", "text/yaml", b"k: 1\n", 0))
+        writer.add_extra(fmt.Metadata("robot", {"name": "r2"}))
+        for t in (10, 20, 30):
+            writer.write(conn, t, b"\x01\x00\x00\x00x")
+        writer.add_extra(fmt.Attachment(25, 2, "map.pgm", "image/x-portable-graymap", b"P5", 0))
+
+    def names(path: Path) -> list[str]:
+        with McapReader(path) as reader:
+            return [r.name for r in reader.extras()]
+
+    assert names(src) == ["calib.yaml", "robot", "map.pgm"]
+    cut = ops.filter_bag(src, tmp_path / "cut.mcap", start=10, end=20)
+    assert (cut.extras_copied, cut.extras_left_out) == (2, 1)  # map.pgm was logged at 25
+    assert names(tmp_path / "cut.mcap") == ["calib.yaml", "robot"]
+    ops.compress(src, tmp_path / "lz4.mcap", "lz4")
+    assert names(tmp_path / "lz4.mcap") == names(src)
+    raw = src.read_bytes()
+    (tmp_path / "unfinished.mcap").write_bytes(raw[: raw.rindex(fmt.encode_data_end())])
+    recover(tmp_path / "unfinished.mcap", tmp_path / "recovered.mcap")
+    assert names(tmp_path / "recovered.mcap") == names(src)

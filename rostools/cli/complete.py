@@ -193,6 +193,29 @@ class Completer:
         pubs, subs, _ = self._state()
         return [(t, "") for t in sorted({t for t, _ in pubs} | {t for t, _ in subs})]
 
+    def topic_fields(self) -> Candidates:
+        """``topic echo /odom/<TAB>``: topics, then the fields of a topic's message type."""
+        topics = self.topics()
+        base = max((t for t, _ in topics if self.cur.startswith(t + "/")), key=len, default=None)
+        if base is None:
+            return topics
+        from rostools.errors import RostoolsError
+        from rostools.msgs.store import TypeStore
+
+        store = TypeStore.default()
+        path = self.cur[len(base) + 1 :].split("/")[:-1]
+        try:
+            spec = store.msg(dict(self._ask("getTopicTypes") or [])[base])
+            for name in path:  # only into single messages: an array needs an index first
+                field = next(f for f in spec.fields if f.name == name)
+                if field.is_builtin or field.is_array:
+                    return []
+                spec = store.msg(field.base)
+        except (KeyError, StopIteration, RostoolsError, ValueError):
+            return []
+        prefix = "/".join([base, *path])
+        return [(f"{prefix}/{f.name}", f.type) for f in spec.fields]
+
     def services(self) -> Candidates:
         """Services with a provider."""
         return [(s, "") for s in sorted({s for s, _ in self._state()[2]})]
@@ -279,6 +302,7 @@ class Completer:
 
 _KINDS: dict[str, Callable[[Completer], Candidates]] = {
     "topic": Completer.topics,
+    "topic_field": Completer.topic_fields,
     "service": Completer.services,
     "node": Completer.nodes,
     "param": Completer.params,

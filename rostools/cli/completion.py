@@ -57,6 +57,8 @@ KINDS: dict[tuple[str, ...] | str, str] = {
     ("param", "name"): "param",
     ("param", "file"): "files yaml",
     ("node", "namespace"): "node",
+    ("topic", "echo", "topic"): "topic_field",
+    ("topic", "type", "topic"): "topic_field",
     ("topic", "msg_type"): "topic_type",
     ("topic", "args"): "message",
     ("service", "values"): "request",

@@ -36,6 +36,8 @@ def graph(rostools_master: str, cli_env: dict[str, str]) -> Iterator[dict[str, s
     procs = [
         Proc([sys.executable, "-m", "rostools", "topic", "pub", "-r", "5", "/chatter_demo",
               "std_msgs/String", "data: hi"], env=cli_env),
+        Proc([sys.executable, "-m", "rostools", "topic", "pub", "-r", "5", "/pose_demo",
+              "geometry_msgs/PoseStamped", "{}"], env=cli_env),
         Proc([sys.executable, str(ROOT / "tests/support/rt_nodes/rt_services.py")], env=cli_env),
     ]  # fmt: skip
     try:
@@ -50,7 +52,8 @@ def _registered(uri: str) -> bool:
     import xmlrpc.client
 
     pubs, _, services = xmlrpc.client.ServerProxy(uri).getSystemState("/t")[2]
-    return any(t == "/chatter_demo" for t, _ in pubs) and any(
+    topics = {t for t, _ in pubs}
+    return {"/chatter_demo", "/pose_demo"} <= topics and any(
         s == "/add_two_ints" for s, _ in services
     )
 
@@ -81,6 +84,11 @@ def test_live_names_types_and_templates(
     )
     assert sh.complete("rostools topic pub /chatter_demo std_msgs/String ") == (
         "rostools topic pub /chatter_demo std_msgs/String {data: ''}"
+    )
+    # field paths, as topic echo and topic type take them
+    assert sh.complete("rostools topic echo /pose_demo/po") == "rostools topic echo /pose_demo/pose"
+    assert sh.complete("rostools topic type /pose_demo/pose/orie") == (
+        "rostools topic type /pose_demo/pose/orientation"
     )
     assert sh.complete("rostools service call /add_t") == "rostools service call /add_two_ints"
     assert sh.complete("rostools service call /add_two_ints ") == (

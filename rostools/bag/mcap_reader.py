@@ -217,6 +217,9 @@ class McapReader(BagReader):
         not; a damaged one is skipped and noted.
         """
         found: list[fmt.Attachment | fmt.Metadata] = []
+        info = self.info()
+        if not info.attachment_count and not info.metadata_count:
+            return found  # the statistics (or the scan) say there are none: skip the walk
         for _, op, start, stop, _ in self._top(self._data_start, self._data_end):
             if op in (fmt.OP_ATTACHMENT, fmt.OP_METADATA):
                 try:

@@ -82,25 +82,53 @@ async def run_core(address: Address, ready: Callable[[Master, str], None]) -> No
     loop = asyncio.get_running_loop()
     for sig in (signal.SIGINT, signal.SIGTERM):
         loop.add_signal_handler(sig, master.stopped.set)
-    rosout = await start_rosout(f"http://127.0.0.1:{master.port}/", address.advertise)
-    step_aside = asyncio.create_task(_close_when_replaced(rosout))
+    rosout = _Rosout(master, address.advertise)
+    await rosout.start()
     try:
         ready(master, run_id)
         await master.wait()
     finally:
         for sig in (signal.SIGINT, signal.SIGTERM):
             loop.remove_signal_handler(sig)
-        step_aside.cancel()
-        if not rosout.shutdown_requested.is_set():
-            await rosout.close()
+        await rosout.stop()
         await master.stop()
 
 
-async def _close_when_replaced(node: Node) -> None:
-    # Another /rosout (a real one, say) registered and the master told ours to go: leave as
-    # roscpp's rosout would, rather than keep serving connections the master has forgotten.
-    await node.shutdown_requested.wait()
-    await node.close()
+class _Rosout:
+    """roscore's /rosout, kept as roscore's launch file keeps it.
+
+    Killed (``node kill``), it is started again, as roslaunch respawns it. Replaced by another
+    node named /rosout (a real rosout, say), it leaves for good, as roscpp's rosout would,
+    rather than keep serving connections the master has forgotten.
+    """
+
+    def __init__(self, master: Master, host: str) -> None:
+        self.master = master
+        self.uri = f"http://127.0.0.1:{master.port}/"
+        self.host = host
+        self.node: Node | None = None
+        self._watch: asyncio.Task[None] | None = None
+
+    async def start(self) -> None:
+        """Start the node and watch for ``shutdown`` calls to it."""
+        self.node = await start_rosout(self.uri, self.host)
+        self._watch = asyncio.create_task(self._respawn())
+
+    async def _respawn(self) -> None:
+        while self.node is not None:
+            await self.node.shutdown_requested.wait()
+            await self.node.close()
+            self.node = None
+            assert self.master.api is not None
+            if "/rosout" not in self.master.api.registry.nodes:  # killed, not replaced
+                self.node = await start_rosout(self.uri, self.host)
+
+    async def stop(self) -> None:
+        """Stop watching and close the node."""
+        if self._watch is not None:
+            self._watch.cancel()
+        if self.node is not None and not self.node.shutdown_requested.is_set():
+            await self.node.close()
 
 
 async def start_rosout(master_uri: str, host: str) -> Node:

@@ -141,3 +141,21 @@ def test_core_rosout_steps_aside_for_a_new_rosout(rostools_master: str) -> None:
     assert "/rosout_agg" not in dict(publishers)
     assert dict(subscribers)["/rosout"] == ["/rosout"]  # ours took none of the newcomer's away
     assert master.lookupNode("/probe", "/rosout")[2] == "http://127.0.0.1:9/"
+
+
+def test_core_rosout_comes_back_after_node_kill(
+    rostools_master: str, cli_env: dict[str, str]
+) -> None:
+    """roscore's launch file respawns rosout; so does rostools core."""
+    master = xmlrpc.client.ServerProxy(rostools_master)
+    old_uri = master.lookupNode("/probe", "/rosout")[2]
+    killed = run_cli("node", "kill", "/rosout", env=cli_env)
+    assert killed.returncode == 0, killed.stderr
+
+    def respawned() -> bool:
+        code, _, uri = master.lookupNode("/probe", "/rosout")
+        return code == 1 and uri != old_uri
+
+    wait_for(respawned, 10, "a new /rosout")
+    publishers = dict(master.getSystemState("/probe")[2][0])
+    assert publishers["/rosout_agg"] == ["/rosout"]

@@ -200,3 +200,16 @@ def test_graph_matches_rostopic(any_master: MasterInfo, graph: dict[str, Proc]) 
     )
     everything = ours(any_master, "graph", "--all").stdout
     assert "    └── /rosout [rosgraph_msgs/Log] ← /listener, /talker\n" in everything
+
+
+def test_rosout_comes_back_after_a_real_rosnode_kill(any_master: MasterInfo) -> None:
+    """roscore respawns its rosout; rostools core does the same (a new node URI each time)."""
+
+    def uri() -> str:
+        return ours(any_master, "list", "-u").stdout
+
+    before = uri()
+    killed = rosnode(any_master, "kill", "/rosout")
+    assert killed.returncode == 0 and "killed" in killed.stdout, killed.stderr
+    wait_for(lambda: uri() not in ("", before), 20, "a new /rosout")
+    assert ours(any_master, "list").stdout == "/rosout\n"

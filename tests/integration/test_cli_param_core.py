@@ -123,9 +123,16 @@ def test_namespace_and_master_uri_option(rostools_master: str, cli_env: dict[str
     )
 
 
+def rosout_ready(master: xmlrpc.client.ServerProxy) -> bool:
+    """Whether the core's /rosout has made its last registration (a logger service)."""
+    services = dict(master.getSystemState("/probe")[2][2])
+    return services.get("/rosout/set_logger_level") == ["/rosout"]
+
+
 def test_core_rosout_steps_aside_for_a_new_rosout(rostools_master: str) -> None:
     """Another node registering as /rosout makes the master shut ours down; ours then leaves."""
     master = xmlrpc.client.ServerProxy(rostools_master)
+    wait_for(lambda: rosout_ready(master), 10, "the core's /rosout to finish registering")
     old_uri = master.lookupNode("/probe", "/rosout")[2]
     master.registerSubscriber("/rosout", "/rosout", "rosgraph_msgs/Log", "http://127.0.0.1:9/")
 
@@ -148,6 +155,7 @@ def test_core_rosout_comes_back_after_node_kill(
 ) -> None:
     """roscore's launch file respawns rosout; so does rostools core."""
     master = xmlrpc.client.ServerProxy(rostools_master)
+    wait_for(lambda: rosout_ready(master), 10, "the core's /rosout to finish registering")
     old_uri = master.lookupNode("/probe", "/rosout")[2]
     killed = run_cli("node", "kill", "/rosout", env=cli_env)
     assert killed.returncode == 0, killed.stderr

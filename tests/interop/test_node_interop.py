@@ -208,6 +208,11 @@ def test_rosout_comes_back_after_a_real_rosnode_kill(any_master: MasterInfo) -> 
     def uri() -> str:
         return ours(any_master, "list", "-u").stdout
 
+    def settled() -> bool:  # rosout's last registration is a logger service
+        listed = run_cli("service", "list", env=any_master.cli_env).stdout
+        return "/rosout/set_logger_level" in listed
+
+    wait_for(settled, 20, "rosout to finish starting")
     before = uri()
     killed = rosnode(any_master, "kill", "/rosout")
     assert killed.returncode == 0 and "killed" in killed.stdout, killed.stderr

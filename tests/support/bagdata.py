@@ -120,8 +120,6 @@ def write_play_bag(path: Path, compression: str | None = None) -> None:
 
 def first_chunk_data(raw: bytes) -> tuple[int, int]:
     """(offset, length) of the data of a ``.bag``'s first chunk, the record after its header."""
-    import struct
-
     pos = 13  # after "#ROSBAG V2.0\n"
     for _ in range(2):  # skip the bag header record, then stop at the chunk's data
         header_len = struct.unpack_from("<I", raw, pos)[0]

@@ -7,6 +7,11 @@ from pathlib import Path
 
 import pytest
 
+# Nodes that tests start in this process give out and bind loopback (rosgraph's rules would
+# otherwise give out this machine's name and listen on every interface).
+os.environ.pop("ROS_HOSTNAME", None)
+os.environ["ROS_IP"] = "127.0.0.1"
+
 
 @pytest.fixture
 def cli_env(tmp_path: Path) -> dict[str, str]:
@@ -14,6 +19,7 @@ def cli_env(tmp_path: Path) -> dict[str, str]:
     env = {k: v for k, v in os.environ.items() if not k.startswith("ROS")}
     env["HOME"] = str(tmp_path / "home")
     env["ROS_MASTER_URI"] = "http://127.0.0.1:9"  # nothing listens on the discard port
+    env["ROS_IP"] = "127.0.0.1"  # traffic stays on loopback
     env.pop("ROSTOOLS_MSG_PATH", None)
     env["ROS_PACKAGE_PATH"] = ""  # the built-in types only, whatever this machine has
     return env

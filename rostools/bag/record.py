@@ -432,8 +432,8 @@ class Recorder:
                 if time.monotonic() >= next_poll:
                     try:
                         await self._poll()
-                    except RostoolsError as err:
-                        log.warning("recording goes on; the master did not answer: %s", err)
+                    except RostoolsError as err:  # the node says once that the master is gone
+                        log.debug("recording goes on; the master did not answer: %s", err)
                     next_poll = time.monotonic() + POLL_PERIOD
                 if tick is not None:
                     tick(self)

@@ -18,6 +18,7 @@ if TYPE_CHECKING:
     from collections.abc import Awaitable, Callable
 
     from rostools.graph.masterapi import MasterProxy
+    from rostools.graph.notice import Notice
     from rostools.msgs.store import TypeStore
 
 DEFAULT_MASTER_URI = "http://localhost:11311"
@@ -68,15 +69,29 @@ def master(ctx: typer.Context, tool: str) -> MasterProxy:
     return MasterProxy(settings(ctx).resolved_master_uri(), caller_id)
 
 
-def node_session(ctx: typer.Context, main: Callable[[Any, Any], Awaitable[T]], name: str) -> T:
+def node_session(
+    ctx: typer.Context,
+    main: Callable[[Any, Any], Awaitable[T]],
+    name: str,
+    fmt: Format = Format.text,
+) -> T:
     """Run ``main(node, stop)`` as an anonymous node named after ``name``.
 
-    The command line's remapping arguments (``__name:=``, ``a:=b``, ...) apply to it.
+    The command line's remapping arguments (``__name:=``, ``a:=b``, ...) apply to it. The
+    node's notices go to stderr; a stream printed with ``fmt`` json also carries them as
+    ``{"event": ...}`` objects.
     """
+    from rostools.graph.notice import to_stderr
     from rostools.graph.session import run_node
 
+    def notify(notice: Notice) -> None:
+        to_stderr(notice)
+        if fmt is Format.json:
+            sys.stdout.write(json.dumps(notice.as_json()) + "\n")
+            sys.stdout.flush()
+
     s = settings(ctx)
-    return run_node(main, s.resolved_master_uri(), name, remappings=s.remappings)
+    return run_node(main, s.resolved_master_uri(), name, remappings=s.remappings, notify=notify)
 
 
 def type_store(msg_paths: list[Path] | None = None) -> TypeStore:

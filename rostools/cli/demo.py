@@ -82,8 +82,9 @@ class Graph:
             req = codec.decode("rospy_tutorials/AddTwoIntsRequest", request)
             return answer(req.a + req.b).serialize()
 
-        talker = await Node("talker", self.master_uri).start()
-        server = await Node("add_two_ints_server", self.master_uri).start()
+        # the demo's master is loopback-only, so its nodes are too, whatever the host's name
+        talker = await Node("talker", self.master_uri, host="127.0.0.1").start()
+        server = await Node("add_two_ints_server", self.master_uri, host="127.0.0.1").start()
         try:
             pub = await talker.advertise("/chatter", TopicType.of(store, "std_msgs/String"))
             await server.advertise_service("/add_two_ints", srv_type, add)
@@ -122,7 +123,8 @@ def demo(
     from rostools.master.server import MasterThread
 
     with MasterThread() as master:
-        env = dict(os.environ, ROS_MASTER_URI=master.uri)
+        env = {k: v for k, v in os.environ.items() if k != "ROS_HOSTNAME"}
+        env.update(ROS_MASTER_URI=master.uri, ROS_IP="127.0.0.1")
         sys.stdout.write(
             f"rostools demo: a master at {master.uri} (in this process), a talker on /chatter,\n"
             "an /add_two_ints service and /demo parameters. Each step runs the real command.\n"

@@ -16,6 +16,7 @@ import time
 from collections.abc import Callable
 from typing import TYPE_CHECKING, Any, Protocol
 
+from rostools.graph.notice import Failure
 from rostools.wire.header import MAX_HEADER_LENGTH
 from rostools.wire.tcpros import BIG_FRAME, FrameError, FrameReader, frame_prefix, parse_header
 
@@ -223,6 +224,8 @@ class InboundConnection(asyncio.BufferedProtocol):
         self.bytes_received = 0
         self.messages_received = 0
         self.peer = "?"
+        #: Why we dropped the connection, when we did.
+        self.failure: Failure | None = None
 
     def connection_made(self, transport: asyncio.BaseTransport) -> None:
         """Asyncio: connected."""
@@ -254,7 +257,7 @@ class InboundConnection(asyncio.BufferedProtocol):
                 self._drop(str(err))
                 return
             if "error" in header:
-                self._drop(f"refused: {header['error']}")
+                self._drop(f"it refused us: {header['error']}")
                 return
             if "md5sum" not in header or "type" not in header:
                 self._drop("reply header lacks md5sum or type")
@@ -270,9 +273,11 @@ class InboundConnection(asyncio.BufferedProtocol):
         self.subscriber.frames_received(frames, self, now)
 
     def _drop(self, reason: str) -> None:
-        log.warning(
+        # the subscriber reports it once (a publisher that keeps refusing is not a flood)
+        log.debug(
             "subscription to %s from %s: %s", self.subscriber.topic, self.publisher_uri, reason
         )
+        self.failure = Failure(reason, dropped=self.header is not None)
         self.close()
 
     def close(self) -> None:

@@ -8,59 +8,30 @@ with the master. ``close()`` unregisters all of it.
 from __future__ import annotations
 
 import asyncio
-import ipaddress
 import logging
 import os
-import socket
 import xmlrpc.client
-from collections.abc import Callable, Mapping
+from collections.abc import Callable
 from typing import Any
-from urllib.parse import urlsplit
 
 from rostools.errors import RostoolsError, UnreachableError
 from rostools.graph.connection import Handler, ServerConnection
+from rostools.graph.notice import Notice, to_stderr
 from rostools.graph.publisher import Publisher
 from rostools.graph.service import Handler as ServiceHandler
 from rostools.graph.service import ServiceServer, ServiceType
 from rostools.graph.subscriber import FramesCallback, Subscriber
 from rostools.graph.topic import ANY, TopicType
+from rostools.graph.watch import MasterWatch
 from rostools.graph.xmlrpc import XmlRpcServer, call
 from rostools.names import anonymous, canonicalize, make_global_ns, resolve, ros_namespace
+from rostools.network import bind_address, host_name
 from rostools.wire.tcpros import error_header
 
 log = logging.getLogger(__name__)
 
 #: How long registration calls to the master may take.
 MASTER_TIMEOUT = 5.0
-
-
-def choose_host(master_uri: str, env: Mapping[str, str] | None = None) -> str:
-    """The host this node gives out, by ROS's rules, kept on loopback for a local master.
-
-    ``ROS_HOSTNAME``, then ``ROS_IP``; else, when the master is on this machine, 127.0.0.1
-    (nothing remote needs to reach us); else the machine's host name.
-    """
-    env = os.environ if env is None else env
-    if env.get("ROS_HOSTNAME"):
-        return env["ROS_HOSTNAME"]
-    if env.get("ROS_IP"):
-        return env["ROS_IP"]
-    master_host = urlsplit(master_uri).hostname or "localhost"
-    if master_host == "localhost" or master_host.startswith("127."):
-        return "127.0.0.1"
-    name = socket.gethostname()
-    return "127.0.0.1" if name == "localhost" or name.startswith("127.") else name
-
-
-def bind_address(host: str) -> str:
-    """Loopback hosts bind loopback; anything else binds every interface."""
-    try:
-        if ipaddress.ip_address(host).is_loopback:
-            return host
-    except ValueError:
-        if host == "localhost":
-            return "127.0.0.1"
-    return "0.0.0.0"  # noqa: S104 - others must reach a node that gives out a public host
 
 
 class Node:
@@ -86,7 +57,7 @@ class Node:
             name, anonymous_name = args.pop("__name"), False
         ns = args.pop("__ns", ns)
         master_uri = args.pop("__master", master_uri)
-        host = args.pop("__hostname", None) or args.pop("__ip", None) or host
+        given: dict[str, str] = {k: args.pop(k) for k in ("__hostname", "__ip") if k in args}
         args.pop("__log", None)
         base = anonymous(name.strip("/")) if anonymous_name else name.strip("/")
         ns = make_global_ns(ns) if ns else ros_namespace()
@@ -94,7 +65,8 @@ class Node:
             canonicalize(ns + "/" + base) if not name.startswith("/") else canonicalize(name)
         )
         self.master_uri = master_uri
-        self.host = host or choose_host(master_uri)
+        # by rosgraph's rules: a __hostname:=/__ip:= argument, the given host, then the environment
+        self.host = host_name(remappings=given) if given or not host else host
         #: ``_param:=value`` arguments, set as private parameters when the node starts.
         self.private_params = {k[1:]: v for k, v in args.items() if k.startswith("_")}
         self.remappings = {
@@ -107,8 +79,13 @@ class Node:
         self.services: dict[str, ServiceServer] = {}
         self.shutdown_requested = asyncio.Event()
         self.shutdown_reason = ""
+        #: Where the node's notices go (a peer it cannot reach, a master restart).
+        self.notify: Callable[[Notice], None] = to_stderr
         self._xmlrpc: XmlRpcServer | None = None
         self._tcpros: asyncio.base_events.Server | None = None
+        self._watch: asyncio.Task[None] | None = None
+        #: Set while the master does not answer (see ``MasterWatch``).
+        self.master_lost = False
         self._conn_ids = 0
         self.tcpros_port = 0
 
@@ -128,6 +105,7 @@ class Node:
             for key, text in self.private_params.items():
                 value = yaml.safe_load(text) if text else ""
                 await self.master_call("setParam", f"{self.name}/{key}", value)
+        self._watch = loop.create_task(MasterWatch(self).run())
         return self
 
     @property
@@ -147,6 +125,8 @@ class Node:
 
     async def close(self) -> None:
         """Unregister everything, close every connection and server."""
+        if self._watch is not None:
+            self._watch.cancel()
         calls: list[tuple[str, tuple[Any, ...]]] = []
         for topic in self.publishers:
             calls.append(("unregisterPublisher", (self.name, topic, self.uri)))
@@ -295,6 +275,10 @@ class Node:
             return [-1, "Error: bad call arity", 0]
         if not isinstance(params[0], str):
             return [-1, "caller_id must be a string", 0]
+        if method == "requestTopic":
+            pub = self.publishers.get(self.resolve(str(params[1])))
+            if pub is not None:
+                pub.contacted.add(params[0])  # it reaches us (see MasterWatch)
         return handler(*params[1:])
 
     def _shutdown(self, reason: Any) -> list[Any]:

@@ -37,6 +37,8 @@ class Publisher:
         self.latched: dict[Hashable, Frame] = {}
         self.seq = 0
         self.closed = False
+        #: Caller ids of the subscribers that reached us, connected or not.
+        self.contacted: set[str] = set()
 
     @property
     def subscriber_count(self) -> int:

@@ -1,7 +1,7 @@
 """Running a command as a short-lived node: start, stop on Ctrl-C/SIGTERM/shutdown, clean up.
 
 ``run_node(main, ...)`` gives ``main`` a started ``Node`` and a ``stop`` event that is set by
-SIGINT, SIGTERM or a ``shutdown`` call (``rosnode kill``); whatever happens, the node
+SIGINT, SIGTERM, SIGHUP or a ``shutdown`` call (``rosnode kill``); whatever happens, the node
 unregisters from the master before the process exits.
 """
 
@@ -15,6 +15,7 @@ from typing import TypeVar
 
 from rostools.errors import RostoolsError
 from rostools.graph.node import Node
+from rostools.graph.notice import Notice
 
 T = TypeVar("T")
 
@@ -39,24 +40,37 @@ async def first(*aws: Awaitable[object], timeout: float | None = None) -> int | 
     return None
 
 
+#: Signals that stop a command cleanly: Ctrl-C, ``kill``, and a closed terminal or SSH session.
+STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)
+
+
 def run_node(
     main: Callable[[Node, asyncio.Event], Awaitable[T]],
     master_uri: str,
     name: str = "rostools",
     anonymous_name: bool = True,
     remappings: dict[str, str] | None = None,
+    notify: Callable[[Notice], None] | None = None,
 ) -> T:
-    """Run ``main(node, stop)`` on a fresh event loop; the node is closed afterwards."""
+    """Run ``main(node, stop)`` on a fresh event loop; the node is closed afterwards.
+
+    ``notify`` receives the node's notices (default: one line each on stderr).
+
+    The stop signals stay caught until the node has unregistered, so a second Ctrl-C during
+    shutdown neither interrupts the unregistering nor prints a traceback.
+    """
 
     async def runner() -> T:
         node = Node(name, master_uri, anonymous_name=anonymous_name, remappings=remappings)
+        if notify is not None:
+            node.notify = notify
         try:
             await node.start()
         except OSError as err:
             raise RostoolsError(f"cannot open the node's sockets: {err.strerror or err}") from None
         loop = asyncio.get_running_loop()
         stop = asyncio.Event()
-        for sig in (signal.SIGINT, signal.SIGTERM):
+        for sig in STOP_SIGNALS:
             loop.add_signal_handler(sig, stop.set)
 
         async def on_shutdown() -> None:
@@ -68,8 +82,8 @@ def run_node(
             return await main(node, stop)
         finally:
             watcher.cancel()
-            for sig in (signal.SIGINT, signal.SIGTERM):
-                loop.remove_signal_handler(sig)
             await node.close()
+            for sig in STOP_SIGNALS:
+                loop.remove_signal_handler(sig)
 
     return asyncio.run(runner())

@@ -1,5 +1,7 @@
 """A topic subscriber: connects to every publisher, follows publisherUpdate, reconnects.
 
+A publisher it cannot reach is reported once (``Node.notify``), with the reason and a hint.
+
 Frames are handed to the callback in batches, as they came off the socket, with the arrival
 time: per-message work is the consumer's, in its own loop (hz at 200 kHz depends on it).
 """
@@ -9,12 +11,16 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import logging
+import time
 from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
 from rostools.graph.connection import Frame, InboundConnection
+from rostools.graph.notice import SET_ADDRESS, Failure, Notice, explain
 from rostools.graph.topic import TopicType
+from rostools.graph.watch import node_at
 from rostools.graph.xmlrpc import call
+from rostools.network import is_loopback, uri_host
 from rostools.wire.tcpros import MAX_FRAME, subscriber_header
 
 if TYPE_CHECKING:
@@ -25,6 +31,10 @@ log = logging.getLogger(__name__)
 FramesCallback = Callable[[list[Frame], InboundConnection, float], None]
 #: Waits between attempts to reach a publisher that is registered but not answering.
 RETRY_FIRST, RETRY_MAX = 0.2, 5.0
+#: A failure that may be a publisher on its way out is reported once it lasts this long (s).
+REPORT_AFTER = 1.0
+#: How long a TCP connect to a publisher may take: the OS's own wait is minutes.
+CONNECT_TIMEOUT = 5.0
 
 
 class Subscriber:
@@ -50,18 +60,31 @@ class Subscriber:
         self.tasks: dict[str, asyncio.Task[None]] = {}
         self.closed = False
         self.on_header: Callable[[InboundConnection], None] | None = None
+        #: Publishers whose live links predate a master restart (see ``master_restarted``).
+        self.orphans: set[str] = set()
 
     def update(self, uris: list[str]) -> None:
         """The publishers now (from registerSubscriber or publisherUpdate)."""
-        self.publishers = set(uris)
+        self.orphans -= set(uris)
+        # roscpp drops publishers no longer listed; those the master never listed stay
+        keep = set(uris) | (self.orphans & set(self.connections))
+        self.publishers = keep
         for uri in uris:
             if uri not in self.tasks and not self.closed:
                 task = asyncio.get_running_loop().create_task(self._follow(uri))
                 self.tasks[uri] = task
                 task.add_done_callback(self._forget_task)
         for uri in list(self.connections):
-            if uri not in self.publishers:
-                self.connections[uri].close()  # roscpp drops publishers no longer listed
+            if uri not in keep:
+                self.connections[uri].close()
+
+    def master_restarted(self) -> None:
+        """A new master knows none of our publishers: keep the live links it does not list.
+
+        rospy and roscpp publishers never register again, so the new master will not list
+        them; their connections stay until they close.
+        """
+        self.orphans = set(self.connections)
 
     def _forget_task(self, task: asyncio.Task[None]) -> None:
         for uri, known in list(self.tasks.items()):
@@ -69,30 +92,73 @@ class Subscriber:
                 del self.tasks[uri]
 
     async def _follow(self, uri: str) -> None:
-        """Stay connected to ``uri`` while it is listed as a publisher."""
+        """Stay connected to ``uri`` while it is listed as a publisher.
+
+        A publisher that cannot be reached is reported once, with the reason; we keep trying.
+        """
         delay = RETRY_FIRST
+        failing_since: float | None = None
+        reported = False
         while not self.closed and uri in self.publishers:
-            conn = await self._connect(uri)
-            if conn is not None:
+            result = await self._connect(uri)
+            if isinstance(result, InboundConnection):
                 delay = RETRY_FIRST
-                await conn.closed
+                await result.closed
                 self.connections.pop(uri, None)
+                if uri in self.orphans:  # no master lists it: nothing to reconnect to
+                    self.orphans.discard(uri)
+                    self.publishers.discard(uri)
+                    return
+                failure = result.failure
+                if failure is None:
+                    failing_since, reported = None, False
+            else:
+                failure = result
             if self.closed or uri not in self.publishers:
                 return
+            if failure is not None:
+                now = time.monotonic()
+                failing_since = failing_since or now
+                due = failure.lasting or now - failing_since >= REPORT_AFTER
+                if due and not reported and not self.node.master_lost:  # lists go stale then
+                    reported = True
+                    await self._report(uri, failure)
             await asyncio.sleep(delay)
             delay = min(delay * 2, RETRY_MAX)
 
-    async def _connect(self, uri: str) -> InboundConnection | None:
+    async def _report(self, uri: str, failure: Failure) -> None:
+        name = await node_at(self.node, uri, self.topic)
+        who = f"{name} at {uri}" if name else uri
+        hint = f"; {failure.hint}" if failure.hint else ""
+        what = "dropped the connection from" if failure.dropped else "cannot connect to"
+        self.node.notify(
+            Notice(
+                "peer_dropped" if failure.dropped else "peer_unreachable",
+                f"{what} {who} (publisher of {self.topic}): {failure.reason}{hint}",
+                {
+                    "topic": self.topic,
+                    "node": name,
+                    "uri": uri,
+                    "reason": failure.reason,
+                    "hint": failure.hint,
+                },
+            )
+        )
+
+    async def _connect(self, uri: str) -> InboundConnection | Failure:
+        host = uri_host(uri)
         try:
             code, message, proto = await call(
                 uri, "requestTopic", (self.node.name, self.topic, [["TCPROS"]])
             )
-        except Exception as err:  # noqa: BLE001 - any failure means: try again later
+        except Exception as err:  # noqa: BLE001 - any failure means: report, try again later
             log.debug("requestTopic %s at %s failed: %s", self.topic, uri, err)
-            return None
+            return explain(err, host)
         if code != 1 or not isinstance(proto, list) or len(proto) < 3 or proto[0] != "TCPROS":
             log.debug("requestTopic %s at %s: %s %s", self.topic, uri, code, message)
-            return None
+            return Failure(
+                f"it refused the topic: {message}", SET_ADDRESS if is_loopback(host) else ""
+            )
         host, port = str(proto[1]), int(proto[2])
         header = subscriber_header(
             self.node.name, self.topic, self.type.md5sum, self.type.type, self.type.definition,
@@ -100,17 +166,22 @@ class Subscriber:
         )  # fmt: skip
         loop = asyncio.get_running_loop()
         try:
-            _, conn = await loop.create_connection(
-                lambda: InboundConnection(self, uri, self.node.next_connection_id(), header),
-                host,
-                port,
+            _, conn = await asyncio.wait_for(
+                loop.create_connection(
+                    lambda: InboundConnection(self, uri, self.node.next_connection_id(), header),
+                    host,
+                    port,
+                ),
+                CONNECT_TIMEOUT,
             )
-        except OSError as err:
+        except (OSError, asyncio.TimeoutError) as err:
             log.debug("connecting to %s:%s for %s failed: %s", host, port, self.topic, err)
-            return None
+            failure = explain(err, host)
+            return Failure(f"its TCPROS port {host}:{port}: {failure.reason}", failure.hint,
+                           failure.lasting)  # fmt: skip
         if self.closed:
             conn.close()
-            return None
+            return Failure("closed")
         self.connections[uri] = conn
         return conn
 

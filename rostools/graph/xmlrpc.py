@@ -10,7 +10,9 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
+import email.utils
 import logging
+import time
 import xmlrpc.client
 from collections.abc import Callable
 from typing import Any
@@ -61,6 +63,18 @@ def handle_body(dispatch: Dispatch, body: bytes) -> bytes:
         return encode_fault(1, f"<class '{type(err).__name__}'>:{err}")
 
 
+_date_cache: tuple[int, str] = (0, "")
+
+
+def http_date() -> str:
+    """Now as an HTTP ``Date`` (made once a second: busy masters answer thousands of calls)."""
+    global _date_cache
+    now = int(time.time())
+    if _date_cache[0] != now:
+        _date_cache = (now, email.utils.formatdate(now, usegmt=True))
+    return _date_cache[1]
+
+
 class _Connection(asyncio.Protocol):
     def __init__(self, server: XmlRpcServer) -> None:
         self.server = server
@@ -85,7 +99,7 @@ class _Connection(asyncio.Protocol):
         try:
             while (message := self.parser.next_message()) is not None:
                 body = handle_body(self.server.dispatch, message.body)
-                transport.write(format_response(body, message.keep_alive))
+                transport.write(format_response(body, message.keep_alive, date=http_date()))
                 if self.server.after_call is not None:
                     self.server.after_call()
                 if not message.keep_alive:

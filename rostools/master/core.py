@@ -3,9 +3,7 @@
 from __future__ import annotations
 
 import asyncio
-import ipaddress
 import os
-import signal
 import uuid
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
@@ -14,10 +12,14 @@ from urllib.parse import urlsplit
 from rostools.errors import RostoolsError
 from rostools.graph.connection import Frame
 from rostools.graph.node import Node
+from rostools.graph.session import STOP_SIGNALS
 from rostools.master.server import Master
 from rostools.msgs.store import BuiltinSource, TypeStore
+from rostools.network import ANY_ADDRESS, address_override, bind_address, host_name, is_loopback
 
 DEFAULT_PORT = 11311
+#: ``--host`` values that mean every interface.
+_EVERYWHERE = ("0.0.0.0", "::")  # noqa: S104
 #: What roscore publishes about itself; values end in a newline as ``rosversion`` prints them.
 ROSDISTRO = "noetic\n"
 ROSVERSION = "1.16.0\n"
@@ -40,10 +42,11 @@ class Address:
 def choose_address(
     host: str | None, port: int | None, env: Mapping[str, str] | None = None
 ) -> Address:
-    """Apply ``--host``/``--port``, ``ROS_IP``, ``ROS_HOSTNAME`` and ``ROS_MASTER_URI``.
+    """Apply ``--host``/``--port``, ``ROS_HOSTNAME``, ``ROS_IP`` and ``ROS_MASTER_URI``.
 
-    Loopback unless told otherwise. A host name (not an address) listens on every interface,
-    as a master that others must reach by name has to.
+    With none of them, loopback only, as DESIGN.md asks. Otherwise rosmaster's rules: the
+    name is given out as it is, and the master listens on every interface unless the name
+    is a loopback one. ``0.0.0.0`` listens everywhere and gives out this host's name.
     """
     if env is None:
         env = os.environ
@@ -52,21 +55,18 @@ def choose_address(
             urlsplit(env.get("ROS_MASTER_URI", "")).port if env.get("ROS_MASTER_URI") else None
         )
         port = uri_port or DEFAULT_PORT
-    name = host or env.get("ROS_IP") or env.get("ROS_HOSTNAME") or "127.0.0.1"
-    if name == "localhost":
-        bind = "127.0.0.1"
-    else:
-        try:
-            ipaddress.ip_address(name)
-            bind = name
-        except ValueError:
-            bind = "0.0.0.0"  # noqa: S104 - a named host must be reachable by that name
-    advertise = env.get("ROS_HOSTNAME") or ("localhost" if name == "127.0.0.1" else name)
-    return Address(bind, port, advertise)
+    name = host or address_override(env)
+    if not name:
+        return Address("127.0.0.1", port, "localhost")
+    if name in _EVERYWHERE:
+        named = address_override(env)
+        advertise = named if named and named not in _EVERYWHERE else host_name({})
+        return Address(ANY_ADDRESS, port, advertise)
+    return Address(bind_address(name), port, name)
 
 
 async def run_core(address: Address, ready: Callable[[Master, str], None]) -> None:
-    """Serve until SIGINT, SIGTERM or a ``shutdown`` call."""
+    """Serve until SIGINT, SIGTERM, SIGHUP or a ``shutdown`` call."""
     master = Master(address.bind, address.port, address.advertise)
     try:
         await master.start()
@@ -80,7 +80,7 @@ async def run_core(address: Address, ready: Callable[[Master, str], None]) -> No
     for key, value in (("/run_id", run_id), ("/rosdistro", ROSDISTRO), ("/rosversion", ROSVERSION)):
         master.api.params.set(key, value)
     loop = asyncio.get_running_loop()
-    for sig in (signal.SIGINT, signal.SIGTERM):
+    for sig in STOP_SIGNALS:
         loop.add_signal_handler(sig, master.stopped.set)
     rosout = _Rosout(master, address.advertise)
     await rosout.start()
@@ -88,10 +88,10 @@ async def run_core(address: Address, ready: Callable[[Master, str], None]) -> No
         ready(master, run_id)
         await master.wait()
     finally:
-        for sig in (signal.SIGINT, signal.SIGTERM):
-            loop.remove_signal_handler(sig)
         await rosout.stop()
         await master.stop()
+        for sig in STOP_SIGNALS:  # caught until now: a second Ctrl-C must not cut the stop short
+            loop.remove_signal_handler(sig)
 
 
 class _Rosout:
@@ -104,7 +104,9 @@ class _Rosout:
 
     def __init__(self, master: Master, host: str) -> None:
         self.master = master
-        self.uri = f"http://127.0.0.1:{master.port}/"
+        # it calls the master on loopback, which a master listening anywhere also answers
+        local = master.host if is_loopback(master.host) else "127.0.0.1"
+        self.uri = f"http://{local}:{master.port}/"
         self.host = host
         self.node: Node | None = None
         self._watch: asyncio.Task[None] | None = None

@@ -16,6 +16,10 @@ from rostools.master.api import MasterAPI
 from rostools.wire.xmlrpc import encode_result
 
 _READ_ONLY = frozenset(("getSystemState", "getTopicTypes", "getPublishedTopics", "getUri"))
+#: Calls that change nothing the cache holds (nodes poll lookupNode to notice a restart).
+_QUERIES = frozenset(
+    ("lookupNode", "lookupService", "getPid", "getParam", "hasParam", "getParamNames")
+)
 
 
 class Master:
@@ -53,7 +57,8 @@ class Master:
         api = self.api
         assert api is not None
         if method not in _READ_ONLY:
-            self._cache.clear()  # anything else may change the state the cache was made from
+            if method not in _QUERIES:
+                self._cache.clear()  # anything else may change the state the cache holds
             return api.call(method, params)
         key = (method, params[1:])
         cached = self._cache.get(key)

@@ -109,11 +109,18 @@ def encode_fault(code: int, message: str) -> bytes:
     return xmlrpc.client.dumps(xmlrpc.client.Fault(code, message), methodresponse=True).encode()
 
 
-def format_response(body: bytes, keep_alive: bool, status: str = "200 OK") -> bytes:
-    """A complete HTTP response. XmlRpc++ keeps the connection only after ``HTTP/1.1 200 OK``."""
+def format_response(
+    body: bytes, keep_alive: bool, status: str = "200 OK", date: str | None = None
+) -> bytes:
+    """A complete HTTP response. XmlRpc++ keeps the connection only after ``HTTP/1.1 200 OK``.
+
+    ``date`` (an RFC 7231 date) goes in a ``Date`` header, as rosmaster's Python server sends
+    one: a client can tell how far our clock is from its own.
+    """
     connection = "keep-alive" if keep_alive else "close"
+    dated = f"Date: {date}\r\n" if date else ""
     head = (
-        f"HTTP/1.1 {status}\r\nServer: rostools\r\nContent-Type: text/xml\r\n"
+        f"HTTP/1.1 {status}\r\nServer: rostools\r\n{dated}Content-Type: text/xml\r\n"
         f"Content-Length: {len(body)}\r\nConnection: {connection}\r\n\r\n"
     )
     return head.encode("latin-1") + body

@@ -16,7 +16,8 @@ from tests.support.procs import Proc, free_port, master_answers, wait_for
 
 def test_core_prints_its_uri_sets_params_and_stops_on_sigterm(cli_env: dict[str, str]) -> None:
     port = free_port()
-    proc = Proc([sys.executable, "-m", "rostools", "core", "-p", str(port)], env=cli_env)
+    bare = {k: v for k, v in cli_env.items() if k != "ROS_IP"}  # a bare core: loopback only
+    proc = Proc([sys.executable, "-m", "rostools", "core", "-p", str(port)], env=bare)
     try:
         wait_for(lambda: master_answers(f"http://127.0.0.1:{port}/"), 15, "core")
         cli_env["ROS_MASTER_URI"] = f"http://127.0.0.1:{port}"

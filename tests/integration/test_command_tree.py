@@ -67,6 +67,7 @@ RECIPES: dict[str, list[str]] = {
     "bag play": ["{bag}", "-i", "-d", "0"],
     "bag record": ["/chatter_demo", "-l", "2", "-O", "{tmp}/rec.bag"],
     "completion install": ["fish"],
+    "doctor": [],
 }
 
 
@@ -101,7 +102,7 @@ def graph(tmp_path_factory: pytest.TempPathFactory) -> Iterator[tuple[dict[str, 
 
     tmp = tmp_path_factory.mktemp("tree")
     env = {k: v for k, v in os.environ.items() if not k.startswith("ROS")}
-    env |= {"HOME": str(tmp / "home"), "ROS_PACKAGE_PATH": ""}
+    env |= {"HOME": str(tmp / "home"), "ROS_PACKAGE_PATH": "", "ROS_IP": "127.0.0.1"}
     port = free_port()
     env["ROS_MASTER_URI"] = f"http://127.0.0.1:{port}"
     core = start_rostools_core(port, env)

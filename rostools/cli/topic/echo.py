@@ -247,7 +247,7 @@ def echo(
         return
     opts = _options(fmt, "", count, filter_expr, plot, nostr, noarr, clear, offset, width)
     result = node_session(
-        ctx, lambda node, stop: _live(node, stop, name, store, opts, timeout), "rostools_echo"
+        ctx, lambda node, stop: _live(node, stop, name, store, opts, timeout), "rostools_echo", fmt
     )
     if result == "timeout":
         wanted = f"{count} message(s)" if count else "a message"

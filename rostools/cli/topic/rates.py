@@ -85,7 +85,7 @@ class Meter:
 
 def _run(ctx: typer.Context, meter: Meter, sink: Any, report: Any) -> None:
     result = node_session(
-        ctx, lambda node, stop: meter.run(node, stop, sink, report), "rostools_rates"
+        ctx, lambda node, stop: meter.run(node, stop, sink, report), "rostools_rates", meter.fmt
     )
     if result == "timeout":
         raise TimeoutExpired(f"no message on {', '.join(meter.topics)} within {meter.timeout:g} s")

@@ -1,0 +1,159 @@
+"""A node's watch on the master: register again after a restart, and name silent subscribers.
+
+Neither rospy nor roscpp does either. After a roscore respawn their nodes stay invisible to
+everyone who starts later. A subscriber that cannot reach its publisher is never reported on
+the publisher's side. Ours notice both within a second or two and say so in one line.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import logging
+import time
+from typing import TYPE_CHECKING, Any
+
+from rostools.graph.notice import Notice, explain
+from rostools.graph.xmlrpc import call
+from rostools.network import uri_host
+
+if TYPE_CHECKING:
+    from rostools.graph.node import Node
+
+log = logging.getLogger(__name__)
+
+#: How often a node with registrations checks that the master still knows it (s): a
+#: restarted master has forgotten everything, and we register again within this and a call.
+WATCH_PERIOD = 0.5
+#: How long that check may take before the master counts as gone (s).
+WATCH_TIMEOUT = 1.0
+#: How long a subscriber registered for one of our topics may stay silent before we say so.
+SILENT_AFTER = 3.0
+#: How often we compare the master's subscribers with those that reached us (s).
+SUBSCRIBER_CHECK_PERIOD = 1.0
+
+
+class MasterWatch:
+    """Runs beside a node until it closes (``asyncio.create_task(MasterWatch(node).run())``)."""
+
+    def __init__(self, node: Node) -> None:
+        self.node = node
+        self.next_check = time.monotonic() + SUBSCRIBER_CHECK_PERIOD
+        #: (topic, subscriber) -> when we first saw it registered and silent
+        self.silent: dict[tuple[str, str], float] = {}
+        self.told: set[tuple[str, str]] = set()
+
+    async def run(self) -> None:
+        """Check every ``WATCH_PERIOD`` while the node has anything registered."""
+        node = self.node
+        while True:
+            await asyncio.sleep(WATCH_PERIOD)
+            if not (node.publishers or node.subscribers or node.services):
+                continue
+            try:
+                await self._check_master()
+                if node.publishers and time.monotonic() >= self.next_check:
+                    self.next_check = time.monotonic() + SUBSCRIBER_CHECK_PERIOD
+                    await self._check_subscribers()
+            except Exception as err:  # noqa: BLE001 - any failure: the master is gone for now
+                self._master_lost(err)
+
+    async def _check_master(self) -> None:
+        node = self.node
+        # -1 means this master never heard of us. Another URI under our name means we were
+        # replaced; then the master shuts us down itself.
+        code, _, _ = await call(
+            node.master_uri, "lookupNode", (node.name, node.name), WATCH_TIMEOUT
+        )
+        if code != 1:
+            await self.register_again()
+        elif node.master_lost:
+            node.notify(Notice("master_back", f"the master at {node.master_uri} is back"))
+        node.master_lost = False
+
+    def _master_lost(self, err: BaseException) -> None:
+        if self.node.master_lost:
+            return
+        self.node.master_lost = True
+        uri = self.node.master_uri
+        reason = explain(err, uri_host(uri)).reason
+        self.node.notify(
+            Notice(
+                "master_lost",
+                f"the master at {uri} does not answer ({reason}); carrying on, and "
+                "registering again when it is back",
+                {"uri": uri, "reason": reason},
+            )
+        )
+
+    async def register_again(self) -> None:
+        """Every publisher, subscriber and service, registered with a new master."""
+        node = self.node
+        subs = list(node.subscribers.values())
+        calls: list[tuple[str, tuple[Any, ...]]] = [
+            ("registerPublisher", (t, p.type.type, node.uri)) for t, p in node.publishers.items()
+        ]
+        calls += [("registerSubscriber", (s.topic, s.type.type, node.uri)) for s in subs]
+        calls += [("registerService", (n, v.uri, node.uri)) for n, v in node.services.items()]
+        for sub in subs:
+            sub.master_restarted()
+        multi = [{"methodName": m, "params": [node.name, *p]} for m, p in calls]
+        results = await call(node.master_uri, "system.multicall", (multi,), WATCH_TIMEOUT * 5)
+        first_sub = len(node.publishers)
+        for sub, result in zip(subs, results[first_sub : first_sub + len(subs)], strict=True):
+            if isinstance(result, list) and result and result[0][0] == 1:
+                sub.update([u for u in result[0][2] if isinstance(u, str)])
+        node.notify(
+            Notice(
+                "master_restarted",
+                f"the master at {node.master_uri} restarted; registered again "
+                f"({len(node.publishers)} publications, {len(subs)} subscriptions, "
+                f"{len(node.services)} services)",
+                {"uri": node.master_uri},
+            )
+        )
+
+    async def _check_subscribers(self) -> None:
+        """Say once of each subscriber the master lists for our topics that never reached us."""
+        node = self.node
+        _, _, state = await call(node.master_uri, "getSystemState", (node.name,), WATCH_TIMEOUT)
+        now = time.monotonic()
+        listed: set[tuple[str, str]] = set()
+        for topic, names in state[1]:
+            pub = node.publishers.get(topic)
+            if pub is None:
+                continue
+            for name in names:
+                key = (topic, name)
+                if name == node.name or name in pub.contacted or key in self.told:
+                    continue
+                listed.add(key)
+                if now - self.silent.setdefault(key, now) >= SILENT_AFTER:
+                    self.told.add(key)
+                    self._tell_silent(topic, name)
+        self.silent = {k: v for k, v in self.silent.items() if k in listed}
+
+    def _tell_silent(self, topic: str, name: str) -> None:
+        node = self.node
+        self.node.notify(
+            Notice(
+                "subscriber_silent",
+                f"{name} subscribes to {topic} but has not contacted us in {SILENT_AFTER:g} s: "
+                f"it may not reach {node.uri} (set ROS_IP or ROS_HOSTNAME here to an address it "
+                "reaches), or it died without unregistering",
+                {"topic": topic, "node": name, "uri": node.uri},
+            )
+        )
+
+
+async def node_at(node: Node, uri: str, topic: str) -> str | None:
+    """The name of the publisher of ``topic`` whose slave API is ``uri``, if the master says."""
+    try:
+        _, _, state = await call(node.master_uri, "getSystemState", (node.name,), 2.0)
+        names: list[str] = next((n for t, n in state[0] if t == topic), [])
+        for name in names:
+            code, _, found = await call(node.master_uri, "lookupNode", (node.name, name), 2.0)
+            if code == 1 and found == uri:
+                return str(name)
+    except Exception as err:  # noqa: BLE001 - the name only decorates a message
+        log.debug("finding the node at %s: %s", uri, err)
+    return None

@@ -28,7 +28,10 @@ def core(
     host: Annotated[
         str | None,
         typer.Option(
-            "--host", help="Address to listen on. Default: ROS_IP, ROS_HOSTNAME, else loopback."
+            "--host",
+            help="Name or address to give out; any but a loopback one listens on every "
+            "interface, and 0.0.0.0 gives out the host name. Default: ROS_HOSTNAME, ROS_IP, "
+            "else loopback only.",
         ),
     ] = None,
     fmt: FormatOpt = None,

@@ -113,15 +113,14 @@ class Doctor:
         self.env = os.environ if env is None else env
         self.caller = f"/rostools_doctor_{os.getpid()}"
         self.master_addresses: list[str] = []
-        self.state: list[Any] | None = None
         self.skews: dict[str, float] = {}
+        self.mine = set(local_addresses())
 
     @property
     def master_remote(self) -> bool:
         """Whether the master is on another host."""
-        mine = set(local_addresses())
         return bool(self.master_addresses) and not any(
-            is_loopback(a) or a in mine for a in self.master_addresses
+            is_loopback(a) or a in self.mine for a in self.master_addresses
         )
 
     def run(self) -> list[Check]:
@@ -211,7 +210,6 @@ class Doctor:
                 1,
             )
         details = {"name": name, "addresses": addresses, "route_to_master": route}
-        mine = set(local_addresses())
         if self.master_remote and all(is_loopback(a) for a in addresses):
             return Check(
                 "this host",
@@ -222,7 +220,7 @@ class Doctor:
                 1,
                 details,
             )
-        if not any(a in mine or is_loopback(a) for a in addresses):
+        if not any(a in self.mine or is_loopback(a) for a in addresses):
             return Check(
                 "this host",
                 "fail",

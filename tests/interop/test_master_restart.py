@@ -35,9 +35,10 @@ def listed(topic: str, env: dict[str, str]) -> bool:
     return topic in run_cli("topic", "list", env=env).stdout.split()
 
 
-def publishers(master: str, topic: str) -> list[str]:
-    _, _, (pubs, _, _) = xmlrpc.client.ServerProxy(master).getSystemState("/t")
-    return next((names for t, names in pubs if t == topic), [])
+def registered(master: str, topic: str, kind: int = 0) -> list[str]:
+    """The publishers (``kind`` 0) or subscribers (1) of ``topic`` the master lists."""
+    state = xmlrpc.client.ServerProxy(master).getSystemState("/t")[2][kind]
+    return next((names for t, names in state if t == topic), [])
 
 
 def kill_master(master: Proc, uri: str) -> None:
@@ -82,6 +83,7 @@ def test_nodes_carry_on_through_a_master_restart(
         procs.append(record)
         wait_for(lambda: listed("/kept", cli_env) and listed("/spoken", cli_env), 20, "graph")
         echo.expect("hello", 15)
+        wait_for(lambda: any("record" in n for n in registered(uri, "/spoken", 1)), 10, "recording")
 
         kill_master(master, uri)
         master = start_master()
@@ -89,7 +91,7 @@ def test_nodes_carry_on_through_a_master_restart(
         wait_for(lambda: listed("/kept", cli_env), 5, "/kept registered again")
         back_after = time.monotonic() - restarted
         # the rospy talker never registers again: the new master knows no publisher of /spoken
-        assert publishers(uri, "/spoken") == []
+        assert registered(uri, "/spoken") == []
 
         # a subscriber that starts now hears the publisher that started before
         listener = start_ros1_node("listener.py", ["/kept"], env)

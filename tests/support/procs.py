@@ -116,8 +116,12 @@ class Proc:
         with contextlib.suppress(ProcessLookupError):
             os.killpg(self.pid, sig)
 
-    def stop(self, timeout: float = 5.0) -> int:
+    #: How long ``stop`` waits after each of SIGINT and SIGTERM.
+    stop_timeout = 5.0
+
+    def stop(self, timeout: float | None = None) -> int:
         """SIGINT, then SIGTERM, then SIGKILL, until it exits; its return code."""
+        timeout = self.stop_timeout if timeout is None else timeout
         for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGKILL):
             if self.popen.poll() is not None:
                 break
@@ -177,4 +181,8 @@ NODES = Path(__file__).with_name("ros1_nodes")
 
 def start_ros1_node(script: str, args: Sequence[str], env: dict[str, str]) -> Proc:
     """One of ``tests/support/ros1_nodes`` on the system python (real rospy)."""
-    return Proc(["/usr/bin/python3", str(NODES / script), *args], env=env)
+    proc = Proc(["/usr/bin/python3", str(NODES / script), *args], env=env)
+    # A rospy publisher with a subscriber connected can hang in its shutdown, deaf to SIGINT
+    # and SIGTERM (seen here: 10 s each time, until SIGKILL); nothing of it is checked then.
+    proc.stop_timeout = 1.0
+    return proc

@@ -80,10 +80,10 @@ def ask(uri: str, method: str, params: tuple[Any, ...], timeout: float) -> Answe
     return Answer(value, skew)
 
 
-def _failure(err: BaseException, host: str) -> Failure:
+def _failure(err: BaseException, host: str, peer: bool = True) -> Failure:
     if isinstance(err, (xmlrpc.client.Error, http.client.HTTPException, ValueError)):
         return Failure(f"it does not speak the ROS XML-RPC API ({type(err).__name__})")
-    return explain(err, host)
+    return explain(err, host, peer)
 
 
 def _resolve(name: str) -> list[str]:
@@ -144,10 +144,9 @@ class Doctor:
             pid = self._master("getPid", uri)
             given = self._master("getUri", uri)
         except (OSError, http.client.HTTPException, xmlrpc.client.Error, ValueError) as err:
-            failure = _failure(err, host)
+            failure = _failure(err, host, peer=False)
             reason, hint = failure.reason, failure.hint
             if isinstance(err, ConnectionRefusedError):
-                reason = "connection refused"
                 hint = (
                     "is a master running there, listening beyond loopback? ('rostools core' "
                     "listens on loopback unless given --host or ROS_IP)"
@@ -165,7 +164,7 @@ class Doctor:
             same = self._master("getPid", str(given)) == pid
             reason = "" if same else "another process answers there"
         except (OSError, http.client.HTTPException, xmlrpc.client.Error, ValueError) as err:
-            same, reason = False, _failure(err, uri_host(str(given))).reason
+            same, reason = False, _failure(err, uri_host(str(given)), peer=False).reason
         if same:
             verdict = f"{uri} answers (pid {pid}); it gives out {given}, which reaches it too"
             return Check("master", "ok", verdict, details=details)

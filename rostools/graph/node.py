@@ -16,7 +16,7 @@ from typing import Any
 
 from rostools.errors import RostoolsError, UnreachableError
 from rostools.graph.connection import Handler, ServerConnection
-from rostools.graph.notice import Notice, to_stderr
+from rostools.graph.notice import Notice, explain, to_stderr
 from rostools.graph.publisher import Publisher
 from rostools.graph.service import Handler as ServiceHandler
 from rostools.graph.service import ServiceServer, ServiceType
@@ -25,7 +25,7 @@ from rostools.graph.topic import ANY, TopicType
 from rostools.graph.watch import MasterWatch
 from rostools.graph.xmlrpc import XmlRpcServer, call
 from rostools.names import anonymous, canonicalize, make_global_ns, resolve, ros_namespace
-from rostools.network import bind_address, host_name
+from rostools.network import bind_address, host_name, uri_host
 from rostools.wire.tcpros import error_header
 
 log = logging.getLogger(__name__)
@@ -158,7 +158,7 @@ class Node:
         try:
             answer = await call(self.master_uri, method, (self.name, *args), timeout=MASTER_TIMEOUT)
         except (OSError, asyncio.TimeoutError) as err:
-            reason = getattr(err, "strerror", None) or err or "timed out"
+            reason = explain(err, uri_host(self.master_uri), peer=False).reason
             raise UnreachableError(
                 f"cannot reach the master at {self.master_uri}: {reason}",
                 hint="is roscore (or 'rostools core') running? check ROS_MASTER_URI",

@@ -50,11 +50,15 @@ class Failure:
     dropped: bool = False
 
 
-def explain(err: BaseException, host: str) -> Failure:
-    """A connection error to ``host`` as a reason and a hint a user can act on."""
+def explain(err: BaseException, host: str, peer: bool = True) -> Failure:
+    """A connection error to ``host`` as a reason and a hint a user can act on.
+
+    A ``peer`` (a node, not the master) that gives out a loopback address is named as such:
+    only its own host can reach it there.
+    """
     if isinstance(err, socket.gaierror):
         return Failure(f"{host} does not resolve here", SET_ADDRESS)
-    loopback = is_loopback(host)
+    loopback = peer and is_loopback(host)
     if isinstance(err, ConnectionRefusedError):
         if loopback:
             return Failure(f"connection refused at {host}, a loopback address", SET_ADDRESS, False)

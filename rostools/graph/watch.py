@@ -75,7 +75,7 @@ class MasterWatch:
             return
         self.node.master_lost = True
         uri = self.node.master_uri
-        reason = explain(err, uri_host(uri)).reason
+        reason = explain(err, uri_host(uri), peer=False).reason
         self.node.notify(
             Notice(
                 "master_lost",

@@ -1,7 +1,8 @@
 """A master killed outright and started again under running nodes, on both masters.
 
 rospy and roscpp never register again, so after a respawn they are invisible to everyone who
-starts later. Ours notice the new master and register again; running commands carry on.
+starts later. Ours (pub, echo, record, play) notice the new master and register again, and
+carry on.
 """
 
 from __future__ import annotations
@@ -16,6 +17,7 @@ from pathlib import Path
 
 import pytest
 
+from tests.support.bagdata import write_play_bag
 from tests.support.env import needs_ros1, run_cli
 from tests.support.procs import (
     Proc,
@@ -78,6 +80,9 @@ def test_nodes_carry_on_through_a_master_restart(
         procs.append(talker)
         echo = Proc([*rostools, "topic", "echo", "/spoken", "-F", "json"], env=cli_env)
         procs.append(echo)
+        write_play_bag(tmp_path / "loop.bag")
+        procs.append(Proc([*rostools, "bag", "play", "-l", str(tmp_path / "loop.bag"),
+                           "/chatter:=/replayed"], env=cli_env))  # fmt: skip
         bag = tmp_path / "through.bag"
         record = Proc([*rostools, "bag", "record", "-a", "-O", str(bag)], env=cli_env)
         procs.append(record)
@@ -97,6 +102,10 @@ def test_nodes_carry_on_through_a_master_restart(
         listener = start_ros1_node("listener.py", ["/kept"], env)
         procs.append(listener)
         listener.expect("got kept", 20)
+        # and one that starts now hears the player that started before
+        replayed = start_ros1_node("listener.py", ["/replayed"], env)
+        procs.append(replayed)
+        replayed.expect("got m", 20)
         # a publisher that starts now is recorded by the recorder that started before
         # (named apart: a second /talker would make the new master shut one down)
         procs.append(

@@ -177,6 +177,25 @@ class MasterAPI:
             return [0, f"Internal failure: {err}", error_value]
         return [code, message, value]
 
+    def cache_key(self, method: str, params: tuple[Any, ...]) -> tuple[Any, ...] | None:
+        """The method and its checked, resolved arguments: what a cached answer is kept under.
+
+        Resolved, because a relative name means something else to each caller. None when the
+        call fails its checks: that answer is never cached.
+        """
+        entry = self.methods.get(method)
+        if entry is None or not params or not isinstance(params[0], str):
+            return None
+        checks = entry[2]
+        if len(params) != len(checks) + 1:
+            return None
+        try:
+            args = tuple(check(v, params[0]) for check, v in zip(checks, params[1:], strict=True))
+            hash(args)
+        except (ArgumentError, TypeError):
+            return None
+        return (method, *args)
+
     def _notify_publishers(self, topic: str) -> None:
         pub_uris = self.registry.apis("pub", topic)
         for api in self.registry.apis("sub", topic):

@@ -35,7 +35,7 @@ class Master:
         self.stopped = asyncio.Event()
         # Encoded answers to read-only calls: busy graphs poll getSystemState a lot, and
         # marshalling a big state is most of the cost of answering it.
-        self._cache: dict[tuple[str, tuple[Any, ...]], Encoded] = {}
+        self._cache: dict[tuple[Any, ...], Encoded] = {}
 
     @property
     def uri(self) -> str:
@@ -60,12 +60,14 @@ class Master:
             if method not in _QUERIES:
                 self._cache.clear()  # anything else may change the state the cache holds
             return api.call(method, params)
-        key = (method, params[1:])
+        key = api.cache_key(method, params)
+        if key is None:
+            return api.call(method, params)  # a call that fails its checks: answered afresh
         cached = self._cache.get(key)
         if cached is None:
             result = api.call(method, params)
-            if not isinstance(params[0] if params else None, str) or result[0] != 1:
-                return result  # errors depend on the caller; never cache them
+            if result[0] != 1:
+                return result
             cached = self._cache[key] = Encoded(encode_result(result))
         return cached
 

@@ -150,3 +150,22 @@ def test_shutdown_call_stops_the_master() -> None:
     time.sleep(0.1)
     with pytest.raises(OSError):
         proxy.getPid("/c")
+
+
+def test_cached_answers_follow_the_caller_and_the_checks(master: MasterThread) -> None:
+    # the defects: the read-only answer cache keyed on the raw arguments, before any check
+    proxy = xmlrpc.client.ServerProxy(master.uri)
+    for topic in ("/a/sub/x", "/b/sub/y"):
+        assert proxy.registerPublisher("/p", topic, "std_msgs/String", "http://h:1/")[0] == 1
+    assert proxy.getPublishedTopics("/a/n", "sub") == [
+        1, "current topics", [["/a/sub/x", "std_msgs/String"]]
+    ]  # fmt: skip
+    assert proxy.getPublishedTopics("/b/n", "sub") == [
+        1, "current topics", [["/b/sub/y", "std_msgs/String"]]
+    ]  # fmt: skip
+    assert proxy.getSystemState("/c")[0] == 1  # now cached
+    assert proxy.getSystemState(5) == [-1, "caller_id must be a string", [[], [], []]]
+    assert proxy.getPublishedTopics("/c", ["not", "hashable"]) == [
+        -1, "ERROR: parameter [subgraph] must be a string", 0
+    ]  # fmt: skip
+    assert proxy.getPublishedTopics("/c", {"a": 1})[0] == -1

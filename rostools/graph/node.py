@@ -15,9 +15,11 @@ from collections.abc import Callable
 from typing import Any
 
 from rostools.errors import RostoolsError, UnreachableError
+from rostools.graph import rosapi as check
 from rostools.graph.connection import Handler, ServerConnection
 from rostools.graph.notice import Notice, explain, to_stderr
 from rostools.graph.publisher import Publisher
+from rostools.graph.rosapi import Methods, Triple
 from rostools.graph.service import Handler as ServiceHandler
 from rostools.graph.service import ServiceServer, ServiceType
 from rostools.graph.subscriber import FramesCallback, Subscriber
@@ -27,6 +29,7 @@ from rostools.graph.xmlrpc import XmlRpcServer, call
 from rostools.names import anonymous, canonicalize, make_global_ns, resolve, ros_namespace
 from rostools.network import bind_address, host_name, uri_host
 from rostools.wire.tcpros import error_header
+from rostools.wire.xmlrpc import multicall
 
 log = logging.getLogger(__name__)
 
@@ -88,6 +91,7 @@ class Node:
         self.master_lost = False
         self._conn_ids = 0
         self.tcpros_port = 0
+        self._methods = self._slave_api()
 
     # life cycle -----------------------------------------------------------------------
 
@@ -244,83 +248,74 @@ class Node:
 
     # slave API ------------------------------------------------------------------------
 
+    def _slave_api(self) -> Methods:
+        """The slave API with rospy's error values and argument checks (``masterslave``)."""
+        topic = check.graph_name("topic")
+        return {
+            "getBusStats": (lambda caller: self._bus_stats(), [], ()),
+            "getBusInfo": (lambda caller: self._bus_info(), [], ()),
+            "getMasterUri": (lambda caller: (1, self.master_uri, self.master_uri), "", ()),
+            "shutdown": (self._shutdown, 0, (check.anything,)),
+            "getPid": (lambda caller: (1, "", os.getpid()), -1, ()),
+            "getSubscriptions": (self._subscriptions, [], ()),
+            "getPublications": (self._publications, [], ()),
+            "paramUpdate": (
+                lambda caller, key, value: (-1, "not subscribed", 0), -1,
+                (check.global_name("parameter_key"), check.anything),
+            ),
+            "publisherUpdate": (
+                self._publisher_update, -1, (topic, check.uri_list("publishers")),
+            ),
+            "requestTopic": (self._request_topic, [], (topic, check.non_empty("protocols"))),
+            "getUri": (lambda caller: (1, "", self.uri), "", ()),
+            "getName": (lambda caller: (1, "", self.name), "", ()),
+        }  # fmt: skip
+
     def _dispatch(self, method: str, params: tuple[Any, ...]) -> Any:
-        handlers: dict[str, tuple[Callable[..., Any], int]] = {
-            "getBusStats": (self._bus_stats, 0),
-            "getBusInfo": (self._bus_info, 0),
-            "getMasterUri": (lambda: [1, self.master_uri, self.master_uri], 0),
-            "shutdown": (self._shutdown, 1),
-            "getPid": (lambda: [1, "", os.getpid()], 0),
-            "getSubscriptions": (self._subscriptions, 0),
-            "getPublications": (self._publications, 0),
-            "paramUpdate": (lambda key, value: [-1, "not subscribed", 0], 2),
-            "publisherUpdate": (self._publisher_update, 2),
-            "requestTopic": (self._request_topic, 2),
-            "getUri": (lambda: [1, "", self.uri], 0),
-            "getName": (lambda: [1, "", self.name], 0),
-        }
         if method == "system.multicall":
-            from rostools.wire.xmlrpc import multicall
-
             return multicall(self._dispatch, params[0] if params else None)
-        entry = handlers.get(method)
-        if entry is None:
-            raise xmlrpc.client.Fault(
-                1, f"<class 'Exception'>:method \"{method}\" is not supported"
-            )
-        handler, arity = entry
-        if not params:
-            return [-1, "missing required caller_id parameter", 0]
-        if len(params) != arity + 1:
-            return [-1, "Error: bad call arity", 0]
-        if not isinstance(params[0], str):
-            return [-1, "caller_id must be a string", 0]
-        if method == "requestTopic":
-            pub = self.publishers.get(self.resolve(str(params[1])))
-            if pub is not None:
-                pub.contacted.add(params[0])  # it reaches us (see MasterWatch)
-        return handler(*params[1:])
+        return check.dispatch(self._methods, method, params)
 
-    def _shutdown(self, reason: Any) -> list[Any]:
+    def _shutdown(self, caller: str, reason: Any) -> Triple:
         self.shutdown_reason = str(reason)
         self.shutdown_requested.set()
-        return [1, "shutdown", 0]
+        return 1, "shutdown", 0
 
-    def _subscriptions(self) -> list[Any]:
-        return [1, "subscriptions", [[t, s.type.type] for t, s in self.subscribers.items()]]
+    def _subscriptions(self, caller: str) -> Triple:
+        return 1, "subscriptions", [[t, s.type.type] for t, s in self.subscribers.items()]
 
-    def _publications(self) -> list[Any]:
-        return [1, "publications", [[t, p.type.type] for t, p in self.publishers.items()]]
+    def _publications(self, caller: str) -> Triple:
+        return 1, "publications", [[t, p.type.type] for t, p in self.publishers.items()]
 
-    def _publisher_update(self, topic: Any, uris: Any) -> list[Any]:
-        sub = self.subscribers.get(self.resolve(str(topic)))
-        if sub is not None and isinstance(uris, list):
-            sub.update([u for u in uris if isinstance(u, str)])
-        return [1, "", 0]
+    def _publisher_update(self, caller: str, topic: str, uris: list[str]) -> Triple:
+        sub = self.subscribers.get(self.resolve(topic))
+        if sub is not None:
+            sub.update(uris)
+        return 1, "", 0
 
-    def _request_topic(self, topic: Any, protocols: Any) -> list[Any]:
-        topic = self.resolve(str(topic))
-        if topic not in self.publishers:
-            return [-1, f"Not a publisher of [{topic}]", []]
+    def _request_topic(self, caller: str, topic: str, protocols: Any) -> Triple:
+        topic = self.resolve(topic)
+        pub = self.publishers.get(topic)
+        if pub is None:
+            return -1, f"Not a publisher of [{topic}]", []
+        pub.contacted.add(caller)  # it reaches us (see MasterWatch)
         for proto in protocols if isinstance(protocols, list) else []:
             if isinstance(proto, list) and proto and proto[0] == "TCPROS":
-                return [
-                    1,
-                    f"ready on {self.host}:{self.tcpros_port}",
-                    ["TCPROS", self.host, self.tcpros_port],
-                ]
-        return [0, "no supported protocol implementations", []]
+                return 1, f"ready on {self.host}:{self.tcpros_port}", [
+                    "TCPROS", self.host, self.tcpros_port
+                ]  # fmt: skip
+        return 0, "no supported protocol implementations", []
 
-    def _bus_stats(self) -> list[Any]:
+    def _bus_stats(self) -> Triple:
         pubs = [
             [t, sum(link.bytes_sent for link in p.links),
              [[link.id, link.bytes_sent, link.messages_sent, True] for link in p.links]]
             for t, p in self.publishers.items()
         ]  # fmt: skip
         subs = [[t, s.stats()] for t, s in self.subscribers.items()]
-        return [1, "", [pubs, subs, []]]
+        return 1, "", [pubs, subs, []]
 
-    def _bus_info(self) -> list[Any]:
+    def _bus_info(self) -> Triple:
         info: list[Any] = []
         for topic, pub in self.publishers.items():
             for link in pub.links:
@@ -330,4 +325,4 @@ class Node:
             for uri, conn in sub.connections.items():
                 text = f"TCPROS connection to [{conn.peer}]"
                 info.append([conn.id, uri, "i", "TCPROS", topic, True, text])
-        return [1, "bus info", info]
+        return 1, "bus info", info

@@ -9,93 +9,14 @@ calls the change requires (``publisherUpdate``, ``paramUpdate``, ``shutdown``) i
 from __future__ import annotations
 
 import os
-import xmlrpc.client
-from collections.abc import Callable
 from typing import Any
 
+from rostools.graph import rosapi as check
+from rostools.graph.rosapi import Methods, Triple
 from rostools.master.params import ParamTree, subscription_key
 from rostools.master.registry import Outgoing, Registry
-from rostools.names import ANYTYPE, GLOBAL_NS, resolve
+from rostools.names import ANYTYPE, resolve
 from rostools.wire.xmlrpc import multicall
-
-Triple = tuple[int, str, Any]
-Check = Callable[[Any, str], Any]
-
-
-class ArgumentError(Exception):
-    """An argument that fails its check; answered as ``[-1, message, error value]``."""
-
-
-def _string(name: str, value: Any) -> str:
-    if not value or not isinstance(value, str):
-        raise ArgumentError(f"ERROR: parameter [{name}] must be a non-empty string")
-    return value
-
-
-def _graph_name(name: str) -> Callable[[Any, str], str]:
-    def check(value: Any, caller_id: str) -> str:
-        value = _string(name, value)
-        if ":" in value or " " in value:
-            raise ArgumentError(f"ERROR: parameter [{name}] contains illegal chars")
-        if value == GLOBAL_NS:
-            raise ArgumentError(f"ERROR: parameter [{name}] cannot be the global namespace")
-        return resolve(value, caller_id)
-
-    return check
-
-
-def _node_name(name: str) -> Callable[[Any, str], str]:
-    def check(value: Any, caller_id: str) -> str:
-        value = _string(name, value)
-        if ":" in value or " " in value:
-            raise ArgumentError(f"ERROR: parameter [{name}] contains illegal chars")
-        return resolve(value, caller_id)
-
-    return check
-
-
-def _subgraph(value: Any, caller_id: str) -> str:
-    if not isinstance(value, str):
-        raise ArgumentError("ERROR: parameter [subgraph] must be a string")
-    return resolve(value, caller_id) if value else ""
-
-
-def _type(value: Any, caller_id: str) -> str:
-    if value == ANYTYPE:
-        return ANYTYPE
-    text = _string("topic_type", value)
-    if len(text.split("/")) != 2:
-        raise ArgumentError("ERROR: parameter [topic_type] is not a valid package resource name")
-    return text
-
-
-def _api(name: str) -> Callable[[Any, str], str]:
-    def check(value: Any, caller_id: str) -> str:
-        if not value or not isinstance(value, str):
-            raise ArgumentError(f"ERROR: parameter [{name}] is not an XMLRPC URI")
-        if not value.startswith(("http://", "rosrpc://")):
-            raise ArgumentError(f"ERROR: parameter [{name}] is not an RPC URI")
-        return value
-
-    return check
-
-
-def _key(value: Any, caller_id: str) -> str:
-    if not value:
-        raise ArgumentError("ERROR: parameter [key] must be specified and non-empty")
-    if not isinstance(value, str):
-        raise ArgumentError("ERROR: parameter [key] must be a string")
-    return value
-
-
-def _any(value: Any, caller_id: str) -> Any:
-    return value
-
-
-def _not_none(value: Any, caller_id: str) -> Any:
-    if value is None:
-        raise ArgumentError("ERROR: parameter [value] must be specified")
-    return value
 
 
 class MasterAPI:
@@ -108,42 +29,35 @@ class MasterAPI:
         self.params = ParamTree(self.registry.param_subscribers)
         self.outgoing: list[Outgoing] = []
         self.shutdown_requested: str | None = None
+        topic, service = check.graph_name("topic"), check.graph_name("service")
+        caller_api, key, kind = check.api_uri("caller_api"), check.param_key, check.topic_type
         # method -> (handler, error value, argument checks after caller_id)
-        self.methods: dict[str, tuple[Callable[..., Triple], Any, tuple[Check, ...]]] = {
+        self.methods: Methods = {
             "getUri": (self.getUri, "", ()),
             "getPid": (self.getPid, -1, ()),
-            "shutdown": (self.shutdown, 0, (_any,)),
+            "shutdown": (self.shutdown, 0, (check.anything,)),
             "registerService": (
-                self.registerService, 0,
-                (_graph_name("service"), _api("service_api"), _api("caller_api")),
+                self.registerService, 0, (service, check.api_uri("service_api"), caller_api),
             ),
             "unregisterService": (
-                self.unregisterService, 0, (_graph_name("service"), _api("service_api")),
+                self.unregisterService, 0, (service, check.api_uri("service_api")),
             ),
-            "registerSubscriber": (
-                self.registerSubscriber, [], (_graph_name("topic"), _type, _api("caller_api")),
-            ),
-            "unregisterSubscriber": (
-                self.unregisterSubscriber, 0, (_graph_name("topic"), _api("caller_api")),
-            ),
-            "registerPublisher": (
-                self.registerPublisher, [], (_graph_name("topic"), _type, _api("caller_api")),
-            ),
-            "unregisterPublisher": (
-                self.unregisterPublisher, 0, (_graph_name("topic"), _api("caller_api")),
-            ),
-            "lookupNode": (self.lookupNode, "", (_node_name("node"),)),
-            "lookupService": (self.lookupService, "", (_graph_name("service"),)),
-            "getPublishedTopics": (self.getPublishedTopics, 0, (_subgraph,)),
+            "registerSubscriber": (self.registerSubscriber, [], (topic, kind, caller_api)),
+            "unregisterSubscriber": (self.unregisterSubscriber, 0, (topic, caller_api)),
+            "registerPublisher": (self.registerPublisher, [], (topic, kind, caller_api)),
+            "unregisterPublisher": (self.unregisterPublisher, 0, (topic, caller_api)),
+            "lookupNode": (self.lookupNode, "", (check.node_name("node"),)),
+            "lookupService": (self.lookupService, "", (service,)),
+            "getPublishedTopics": (self.getPublishedTopics, 0, (check.subgraph,)),
             "getTopicTypes": (self.getTopicTypes, [], ()),
             "getSystemState": (self.getSystemState, [[], [], []], ()),
-            "setParam": (self.setParam, 0, (_key, _not_none)),
-            "getParam": (self.getParam, 0, (_key,)),
-            "deleteParam": (self.deleteParam, 0, (_key,)),
-            "hasParam": (self.hasParam, False, (_key,)),
-            "searchParam": (self.searchParam, 0, (_key,)),
-            "subscribeParam": (self.subscribeParam, 0, (_api("caller_api"), _key)),
-            "unsubscribeParam": (self.unsubscribeParam, 0, (_api("caller_api"), _key)),
+            "setParam": (self.setParam, 0, (key, check.not_none)),
+            "getParam": (self.getParam, 0, (key,)),
+            "deleteParam": (self.deleteParam, 0, (key,)),
+            "hasParam": (self.hasParam, False, (key,)),
+            "searchParam": (self.searchParam, 0, (key,)),
+            "subscribeParam": (self.subscribeParam, 0, (caller_api, key)),
+            "unsubscribeParam": (self.unsubscribeParam, 0, (caller_api, key)),
             "getParamNames": (self.getParamNames, [], ()),
         }  # fmt: skip
 
@@ -153,48 +67,11 @@ class MasterAPI:
         """Run one XML-RPC call; raises ``xmlrpc.client.Fault`` for an unknown method."""
         if method == "system.multicall":
             return multicall(self.call, params[0] if params else None)
-        entry = self.methods.get(method)
-        if entry is None:
-            raise xmlrpc.client.Fault(
-                1, f"<class 'Exception'>:method \"{method}\" is not supported"
-            )
-        handler, error_value, checks = entry
-        if not params:
-            return [-1, "missing required caller_id parameter", error_value]
-        if len(params) != len(checks) + 1:
-            return [-1, "Error: bad call arity", error_value]
-        caller_id = params[0]
-        if not isinstance(caller_id, str):
-            return [-1, "caller_id must be a string", error_value]
-        try:
-            args = [
-                check(value, caller_id) for check, value in zip(checks, params[1:], strict=True)
-            ]
-            code, message, value = handler(caller_id, *args)
-        except ArgumentError as err:
-            return [-1, str(err), error_value]
-        except Exception as err:  # noqa: BLE001 - rosmaster answers any internal error this way
-            return [0, f"Internal failure: {err}", error_value]
-        return [code, message, value]
+        return check.dispatch(self.methods, method, params)
 
     def cache_key(self, method: str, params: tuple[Any, ...]) -> tuple[Any, ...] | None:
-        """The method and its checked, resolved arguments: what a cached answer is kept under.
-
-        Resolved, because a relative name means something else to each caller. None when the
-        call fails its checks: that answer is never cached.
-        """
-        entry = self.methods.get(method)
-        if entry is None or not params or not isinstance(params[0], str):
-            return None
-        checks = entry[2]
-        if len(params) != len(checks) + 1:
-            return None
-        try:
-            args = tuple(check(v, params[0]) for check, v in zip(checks, params[1:], strict=True))
-            hash(args)
-        except (ArgumentError, TypeError):
-            return None
-        return (method, *args)
+        """What a cached answer to this call is kept under (see ``rosapi.cache_key``)."""
+        return check.cache_key(self.methods, method, params)
 
     def _notify_publishers(self, topic: str) -> None:
         pub_uris = self.registry.apis("pub", topic)

@@ -18,7 +18,15 @@ from typing import TYPE_CHECKING, Any, Protocol
 
 from rostools.graph.notice import Failure
 from rostools.wire.header import MAX_HEADER_LENGTH
-from rostools.wire.tcpros import BIG_FRAME, FrameError, FrameReader, frame_prefix, parse_header
+from rostools.wire.tcpros import (
+    BIG_FRAME,
+    HANDSHAKE_TIMEOUT,
+    MAX_FRAME,
+    FrameError,
+    FrameReader,
+    frame_prefix,
+    parse_header,
+)
 
 if TYPE_CHECKING:
     from rostools.graph.subscriber import Subscriber
@@ -62,18 +70,24 @@ class ServerConnection(asyncio.BufferedProtocol):
         self, accept: Callable[[dict[str, str], ServerConnection], Handler | None]
     ) -> None:
         self.accept = accept
-        self.reader = FrameReader(MAX_HEADER_LENGTH)
+        self.reader = FrameReader(MAX_FRAME, first_max=MAX_HEADER_LENGTH)
         self.transport: asyncio.Transport | None = None
         self.handler: Handler | None = None
         self.peer = "?"
 
     def connection_made(self, transport: asyncio.BaseTransport) -> None:
-        """Asyncio: connected."""
+        """Asyncio: connected; the peer has ``HANDSHAKE_TIMEOUT`` to send its header."""
         assert isinstance(transport, asyncio.Transport)
         self.transport = transport
         transport.set_write_buffer_limits(WRITE_HIGH_WATER, WRITE_LOW_WATER)
         peer = transport.get_extra_info("peername")
         self.peer = f"{peer[0]}:{peer[1]}" if peer else "?"
+        asyncio.get_running_loop().call_later(HANDSHAKE_TIMEOUT, self._handshake_expired)
+
+    def _handshake_expired(self) -> None:
+        if self.handler is None and self.transport is not None:
+            log.warning("TCPROS connection from %s sent no header in time; closing it", self.peer)
+            self.transport.abort()
 
     def get_buffer(self, sizehint: int) -> memoryview:
         """Asyncio: where to receive into."""
@@ -217,7 +231,7 @@ class InboundConnection(asyncio.BufferedProtocol):
         self.publisher_uri = publisher_uri
         self.id = conn_id
         self.request = header
-        self.reader = FrameReader(MAX_HEADER_LENGTH)
+        self.reader = FrameReader(subscriber.max_frame, first_max=MAX_HEADER_LENGTH)
         self.transport: asyncio.Transport | None = None
         self.header: dict[str, str] | None = None
         self.closed: asyncio.Future[None] = asyncio.get_running_loop().create_future()
@@ -235,6 +249,11 @@ class InboundConnection(asyncio.BufferedProtocol):
         peer = transport.get_extra_info("peername")
         self.peer = f"{peer[0]}:{peer[1]}" if peer else "?"
         transport.write(self.request)
+        asyncio.get_running_loop().call_later(HANDSHAKE_TIMEOUT, self._handshake_expired)
+
+    def _handshake_expired(self) -> None:
+        if self.header is None and self.failure is None and not self.closed.done():
+            self._drop(f"no connection header within {HANDSHAKE_TIMEOUT:g} s")
 
     def get_buffer(self, sizehint: int) -> memoryview:
         """Asyncio: where to receive into."""
@@ -243,34 +262,37 @@ class InboundConnection(asyncio.BufferedProtocol):
     def buffer_updated(self, nbytes: int) -> None:
         """Asyncio: bytes arrived."""
         now = time.monotonic()
+        error: FrameError | None = None
         try:
             frames = self.reader.buffer_updated(nbytes)
         except FrameError as err:
-            self._drop(f"{err}")
-            return
-        if not frames:
-            return
-        if self.header is None:
-            try:
-                header = parse_header(frames[0])
-            except FrameError as err:
-                self._drop(str(err))
+            frames, error = err.frames, err  # the frames before the bad one still count
+        if frames and self.header is None:
+            problem = self._take_header(frames[0])
+            if problem is not None:
+                self._drop(problem)
                 return
-            if "error" in header:
-                self._drop(f"it refused us: {header['error']}")
-                return
-            if "md5sum" not in header or "type" not in header:
-                self._drop("reply header lacks md5sum or type")
-                return
-            self.header = header
-            self.reader.max_frame = self.subscriber.max_frame
-            self.subscriber.header_received(self)
             frames = frames[1:]
-            if not frames:
-                return
-        self.messages_received += len(frames)
-        self.bytes_received += nbytes  # what arrived on the wire, length prefixes included
-        self.subscriber.frames_received(frames, self, now)
+        if frames:
+            self.messages_received += len(frames)
+            self.bytes_received += nbytes  # what arrived on the wire, prefixes included
+            self.subscriber.frames_received(frames, self, now)
+        if error is not None:
+            self._drop(str(error))
+
+    def _take_header(self, frame: Frame) -> str | None:
+        """Accept the publisher's header; why not, when it is refused or malformed."""
+        try:
+            header = parse_header(frame)
+        except FrameError as err:
+            return str(err)
+        if "error" in header:
+            return f"it refused us: {header['error']}"
+        if "md5sum" not in header or "type" not in header:
+            return "reply header lacks md5sum or type"
+        self.header = header
+        self.subscriber.header_received(self)
+        return None
 
     def _drop(self, reason: str) -> None:
         # the subscriber reports it once (a publisher that keeps refusing is not a flood)

@@ -12,9 +12,11 @@ from collections.abc import Mapping
 _U32 = struct.Struct("<I")
 #: roscpp refuses a header field longer than this (``Header::parse``), and so do we.
 MAX_FIELD_LENGTH = 1_000_000
-#: roscpp's limit for a whole TCPROS header is 1e9; a header we must buffer whole is kept far
-#: smaller: a full message definition is the largest field real peers send (tens of KB).
-MAX_HEADER_LENGTH = 64 * 1024 * 1024
+#: roscpp's limit for a whole TCPROS header is 1e9 (``Connection::onHeaderLengthRead``) and
+#: rospy has none. Ours is small: the largest field real peers send is a full message
+#: definition, and the largest in Noetic's message packages, visualization_msgs/
+#: InteractiveMarkerUpdate with its comments, is 10.6 KB: a hundred times that.
+MAX_HEADER_LENGTH = 1024 * 1024
 
 
 class HeaderError(ValueError):

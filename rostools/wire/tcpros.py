@@ -17,15 +17,29 @@ _U32 = struct.Struct("<I")
 
 #: roscpp drops a connection whose frame length exceeds 1e9 bytes (``Connection::read``).
 MAX_FRAME = 1_000_000_000
+#: Seconds a new connection has to complete its header exchange. rospy and roscpp wait
+#: forever, so a peer that connects and sends nothing holds its buffers for good; a real peer
+#: sends its header at once.
+HANDSHAKE_TIMEOUT = 10.0
 #: Frames at least this big are received into a buffer of their own, not the scratch buffer.
 BIG_FRAME = 64 * 1024
 #: The scratch buffer: many small frames per recv; several times BIG_FRAME so it never fills
 #: with a partial small frame.
 SCRATCH = 256 * 1024
+#: A big frame's buffer starts this big (or at what has arrived) and doubles as data comes:
+#: what a length prefix alone can make us allocate. 1 MiB holds a 1 MB image without growing.
+GROW_FIRST = 1024 * 1024
 
 
 class FrameError(ValueError):
-    """A frame the peer should not have sent (too long, a bad header)."""
+    """A frame the peer should not have sent (too long, a bad header).
+
+    ``frames`` holds the frames completed before it in the same read: they were sent first.
+    """
+
+    def __init__(self, message: str, frames: list[bytes | memoryview] | None = None) -> None:
+        super().__init__(message)
+        self.frames: list[bytes | memoryview] = frames or []
 
 
 def frame_prefix(length: int) -> bytes:
@@ -34,23 +48,44 @@ def frame_prefix(length: int) -> bytes:
 
 
 class FrameReader:
-    """Splits a byte stream into frames, receiving into reusable buffers."""
+    """Splits a byte stream into frames, receiving into reusable buffers.
 
-    __slots__ = ("_big", "_big_filled", "_buf", "_end", "_start", "_view", "max_frame")
+    A frame's length prefix is not trusted: the buffer of a big frame starts at what has
+    arrived, at least ``GROW_FIRST``, and doubles as more arrives, so a peer that announces
+    a gigabyte and sends twenty bytes costs us a megabyte, not a gigabyte. The first frame of
+    a connection (its header) may have a limit of its own, ``first_max``.
+    """
 
-    def __init__(self, max_frame: int = MAX_FRAME) -> None:
+    __slots__ = (
+        "_big", "_big_filled", "_big_length", "_buf", "_end", "_start", "_view", "first_max",
+        "max_frame",
+    )  # fmt: skip
+
+    def __init__(self, max_frame: int = MAX_FRAME, first_max: int | None = None) -> None:
         self.max_frame = max_frame
+        #: The limit of the next frame only, while it is the first; then ``max_frame``.
+        self.first_max = first_max
         self._buf = bytearray(SCRATCH)
         self._view = memoryview(self._buf)
         self._start = 0
         self._end = 0
         self._big: bytearray | None = None
         self._big_filled = 0
+        self._big_length = 0
 
     def get_buffer(self) -> memoryview:
         """Where the next bytes from the socket go."""
-        if self._big is not None:
-            return memoryview(self._big)[self._big_filled :]
+        big = self._big
+        if big is not None:
+            if self._big_filled == len(big):  # full, but the frame is not: double it
+                size = min(self._big_length, 2 * len(big))
+                try:
+                    big.extend(bytes(size - len(big)))  # in place (realloc), between reads
+                except BufferError:  # a view of the last read is still alive: copy instead
+                    grown = bytearray(size)
+                    grown[: len(big)] = big
+                    self._big = big = grown
+            return memoryview(big)[self._big_filled :]
         if self._end == SCRATCH:
             # Compact: the partial frame left at the end moves to the front.
             pending = self._end - self._start
@@ -66,7 +101,7 @@ class FrameReader:
         """
         if self._big is not None:
             self._big_filled += nbytes
-            if self._big_filled < len(self._big):
+            if self._big_filled < self._big_length:
                 return []
             # Read-only: nobody writes to it again, and writers may then keep it without a copy.
             done = memoryview(self._big).toreadonly()
@@ -80,20 +115,22 @@ class FrameReader:
         data = bytes(view[start:end])
         base = start
         unpack = _U32.unpack_from
-        limit = self.max_frame
         while end - start >= 4:
             (length,) = unpack(data, start - base)
+            limit = self.max_frame if self.first_max is None else self.first_max
             if length > limit:
-                raise FrameError(f"frame of {length} bytes exceeds the limit of {limit}")
+                raise FrameError(f"frame of {length} bytes exceeds the limit of {limit}", frames)
             if end - start - 4 >= length:
                 offset = start - base + 4
                 frames.append(data[offset : offset + length])
                 start += 4 + length
+                self.first_max = None
             elif length >= BIG_FRAME:
                 have = end - start - 4
-                self._big = bytearray(length)
+                self._big = bytearray(min(length, max(GROW_FIRST, have)))
                 self._big[:have] = view[start + 4 : end]
-                self._big_filled = have
+                self._big_filled, self._big_length = have, length
+                self.first_max = None
                 start = end
                 break
             else:

@@ -11,6 +11,7 @@ from hypothesis import strategies as st
 from rostools.wire.header import decode_fields, encode_header
 from rostools.wire.tcpros import (
     BIG_FRAME,
+    GROW_FIRST,
     FrameError,
     FrameReader,
     check_subscription,
@@ -163,3 +164,28 @@ def test_service_request_checks() -> None:
     assert "missing required field [callerid]" in (
         check_service_request({"service": "/s", "md5sum": "*"}, "/s", "abc") or ""
     )
+
+
+def test_a_length_prefix_alone_allocates_little() -> None:
+    # the defect: a frame announcing 999,999,999 bytes got a zero-filled buffer of that size
+    # before any of it arrived (981 MB for topic echo; rostopic echo stays at 38 MB)
+    reader = FrameReader()
+    buf = reader.get_buffer()
+    buf[:24] = struct.pack("<I", 999_999_999) + b"x" * 20
+    assert reader.buffer_updated(24) == []
+    assert len(reader.get_buffer()) <= GROW_FIRST
+
+
+def test_a_big_frame_grows_as_it_arrives() -> None:
+    payload = bytes(range(256)) * (5 * GROW_FIRST // 256 + 3)  # five growths
+    assert feed(FrameReader(), framed([payload, b"after"]), 300_000) == [payload, b"after"]
+
+
+def test_the_first_frame_has_its_own_limit() -> None:
+    # the defect: a message over the header limit, arriving in the same read as the header,
+    # was refused as if it were the header
+    header, message = b"h" * 10, b"m" * 200
+    reader = FrameReader(max_frame=1000, first_max=100)
+    assert feed(reader, framed([header, message]), 1 << 20) == [header, message]
+    with pytest.raises(FrameError, match="exceeds the limit of 100"):
+        feed(FrameReader(max_frame=1000, first_max=100), framed([message]), 1 << 20)

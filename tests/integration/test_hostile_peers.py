@@ -1,0 +1,140 @@
+"""Peers that lie about sizes, stall, or never finish their handshake: bounded memory, one line."""
+
+from __future__ import annotations
+
+import asyncio
+import re
+import socket
+import struct
+import sys
+import time
+from collections.abc import Iterator
+from pathlib import Path
+
+import pytest
+
+from rostools.graph import connection
+from rostools.graph.node import Node
+from rostools.graph.topic import TopicType
+from rostools.master.server import MasterThread
+from rostools.msgs.store import BuiltinSource, TypeStore
+from tests.support.fakepeer import FakePublisher, frame, valid_header
+from tests.support.procs import Proc
+
+STRING = TopicType.of(TypeStore([BuiltinSource()]), "std_msgs/String")
+
+
+@pytest.fixture
+def master() -> Iterator[MasterThread]:
+    with MasterThread() as m:
+        yield m
+
+
+def peak_rss_mb(proc: Proc, timeout: float) -> float:
+    """The peak resident memory of ``proc`` (VmHWM) until it exits, in MB."""
+    peak, deadline = 0, time.monotonic() + timeout
+    while proc.popen.poll() is None and time.monotonic() < deadline:
+        try:
+            status = Path(f"/proc/{proc.pid}/status").read_text()
+        except OSError:
+            break
+        peak = max(peak, int(status.split("VmHWM:")[1].split()[0]))
+        time.sleep(0.05)
+    return peak / 1024
+
+
+def test_an_announced_gigabyte_costs_little(rostools_master: str, cli_env: dict[str, str]) -> None:
+    # the defect: echo allocated what the length prefix claimed, 981 MB before any data came
+    def lie(sock: socket.socket) -> None:
+        sock.sendall(valid_header("/huge"))
+        time.sleep(0.2)  # a read of its own: the header's limit no longer applies
+        sock.sendall(struct.pack("<I", 999_999_999) + b"x" * 20)
+
+    with FakePublisher(rostools_master, "/huge", lie):
+        echo = Proc([sys.executable, "-m", "rostools", "topic", "echo", "/huge", "--timeout", "3"],
+                    env=cli_env)  # fmt: skip
+        try:
+            peak = peak_rss_mb(echo, 15)
+            assert echo.popen.wait(15) == 5
+        finally:
+            echo.stop()
+    assert peak < 150, f"echo peaked at {peak:.0f} MB"
+
+
+def test_an_oversized_frame_is_said_once(rostools_master: str, cli_env: dict[str, str]) -> None:
+    # the defect: echo printed about 60 reconnect warnings and then only timed out
+    def oversized(sock: socket.socket) -> None:
+        sock.sendall(valid_header("/over") + struct.pack("<I", 2_000_000_000))
+
+    with FakePublisher(rostools_master, "/over", oversized):
+        echo = Proc([sys.executable, "-m", "rostools", "topic", "echo", "/over", "--timeout", "4"],
+                    env=cli_env)  # fmt: skip
+        try:
+            assert echo.popen.wait(20) == 5
+            _, err = echo.output()
+        finally:
+            echo.stop()
+    told = [line for line in err.splitlines() if "/fake" in line]
+    assert len(told) == 1, err
+    assert re.fullmatch(
+        r"rostools: dropped the connection from /fake at http://127\.0\.0\.1:\d+/ \(publisher "
+        r"of /over\): frame of 2000000000 bytes exceeds the limit of 1000000000",
+        told[0],
+    ), told
+
+
+def test_a_big_message_in_the_same_read_as_the_header(master: MasterThread) -> None:
+    # the defect: a message over 64 MiB that came in one read with the header was checked
+    # against the header's limit and dropped
+    size = 64 * 1024 * 1024 + 100
+    message = struct.pack("<I", size - 4) + b"m" * (size - 4)
+
+    def send(sock: socket.socket) -> None:
+        sock.sendall(valid_header("/big") + frame(message))
+
+    async def main() -> list[int]:
+        node = await Node("big_sub", master.uri).start()
+        got: list[int] = []
+        try:
+            await node.subscribe("/big", lambda frames, conn, t: got.extend(map(len, frames)))
+            for _ in range(200):
+                if got:
+                    break
+                await asyncio.sleep(0.05)
+        finally:
+            await node.close()
+        return got
+
+    with FakePublisher(master.uri, "/big", send):
+        assert asyncio.run(main()) == [size]
+
+
+def test_a_peer_that_never_sends_its_header_is_closed(
+    master: MasterThread, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    # the defect: no handshake deadline, and a 4-byte prefix reserved 64 MiB for the header
+    monkeypatch.setattr(connection, "HANDSHAKE_TIMEOUT", 0.5)
+
+    async def main() -> tuple[bytes, bytes, float]:
+        node = await Node("victim", master.uri).start()
+        await node.advertise("/v", STRING)
+        loop = asyncio.get_running_loop()
+        try:
+            silent = socket.create_connection(("127.0.0.1", node.tcpros_port))
+            huge = socket.create_connection(("127.0.0.1", node.tcpros_port))
+            huge.sendall(struct.pack("<I", 64 * 1024 * 1024))
+            for sock in (silent, huge):
+                sock.settimeout(5)
+            began = time.monotonic()
+            closed = await loop.run_in_executor(None, silent.recv, 1)
+            waited = time.monotonic() - began
+            refused = await loop.run_in_executor(None, huge.recv, 1)
+            silent.close()
+            huge.close()
+        finally:
+            await node.close()
+        return closed, refused, waited
+
+    closed, refused, waited = asyncio.run(main())
+    assert closed == b"" and refused == b""
+    assert waited < 3

@@ -19,8 +19,10 @@ from typing import Any
 from urllib.parse import urlsplit
 
 from rostools.wire.xmlrpc import (
+    MAX_BODY,
     HttpError,
     HttpParser,
+    Message,
     decode_call,
     decode_response,
     encode_fault,
@@ -31,8 +33,19 @@ from rostools.wire.xmlrpc import (
 
 log = logging.getLogger(__name__)
 
-#: A request that has started must complete within this time (slow or half-open clients).
+#: A request that has started must complete within this time, however it trickles in
+#: (slow or half-open clients).
 REQUEST_TIMEOUT = 30.0
+#: A request body bigger than this is decoded and encoded in a thread and, for a multicall,
+#: run in slices: parsing a 23 MB multicall held rosmaster-size graphs up for 4.5 s.
+BIG_REQUEST = 256 * 1024
+#: Calls of a big multicall run between two turns of the event loop (about 2 ms of work).
+MULTICALL_SLICE = 500
+#: Bodies bigger than this count against a budget shared by every connection...
+LARGE_BODY = 1024 * 1024
+#: ...which holds two of the largest bodies we accept (``MAX_BODY``) at once. rosmaster has
+#: no budget: six slow 63 MiB bodies held 416 MB there.
+BODY_BUDGET = 2 * MAX_BODY
 #: Outgoing calls (publisherUpdate, paramUpdate, shutdown) give up after this long.
 CALL_TIMEOUT = 5.0
 
@@ -48,19 +61,33 @@ class Encoded:
         self.body = body
 
 
+def run_call(dispatch: Dispatch, method: str, params: tuple[Any, ...]) -> Any:
+    """Run a decoded call: its result, or an encoded fault (every failure becomes one)."""
+    try:
+        return dispatch(method, params)
+    except xmlrpc.client.Fault as fault:
+        return Encoded(encode_fault(fault.faultCode, fault.faultString))
+    except OverflowError:
+        return Encoded(encode_fault(1, "<class 'OverflowError'>:int exceeds XML-RPC limits"))
+    except Exception as err:  # noqa: BLE001 - answered as a fault, logged in one line
+        log.warning("XML-RPC method %s failed: %s: %s", method, type(err).__name__, err)
+        return Encoded(encode_fault(1, f"<class '{type(err).__name__}'>:{err}"))
+
+
+def encode_answer(result: Any) -> bytes:
+    """A result as a response body (an ``Encoded`` one as it is)."""
+    if isinstance(result, Encoded):
+        return result.body
+    try:
+        return encode_result(result)
+    except OverflowError:
+        return encode_fault(1, "<class 'OverflowError'>:int exceeds XML-RPC limits")
+
+
 def handle_body(dispatch: Dispatch, body: bytes) -> bytes:
     """Decode a call, run it, encode the answer; every failure becomes a fault."""
     method, params = decode_call(body)
-    try:
-        result = dispatch(method, params)
-        return result.body if isinstance(result, Encoded) else encode_result(result)
-    except xmlrpc.client.Fault as fault:
-        return encode_fault(fault.faultCode, fault.faultString)
-    except OverflowError:
-        return encode_fault(1, "<class 'OverflowError'>:int exceeds XML-RPC limits")
-    except Exception as err:
-        log.exception("XML-RPC method %s failed", method)
-        return encode_fault(1, f"<class '{type(err).__name__}'>:{err}")
+    return encode_answer(run_call(dispatch, method, params))
 
 
 _date_cache: tuple[int, str] = (0, "")
@@ -76,11 +103,17 @@ def http_date() -> str:
 
 
 class _Connection(asyncio.Protocol):
+    """One client connection: requests answered in order, big ones off the fast path."""
+
     def __init__(self, server: XmlRpcServer) -> None:
         self.server = server
         self.parser = HttpParser()
         self.transport: asyncio.Transport | None = None
         self.deadline: asyncio.TimerHandle | None = None
+        #: A big request is being handled; what arrives meanwhile waits in the parser.
+        self.busy = False
+        #: Bytes of the body budget this connection holds.
+        self.reserved = 0
 
     def connection_made(self, transport: asyncio.BaseTransport) -> None:
         assert isinstance(transport, asyncio.Transport)
@@ -89,36 +122,92 @@ class _Connection(asyncio.Protocol):
 
     def connection_lost(self, exc: Exception | None) -> None:
         self.server.connections.discard(self)
+        self._release()
         if self.deadline is not None:
             self.deadline.cancel()
 
     def data_received(self, data: bytes) -> None:
+        self.parser.feed(data)
+        if not self.busy:
+            self._process()
+
+    def _process(self) -> None:
         transport = self.transport
         assert transport is not None
-        self.parser.feed(data)
         try:
             while (message := self.parser.next_message()) is not None:
-                body = handle_body(self.server.dispatch, message.body)
-                transport.write(format_response(body, message.keep_alive, date=http_date()))
-                if self.server.after_call is not None:
-                    self.server.after_call()
-                if not message.keep_alive:
-                    transport.close()
+                self._stop_clock()
+                if len(message.body) > BIG_REQUEST:
+                    self.busy = True
+                    transport.pause_reading()
+                    task = asyncio.get_running_loop().create_task(self._handle_big(message))
+                    self.server.tasks.add(task)
+                    task.add_done_callback(self.server.tasks.discard)
                     return
+                body = handle_body(self.server.dispatch, message.body)
+                self._answer(body, message.keep_alive)
+                if not message.keep_alive:
+                    return
+            self._reserve(self.parser.pending)
         except HttpError as err:
-            page = f"{err.status} {err.reason}".encode()
-            transport.write(format_response(page, False, f"{err.status} {err.reason}"))
-            transport.close()
+            self._refuse(err)
             return
-        self._arm_deadline()
+        if self.parser.buffer and self.deadline is None:
+            # one deadline for the whole request, not renewed by each byte of a trickle
+            loop = asyncio.get_running_loop()
+            self.deadline = loop.call_later(REQUEST_TIMEOUT, transport.abort)
 
-    def _arm_deadline(self) -> None:
+    async def _handle_big(self, message: Message) -> None:
+        """Decode and encode in a thread, and run a multicall in slices: others get turns."""
+        transport = self.transport
+        assert transport is not None
+        loop = asyncio.get_running_loop()
+        try:
+            method, params = await loop.run_in_executor(None, decode_call, message.body)
+            result = await self.server.run(method, params)
+            body = await loop.run_in_executor(None, encode_answer, result)
+        except HttpError as err:
+            self._refuse(err)
+            return
+        finally:
+            self._release()
+        self._answer(body, message.keep_alive)
+        self.busy = False
+        if message.keep_alive and not transport.is_closing():
+            transport.resume_reading()
+            self._process()
+
+    def _answer(self, body: bytes, keep_alive: bool) -> None:
+        assert self.transport is not None
+        self.transport.write(format_response(body, keep_alive, date=http_date()))
+        if self.server.after_call is not None:
+            self.server.after_call()
+        if not keep_alive:
+            self.transport.close()
+
+    def _refuse(self, err: HttpError) -> None:
+        assert self.transport is not None
+        page = f"{err.status} {err.reason}".encode()
+        self.transport.write(format_response(page, False, f"{err.status} {err.reason}"))
+        self.transport.close()
+
+    def _reserve(self, length: int) -> None:
+        """Hold ``length`` of the body budget while a large body arrives (503 past it)."""
+        if length <= LARGE_BODY or self.reserved:
+            return
+        if self.server.budget_used + length > BODY_BUDGET:
+            raise HttpError(503, "Service Unavailable: too many large requests at once")
+        self.reserved = length
+        self.server.budget_used += length
+
+    def _release(self) -> None:
+        self.server.budget_used -= self.reserved
+        self.reserved = 0
+
+    def _stop_clock(self) -> None:
         if self.deadline is not None:
             self.deadline.cancel()
             self.deadline = None
-        if self.parser.buffer and self.transport is not None:
-            loop = asyncio.get_running_loop()
-            self.deadline = loop.call_later(REQUEST_TIMEOUT, self.transport.abort)
 
 
 class XmlRpcServer:
@@ -136,6 +225,9 @@ class XmlRpcServer:
         self.port = port
         self.after_call = after_call
         self.connections: set[_Connection] = set()
+        self.tasks: set[asyncio.Task[None]] = set()
+        #: Bytes of large request bodies being received or handled, across connections.
+        self.budget_used = 0
         self._server: asyncio.base_events.Server | None = None
 
     async def start(self) -> None:
@@ -145,6 +237,22 @@ class XmlRpcServer:
             lambda: _Connection(self), self.host, self.port, reuse_address=True
         )
         self.port = self._server.sockets[0].getsockname()[1]
+
+    async def run(self, method: str, params: tuple[Any, ...]) -> Any:
+        """Run a call; a big ``system.multicall`` in slices, with turns for others between."""
+        calls = params[0] if method == "system.multicall" and len(params) == 1 else None
+        if not isinstance(calls, list) or len(calls) <= MULTICALL_SLICE:
+            return run_call(self.dispatch, method, params)
+        results: list[Any] = []
+        for start in range(0, len(calls), MULTICALL_SLICE):
+            part = run_call(self.dispatch, method, (calls[start : start + MULTICALL_SLICE],))
+            if isinstance(part, Encoded):
+                return part  # the multicall as a whole failed
+            results += part
+            if self.after_call is not None:
+                self.after_call()
+            await asyncio.sleep(0)
+        return results
 
     async def close(self) -> None:
         """Stop listening and drop every connection."""

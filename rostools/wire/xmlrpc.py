@@ -48,6 +48,8 @@ class HttpParser:
     """
 
     buffer: bytearray = field(default_factory=bytearray)
+    #: The declared body length of a message whose headers are in and whose body is not.
+    pending: int = 0
 
     def feed(self, data: bytes) -> None:
         """Add received bytes."""
@@ -78,7 +80,9 @@ class HttpParser:
             raise HttpError(413, "Payload Too Large")
         total = end + 4 + length
         if len(self.buffer) < total:
+            self.pending = length
             return None
+        self.pending = 0
         body = bytes(self.buffer[end + 4 : total])
         del self.buffer[:total]
         start = lines[0]
@@ -157,6 +161,8 @@ def multicall(dispatch: Any, calls: Any) -> list[Any]:
             method, params = call.get("methodName"), call.get("params", [])
             if method == "system.multicall":
                 raise xmlrpc.client.Fault(1, "recursive system.multicall forbidden")
+            if not isinstance(params, list):
+                raise xmlrpc.client.Fault(1, "multicall params must be an array")
             results.append([dispatch(method, tuple(params))])
         except xmlrpc.client.Fault as fault:
             results.append({"faultCode": fault.faultCode, "faultString": fault.faultString})

@@ -8,10 +8,12 @@ import threading
 import time
 import xmlrpc.client
 from collections.abc import Iterator
+from typing import Any
 from xmlrpc.server import SimpleXMLRPCServer
 
 import pytest
 
+from rostools.graph import xmlrpc as graph_xmlrpc
 from rostools.master.server import MasterThread
 from tests.support.procs import wait_for
 
@@ -169,3 +171,69 @@ def test_cached_answers_follow_the_caller_and_the_checks(master: MasterThread) -
         -1, "ERROR: parameter [subgraph] must be a string", 0
     ]  # fmt: skip
     assert proxy.getPublishedTopics("/c", {"a": 1})[0] == -1
+
+
+def test_a_huge_multicall_does_not_stall_other_clients(master: MasterThread) -> None:
+    # the defect: a multicall of 100,000 calls held the event loop; every other client's
+    # getSystemState waited up to 4.5 s (rosmaster, threaded: under 0.2 s)
+    calls = [{"methodName": "getPid", "params": ["/big"]}] * 100_000
+    answer: list[Any] = []
+    big = threading.Thread(
+        target=lambda: answer.append(xmlrpc.client.ServerProxy(master.uri).system.multicall(calls))
+    )
+    proxy = xmlrpc.client.ServerProxy(master.uri)
+    big.start()
+    waits = []
+    while big.is_alive():
+        began = time.monotonic()
+        assert proxy.getSystemState("/small")[0] == 1
+        waits.append(time.monotonic() - began)
+    big.join()
+    assert len(answer[0]) == 100_000 and answer[0][-1][0][0] == 1
+    assert len(waits) > 5 and max(waits) < 0.5, f"{len(waits)} calls, worst {max(waits):.2f} s"
+
+
+def test_a_bad_multicall_entry_is_a_fault(master: MasterThread, capsys: Any) -> None:
+    # the defect: params that were not a list printed a traceback on the master
+    results = xmlrpc.client.ServerProxy(master.uri).system.multicall(
+        [{"methodName": "getPid", "params": 5}, {"methodName": "getPid", "params": ["/c"]}]
+    )
+    assert results[0] == {"faultCode": 1, "faultString": "multicall params must be an array"}
+    assert results[1][0][0] == 1
+    assert "Traceback" not in capsys.readouterr().err
+
+
+def test_large_bodies_share_one_budget(master: MasterThread) -> None:
+    # the defect: six connections promising 63 MiB each and sending slowly held 416 MB
+    port = master.master.port  # type: ignore[union-attr]
+    promised = f"POST / HTTP/1.1\r\nContent-Length: {60 << 20}\r\n\r\n".encode() + b"x" * 1000
+    socks = [socket.create_connection(("127.0.0.1", port), timeout=5) for _ in range(3)]
+    try:
+        for sock in socks:
+            sock.sendall(promised)
+            time.sleep(0.2)
+        refused = socks[2].recv(200)
+        assert refused.startswith(b"HTTP/1.1 503 Service Unavailable"), refused
+        assert xmlrpc.client.ServerProxy(master.uri).getPid("/c")[0] == 1  # small calls go on
+    finally:
+        for sock in socks:
+            sock.close()
+
+
+def test_a_trickling_request_meets_one_deadline(
+    master: MasterThread, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    # the defect: the request timeout restarted with every byte, so a byte a second was
+    # never closed
+    monkeypatch.setattr(graph_xmlrpc, "REQUEST_TIMEOUT", 0.5)
+    port = master.master.port  # type: ignore[union-attr]
+    with socket.create_connection(("127.0.0.1", port), timeout=5) as sock:
+        began = time.monotonic()
+        try:
+            for byte in b"POST / HTTP/1.1\r\nContent-Length: 100\r\n\r\n":
+                sock.send(bytes([byte]))
+                time.sleep(0.1)
+        except OSError:
+            pass  # closed under us, as it should be
+        closed_after = time.monotonic() - began
+    assert closed_after < 2.5

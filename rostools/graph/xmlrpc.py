@@ -82,6 +82,8 @@ def encode_answer(result: Any) -> bytes:
         return encode_result(result)
     except OverflowError:
         return encode_fault(1, "<class 'OverflowError'>:int exceeds XML-RPC limits")
+    except RecursionError:
+        return encode_fault(1, "<class 'RecursionError'>:value nested too deep to encode")
 
 
 def handle_body(dispatch: Dispatch, body: bytes) -> bytes:
@@ -129,7 +131,11 @@ class _Connection(asyncio.Protocol):
     def data_received(self, data: bytes) -> None:
         self.parser.feed(data)
         if not self.busy:
-            self._process()
+            try:
+                self._process()
+            except Exception as err:  # noqa: BLE001 - one line per bad request, never a traceback
+                log.warning("XML-RPC request failed: %s: %s", type(err).__name__, err)
+                self._refuse(HttpError(500, "Internal Server Error"))
 
     def _process(self) -> None:
         transport = self.transport

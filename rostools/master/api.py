@@ -181,6 +181,8 @@ class MasterAPI:
             updates = self.params.set(key, value, caller_id)
         except TypeError as err:
             return -1, f"Error: invalid arguments: {err}", 0
+        except ValueError as err:
+            return -1, f"ERROR: {err}", 0
         self._notify_params(updates)
         return 1, f"parameter {key} set", 0
 

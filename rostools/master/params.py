@@ -11,6 +11,11 @@ from typing import Any
 
 from rostools.names import GLOBAL_NS, SEP, canonicalize, is_global, is_private
 
+#: How deep the tree may nest, key segments and value levels together. Encoding and walking
+#: it recurse; rosmaster stores a parameter 100,000 levels deep and then fails every
+#: ``getParam /`` with a RecursionError. Real configurations nest about ten levels.
+MAX_DEPTH = 100
+
 #: (caller_id, caller_api) pairs subscribed to one key.
 Subscribers = list[tuple[str, str]]
 #: A paramUpdate to send: (caller_id, caller_api, key, value); ``{}`` means deleted.
@@ -52,7 +57,12 @@ class ParamTree:
         return True
 
     def set(self, key: str, value: Any, caller_id: str | None = None) -> list[Update]:
-        """Set ``key``; the paramUpdates to send (the setter itself is not told)."""
+        """Set ``key``; the paramUpdates to send (the setter itself is not told).
+
+        ValueError when the tree would nest deeper than ``MAX_DEPTH``.
+        """
+        if len(_parts(key)) + nesting(value) > MAX_DEPTH:
+            raise ValueError(f"parameter [{key}] would nest deeper than {MAX_DEPTH} levels")
         if key == GLOBAL_NS:
             if not isinstance(value, dict):
                 raise TypeError("cannot set root of parameter tree to non-dictionary")
@@ -138,6 +148,23 @@ class ParamTree:
                         sub_value = sub_value[part]
                     updates += [(cid, api, skey, sub_value) for cid, api in self.subscribers[skey]]
         return updates
+
+
+def nesting(value: Any) -> int:
+    """How many levels of dicts and lists ``value`` holds (0 for a scalar), without recursion."""
+    deepest, level = 0, [(value, 0)]
+    while level:
+        item, depth = level.pop()
+        children = (
+            item.values() if isinstance(item, dict) else item if isinstance(item, list) else None
+        )
+        if children is None:
+            continue
+        deepest = max(deepest, depth + 1)
+        if deepest > MAX_DEPTH:
+            return deepest  # deep enough to refuse: no need to walk the rest
+        level += [(child, depth + 1) for child in children]
+    return deepest
 
 
 def _all_keys(prefix: str, value: dict[str, Any]) -> set[str]:

@@ -237,3 +237,33 @@ def test_a_trickling_request_meets_one_deadline(
             pass  # closed under us, as it should be
         closed_after = time.monotonic() - began
     assert closed_after < 2.5
+
+
+def _deep_set_body(depth: int) -> bytes:
+    """A setParam of /deep to a struct nested ``depth`` levels, as raw XML (a client's
+    marshaller would recurse too deep to write it)."""
+    opening = "<value><struct><member><name>a</name>" * depth
+    closing = "</member></struct></value>" * depth
+    return (
+        "<?xml version='1.0'?><methodCall><methodName>setParam</methodName><params>"
+        "<param><value><string>/c</string></value></param>"
+        "<param><value><string>/deep</string></value></param>"
+        f"<param>{opening}<value><int>1</int></value>{closing}</param></params></methodCall>"
+    ).encode()
+
+
+def test_absurdly_deep_parameters_are_refused(master: MasterThread, capsys: Any) -> None:
+    # the defect: a parameter nested 100k deep was stored, and every getParam / after it
+    # printed a RecursionError traceback of about 110 KB on the master
+    port = master.master.port  # type: ignore[union-attr]
+    answer = xmlrpc.client.loads(_post(port, _deep_set_body(5000)).split(b"\r\n\r\n", 1)[1])
+    assert answer[0][0] == [
+        -1, "ERROR: parameter [/deep] would nest deeper than 100 levels", 0
+    ]  # fmt: skip
+    proxy = xmlrpc.client.ServerProxy(master.uri)
+    long_key = "/k" * 5000
+    assert proxy.setParam("/c", long_key, 1)[0] == -1
+    assert proxy.setParam("/c", "/ok/" + "/".join("n" * 10), {"x": [[1]]})[0] == 1
+    for _ in range(3):
+        assert proxy.getParam("/c", "/")[0] == 1
+    assert "Traceback" not in capsys.readouterr().err

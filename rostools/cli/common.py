@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import enum
 import json
+import math
 import os
 import sys
 from dataclasses import dataclass, field
@@ -22,6 +23,26 @@ if TYPE_CHECKING:
     from rostools.msgs.store import TypeStore
 
 DEFAULT_MASTER_URI = "http://localhost:11311"
+
+try:
+    from typer._click.types import FloatParamType
+except ImportError:  # pragma: no cover - older typer uses the click package
+    from click.types import FloatParamType  # type: ignore[no-redef,import-not-found,unused-ignore]
+
+
+class FiniteFloat(FloatParamType):  # type: ignore[misc,unused-ignore]
+    """A float option: ``nan`` and ``inf`` are usage errors (exit 2), not crashes later."""
+
+    def convert(self, value: Any, param: Any, ctx: Any) -> Any:
+        """Click's float, finite."""
+        number = super().convert(value, param, ctx)
+        if not math.isfinite(number):
+            self.fail(f"{value!r} is not a finite number", param, ctx)
+        return number
+
+
+#: Every float option's type (``typer.Option(..., click_type=FINITE)``).
+FINITE = FiniteFloat()
 
 
 class Format(str, enum.Enum):

@@ -7,7 +7,7 @@ from typing import Annotated
 
 import typer
 
-from rostools.cli.common import Format, FormatOpt, emit, output_format, settings
+from rostools.cli.common import FINITE, Format, FormatOpt, emit, output_format, settings
 from rostools.errors import RostoolsError, TimeoutExpired, UnreachableError, UsageError
 
 app = typer.Typer(
@@ -27,7 +27,9 @@ def doctor(
     ctx: typer.Context,
     timeout: Annotated[
         float,
-        typer.Option("--timeout", "-t", min=0.001, help="Seconds to wait for each peer."),
+        typer.Option(
+            "--timeout", "-t", min=0.001, click_type=FINITE, help="Seconds to wait for each peer."
+        ),
     ] = 2.0,
     fmt: FormatOpt = None,
 ) -> None:

@@ -17,7 +17,16 @@ from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
-from rostools.cli.common import Format, FormatOpt, emit, master, output_format, render, settings
+from rostools.cli.common import (
+    FINITE,
+    Format,
+    FormatOpt,
+    emit,
+    master,
+    output_format,
+    render,
+    settings,
+)
 from rostools.errors import (
     NotFoundError,
     RostoolsError,
@@ -49,6 +58,7 @@ TimeoutOpt = Annotated[
         "--timeout",
         "-t",
         min=0.001,
+        click_type=FINITE,
         help="Seconds to wait for each node's answer.",
     ),
 ]

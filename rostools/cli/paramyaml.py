@@ -18,7 +18,9 @@ from typing import Any
 
 import yaml
 
+from rostools import yamlio
 from rostools.errors import UsageError
+from rostools.yamlio import SafeLoader
 
 INT32_MIN, INT32_MAX = -(2**31), 2**31 - 1
 _OPS: dict[type, Callable[..., float]] = {
@@ -67,7 +69,7 @@ def _binary(loader: yaml.SafeLoader, node: yaml.Node) -> xmlrpc.client.Binary:
     return xmlrpc.client.Binary(loader.construct_yaml_binary(node))  # type: ignore[arg-type]
 
 
-class ParamLoader(yaml.SafeLoader):
+class ParamLoader(SafeLoader):  # type: ignore[misc,valid-type]
     """safe_load plus rosparam's tags."""
 
 
@@ -95,26 +97,18 @@ ParamDumper.add_representer(xmlrpc.client.Binary, _represent_binary)
 ParamDumper.add_representer(xmlrpc.client.DateTime, _represent_date)
 
 
-def load(text: str) -> Any:
+#: Parameters go out as XML-RPC, which the master accepts up to 64 MiB: about a million values.
+MAX_PARAM_VALUES = 1_000_000
+
+
+def load(text: str, source: str = "the value") -> Any:
     """One YAML value."""
-    try:
-        return yaml.load(text, Loader=ParamLoader)  # noqa: S506 - a SafeLoader subclass
-    except yaml.YAMLError as err:
-        raise UsageError(f"bad YAML: {_problem(err)}") from None
+    return yamlio.load(text, source, ParamLoader, MAX_PARAM_VALUES)
 
 
 def load_all(text: str, source: str) -> list[Any]:
     """Every document of a YAML stream."""
-    try:
-        return list(yaml.load_all(text, Loader=ParamLoader))
-    except yaml.YAMLError as err:
-        raise UsageError(f"bad YAML in {source}: {_problem(err)}") from None
-
-
-def _problem(err: yaml.YAMLError) -> str:
-    mark = getattr(err, "problem_mark", None)
-    where = f" (line {mark.line + 1}, column {mark.column + 1})" if mark is not None else ""
-    return f"{getattr(err, 'problem', None) or err}{where}"
+    return yamlio.load_all(text, source, ParamLoader, MAX_PARAM_VALUES)
 
 
 class PrettyDumper(ParamDumper):

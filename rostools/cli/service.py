@@ -10,6 +10,7 @@ from typing import TYPE_CHECKING, Annotated, Any
 import typer
 
 from rostools.cli.common import (
+    FINITE,
     Format,
     FormatOpt,
     MsgPathOpt,
@@ -34,7 +35,9 @@ app = typer.Typer(
 )
 
 ServiceArg = Annotated[str, typer.Argument(help="Service name; relative names join ROS_NAMESPACE.")]
-TimeoutOpt = Annotated[float, typer.Option("--timeout", help="Seconds to wait for the service.")]
+TimeoutOpt = Annotated[
+    float, typer.Option("--timeout", click_type=FINITE, help="Seconds to wait for the service.")
+]
 DEFAULT_TIMEOUT = 10.0
 
 
@@ -227,12 +230,10 @@ def call(
     if values:
         requests = [parse_yaml_args(values)]
     elif spec.request.fields and not sys.stdin.isatty():
-        import yaml
+        from rostools import yamlio
 
-        try:
-            requests = [[doc] for doc in yaml.safe_load_all(sys.stdin.read()) if doc is not None]
-        except yaml.YAMLError as err:
-            raise UsageError(f"bad YAML on stdin: {err}") from None
+        docs = yamlio.load_all(sys.stdin.read(), "stdin")
+        requests = [[doc] for doc in docs if doc is not None]
     else:
         requests = [[]]
     fmt = output_format(ctx, fmt)

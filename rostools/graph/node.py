@@ -104,10 +104,10 @@ class Node:
         self._tcpros = await loop.create_server(lambda: ServerConnection(self._accept), bind, 0)
         self.tcpros_port = self._tcpros.sockets[0].getsockname()[1]
         if self.private_params:
-            import yaml
+            from rostools import yamlio
 
             for key, text in self.private_params.items():
-                value = yaml.safe_load(text) if text else ""
+                value = yamlio.load(text, f"_{key}:=") if text else ""
                 await self.master_call("setParam", f"{self.name}/{key}", value)
         self._watch = loop.create_task(MasterWatch(self).run())
         return self

@@ -173,21 +173,9 @@ def parse_yaml_args(args: list[str]) -> list[Any]:
 
     An empty argument is the empty string, as in rosservice.
     """
-    import yaml
+    from rostools import yamlio
 
-    values: list[Any] = []
-    for arg in args:
-        if arg == "":
-            values.append("")
-            continue
-        try:
-            values.append(yaml.safe_load(arg))
-        except yaml.YAMLError as err:
-            mark = getattr(err, "problem_mark", None)
-            where = f" at column {mark.column + 1}" if mark is not None else ""
-            problem = getattr(err, "problem", None) or "not valid YAML"
-            raise UsageError(f"bad YAML in argument {arg!r}{where}: {problem}") from None
-    return values
+    return ["" if arg == "" else yamlio.load(arg, f"argument {arg[:40]!r}") for arg in args]
 
 
 def _join(path: str, name: str) -> str:

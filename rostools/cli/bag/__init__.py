@@ -15,7 +15,7 @@ from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
-from rostools.cli.common import Format, FormatOpt, emit, output_format, render
+from rostools.cli.common import FINITE, Format, FormatOpt, emit, output_format, render
 from rostools.errors import UsageError
 
 if TYPE_CHECKING:
@@ -181,10 +181,11 @@ def filter_(
         list[str] | None, typer.Option("--topics", "-t", help="Only these topics.")
     ] = None,
     start: Annotated[
-        float | None, typer.Option("--start", help="Seconds from the bag's start.")
+        float | None,
+        typer.Option("--start", click_type=FINITE, help="Seconds from the bag's start."),
     ] = None,
     end: Annotated[
-        float | None, typer.Option("--end", help="Seconds from the bag's start.")
+        float | None, typer.Option("--end", click_type=FINITE, help="Seconds from the bag's start.")
     ] = None,
     print_: Annotated[
         str | None,

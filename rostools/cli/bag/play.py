@@ -12,7 +12,7 @@ from typing import TYPE_CHECKING, Annotated
 import typer
 
 from rostools.cli.bag import app
-from rostools.cli.common import Format, FormatOpt, node_session, output_format, render
+from rostools.cli.common import FINITE, Format, FormatOpt, node_session, output_format, render
 from rostools.errors import UsageError
 
 if TYPE_CHECKING:
@@ -86,18 +86,27 @@ def play(
         list[str] | None,
         typer.Argument(help="Bags to play, merged in time order.", show_default=False),
     ] = None,
-    rate: Annotated[float, typer.Option("--rate", "-r", help="Speed factor.")] = 1.0,
+    rate: Annotated[
+        float, typer.Option("--rate", "-r", click_type=FINITE, help="Speed factor.")
+    ] = 1.0,
     start: Annotated[
-        float, typer.Option("--start", "-s", help="Start this many seconds into the bags.")
+        float,
+        typer.Option(
+            "--start", "-s", click_type=FINITE, help="Start this many seconds into the bags."
+        ),
     ] = 0.0,
     duration: Annotated[
-        float | None, typer.Option("--duration", "-u", help="Play only this many seconds.")
+        float | None,
+        typer.Option("--duration", "-u", click_type=FINITE, help="Play only this many seconds."),
     ] = None,
     loop_: Annotated[bool, typer.Option("--loop", "-l", help="Play again and again.")] = False,
     clock: Annotated[bool, typer.Option("--clock", help="Publish bag time on /clock.")] = False,
-    hz: Annotated[float, typer.Option("--hz", help="/clock messages per second.")] = 100.0,
+    hz: Annotated[
+        float, typer.Option("--hz", click_type=FINITE, help="/clock messages per second.")
+    ] = 100.0,
     delay: Annotated[
-        float, typer.Option("--delay", "-d", help="Seconds to wait after advertising.")
+        float,
+        typer.Option("--delay", "-d", click_type=FINITE, help="Seconds to wait after advertising."),
     ] = 0.2,
     immediate: Annotated[
         bool, typer.Option("--immediate", "-i", help="Publish everything without waiting.")
@@ -113,7 +122,8 @@ def play(
         bool, typer.Option("--keep-alive", "-k", help="Stay up after the end (latched topics).")
     ] = False,
     skip_empty: Annotated[
-        float | None, typer.Option("--skip-empty", help="Skip gaps longer than this (s).")
+        float | None,
+        typer.Option("--skip-empty", click_type=FINITE, help="Skip gaps longer than this (s)."),
     ] = None,
     queue: Annotated[int, typer.Option("--queue", help="Publisher queue size.")] = 100,
     wait_for_subscribers: Annotated[
@@ -135,7 +145,11 @@ def play(
     ] = None,
     rate_control_max_delay: Annotated[
         float,
-        typer.Option("--rate-control-max-delay", help="The lag (s) allowed before holding."),
+        typer.Option(
+            "--rate-control-max-delay",
+            click_type=FINITE,
+            help="The lag (s) allowed before holding.",
+        ),
     ] = 1.0,
     bag_list: Annotated[
         list[str] | None,

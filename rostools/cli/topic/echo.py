@@ -12,6 +12,7 @@ from typing import TYPE_CHECKING, Annotated, Any
 import typer
 
 from rostools.cli.common import (
+    FINITE,
     Format,
     FormatOpt,
     MsgPathOpt,
@@ -31,6 +32,7 @@ TimeoutOpt = Annotated[
     float | None,
     typer.Option(
         "--timeout",
+        click_type=FINITE,
         help="Give up after this many seconds (exit 5 if fewer messages than asked arrived).",
     ),
 ]

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 import sys
 import time
 from collections.abc import Callable, Iterator
@@ -10,7 +11,7 @@ from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
-from rostools.cli.common import MsgPathOpt, node_session, type_store
+from rostools.cli.common import FINITE, MsgPathOpt, node_session, type_store
 from rostools.cli.topic import TopicArg, app
 from rostools.cli.topic.echo import TimeoutOpt
 from rostools.errors import NotFoundError, UsageError
@@ -43,6 +44,8 @@ def _message_source(
             text = file.read_text()
         except OSError as err:
             raise NotFoundError(f"cannot read {file}: {err.strerror}") from None
+        except UnicodeDecodeError as err:
+            raise UsageError(f"{file} is not UTF-8 text (byte {err.start})") from None
         docs = _yaml_docs(text, str(file))
         return (lambda: (filler.message(type_name, [d]) for d in docs)), len(docs) == 1
     if args:
@@ -72,12 +75,9 @@ def _forever(make: Callable[[], Any]) -> Iterator[Any]:
 
 
 def _yaml_docs(text: str, source: str) -> list[Any]:
-    import yaml
+    from rostools import yamlio
 
-    try:
-        return [d for d in yaml.safe_load_all(text) if d is not None]
-    except yaml.YAMLError as err:
-        raise UsageError(f"bad YAML in {source}: {err}") from None
+    return [d for d in yamlio.load_all(text, source) if d is not None]
 
 
 def _stdin_docs() -> Iterator[Any]:
@@ -104,7 +104,10 @@ def pub(
         typer.Argument(help="Values: one YAML mapping, or one YAML value per field in order."),
     ] = None,
     rate: Annotated[
-        float | None, typer.Option("--rate", "-r", help="Publish repeatedly at this rate (Hz).")
+        float | None,
+        typer.Option(
+            "--rate", "-r", click_type=FINITE, help="Publish repeatedly at this rate (Hz)."
+        ),
     ] = None,
     once: Annotated[
         bool, typer.Option("--once", "-1", help="Publish once, stay 3 s, exit.")
@@ -130,8 +133,8 @@ def pub(
     from rostools.msgs.codec import Codec
     from rostools.msgs.fill import Filler
 
-    if rate is not None and rate <= 0:
-        raise UsageError("--rate must be above 0")
+    if rate is not None and not 0 < rate < math.inf:  # nan compares false both ways
+        raise UsageError("--rate must be a number above 0")
     if once and rate is not None:
         raise UsageError("-1 and -r cannot be combined")
     name = script_resolve(topic, "rostopic")

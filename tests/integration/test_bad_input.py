@@ -1,0 +1,39 @@
+"""Hostile command-line and YAML input: one line, exit 2, at once (issue 11's cases)."""
+
+from __future__ import annotations
+
+import time
+from pathlib import Path
+
+import pytest
+
+from tests.support.env import run_cli
+from tests.unit.test_yamlio import BOMB
+
+DEEP = "[" * 10_000 + "]" * 10_000
+
+
+@pytest.mark.parametrize(
+    ("args", "said"),
+    [
+        (["param", "load", "{tmp}/bomb.yaml"], "it expands to more than 1,000,000 values"),
+        (["param", "set", "/x", DEEP], "nested deeper than 100 levels"),
+        (["param", "set", "/x", "{a: 1"], "(line 2, column 1)"),
+        (["topic", "pub", "-1", "/x", "std_msgs/String", DEEP], "nested deeper"),
+        (["topic", "pub", "-1", "/x", "std_msgs/Int32", "data: " + "1" * 10_000], "too long"),
+        (["topic", "pub", "-1", "/x", "std_msgs/String", "-f", "{tmp}/latin1.yaml"], "not UTF-8"),
+        (["topic", "pub", "-r", "nan", "/x", "std_msgs/Empty", "{}"], "not a finite number"),
+        (["bag", "play", "{tmp}/bomb.yaml", "-r", "inf"], "not a finite number"),
+    ],
+)
+def test_bad_input_is_one_line(
+    args: list[str], said: str, cli_env: dict[str, str], tmp_path: Path
+) -> None:
+    (tmp_path / "bomb.yaml").write_text(BOMB)
+    (tmp_path / "latin1.yaml").write_bytes(b"data: caf\xe9\n")
+    began = time.monotonic()
+    done = run_cli(*(a.replace("{tmp}", str(tmp_path)) for a in args), env=cli_env, timeout=30)
+    assert done.returncode == 2, done.stderr
+    assert said in done.stderr and len(done.stderr.splitlines()) == 1, done.stderr
+    assert "Traceback" not in done.stderr and "internal error" not in done.stderr
+    assert time.monotonic() - began < 10

@@ -43,6 +43,11 @@ def attr_name(field_name: str) -> str:
     return field_name + "_" if keyword.iskeyword(field_name) else field_name
 
 
+#: What a generated decoder can raise on bytes that lie about their type, besides
+#: ``DecodeError``: callers of a raw decoder turn these into one.
+DECODE_ERRORS = (struct.error, IndexError, ValueError, OverflowError, MemoryError)
+
+
 def _short() -> None:
     raise DecodeError("message is shorter than its type says")
 
@@ -362,11 +367,11 @@ class Codec:
         """Source of an expression for the default value of a field."""
         if f.is_array:
             if f.base in BYTE_TYPES:
-                return f"bytes({f.length or 0})"
+                return f"_bytes({f.length or 0})"
             if f.length is None:
                 return "[]"
             one = self._default(Field("_", f.base, f.base, False, None))
-            return f"[{one} for _ in range({f.length})]"
+            return f"[{one} for _ in _range({f.length})]"
         if f.base == "string":
             return "''"
         if f.base == "bool":
@@ -376,9 +381,9 @@ class Codec:
         if f.base in STRUCT_CODES:
             return "0"
         if f.base == "time":
-            return "Time()"
+            return "_Time()"
         if f.base == "duration":
-            return "Duration()"
+            return "_Duration()"
         return f"_cls({f.base!r})()"
 
     def _build_class(self, spec: MsgSpec) -> type[Message]:
@@ -392,17 +397,20 @@ class Codec:
             "__module__": "rostools.msgs.generated",
         }
         for c in spec.constants:
-            namespace[c.name] = c.value
+            if c.name not in slots and not hasattr(Message, c.name):  # never over machinery
+                namespace[c.name] = c.value
         cls: type[Message] = type(spec.name.replace("/", "__"), (Message,), namespace)
         cls.__qualname__ = spec.name
+        # The generated names start with "_", which no ROS field name can (spec.py).
         init_lines = [
-            f"    self.{a} = {self._default(f)} if {a} is _U else {a}"
+            f"    _self.{a} = {self._default(f)} if {a} is _U else {a}"
             for a, f in zip(slots, spec.fields, strict=True)
         ] or ["    pass"]
         params = "".join(f", {a}=_U" for a in slots)
-        source = f"def __init__(self{params}):\n" + "\n".join(init_lines) + "\n"
+        source = f"def __init__(_self{params}):\n" + "\n".join(init_lines) + "\n"
         env: dict[str, Any] = {
-            "_U": _UNSET, "Time": Time, "Duration": Duration, "_cls": self.message_class,
+            "_U": _UNSET, "_Time": Time, "_Duration": Duration, "_cls": self.message_class,
+            "_bytes": bytes, "_range": range,
         }  # fmt: skip
         exec(compile(source, f"<rostools init {spec.name}>", "exec"), env)  # noqa: S102
         setattr(cls, "__init__", env["__init__"])  # noqa: B010
@@ -410,10 +418,7 @@ class Codec:
         name = spec.name
 
         def deserialize(klass: type[Message], data: Any) -> Any:
-            try:
-                return codec.decoder(name)(data, 0)[0]
-            except (struct.error, IndexError, ValueError) as err:
-                raise DecodeError(f"cannot decode {name}: {err}") from err
+            return codec.decode(name, data)
 
         def serialize(self: Message) -> bytes:
             return codec.serialize(self)
@@ -426,9 +431,7 @@ class Codec:
         """Decode ``data`` (bytes or memoryview) as type ``name``."""
         try:
             return self.decoder(name)(data, 0)[0]
-        except (struct.error, IndexError, ValueError) as err:
-            if isinstance(err, DecodeError):
-                raise
+        except (DecodeError, *DECODE_ERRORS) as err:
             raise DecodeError(f"cannot decode {name}: {err}") from err
 
     def serialize(self, msg: Message) -> bytes:

@@ -32,6 +32,10 @@ from rostools.msgs.spec import (
     split_definition,
 )
 
+#: How deeply message types may nest (see ``TypeStore.check``): the deepest of Noetic's
+#: packages nest 7 levels (nav_msgs/GetMapAction); each level costs a few recursive calls.
+MAX_NESTING = 64
+
 Kind = Literal["msg", "srv"]
 MSG_PATH_ENV = "ROSTOOLS_MSG_PATH"
 # Debian installs ROS packages here and its rospkg searches it when ROS_PACKAGE_PATH is unset.
@@ -232,8 +236,45 @@ class TypeStore:
         An empty definition (some bags have one) falls through to this store's sources.
         """
         name = normalize_type_name(name)
-        sources = [DefinitionSource(name, full_text)] if full_text.strip() else []
-        return TypeStore([*sources, *self.sources])
+        if not full_text.strip():
+            return self
+        store = TypeStore([DefinitionSource(name, full_text), *self.sources])
+        store.check(name)
+        return store
+
+    def check(self, name: str) -> None:
+        """Refuse a type that contains itself or nests deeper than ``MAX_NESTING``.
+
+        The codec, the md5 and the definition text recurse once per level, so a definition
+        from a peer or a bag is checked here first, without recursion, and a bad one is a
+        ``DefinitionError`` naming the type.
+        """
+        root = normalize_type_name(name)
+        depth: dict[str, int] = {}  # the longest chain of nested types below each type
+        stack = [(root, iter(self.msg(root).dependencies))]
+        on_path = {root}
+        while stack:
+            current, deps = stack[-1]
+            dep = next(deps, None)
+            if dep is None:
+                stack.pop()
+                on_path.discard(current)
+                below = (depth.get(d, 0) for d in self.msg(current).dependencies)
+                depth[current] = 1 + max(below, default=0)
+            elif dep in on_path:
+                raise DefinitionError(f"invalid definition of {root}: {dep} contains itself")
+            elif dep not in depth:
+                if len(stack) >= MAX_NESTING:
+                    raise DefinitionError(
+                        f"invalid definition of {root}: types nest deeper than {MAX_NESTING} levels"
+                    )
+                try:
+                    spec = self.msg(dep)
+                except NotFoundError:
+                    depth[dep] = 0  # unknown here: whoever needs it says so
+                    continue
+                on_path.add(dep)
+                stack.append((dep, iter(spec.dependencies)))
 
     def _text(self, kind: Kind, name: str) -> str:
         for source in self.sources:

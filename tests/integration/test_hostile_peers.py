@@ -138,3 +138,24 @@ def test_a_peer_that_never_sends_its_header_is_closed(
     closed, refused, waited = asyncio.run(main())
     assert closed == b"" and refused == b""
     assert waited < 3
+
+
+def test_a_message_that_does_not_decode_is_one_line(
+    rostools_master: str, cli_env: dict[str, str]
+) -> None:
+    # the defect: a zero-length frame made echo fail with "internal error: struct.error"
+    def empty(sock: socket.socket) -> None:
+        sock.sendall(valid_header("/empty") + frame(b""))
+
+    with FakePublisher(rostools_master, "/empty", empty):
+        echo = Proc([sys.executable, "-m", "rostools", "topic", "echo", "/empty", "--timeout", "5"],
+                    env=cli_env)  # fmt: skip
+        try:
+            assert echo.popen.wait(20) == 1
+            _, err = echo.output()
+        finally:
+            echo.stop()
+    assert err.splitlines()[-1].startswith(
+        "rostools: a message on /empty does not decode as std_msgs/String: "
+    ), err
+    assert "internal error" not in err

@@ -156,7 +156,20 @@ class Echo:
         return found
 
     def emit(self, printer: Printer, frames: list[Any], stamp_ns: int | None = None) -> bool:
-        """Print messages; False once ``-n`` is reached."""
+        """Print messages; False once ``-n`` is reached.
+
+        Bytes that do not decode as their type says are a ``DecodeError`` naming both.
+        """
+        from rostools.msgs.codec import DECODE_ERRORS, DecodeError
+
+        try:
+            return self._emit(printer, frames, stamp_ns)
+        except (DecodeError, *DECODE_ERRORS) as err:
+            raise DecodeError(
+                f"a message on {printer.topic} does not decode as {printer.type_name}: {err}"
+            ) from err
+
+    def _emit(self, printer: Printer, frames: list[Any], stamp_ns: int | None) -> bool:
         limit = self.opts.count
         if printer.fast is not None and limit is None:
             texts: list[str] = printer.fast(frames)

@@ -1,6 +1,6 @@
 """ROS graph resource names: canonical form, resolution, remapping, anonymous names.
 
-Pure functions over strings (ROS1_PROTOCOL.md §9), standard library only.
+Pure functions over strings (ROS1_PROTOCOL.md §9): the standard library and our errors only.
 """
 
 from __future__ import annotations
@@ -8,6 +8,8 @@ from __future__ import annotations
 import os
 import re
 import time
+
+from rostools.errors import UsageError
 
 SEP = "/"
 GLOBAL_NS = "/"
@@ -103,11 +105,21 @@ def ros_namespace(env: dict[str, str] | None = None) -> str:
     return make_global_ns(value) if value else GLOBAL_NS
 
 
-def script_resolve(name: str, tool: str = "rostools", env: dict[str, str] | None = None) -> str:
+def script_resolve(
+    name: str, tool: str = "rostools", env: dict[str, str] | None = None, field_path: bool = False
+) -> str:
     """How a command-line tool resolves a name the user typed, as rosgraph does.
 
     Relative names join ``ROS_NAMESPACE``; ``~private`` names join the tool's own name there.
+    A name that is not a legal graph name (``-x``, ``a b``, ``a//b``) is a ``UsageError``;
+    with ``field_path``, what follows a ``[`` (``/scan/ranges[0]``) is not checked.
     """
+    checked = name.split("[", 1)[0] if field_path else name
+    if not is_legal(checked):
+        raise UsageError(
+            f"{name!r} is not a legal ROS name",
+            hint="names are letters, digits, _ and /, and start with a letter, / or ~",
+        )
     ns = ros_namespace(env)
     if not name:
         return ns

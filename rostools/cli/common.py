@@ -25,23 +25,24 @@ if TYPE_CHECKING:
 DEFAULT_MASTER_URI = "http://localhost:11311"
 
 try:
-    from typer._click.types import FloatParamType
+    from typer._click.types import FloatRange
 except ImportError:  # pragma: no cover - older typer uses the click package
-    from click.types import FloatParamType  # type: ignore[no-redef,import-not-found,unused-ignore]
+    from click.types import FloatRange  # type: ignore[no-redef,import-not-found,unused-ignore]
 
 
-class FiniteFloat(FloatParamType):  # type: ignore[misc,unused-ignore]
+class FiniteFloat(FloatRange):  # type: ignore[misc,unused-ignore]
     """A float option: ``nan`` and ``inf`` are usage errors (exit 2), not crashes later."""
 
     def convert(self, value: Any, param: Any, ctx: Any) -> Any:
-        """Click's float, finite."""
+        """Click's float (in range, if one is given), finite."""
         number = super().convert(value, param, ctx)
         if not math.isfinite(number):
             self.fail(f"{value!r} is not a finite number", param, ctx)
         return number
 
 
-#: Every float option's type (``typer.Option(..., click_type=FINITE)``).
+#: Every float option's type (``typer.Option(..., click_type=FINITE)``); with bounds,
+#: ``FiniteFloat(min=...)`` (typer ignores ``min=`` once a ``click_type`` is given).
 FINITE = FiniteFloat()
 
 

@@ -7,7 +7,7 @@ from typing import Annotated
 
 import typer
 
-from rostools.cli.common import FINITE, Format, FormatOpt, emit, output_format, settings
+from rostools.cli.common import FiniteFloat, Format, FormatOpt, emit, output_format, settings
 from rostools.errors import RostoolsError, TimeoutExpired, UnreachableError, UsageError
 
 app = typer.Typer(
@@ -28,7 +28,10 @@ def doctor(
     timeout: Annotated[
         float,
         typer.Option(
-            "--timeout", "-t", min=0.001, click_type=FINITE, help="Seconds to wait for each peer."
+            "--timeout",
+            "-t",
+            click_type=FiniteFloat(min=0.001),
+            help="Seconds to wait for each peer.",
         ),
     ] = 2.0,
     fmt: FormatOpt = None,

@@ -18,7 +18,7 @@ from typing import TYPE_CHECKING, Annotated, Any
 import typer
 
 from rostools.cli.common import (
-    FINITE,
+    FiniteFloat,
     Format,
     FormatOpt,
     emit,
@@ -57,8 +57,7 @@ TimeoutOpt = Annotated[
     typer.Option(
         "--timeout",
         "-t",
-        min=0.001,
-        click_type=FINITE,
+        click_type=FiniteFloat(min=0.001),
         help="Seconds to wait for each node's answer.",
     ),
 ]

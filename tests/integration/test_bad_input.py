@@ -24,6 +24,10 @@ DEEP = "[" * 10_000 + "]" * 10_000
         (["topic", "pub", "-1", "/x", "std_msgs/String", "-f", "{tmp}/latin1.yaml"], "not UTF-8"),
         (["topic", "pub", "-r", "nan", "/x", "std_msgs/Empty", "{}"], "not a finite number"),
         (["bag", "play", "{tmp}/bomb.yaml", "-r", "inf"], "not a finite number"),
+        (["param", "set", "--", "-x", "3"], "'-x' is not a legal ROS name"),  # was set
+        (["topic", "echo", "/a b"], "'/a b' is not a legal ROS name"),
+        (["node", "info", "a//b"], "not a legal ROS name"),
+        (["service", "call", "/s:x"], "not a legal ROS name"),
     ],
 )
 def test_bad_input_is_one_line(

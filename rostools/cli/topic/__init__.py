@@ -143,7 +143,7 @@ def type_(
     """A topic's type, or the type of a field: ``/odom/pose/pose`` (rostopic type)."""
     from rostools.graph.topics import split_field
 
-    name = script_resolve(topic, "rostopic")
+    name = script_resolve(topic, "rostopic", field_path=True)
     store = type_store(msg_path)
     ref = split_field(name, master(ctx, "rostopic").topic_types(), store)
     if ref is None or ref.type is None:

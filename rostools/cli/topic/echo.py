@@ -252,7 +252,7 @@ def echo(
         raise UsageError("--offset does not apply to a bag")
     if topic is None and not all_topics:
         raise UsageError("give a topic")
-    name = script_resolve(topic, "rostopic") if topic else ""
+    name = script_resolve(topic, "rostopic", field_path=True) if topic else ""
     store = type_store(msg_path)
     if bag is not None:
         from rostools.cli.topic.bagecho import echo_bag

@@ -1,0 +1,137 @@
+"""Fuzz the XML-RPC side: the HTTP and XML parsers, every master and every slave method.
+
+The invariant: a bad request is an ``HttpError`` (a 4xx answer), a bad call is a ROS triple
+or a fault, and any answer encodes; nothing else is ever raised.
+"""
+
+from __future__ import annotations
+
+import xmlrpc.client
+from types import SimpleNamespace
+from typing import Any
+
+from hypothesis import given, seed
+from hypothesis import strategies as st
+
+from rostools.graph.node import Node
+from rostools.graph.xmlrpc import encode_answer, run_call
+from rostools.master.api import MasterAPI
+from rostools.wire.xmlrpc import HttpError, HttpParser, decode_call
+from tests.fuzz.conftest import FUZZ, SEED
+
+#: Names as peers send them: good, relative, private, empty, illegal, huge.
+NAMES = st.sampled_from(
+    ["/a", "a", "~p", "", "/", "a//b", "x y", "/s:1", "-x", "/" + "k/" * 300, "/\u00e9"]
+) | st.text(max_size=20)
+URIS = st.sampled_from(["http://h:1/", "rosrpc://h:2", "bad", "", "http://", "ftp://x"])
+SCALARS = (
+    st.none()
+    | st.booleans()
+    | st.integers(-(2**31), 2**31 - 1)
+    | st.floats(allow_nan=True)
+    | st.text(max_size=30)
+    | NAMES
+    | URIS
+    | st.binary(max_size=20).map(xmlrpc.client.Binary)
+)
+VALUES = st.recursive(
+    SCALARS,
+    lambda inner: (
+        st.lists(inner, max_size=4) | st.dictionaries(st.text(max_size=8), inner, max_size=4)
+    ),
+    max_leaves=12,
+)
+#: A deep value: what recursion-based code trips on.
+DEEP = st.integers(1, 400).map(lambda n: _nest(n))
+
+
+def _nest(depth: int) -> Any:
+    value: Any = 1
+    for _ in range(depth):
+        value = {"a": value} if depth % 2 else [value]
+    return value
+
+
+PARAMS = st.lists(VALUES | DEEP, max_size=5).map(tuple)
+MASTER_METHODS = [*sorted(MasterAPI("http://m:1/").methods), "system.multicall", "nope"]
+
+
+def _answer_ok(result: Any) -> None:
+    body = encode_answer(result)
+    assert body.startswith(b"<?xml")
+
+
+@seed(SEED)
+@FUZZ
+@given(st.sampled_from(MASTER_METHODS), PARAMS, PARAMS)
+def test_master_methods_answer_anything(method: str, before: tuple[Any, ...], params: Any) -> None:
+    api = MasterAPI("http://m:1/")
+    for args in (before, params):  # a call after another, as state changes the answers
+        result = run_call(api.call, method, args)
+        if method == "system.multicall" and args and isinstance(args[0], list):
+            assert isinstance(result, list)
+        _answer_ok(result)
+        if not isinstance(result, list) or method == "system.multicall":
+            continue
+        code, message, _ = result
+        assert code in (-1, 0, 1) and isinstance(message, str)
+
+
+@seed(SEED)
+@FUZZ
+@given(st.lists(st.tuples(st.sampled_from(MASTER_METHODS[:-2]), PARAMS), max_size=6))
+def test_multicalls_of_anything(calls: list[tuple[str, tuple[Any, ...]]]) -> None:
+    api = MasterAPI("http://m:1/")
+    entries: list[Any] = [{"methodName": m, "params": list(p)} for m, p in calls]
+    entries += [5, {"methodName": "getPid", "params": 5}, {"params": []}]
+    result = run_call(api.call, "system.multicall", (entries,))
+    assert isinstance(result, list) and len(result) == len(entries)
+    _answer_ok(result)
+
+
+SLAVE_METHODS = [
+    "getBusStats", "getBusInfo", "getMasterUri", "shutdown", "getPid", "getSubscriptions",
+    "getPublications", "paramUpdate", "publisherUpdate", "requestTopic", "getUri", "getName",
+    "system.multicall", "nope",
+]  # fmt: skip
+
+
+@seed(SEED)
+@FUZZ
+@given(st.sampled_from(SLAVE_METHODS), PARAMS)
+def test_slave_methods_answer_anything(method: str, params: tuple[Any, ...]) -> None:
+    node = Node("fuzzed", "http://m:1/", host="127.0.0.1")
+    node._xmlrpc = SimpleNamespace(port=1)  # type: ignore[assignment]  # no sockets here
+    result = run_call(node._dispatch, method, params)
+    _answer_ok(result)
+
+
+@seed(SEED)
+@FUZZ
+@given(st.binary(max_size=400), st.lists(st.integers(1, 64), max_size=8))
+def test_http_parser_takes_any_bytes(data: bytes, cuts: list[int]) -> None:
+    parser = HttpParser()
+    pos = 0
+    try:
+        for cut in [*cuts, len(data)]:
+            parser.feed(data[pos : pos + cut])
+            pos += cut
+            while (message := parser.next_message()) is not None:
+                decode_call(message.body)
+    except HttpError as err:
+        assert 400 <= err.status < 500
+
+
+@seed(SEED)
+@FUZZ
+@given(st.sampled_from(MASTER_METHODS), PARAMS, st.integers(0, 400), st.binary(max_size=8))
+def test_mangled_xml_is_a_400(method: str, params: Any, at: int, junk: bytes) -> None:
+    try:
+        body = xmlrpc.client.dumps(params, method, allow_none=True).encode()
+    except (TypeError, OverflowError, RecursionError):
+        return  # not a request a client could write
+    mangled = body[:at] + junk + body[at + len(junk) :]
+    try:
+        decode_call(mangled)
+    except HttpError as err:
+        assert err.status == 400

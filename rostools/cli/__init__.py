@@ -7,6 +7,15 @@ import sys
 from collections.abc import Sequence
 from typing import Any
 
+# Names and values quoted in a message may carry control characters; escape them so
+# that every error stays one line on the terminal and in logs.
+_ESCAPES = {c: repr(chr(c))[1:-1] for c in (*range(0x20), 0x7F)}
+
+
+def one_line(text: str) -> str:
+    """``text`` with newlines and other control characters escaped."""
+    return text.translate(_ESCAPES)
+
 
 def report(err: BaseException, debug: bool) -> int:
     """Print ``err`` as one line on stderr (a traceback with ``--debug``); its exit code."""
@@ -18,9 +27,9 @@ def report(err: BaseException, debug: bool) -> int:
         traceback.print_exception(err)
     if isinstance(err, RostoolsError):
         hint = f" (hint: {err.hint})" if err.hint else ""
-        sys.stderr.write(f"rostools: {err}{hint}\n")
+        sys.stderr.write(one_line(f"rostools: {err}{hint}") + "\n")
         return err.exit_code
-    sys.stderr.write(f"rostools: internal error: {type(err).__name__}: {err}\n")
+    sys.stderr.write(one_line(f"rostools: internal error: {type(err).__name__}: {err}") + "\n")
     if not debug:
         sys.stderr.write("rostools: run again with --debug for the traceback\n")
     return 1

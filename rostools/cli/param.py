@@ -106,9 +106,7 @@ def set(
     else:
         assert value is not None
         parsed = "" if value == "" else paramyaml.load(value)
-        if parsed is None:
-            raise UsageError("a parameter cannot be null", hint="quote it to set a string")
-    paramyaml.check_ints(parsed, key)
+    paramyaml.check_value(parsed, key)
     _set_tree(master(ctx, "rosparam"), key, parsed, verbose)
 
 
@@ -152,7 +150,7 @@ def load(
             ns = join(make_global_ns(base), str(doc.pop("_ns")))
         if ns == GLOBAL_NS and not isinstance(doc, dict):
             raise UsageError("a document loaded into / must be a mapping")
-        paramyaml.check_ints(doc, ns)
+        paramyaml.check_value(doc, ns)
         _say(verbose, f"reading parameters into namespace [{ns}]")
         _set_tree(proxy, ns, doc, verbose)
 

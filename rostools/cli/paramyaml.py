@@ -131,8 +131,12 @@ def dump(value: Any, *, pretty: bool = False) -> str:
     return text.removesuffix("\n...\n")
 
 
-def check_ints(value: Any, name: str) -> None:
-    """Refuse integers XML-RPC cannot carry (it has 32-bit ints only)."""
+def check_value(value: Any, name: str) -> None:
+    """Refuse what XML-RPC cannot carry: integers beyond 32 bits, and null anywhere."""
+    if value is None:
+        raise UsageError(
+            f"{name}: null is not a parameter value", hint="quote it to set the string 'null'"
+        )
     if isinstance(value, bool):
         return
     if isinstance(value, int) and not INT32_MIN <= value <= INT32_MAX:
@@ -143,10 +147,10 @@ def check_ints(value: Any, name: str) -> None:
         )
     if isinstance(value, dict):
         for k, v in value.items():
-            check_ints(v, f"{name}/{k}")
+            check_value(v, f"{name}/{k}")
     elif isinstance(value, list):
         for i, v in enumerate(value):
-            check_ints(v, f"{name}[{i}]")
+            check_value(v, f"{name}[{i}]")
 
 
 def to_plain(value: Any) -> Any:

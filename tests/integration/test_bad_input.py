@@ -28,6 +28,8 @@ DEEP = "[" * 10_000 + "]" * 10_000
         (["topic", "echo", "/a b"], "'/a b' is not a legal ROS name"),
         (["node", "info", "a//b"], "not a legal ROS name"),
         (["service", "call", "/s:x"], "not a legal ROS name"),
+        (["param", "set", "/x", "- - - -"], "/x[0][0][0][0]: null is not a parameter value"),
+        (["param", "set", "/x", '{"\\n": null}'], "/x/\\n: null"),  # escaped, still one line
     ],
 )
 def test_bad_input_is_one_line(

@@ -1,0 +1,121 @@
+"""Fuzz the bag readers with mutants of the corpus: byte flips, truncations, swapped records,
+length fields set to 0xFFFFFFFF; through ``bag info``, ``echo -b``, ``convert`` and ``recover``.
+
+Each command runs in this process through the CLI's own entry point. The invariant: a
+documented exit code, no traceback, no "internal error", at most two lines on stderr, and
+no case slower than ``CASE_SECONDS``.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import io
+import signal
+import struct
+from pathlib import Path
+from types import FrameType
+
+import pytest
+from hypothesis import given, seed
+from hypothesis import strategies as st
+
+from rostools.cli import main
+from tests.fuzz.conftest import FUZZ, SEED
+from tests.support.env import CORPUS, needs_corpus
+
+pytestmark = needs_corpus
+
+#: Small corpus files of every kind: plain, lz4 and bz2 bags, unindexed chunks, MCAPs.
+SOURCES = [
+    "ros1/embag/test_2.bag",
+    "ros1/frost/compressed_lz4.bag",
+    "ros1/ros_comm/rosbag_storage_test.bag",
+    "ros1/rosbag.js/example-unsorted-chunks.bag",
+    "ros1/matlab_rosbag/constants.bag",
+    "ros1/webviz/bag-with-empty-message-definition.bag",
+    "mcap/rosbag2/rosbag2_cpp/only_topics.mcap",
+    "mcap/rosbag2/rosbag2_transport/test_bag_for_seek/test_bag_for_seek_0.mcap",
+]
+#: Exit codes a bad file may give (README): error, usage, not found, data loss.
+DOCUMENTED = {0, 1, 2, 3, 6}
+CASE_SECONDS = 20
+
+
+def _mutate(data: bytes, kind: str, at: int, size: int) -> bytes:
+    at %= max(len(data), 1)
+    if kind == "flip":
+        return data[:at] + bytes([data[at] ^ 0xFF]) + data[at + 1 :] if data else data
+    if kind == "truncate":
+        return data[:at]
+    if kind == "max_length":  # a u32 length field claiming 4 GiB
+        return data[:at] + struct.pack("<I", 0xFFFFFFFF) + data[at + 4 :]
+    if kind == "zero_length":
+        return data[:at] + struct.pack("<I", 0) + data[at + 4 :]
+    # swap two ranges of ``size`` bytes: records out of place
+    other = (at * 7 + size) % max(len(data) - size, 1)
+    first, second = sorted((at, other))
+    if second < first + size or second + size > len(data):
+        return data
+    return (
+        data[:first]
+        + data[second : second + size]
+        + data[first + size : second]
+        + data[first : first + size]
+        + data[second + size :]
+    )
+
+
+def _hang(signum: int, frame: FrameType | None) -> None:
+    raise TimeoutError(f"a case ran past {CASE_SECONDS} s")
+
+
+def _run(*args: str) -> tuple[int, str]:
+    """``rostools ARGS`` in this process: its exit code and stderr."""
+    out, err = io.StringIO(), io.StringIO()
+    code: int | str | None = 0
+    previous = signal.signal(signal.SIGALRM, _hang)
+    signal.alarm(CASE_SECONDS)
+    try:
+        with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+            try:
+                main(list(args))
+            except SystemExit as stop:
+                code = stop.code
+    finally:
+        signal.alarm(0)
+        signal.signal(signal.SIGALRM, previous)
+    return int(code or 0), err.getvalue()
+
+
+@seed(SEED)
+@FUZZ
+@given(
+    st.sampled_from(SOURCES),
+    st.sampled_from(["flip", "truncate", "max_length", "zero_length", "swap"]),
+    st.integers(0, 2**20),
+    st.integers(1, 64),
+)
+def test_mutant_bags_fail_cleanly(tmp: Path, source: str, kind: str, at: int, size: int) -> None:
+    data = (CORPUS / source).read_bytes()
+    suffix = Path(source).suffix
+    mutant = tmp / f"mutant{suffix}"
+    mutant.write_bytes(_mutate(data, kind, at, size))
+    other = ".bag" if suffix == ".mcap" else ".mcap"
+    for args in (
+        ["bag", "info", str(mutant)],
+        ["topic", "echo", "-b", str(mutant), "-a", "-n", "20", "-F", "json"],
+        ["bag", "convert", str(mutant), str(tmp / f"converted{other}")],
+        ["bag", "recover", str(mutant), str(tmp / f"recovered{suffix}")],
+    ):
+        code, err = _run(*args)
+        assert code in DOCUMENTED, (args[:2], kind, at, code, err)
+        assert "Traceback" not in err and "internal error" not in err, (args[:2], kind, at, err)
+        assert len(err.strip().splitlines()) <= 2, (args[:2], kind, at, err)
+        for leftover in tmp.glob("converted*"):
+            leftover.unlink()
+
+
+@pytest.fixture(scope="module")
+def tmp(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """One folder for every case (hypothesis calls the test many times per fixture)."""
+    return tmp_path_factory.mktemp("mutants")

@@ -171,7 +171,7 @@ def test_connections_in_both_roles_take_any_bytes(parts: list[Any], cuts: list[i
 
     async def run() -> None:
         accepted: list[dict[str, str]] = []
-        server = ServerConnection(lambda fields, conn: accepted.append(fields))  # type: ignore[func-returns-value]
+        server = ServerConnection(lambda fields, conn: accepted.append(fields))
         server.connection_made(_Transport())
         _feed(server, data, cuts)
         inbound = InboundConnection(_Subscriber(), "http://p:1/", 1, b"")  # type: ignore[arg-type]

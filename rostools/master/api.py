@@ -165,7 +165,7 @@ class MasterAPI:
         return 1, "current topics", topics
 
     def getTopicTypes(self, caller_id: str) -> Triple:  # noqa: N802
-        """Every topic ever typed, with its type."""
+        """Every topic in the graph, with its type (a type is forgotten with its last user)."""
         return 1, "current system state", [[t, ty] for t, ty in self.registry.topic_types.items()]
 
     def getSystemState(self, caller_id: str) -> Triple:  # noqa: N802

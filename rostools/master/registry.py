@@ -41,7 +41,9 @@ class Registry:
         self.param_subscribers: dict[str, Providers] = {}
         #: service -> (caller_id, caller_api, service_api); the last registration wins.
         self.services: dict[str, tuple[str, str, str]] = {}
-        #: topic -> type; never forgotten, as in rosmaster.
+        #: topic -> type, while anyone publishes or subscribes it. rosmaster keeps every
+        #: type forever, so a master that sees many short-lived topic names grows without
+        #: end; rostopic and rospy only look up types of topics in the graph.
         self.topic_types: dict[str, str] = {}
 
     def _multimap(self, kind: Kind) -> dict[str, Providers]:
@@ -68,9 +70,14 @@ class Registry:
                 table[key] = [p for p in table[key] if p[0] != caller_id]
                 if not table[key]:
                     del table[key]
+                    self._forget_type(key)
         for service, (cid, _, _) in list(self.services.items()):
             if cid == caller_id:
                 del self.services[service]
+
+    def _forget_type(self, topic: str) -> None:
+        if topic not in self.publishers and topic not in self.subscribers:
+            self.topic_types.pop(topic, None)
 
     def register(
         self, kind: Kind, key: str, caller_id: str, caller_api: str, service_api: str = ""
@@ -113,6 +120,7 @@ class Registry:
                 providers.remove((caller_id, caller_api))
                 if not providers:
                     del table[key]
+                    self._forget_type(key)
                 answer = (1, f"Unregistered [{caller_id}] as provider of [{key}]", 1)
             else:
                 answer = (1, f"[{caller_id}] is not a known provider of [{key}]", 0)

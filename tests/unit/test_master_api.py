@@ -167,3 +167,16 @@ def test_multicall(api: MasterAPI) -> None:
     assert result[0] == [[1, "", 42]]
     assert result[1]["faultCode"] == 1
     assert result[2] == [[1, "parameter /rosdistro set", 0]]
+
+
+def test_types_go_with_the_last_user(api: MasterAPI) -> None:
+    """rosmaster keeps every type forever; we forget one nobody uses (bounded memory)."""
+    api.call("registerPublisher", ("/p", "/t", "a/B", NODE_A))
+    api.call("registerSubscriber", ("/s", "/t", "a/B", NODE_B))
+    api.call("unregisterPublisher", ("/p", "/t", NODE_A))
+    assert api.call("getTopicTypes", ("/x",))[2] == [["/t", "a/B"]]
+    api.call("unregisterSubscriber", ("/s", "/t", NODE_B))
+    assert api.call("getTopicTypes", ("/x",))[2] == []
+    api.call("registerPublisher", ("/n", "/u", "a/B", NODE_A))
+    api.call("registerSubscriber", ("/n", "/v", "a/B", NODE_B))  # same name, new URI: purged
+    assert api.call("getTopicTypes", ("/x",))[2] == [["/v", "a/B"]]

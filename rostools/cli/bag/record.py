@@ -239,7 +239,12 @@ def record(
         int | None, typer.Option("--chunksize", help="Chunk size in KB (default 768).")
     ] = None,
     buffer: Annotated[
-        int, typer.Option("--buffsize", "-b", help="Queue size in MB; 0 for unlimited.")
+        int,
+        typer.Option(
+            "--buffsize",
+            "-b",
+            help="Memory for messages waiting to be written, in MB; 0 for unlimited.",
+        ),
     ] = 256,
     tcp_nodelay: Annotated[
         bool, typer.Option("--tcpnodelay", help="Ask publishers for TCP_NODELAY.")

@@ -159,3 +159,78 @@ def test_a_message_that_does_not_decode_is_one_line(
         "rostools: a message on /empty does not decode as std_msgs/String: "
     ), err
     assert "internal error" not in err
+
+
+def _raw_subscriber(master_uri: str, topic: str, rcvbuf: int | None = None) -> socket.socket:
+    """A TCPROS subscription made by hand, past its header: the caller reads, or never does."""
+    import xmlrpc.client
+
+    from rostools.wire.tcpros import subscriber_header
+
+    master = xmlrpc.client.ServerProxy(master_uri)
+    [[_, [node]]] = [p for p in master.getSystemState("/t")[2][0] if p[0] == topic]
+    node_api = master.lookupNode("/t", node)[2]
+    _, _, (_, host, port) = xmlrpc.client.ServerProxy(node_api).requestTopic(
+        "/raw", topic, [["TCPROS"]]
+    )
+    sock = socket.socket()
+    if rcvbuf is not None:
+        sock.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, rcvbuf)
+    sock.connect((host, port))
+    sock.sendall(subscriber_header("/raw", topic, "*", "*", "", False))
+    (length,) = struct.unpack("<I", sock.recv(4, socket.MSG_WAITALL))
+    sock.recv(length, socket.MSG_WAITALL)
+    return sock
+
+
+def _count_frames(sock: socket.socket, seconds: float) -> int:
+    """Frames received in ``seconds`` (whole reads; the count of length prefixes seen)."""
+    count, pending, deadline = 0, b"", time.monotonic() + seconds
+    sock.settimeout(0.2)
+    while time.monotonic() < deadline:
+        try:
+            pending += sock.recv(1 << 20)
+        except TimeoutError:
+            continue
+        while len(pending) >= 4:
+            (length,) = struct.unpack_from("<I", pending)
+            if len(pending) < 4 + length:
+                break
+            pending, count = pending[4 + length :], count + 1
+    return count
+
+
+def test_a_stalled_subscriber_costs_the_others_nothing(
+    rostools_master: str, cli_env: dict[str, str]
+) -> None:
+    """A subscriber that never reads: the healthy one keeps its rate, the publisher's memory
+    stays bounded by its queue (100 messages of 10 KB), not by how long the stall lasts.
+    ``-s`` makes every message a new object, so a queue that kept them all would grow."""
+    pub = Proc(
+        [sys.executable, "-m", "rostools", "topic", "pub", "-r", "500", "-s", "/load",
+         "sensor_msgs/CompressedImage", "{header: {stamp: now}, format: " + "x" * 10_000 + "}"],
+        env=cli_env,
+    )  # fmt: skip
+    try:
+        deadline = time.monotonic() + 15
+        while True:
+            try:
+                healthy = _raw_subscriber(rostools_master, "/load")
+                break
+            except ValueError:  # not registered yet
+                assert time.monotonic() < deadline, "the publisher never registered"
+                time.sleep(0.1)
+        stalled = _raw_subscriber(rostools_master, "/load", rcvbuf=4096)
+        # Meanwhile the stalled link fills the kernel's buffers, the transport's (4 MB) and
+        # the queue; from then on it costs nothing more.
+        _count_frames(healthy, 3.0)
+        rss_before = int(Path(f"/proc/{pub.pid}/status").read_text().split("VmRSS:")[1].split()[0])
+        received = _count_frames(healthy, 4.0)
+        rss_after = int(Path(f"/proc/{pub.pid}/status").read_text().split("VmRSS:")[1].split()[0])
+        # 20 MB went to the stalled socket's queue in those 4 s if nothing bounded it.
+        assert (rss_after - rss_before) / 1024 < 3, (rss_before, rss_after)
+        assert received >= 0.9 * 500 * 4, received
+        stalled.close()
+        healthy.close()
+    finally:
+        pub.stop()

@@ -124,7 +124,10 @@ def read_record(
     (hlen,) = _LEN.unpack_from(buf, pos)
     if hlen > MAX_RECORD_HEADER or pos + 8 + hlen > end:
         raise RecordError(f"record header at {pos} ({hlen} bytes) is cut short or corrupt")
-    fields = parse_header(buf, pos + 4, pos + 4 + hlen)
+    try:
+        fields = parse_header(buf, pos + 4, pos + 4 + hlen)
+    except RecordError as err:
+        raise RecordError(f"record header at {pos}: {err}") from None
     (dlen,) = _LEN.unpack_from(buf, pos + 4 + hlen)
     data = pos + 8 + hlen
     if max_data is not None and dlen > max_data:

@@ -469,9 +469,9 @@ class Bag1Reader(BagReader):
                         hlen, op_field, dlen = fast.unpack_from(buf, p)
                     q = p + 46
                     if hlen != 38 or op_field != _OP_FIELD:
-                        q, dlen = self._message_at(buf, p, end)
+                        q, dlen = self._message_at(buf, p, end, chunk.pos)
                 else:
-                    q, dlen = self._message_at(buf, p, end)
+                    q, dlen = self._message_at(buf, p, end, chunk.pos)
                 if q + dlen > end:
                     raise BagFormatError(f"{self.path}: chunk at {chunk.pos}: index points past it")
                 append((t, rank, off, conn, view[q : q + dlen]))
@@ -499,7 +499,7 @@ class Bag1Reader(BagReader):
                 raise BagFormatError(f"{self.path}: index data at {data} is cut short")
             yield conn_id, self._view[data:pos]
 
-    def _message_at(self, buf: Buffer, pos: int, end: int) -> tuple[int, int]:
+    def _message_at(self, buf: Buffer, pos: int, end: int, chunk_pos: int) -> tuple[int, int]:
         """(data start, data length) of the message record at ``pos``.
 
         Connection records before it are skipped, as rosbag does.
@@ -514,7 +514,7 @@ class Bag1Reader(BagReader):
                     raise fmt.RecordError(f"index points at a record with op {op}")
                 pos = data + dlen
         except fmt.RecordError as err:
-            raise BagFormatError(f"{self.path}: {err}") from err
+            raise BagFormatError(f"{self.path}: chunk at {chunk_pos}: {err}") from err
 
     def close(self) -> None:
         """Release the file map."""

@@ -7,7 +7,7 @@ from pathlib import Path
 
 import pytest
 
-from tests.support.env import run_cli
+from tests.support.env import CORPUS, needs_corpus, run_cli
 from tests.unit.test_yamlio import BOMB
 
 DEEP = "[" * 10_000 + "]" * 10_000
@@ -43,3 +43,26 @@ def test_bad_input_is_one_line(
     assert said in done.stderr and len(done.stderr.splitlines()) == 1, done.stderr
     assert "Traceback" not in done.stderr and "internal error" not in done.stderr
     assert time.monotonic() - began < 10
+
+
+@needs_corpus
+@pytest.mark.parametrize(
+    ("flip", "said"),
+    [
+        (5036, "message at 1550219983.835047007 s: a message on text does not decode as"),
+        (5379, "message at 1550219977.520894051 s: std_msgs/Int32: line 1:"),
+        (4662, "chunk at 4117: record header at 4628: record header field of 251 bytes"),
+    ],
+)
+def test_a_damaged_bag_says_where(
+    flip: int, said: str, cli_env: dict[str, str], tmp_path: Path
+) -> None:
+    """One flipped byte: the error names the file and the message or record (issue 11)."""
+    data = bytearray((CORPUS / "ros1/ros_comm/rosbag_storage_test.bag").read_bytes())
+    data[flip] ^= 0xFF
+    bag = tmp_path / "damaged.bag"
+    bag.write_bytes(data)
+    done = run_cli("topic", "echo", "-b", str(bag), "-a", "-F", "json", env=cli_env)
+    assert done.returncode == 1, done.stderr
+    assert done.stderr.startswith(f"rostools: {bag}: {said}"), done.stderr
+    assert len(done.stderr.splitlines()) == 1

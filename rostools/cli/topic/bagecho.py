@@ -16,6 +16,7 @@ def echo_bag(path: Path, name: str | None, store: TypeStore, opts: EchoOptions) 
     """Print the messages of ``name`` (a topic, maybe with a field path), or of every topic."""
     from rostools.bag.api import open_bag
     from rostools.cli.topic.echo import Echo
+    from rostools.errors import InvalidDataError
     from rostools.graph.topics import split_field
 
     with open_bag(path) as bag:
@@ -29,6 +30,9 @@ def echo_bag(path: Path, name: str | None, store: TypeStore, opts: EchoOptions) 
             topics = [ref.topic]
         echo = Echo(store, opts)
         for conn, t_ns, data in bag.messages(topics=topics):
-            printer = echo.printer(conn.type, conn.md5sum, conn.definition, conn.topic)
-            if not echo.emit(printer, [data], t_ns):
-                return
+            try:
+                printer = echo.printer(conn.type, conn.md5sum, conn.definition, conn.topic)
+                if not echo.emit(printer, [data], t_ns):
+                    return
+            except InvalidDataError as err:  # a bad definition or message: say where
+                raise InvalidDataError(f"{path}: message at {t_ns / 1e9:.9f} s: {err}") from err

@@ -255,7 +255,13 @@ def _wait_drained(rec: subprocess.Popen[bytes], out: Path) -> float:
     return time.monotonic() - began - quiet
 
 
-def _record(recorder: Sequence[str], out: Path, tag: str) -> _Recording:
+def _record(
+    recorder: Sequence[str],
+    out: Path,
+    tag: str,
+    rate: float = REC_RATE,
+    duration: float = DURATION,
+) -> _Recording:
     """One round on a fresh rosmaster: ``recorder`` (writing ``out``) takes one publishing run."""
     from rostools.bag.api import bag_info
 
@@ -268,8 +274,8 @@ def _record(recorder: Sequence[str], out: Path, tag: str) -> _Recording:
         REC_PREFIX,
         str(REC_TOPICS),
         str(REC_SIZE),
-        str(REC_RATE),
-        str(DURATION),
+        str(rate),
+        str(duration),
         "--wait-subscribers",
         "1",
         "--wait-timeout",
@@ -285,7 +291,7 @@ def _record(recorder: Sequence[str], out: Path, tag: str) -> _Recording:
         pub = start(publisher, env, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
         try:
             _wait_subscribed(uri, rec, log)
-            pub_out, pub_err = pub.communicate(timeout=SUBSCRIBE_TIMEOUT + DURATION + LINGER + 120)
+            pub_out, pub_err = pub.communicate(timeout=SUBSCRIBE_TIMEOUT + duration + LINGER + 120)
             if pub.returncode != 0:
                 raise RuntimeError(f"{tag}: multi_pub failed: {pub_err.decode()[-500:]}")
             drain_s = _wait_drained(rec, out)
@@ -355,6 +361,41 @@ def bench_record_100_topics() -> list[Result]:
             "report",
             None,
             "max of VmRSS/VmHWM sampled every 0.1 s from start to exit",
+        ),
+    ]
+
+
+def bench_record_buffer() -> list[Result]:
+    """100 topics x 3 kHz into ``bag record -a -b 16``: the peak RSS, against rosbag's."""
+    rate, duration = 3 * REC_RATE, DURATION / 2
+    rounds = {"ours": [*rostools_cmd(), "bag", "record", "-q", "-a", "-b", "16", "-O", "ours.bag"]}
+    theirs_cmd = _rosbag("record")
+    if theirs_cmd is not None:
+        rounds["rosbag"] = [*theirs_cmd, "-q", "-a", "-b", "16", "-O", "rosbag.bag"]
+    got = {
+        label: _record(argv, BUILD / f"{label}.bag", f"record_buffer_{label}", rate, duration)
+        for label, argv in rounds.items()
+    }
+    ours, theirs = got["ours"], got.get("rosbag")
+    note = "; ".join(_describe(label, r) for label, r in got.items())
+    return [
+        Result(
+            "load record -b 16, 100 topics x 3 kHz, recorder peak RSS",
+            "MB",
+            ours.peak_rss_kb / 1024,
+            None if theirs is None else theirs.peak_rss_kb / 1024,
+            "<= 100 MB (-b bounds what is held)",
+            ours.peak_rss_kb / 1024 <= 100,
+            f"{duration:g} s, roscpp multi_pub, rosmaster: {note}",
+        ),
+        Result(
+            "load record -b 16, 100 topics x 3 kHz, kept",
+            "%",
+            ours.kept,
+            None if theirs is None else theirs.kept,
+            "report (drops beyond -b are counted and exit 6)",
+            None,
+            note,
         ),
     ]
 
@@ -557,6 +598,7 @@ def bench_register_cycles() -> list[Result]:
 
 
 BENCHMARKS = {
+    "load_record_buffer": bench_record_buffer,
     "load_record_100_topics": bench_record_100_topics,
     "load_1000_nodes": bench_1000_nodes,
     "load_register_cycles": bench_register_cycles,

@@ -7,9 +7,9 @@ import sys
 from collections.abc import Sequence
 from typing import Any
 
-# Names and values quoted in a message may carry control characters; escape them so
-# that every error stays one line on the terminal and in logs.
-_ESCAPES = {c: repr(chr(c))[1:-1] for c in (*range(0x20), 0x7F)}
+# Names and values quoted in a message may carry control characters or Unicode line
+# breaks (NEL, U+2028); escape them so every error stays one line, on a terminal and in logs.
+_ESCAPES = {c: repr(chr(c))[1:-1] for c in (*range(0x20), *range(0x7F, 0xA0), 0x2028, 0x2029)}
 
 
 def one_line(text: str) -> str:

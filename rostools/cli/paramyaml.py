@@ -147,7 +147,7 @@ def check_value(value: Any, name: str) -> None:
         )
     if isinstance(value, dict):
         for k, v in value.items():
-            check_value(v, f"{name}/{k}")
+            check_value(v, f"{name.rstrip('/')}/{k}")
     elif isinstance(value, list):
         for i, v in enumerate(value):
             check_value(v, f"{name}[{i}]")

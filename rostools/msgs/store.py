@@ -26,6 +26,7 @@ from rostools.msgs.spec import (
     DefinitionError,
     MsgSpec,
     SrvSpec,
+    is_valid_type,
     normalize_type_name,
     parse_msg,
     parse_srv,
@@ -236,6 +237,8 @@ class TypeStore:
         An empty definition (some bags have one) falls through to this store's sources.
         """
         name = normalize_type_name(name)
+        if not is_valid_type(name) or name.endswith("]"):
+            raise DefinitionError(f"{name!r} is not a legal message type name")
         if not full_text.strip():
             return self
         store = TypeStore([DefinitionSource(name, full_text), *self.sources])

@@ -30,6 +30,7 @@ DEEP = "[" * 10_000 + "]" * 10_000
         (["service", "call", "/s:x"], "not a legal ROS name"),
         (["param", "set", "/x", "- - - -"], "/x[0][0][0][0]: null is not a parameter value"),
         (["param", "set", "/x", '{"\\n": null}'], "/x/\\n: null"),  # escaped, still one line
+        (["param", "set", "/", '{"\\u0085": null}'], "rostools: /\\x85: null"),  # NEL too
     ],
 )
 def test_bad_input_is_one_line(

@@ -55,3 +55,10 @@ def test_bytes_that_lie_are_a_decode_error(definition: str, data: bytes) -> None
         codec.decode("pkg/L", data)
     with pytest.raises(DecodeError, match="cannot decode pkg/L"):
         codec.message_class("pkg/L").deserialize(data)
+
+
+@pytest.mark.parametrize("name", ["std_msgs/St\x00r", "a b/C", "pkg/T[3]", "", "/"])
+def test_a_type_name_that_is_not_one_is_refused(name: str) -> None:
+    """A bag's connection record named its type with a NUL: Python's ``type()`` refused it."""
+    with pytest.raises(DefinitionError, match="is not a legal message type name"):
+        TypeStore([]).with_definition(name, "int32 a\n")

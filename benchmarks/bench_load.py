@@ -13,6 +13,12 @@ on ``rosmaster`` over raw XML-RPC; then getSystemState latency and whole-process
 ``load_register_cycles``: 100,000 registerPublisher + unregisterPublisher cycles on each master,
 on one topic name and on a new name every cycle; the master's resident memory before and after.
 
+``load_record_buffer``: as ``load_record_100_topics`` at 3 kHz per topic for half the time,
+with ``-b 16``; the recorder's peak memory, which ``-b`` must bound.
+
+``load_multicall_stall``: one client sends a 100,000-call ``system.multicall`` while another
+calls getSystemState every 5 ms; the other's worst wait, on each master.
+
 Every master gets a free loopback port; every process is stopped through its PID. Bags go to
 benchmarks/build/load/ (gitignored) and are deleted once counted.
 """
@@ -597,7 +603,75 @@ def bench_register_cycles() -> list[Result]:
     return results
 
 
+# --- load_multicall_stall -----------------------------------------------------------------------
+
+STALL_CALLS = 100_000  # calls in the one big multicall
+STALL_TARGET_S = 0.2  # rosmaster, a thread per connection, keeps the others under this
+
+
+def _worst_wait(argv: Sequence[str]) -> tuple[float, float, int]:
+    """While one client's big multicall runs, another's worst getSystemState wait (s).
+
+    Also returns how long the multicall took (s) and its body size (bytes).
+    """
+    calls = [
+        {"methodName": "hasParam", "params": ["/bench_stall", f"/stall/param/number/{i}"]}
+        for i in range(STALL_CALLS)
+    ]
+    body = xmlrpc.client.dumps((calls,), "system.multicall").encode()
+    worst, stop_probe = [0.0], threading.Event()
+    with _running(argv) as (uri, _):
+        state = xmlrpc.client.dumps(("/bench_probe",), "getSystemState").encode()
+
+        def probe() -> None:
+            client = _Client(uri)
+            try:
+                while not stop_probe.is_set():
+                    began = time.perf_counter()
+                    client.raw(state)
+                    worst[0] = max(worst[0], time.perf_counter() - began)
+                    time.sleep(0.005)
+            finally:
+                client.close()
+
+        prober = threading.Thread(target=probe, daemon=True)
+        prober.start()
+        time.sleep(0.5)  # the probe is warm before the big call starts
+        big = _Client(uri)
+        began = time.perf_counter()
+        big.raw(body)
+        took = time.perf_counter() - began
+        big.close()
+        time.sleep(0.2)
+        stop_probe.set()
+        prober.join()
+    return worst[0], took, len(body)
+
+
+def bench_multicall_stall() -> list[Result]:
+    """One 100,000-call multicall must not stall the master for everyone else."""
+    got = {name: _worst_wait(argv) for name, argv in _masters().items()}
+    ours, theirs = got["ours"], got.get("theirs")
+    note = "; ".join(
+        f"{'rostools core' if name == 'ours' else 'rosmaster'}: multicall took {took:.2f} s"
+        for name, (_, took, _) in got.items()
+    )
+    return [
+        Result(
+            f"load other clients' worst wait during a {STALL_CALLS:,}-call multicall",
+            "s",
+            ours[0],
+            None if theirs is None else theirs[0],
+            f"<= {STALL_TARGET_S:g} s",
+            ours[0] <= STALL_TARGET_S,
+            f"{ours[2] / 1e6:.1f} MB body of hasParam calls; getSystemState every 5 ms on "
+            f"another keep-alive connection; {note}",
+        )
+    ]
+
+
 BENCHMARKS = {
+    "load_multicall_stall": bench_multicall_stall,
     "load_record_buffer": bench_record_buffer,
     "load_record_100_topics": bench_record_100_topics,
     "load_1000_nodes": bench_1000_nodes,

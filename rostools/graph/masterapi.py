@@ -13,6 +13,7 @@ import xmlrpc.client
 from typing import Any
 
 from rostools.errors import NotFoundError, RostoolsError, TimeoutExpired, UnreachableError
+from rostools.wire import codes
 
 #: Seconds to wait for the master before giving up; ``ROSTOOLS_MASTER_TIMEOUT`` changes it.
 DEFAULT_TIMEOUT = 3.0
@@ -41,12 +42,53 @@ class TimeoutTransport(xmlrpc.client.Transport):
 
 
 class MasterError(RostoolsError):
-    """The master answered a call with a failure code."""
+    """The master (or a node) answered a call with a failure code."""
 
     def __init__(self, method: str, code: int, message: str) -> None:
         super().__init__(message or f"{method} failed")
         self.method = method
         self.code = code
+
+
+# One policy for every call to a master or a node, blocking or async: a server that accepts
+# the connection and does not answer is a timeout (exit 5), one that cannot be connected to
+# is unreachable (exit 4), and a ROS failure code is a MasterError. Callers raise what these
+# return ``from`` the original error, so ``--debug`` shows the cause.
+
+
+def no_answer(uri: str, what: str, method: str, timeout: float) -> TimeoutExpired:
+    """The server at ``uri`` did not answer ``method`` in time."""
+    return TimeoutExpired(f"the {what} at {uri} did not answer {method} within {timeout:g} s")
+
+
+def unreachable(err: BaseException, uri: str, what: str) -> UnreachableError:
+    """The server at ``uri`` could not be reached (``err``: the transport's error)."""
+    if what == "master":  # the reasons the multi-host notices give (imported on failure only)
+        from rostools.graph.notice import explain
+        from rostools.network import uri_host
+
+        reason = explain(err, uri_host(uri), peer=False).reason
+    else:
+        reason = getattr(err, "strerror", None) or str(err) or type(err).__name__
+    hint = "is roscore (or 'rostools core') running? check ROS_MASTER_URI or --master-uri"
+    return UnreachableError(
+        f"cannot reach the {what} at {uri}: {reason}", hint=hint if what == "master" else None
+    )
+
+
+def faulted(fault: xmlrpc.client.Fault, uri: str, what: str, method: str) -> RostoolsError:
+    """The server answered with an XML-RPC fault (not a ROS failure code)."""
+    return RostoolsError(f"the {what} at {uri} failed {method}: {fault.faultString}")
+
+
+def ros_value(answer: Any, method: str, what: str) -> Any:
+    """The value of a ROS API answer ``[code, message, value]``; ``MasterError`` unless 1."""
+    if not isinstance(answer, list | tuple) or len(answer) != 3:
+        raise RostoolsError(f"bad answer from the {what} to {method}: {answer!r}")
+    code, message, value = answer
+    if code != codes.SUCCESS:
+        raise MasterError(method, code, message)
+    return value
 
 
 class XmlRpcNode:
@@ -67,38 +109,22 @@ class XmlRpcNode:
         """Call ``method(caller_id, *args)`` and return the whole answer."""
         try:
             return getattr(self.proxy, method)(self.caller_id, *args)
-        except TimeoutError:
-            raise TimeoutExpired(
-                f"the {self.what} at {self.uri} did not answer {method} within {self.timeout:g} s"
-            ) from None
+        except TimeoutError as err:
+            raise no_answer(self.uri, self.what, method, self.timeout) from err
         except (OSError, http.client.HTTPException) as err:
-            reason = getattr(err, "strerror", None) or str(err) or type(err).__name__
-            raise UnreachableError(
-                f"cannot reach the {self.what} at {self.uri}: {reason}",
-                hint="is roscore (or 'rostools core') running? check ROS_MASTER_URI or --master-uri"
-                if self.what == "master"
-                else None,
-            ) from None
+            raise unreachable(err, self.uri, self.what) from err
         except xmlrpc.client.Fault as fault:
-            raise RostoolsError(
-                f"the {self.what} at {self.uri} failed {method}: {fault.faultString}"
-            ) from None
-        except OverflowError:
+            raise faulted(fault, self.uri, self.what, method) from fault
+        except OverflowError as err:
             raise RostoolsError(
                 "integers must fit in 32 bits (XML-RPC has no larger type)"
-            ) from None
+            ) from err
         except (xmlrpc.client.ResponseError, xmlrpc.client.ProtocolError) as err:
-            raise RostoolsError(f"bad answer from the {self.what} at {self.uri}: {err}") from None
+            raise RostoolsError(f"bad answer from the {self.what} at {self.uri}: {err}") from err
 
     def call(self, method: str, *args: Any) -> Any:
         """Call a ROS API method and return its value; a failure code raises ``MasterError``."""
-        answer = self.raw(method, *args)
-        if not isinstance(answer, list | tuple) or len(answer) != 3:
-            raise RostoolsError(f"bad answer from the {self.what} to {method}: {answer!r}")
-        code, message, value = answer
-        if code != 1:
-            raise MasterError(method, code, message)
-        return value
+        return ros_value(self.raw(method, *args), method, self.what)
 
 
 class MasterProxy(XmlRpcNode):
@@ -112,7 +138,7 @@ class MasterProxy(XmlRpcNode):
         try:
             return self.call("getParam", key)
         except MasterError as err:
-            if err.code == -1:
+            if err.code == codes.ERROR:
                 raise NotFoundError(f"parameter {key} is not set") from None
             raise
 
@@ -125,7 +151,7 @@ class MasterProxy(XmlRpcNode):
         try:
             self.call("deleteParam", key)
         except MasterError as err:
-            if err.code == -1:
+            if err.code == codes.ERROR:
                 raise NotFoundError(f"parameter {key} is not set") from None
             raise
 
@@ -148,7 +174,7 @@ class MasterProxy(XmlRpcNode):
         try:
             uri: str = self.call("lookupNode", name)
         except MasterError as err:
-            if err.code == -1:
+            if err.code == codes.ERROR:
                 raise NotFoundError(f"unknown node {name}") from None
             raise
         return uri
@@ -158,7 +184,7 @@ class MasterProxy(XmlRpcNode):
         try:
             uri: str = self.call("lookupService", name)
         except MasterError as err:
-            if err.code == -1:
+            if err.code == codes.ERROR:
                 raise NotFoundError(f"unknown service {name}") from None
             raise
         return uri

@@ -14,10 +14,10 @@ import xmlrpc.client
 from collections.abc import Callable
 from typing import Any
 
-from rostools.errors import RostoolsError, UnreachableError
 from rostools.graph import rosapi as check
 from rostools.graph.connection import Handler, ServerConnection
-from rostools.graph.notice import Notice, explain, to_stderr
+from rostools.graph.masterapi import faulted, master_timeout, no_answer, ros_value, unreachable
+from rostools.graph.notice import Notice, to_stderr
 from rostools.graph.publisher import Publisher
 from rostools.graph.rosapi import Methods, Triple
 from rostools.graph.service import Handler as ServiceHandler
@@ -27,14 +27,11 @@ from rostools.graph.topic import ANY, TopicType
 from rostools.graph.watch import MasterWatch
 from rostools.graph.xmlrpc import XmlRpcServer, call
 from rostools.names import anonymous, canonicalize, make_global_ns, resolve, ros_namespace
-from rostools.network import bind_address, host_name, uri_host
+from rostools.network import bind_address, host_name
 from rostools.wire.tcpros import error_header
 from rostools.wire.xmlrpc import multicall
 
 log = logging.getLogger(__name__)
-
-#: How long registration calls to the master may take.
-MASTER_TIMEOUT = 5.0
 
 
 class Node:
@@ -158,21 +155,17 @@ class Node:
     # master calls ---------------------------------------------------------------------
 
     async def master_call(self, method: str, *args: Any) -> Any:
-        """Call the master as this node; a failure code raises ``RostoolsError``."""
+        """Call the master as this node; errors as every master client gives them."""
+        timeout = master_timeout()
         try:
-            answer = await call(self.master_uri, method, (self.name, *args), timeout=MASTER_TIMEOUT)
-        except (OSError, asyncio.TimeoutError) as err:
-            reason = explain(err, uri_host(self.master_uri), peer=False).reason
-            raise UnreachableError(
-                f"cannot reach the master at {self.master_uri}: {reason}",
-                hint="is roscore (or 'rostools core') running? check ROS_MASTER_URI",
-            ) from None
+            answer = await call(self.master_uri, method, (self.name, *args), timeout=timeout)
+        except (TimeoutError, asyncio.TimeoutError) as err:
+            raise no_answer(self.master_uri, "master", method, timeout) from err
+        except OSError as err:
+            raise unreachable(err, self.master_uri, "master") from err
         except xmlrpc.client.Fault as fault:
-            raise RostoolsError(f"the master failed {method}: {fault.faultString}") from None
-        code, message, value = answer
-        if code != 1:
-            raise RostoolsError(f"the master refused {method}: {message}")
-        return value
+            raise faulted(fault, self.master_uri, "master", method) from fault
+        return ros_value(answer, method, "master")
 
     async def advertise(
         self, topic: str, topic_type: TopicType, latch: bool = False, queue_size: int = 100

@@ -21,7 +21,9 @@ from rostools.errors import (
     UnreachableError,
 )
 from rostools.graph.connection import Frame, ServerConnection, set_nodelay
+from rostools.graph.masterapi import MasterError
 from rostools.msgs.store import TypeStore
+from rostools.wire import codes
 from rostools.wire.tcpros import (
     FrameError,
     ResponseReader,
@@ -202,9 +204,9 @@ async def lookup_service(node: Node, name: str) -> tuple[str, int]:
     """Host and port of a service's provider."""
     try:
         uri = await node.master_call("lookupService", name)
-    except RostoolsError as err:
-        if "no provider" in str(err):
-            raise NotFoundError(f"service {name} is not available") from None
+    except MasterError as err:
+        if err.code == codes.ERROR:
+            raise NotFoundError(f"service {name} is not available") from err
         raise
     parts = urlsplit(str(uri))
     if parts.scheme != "rosrpc" or not parts.hostname or not parts.port:

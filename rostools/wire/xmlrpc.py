@@ -17,8 +17,6 @@ MAX_BODY = 64 * 1024 * 1024
 #: The largest HTTP header block: real clients send about 150 bytes.
 MAX_HEADERS = 64 * 1024
 
-ROS_SUCCESS, ROS_FAILURE, ROS_ERROR = 1, 0, -1
-
 
 class HttpError(Exception):
     """A request or response that is not acceptable HTTP; ``status`` is the reply to send."""

@@ -1,0 +1,55 @@
+"""Every command meets a master the same way: one policy, whichever client it uses (issue 12)."""
+
+from __future__ import annotations
+
+import socket
+from collections.abc import Iterator
+from pathlib import Path
+
+import pytest
+
+from tests.support.env import run_cli
+
+COMMANDS = [
+    (["param", "get", "/x"], "getParam"),  # the blocking client
+    (["topic", "list"], "getSystemState"),
+    (["topic", "pub", "-1", "/x", "std_msgs/Empty", "{}"], "registerPublisher"),  # the node
+    (["topic", "echo", "/x"], "getTopicTypes"),
+    (["service", "call", "/s"], "lookupService"),
+    (["bag", "record", "-O", "{tmp}/x.bag", "/x"], "hasParam"),  # the node: /use_sim_time
+]
+
+
+@pytest.fixture
+def silent_master(cli_env: dict[str, str]) -> Iterator[str]:
+    """A master that accepts connections and never answers."""
+    with socket.socket() as silent:
+        silent.bind(("127.0.0.1", 0))
+        silent.listen(16)
+        cli_env["ROS_MASTER_URI"] = f"http://127.0.0.1:{silent.getsockname()[1]}"
+        cli_env["ROSTOOLS_MASTER_TIMEOUT"] = "0.5"
+        yield cli_env["ROS_MASTER_URI"]
+
+
+@pytest.mark.parametrize(("args", "method"), COMMANDS, ids=[" ".join(c[:2]) for c, _ in COMMANDS])
+def test_a_master_that_does_not_answer_is_a_timeout(
+    args: list[str], method: str, silent_master: str, cli_env: dict[str, str], tmp_path: Path
+) -> None:
+    # The node's calls said "cannot reach" and exit 4 where the blocking client said exit 5.
+    done = run_cli(*(a.replace("{tmp}", str(tmp_path)) for a in args), env=cli_env, timeout=20)
+    assert done.returncode == 5, done.stderr
+    last = done.stderr.splitlines()[-1]  # bag record says "Recording to ..." first
+    assert last == f"rostools: the master at {silent_master} did not answer {method} within 0.5 s"
+
+
+@pytest.mark.parametrize(("args", "method"), COMMANDS, ids=[" ".join(c[:2]) for c, _ in COMMANDS])
+def test_a_master_that_is_not_there_is_unreachable(
+    args: list[str], method: str, cli_env: dict[str, str], tmp_path: Path
+) -> None:
+    args = [a.replace("{tmp}", str(tmp_path)) for a in args]
+    done = run_cli(*args, env=cli_env, timeout=20)  # cli_env: the discard port, refused
+    assert done.returncode == 4, done.stderr
+    # One reason for one cause: the node said "connection refused", the client "Connection..."
+    assert done.stderr.splitlines()[-1].startswith(
+        "rostools: cannot reach the master at http://127.0.0.1:9: connection refused"
+    ), done.stderr

@@ -7,7 +7,6 @@ unless a filter expression needs the decoded message. A failure deletes the part
 
 from __future__ import annotations
 
-import ast
 import itertools
 from collections.abc import Callable, Collection, Iterator
 from dataclasses import dataclass, field
@@ -19,7 +18,8 @@ from rostools.bag.base import BagReader, BagWriter, Targets
 from rostools.bag.mcap_reader import McapReader
 from rostools.bag.model import BagUsageError, Connection, UnsupportedBagError
 from rostools.bag.ordering import Message
-from rostools.errors import RostoolsError, UsageError
+from rostools.errors import RostoolsError
+from rostools.msgs.expr import Expression, compile_expression
 
 #: ``progress(done, total)`` is called about every this many messages (and at the end).
 PROGRESS_EVERY: Final = 4096
@@ -41,10 +41,6 @@ class CopyReport:
     #: MCAP attachments and metadata records copied, and left out (see ``copy_extras``).
     extras_copied: int = 0
     extras_left_out: int = 0
-
-
-class FilterExpressionError(UsageError):
-    """A filter expression that does not compile, or raised on a message."""
 
 
 def convert(
@@ -148,32 +144,21 @@ filter = filter_bag
 
 @dataclass
 class _Filter:
-    """A compiled filter expression and the decoders it needs."""
+    """A compiled filter expression (and ``--print``'s) and the decoders it needs."""
 
-    source: str
-    fn: Callable[[str, Any, Any], Any]
-    needs_message: bool
-    show: tuple[str, Callable[[str, Any, Any], Any], Callable[[bool, Any], None]] | None = None
+    keep: Expression
+    show: tuple[Expression, Callable[[bool, Any], None]] | None = None
     decoders: dict[int, Callable[[Any], Any]] = field(default_factory=dict)
 
     def __call__(self, conn: Connection, t_ns: int, data: memoryview) -> bool:
         from rostools.msgs.message import Time
 
-        msg = self._decode(conn, data) if self.needs_message else None
+        needs = self.keep.needs_message or (self.show is not None and self.show[0].needs_message)
+        msg = self._decode(conn, data) if needs else None
         t = Time.from_nsec(t_ns)
-        source, shown = self.source, None
-        try:
-            verdict = bool(self.fn(conn.topic, msg, t))
-            if self.show is not None:
-                source = self.show[0]
-                shown = self.show[1](conn.topic, msg, t)
-        except Exception as err:  # the user's expression may raise anything
-            raise FilterExpressionError(
-                f"filter expression {source!r} failed on {conn.topic} at {t_ns} ns: "
-                f"{type(err).__name__}: {err}"
-            ) from err
+        verdict = bool(self.keep(conn.topic, msg, t))
         if self.show is not None:
-            self.show[2](verdict, shown)
+            self.show[1](verdict, self.show[0](conn.topic, msg, t))
         return verdict
 
     def _decode(self, conn: Connection, data: memoryview) -> Any:
@@ -190,23 +175,10 @@ def compile_filter(
 
     ``show`` is (expression, callback): see ``filter_bag``.
     """
-    fn, needs = _compile(expression)
+    keep = compile_expression(expression, "filter expression")
     if show is None:
-        return _Filter(expression, fn, needs)
-    show_fn, show_needs = _compile(show[0])
-    return _Filter(expression, fn, needs or show_needs, (show[0], show_fn, show[1]))
-
-
-def _compile(expression: str) -> tuple[Callable[[str, Any, Any], Any], bool]:
-    """The expression as a function of (topic, m, t), and whether it reads ``m``."""
-    try:
-        tree = ast.parse(expression.strip(), mode="eval")
-        code = compile(f"lambda topic, m, t: ({expression.strip()})", "<filter>", "eval")
-    except SyntaxError as err:
-        raise FilterExpressionError(f"bad filter expression {expression!r}: {err.msg}") from err
-    needs = any(isinstance(n, ast.Name) and n.id == "m" for n in ast.walk(tree))
-    # The expression is the user's own Python, exactly as rosbag filter evaluates it.
-    return eval(code, {"__builtins__": __builtins__}), needs  # noqa: S307
+        return _Filter(keep)
+    return _Filter(keep, (compile_expression(show[0], "--print expression"), show[1]))
 
 
 def _decoder(conn: Connection) -> Callable[[Any], Any]:

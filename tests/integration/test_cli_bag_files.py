@@ -95,7 +95,7 @@ def test_filter_by_expression_topics_and_time(tmp_path: Path) -> None:
 
 @pytest.mark.parametrize(
     ("expr", "words"),
-    [("m.nosuch", "failed on"), ("(", "bad filter expression")],
+    [("m.nosuch", "failed on"), ("(", "filter expression '(' is not a Python expression")],
 )
 def test_filter_expression_errors_leave_no_output(tmp_path: Path, expr: str, words: str) -> None:
     sample = write_sample(tmp_path / "s.bag", 40)

@@ -112,6 +112,14 @@ def test_filter_sees_m_and_topic(rostools_master: str, cli_env: dict[str, str]) 
         assert none.returncode == 5
         bad = run_cli("topic", "echo", "/nums", "--filter", "m.data ==", env=cli_env)
         assert bad.returncode == 2 and "not a Python expression" in bad.stderr
+        # One compiler: an expression that raises is exit 2 everywhere (echo said 1, bag 2).
+        for verb in ("echo", "hz"):
+            raised = run_cli(
+                "topic", verb, "/nums", "--filter", "m.nosuch", "--timeout", "5", env=cli_env
+            )
+            assert raised.returncode == 2, raised.stderr
+            last = raised.stderr.splitlines()[-1]  # hz says "subscribed to [/nums]" first
+            assert last.startswith("rostools: 'm.nosuch' failed on /nums: AttributeError"), last
     finally:
         pub.stop()
 

@@ -21,11 +21,13 @@ from rostools.cli.common import (
     type_store,
 )
 from rostools.cli.topic import app
-from rostools.errors import RostoolsError, TimeoutExpired, UsageError
+from rostools.errors import TimeoutExpired, UsageError
 from rostools.names import script_resolve
 
 if TYPE_CHECKING:
     import asyncio
+
+    from rostools.msgs.expr import Expression
 
 CountOpt = Annotated[int | None, typer.Option("-n", help="Exit after this many messages.")]
 TimeoutOpt = Annotated[
@@ -51,7 +53,7 @@ class EchoOptions:
 
     field: str
     count: int | None
-    filter: Any  # a compiled expression, or None
+    filter: Expression | None
     plot: bool
     nostr: bool
     noarr: bool
@@ -102,13 +104,8 @@ class Printer:
         from rostools.msgs import plain
 
         msg = self.decode(data, 0)[0]
-        if self.opts.filter is not None:
-            try:
-                keep = eval(self.opts.filter, {"m": msg, "topic": self.topic})  # noqa: S307
-            except Exception as err:  # noqa: BLE001 - the user's expression
-                raise RostoolsError(f"--filter failed: {type(err).__name__}: {err}") from None
-            if not keep:
-                return None
+        if self.opts.filter is not None and not self.opts.filter(self.topic, msg):
+            return None
         value = self.get(msg) if self.get is not None else msg
         opts = self.opts
         if opts.plot:
@@ -207,10 +204,9 @@ def _options(
 ) -> EchoOptions:
     compiled = None
     if filter_expr:
-        try:
-            compiled = compile(filter_expr, "<--filter>", "eval")
-        except SyntaxError as err:
-            raise UsageError(f"--filter is not a Python expression: {err.msg}") from None
+        from rostools.msgs.expr import compile_expression
+
+        compiled = compile_expression(filter_expr)
     if width is not None and width < 2:
         raise UsageError("-w must be at least 2")
     if count is not None and count < 1:

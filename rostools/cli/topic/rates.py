@@ -14,7 +14,7 @@ import typer
 from rostools.cli.common import Format, FormatOpt, node_session, output_format
 from rostools.cli.topic import app
 from rostools.cli.topic.echo import FilterOpt, TimeoutOpt, _resolve
-from rostools.errors import NotFoundError, RostoolsError, TimeoutExpired, UsageError
+from rostools.errors import NotFoundError, TimeoutExpired, UsageError
 from rostools.names import script_resolve
 
 if TYPE_CHECKING:
@@ -142,13 +142,11 @@ def _filter(expr: str | None) -> Callable[[list[Any], Any, str], list[Any]] | No
     """A frames filter that decodes and evaluates ``expr``, or None."""
     if not expr:
         return None
-    try:
-        code = compile(expr, "<--filter>", "eval")
-    except SyntaxError as err:
-        raise UsageError(f"--filter is not a Python expression: {err.msg}") from None
     from rostools.msgs.codec import Codec
+    from rostools.msgs.expr import compile_expression
     from rostools.msgs.store import TypeStore
 
+    wanted = compile_expression(expr)
     base = TypeStore.default()
     decoders: dict[tuple[str, str], Any] = {}
 
@@ -159,14 +157,7 @@ def _filter(expr: str | None) -> Callable[[list[Any], Any, str], list[Any]] | No
         if decode is None:
             store = base.with_definition(*key)
             decode = decoders[key] = Codec.of(store).decoder(key[0])
-        out = []
-        for data in frames:
-            try:
-                if eval(code, {"m": decode(data, 0)[0], "topic": topic}):  # noqa: S307
-                    out.append(data)
-            except Exception as err:  # noqa: BLE001 - the user's expression
-                raise RostoolsError(f"--filter failed: {type(err).__name__}: {err}") from None
-        return out
+        return [data for data in frames if wanted(topic, decode(data, 0)[0])]
 
     return keep
 

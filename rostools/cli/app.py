@@ -9,7 +9,8 @@ import typer
 from typer.core import TyperGroup
 
 from rostools import __version__
-from rostools.cli.common import Format, Settings
+from rostools.cli.common import Settings
+from rostools.cli.output import Format
 
 #: ``name:=value`` arguments that ``rostools.cli.main`` took off the command line.
 REMAPPINGS: dict[str, str] = {}

@@ -2,16 +2,16 @@
 
 from __future__ import annotations
 
-import enum
-import json
 import math
 import os
-import sys
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated, Any, TypeVar
 
 import typer
+
+from rostools.cli import output
+from rostools.cli.output import Format
 
 T = TypeVar("T")
 
@@ -44,14 +44,6 @@ class FiniteFloat(FloatRange):  # type: ignore[misc,unused-ignore]
 #: Every float option's type (``typer.Option(..., click_type=FINITE)``); with bounds,
 #: ``FiniteFloat(min=...)`` (typer ignores ``min=`` once a ``click_type`` is given).
 FINITE = FiniteFloat()
-
-
-class Format(str, enum.Enum):
-    """Output formats."""
-
-    text = "text"
-    json = "json"
-    yaml = "yaml"
 
 
 @dataclass
@@ -108,9 +100,8 @@ def node_session(
 
     def notify(notice: Notice) -> None:
         to_stderr(notice)
-        if fmt is Format.json:
-            sys.stdout.write(json.dumps(notice.as_json()) + "\n")
-            sys.stdout.flush()
+        if fmt is not Format.text:  # in the stream, a record among the others
+            output.write(fmt, notice.as_json())
 
     s = settings(ctx)
     return run_node(main, s.resolved_master_uri(), name, remappings=s.remappings, notify=notify)
@@ -138,20 +129,3 @@ MsgPathOpt = Annotated[
         show_default=False,
     ),
 ]
-
-
-def render(fmt: Format, data: Any, text: Callable[[Any], str] | None = None) -> str:
-    """One result as text (``text(data)``), or as one JSON or YAML document."""
-    if fmt is Format.json:
-        return json.dumps(data, indent=2, ensure_ascii=False)
-    if fmt is Format.yaml:
-        import yaml
-
-        text_ = str(yaml.safe_dump(data, sort_keys=False, allow_unicode=True))
-        return text_.removesuffix("\n...\n").rstrip("\n")  # a scalar has no end-of-document mark
-    return text(data) if text is not None else str(data)
-
-
-def emit(fmt: Format, data: Any, text: Callable[[Any], str] | None = None) -> None:
-    """Print one result (see ``render``) and a newline."""
-    sys.stdout.write(render(fmt, data, text) + "\n")

@@ -17,7 +17,8 @@ from typing import Annotated, Any
 
 import typer
 
-from rostools.cli.common import Format, FormatOpt, emit, output_format
+from rostools.cli.common import FormatOpt, output_format
+from rostools.cli.output import Format, emit
 from rostools.errors import UsageError
 
 app = typer.Typer(

@@ -10,7 +10,8 @@ from typing import Annotated
 import typer
 
 from rostools import __version__
-from rostools.cli.common import Format, FormatOpt, output_format
+from rostools.cli.common import FormatOpt, output_format
+from rostools.cli.output import Format
 from rostools.errors import RostoolsError
 
 app = typer.Typer(

@@ -7,7 +7,8 @@ from typing import Annotated
 
 import typer
 
-from rostools.cli.common import FiniteFloat, Format, FormatOpt, emit, output_format, settings
+from rostools.cli.common import FiniteFloat, FormatOpt, output_format, settings
+from rostools.cli.output import Format, emit
 from rostools.errors import RostoolsError, TimeoutExpired, UnreachableError, UsageError
 
 app = typer.Typer(

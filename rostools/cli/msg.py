@@ -8,8 +8,9 @@ from typing import Annotated, Any
 
 import typer
 
-from rostools.cli.common import Format, FormatOpt, MsgPathOpt, emit, output_format, type_store
+from rostools.cli.common import FormatOpt, MsgPathOpt, output_format, type_store
 from rostools.cli.lookup import Kind, matches, md5_text, md5sums, read_type
+from rostools.cli.output import Format, emit
 from rostools.errors import NotFoundError, UsageError
 from rostools.msgs.store import TypeStore
 

@@ -9,7 +9,6 @@ error (exit 3), a node that cannot be reached exits 4 and one that does not answ
 from __future__ import annotations
 
 import enum
-import json
 import sys
 import time
 from collections.abc import Iterator
@@ -17,16 +16,8 @@ from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
-from rostools.cli.common import (
-    FiniteFloat,
-    Format,
-    FormatOpt,
-    emit,
-    master,
-    output_format,
-    render,
-    settings,
-)
+from rostools.cli.common import FiniteFloat, FormatOpt, master, output_format, settings
+from rostools.cli.output import Format, emit
 from rostools.errors import (
     NotFoundError,
     RostoolsError,
@@ -297,12 +288,10 @@ def ping(
 
 
 def _print_reply(fmt: Format, node: str, uri: str, pid: int, ms: float, seq: int) -> None:
-    if fmt is Format.text:
-        text = reply_text(uri, ms)
-    else:
-        data = {"node": node, "uri": uri, "seq": seq, "pid": pid, "time_ms": round(ms, 6)}
-        text = json.dumps(data) if fmt is Format.json else "---\n" + render(fmt, data)
-    print(text, flush=True)
+    from rostools.cli import output
+
+    data = {"node": node, "uri": uri, "seq": seq, "pid": pid, "time_ms": round(ms, 6)}
+    output.write(fmt, data, lambda _: reply_text(uri, ms))
 
 
 def _ping_all(graph: Graph, fmt: Format) -> None:

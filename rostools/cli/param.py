@@ -9,7 +9,8 @@ from typing import Annotated, Any
 import typer
 
 from rostools.cli import paramyaml
-from rostools.cli.common import Format, FormatOpt, emit, master, output_format, render
+from rostools.cli.common import FormatOpt, master, output_format
+from rostools.cli.output import Format, emit, render
 from rostools.errors import NotFoundError, UsageError
 from rostools.names import GLOBAL_NS, join, make_global_ns, script_resolve
 

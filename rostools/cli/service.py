@@ -9,16 +9,8 @@ from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
-from rostools.cli.common import (
-    FINITE,
-    Format,
-    FormatOpt,
-    MsgPathOpt,
-    emit,
-    master,
-    output_format,
-    type_store,
-)
+from rostools.cli.common import FINITE, FormatOpt, MsgPathOpt, master, output_format, type_store
+from rostools.cli.output import Format, emit
 from rostools.errors import NotFoundError, TimeoutExpired, UsageError
 from rostools.names import make_global_ns, ros_namespace, script_resolve
 

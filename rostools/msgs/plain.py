@@ -73,11 +73,13 @@ def _finite(value: Any) -> Any:
 
 
 def dumps(value: Any) -> str:
-    """Compact JSON text of plain data, always valid JSON."""
+    """Compact JSON text of plain data, always valid JSON (anything else as its ``str``)."""
     try:
-        return json.dumps(value, separators=(",", ":"), ensure_ascii=False, allow_nan=False)
+        return json.dumps(
+            value, separators=(",", ":"), ensure_ascii=False, allow_nan=False, default=str
+        )
     except ValueError:
-        return json.dumps(_finite(value), separators=(",", ":"), ensure_ascii=False)
+        return json.dumps(_finite(value), separators=(",", ":"), ensure_ascii=False, default=str)
 
 
 @dataclass(frozen=True)

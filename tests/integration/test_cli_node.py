@@ -20,6 +20,7 @@ from typing import Any
 from xmlrpc.server import SimpleXMLRPCRequestHandler, SimpleXMLRPCServer
 
 import pytest
+import yaml
 
 from tests.support.env import run_cli
 from tests.support.procs import Proc, free_port
@@ -273,6 +274,10 @@ def test_ping(
         for line in lines[1:3]
     ), lines
     assert re.fullmatch(r"ping average: \d+\.\d{6}ms", lines[3]) and len(lines) == 4
+    # A YAML stream is documents that each end with ---, as echo's (ping began them with it).
+    docs = cli(cli_env, "ping", "/talker", "-c2", "-F", "yaml")
+    assert docs.endswith("---\n") and not docs.startswith("---")
+    assert [d["seq"] for d in yaml.safe_load_all(docs) if d] == [1, 2]
     stream = cli(cli_env, "ping", "/talker", "-c2", "-F", "json").splitlines()
     replies = [json.loads(line) for line in stream]
     assert [(r["node"], r["uri"], r["seq"], r["pid"]) for r in replies] == [

@@ -8,6 +8,8 @@ import sys
 import time
 from pathlib import Path
 
+import yaml
+
 from tests.support.env import run_cli
 from tests.support.procs import Proc, wait_for
 
@@ -81,6 +83,12 @@ def test_rate_meters(rostools_master: str, cli_env: dict[str, str]) -> None:
         rows = [json.loads(line) for line in hz.stdout.splitlines()]
         assert hz.returncode == 0 and rows, hz.stderr
         assert abs(rows[-1]["rate"] - 50) < 2.5
+        # YAML is asked for, YAML it gets (hz, bw and delay printed JSON), one document a report.
+        docs = run_cli(
+            "topic", "hz", "/pt", "--timeout", "2.5", "-F", "yaml", env=cli_env, timeout=30
+        ).stdout
+        assert docs.endswith("---\n") and "rate: " in docs and "{" not in docs, docs
+        assert all(d["topic"] == "/pt" for d in yaml.safe_load_all(docs) if d)
         bw = run_cli("topic", "bw", "/pt", "--timeout", "2.5", env=cli_env, timeout=30).stdout
         assert bw.startswith("average: ") and "mean: 0.04KB min: 0.04KB" in bw  # 40-byte messages
         delay = run_cli(

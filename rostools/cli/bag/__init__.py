@@ -15,7 +15,9 @@ from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
-from rostools.cli.common import FINITE, Format, FormatOpt, emit, output_format, render
+from rostools.cli import output
+from rostools.cli.common import FINITE, FormatOpt, output_format
+from rostools.cli.output import Format, emit, render
 from rostools.errors import UsageError
 
 if TYPE_CHECKING:
@@ -92,12 +94,7 @@ class Progress:
             return
         self.last = percent
         if self.json:
-            import json
-
-            sys.stdout.write(
-                json.dumps({"progress": self.label, "done": done, "total": total}) + "\n"
-            )
-            sys.stdout.flush()
+            output.write(Format.json, {"progress": self.label, "done": done, "total": total})
         elif self.bar:
             width = 30
             filled = width * percent // 100
@@ -139,9 +136,7 @@ def _report(fmt: Format, report: CopyReport) -> None:
                 )
             )
     elif fmt is Format.json:
-        import json
-
-        sys.stdout.write(json.dumps(data) + "\n")  # the last line of the NDJSON progress stream
+        output.write(fmt, data)  # the last record of the NDJSON progress stream
     else:
         emit(fmt, data)
 
@@ -220,13 +215,8 @@ def filter_(
 
 def _say(fmt: Format, matched: bool, value: Any) -> None:
     """One line of ``filter --print``: text as rosbag prints it, or an NDJSON object."""
-    if fmt is Format.json:
-        import json
-
-        line = json.dumps({"match": matched, "print": value}, default=str)
-    else:
-        line = f"{'MATCH' if matched else 'NO MATCH'} {value}"
-    sys.stdout.write(line + "\n")
+    text = f"{'MATCH' if matched else 'NO MATCH'} {value}"
+    output.write(fmt, {"match": matched, "print": value}, lambda _: text)
 
 
 @app.command()

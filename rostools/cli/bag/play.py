@@ -12,7 +12,8 @@ from typing import TYPE_CHECKING, Annotated
 import typer
 
 from rostools.cli.bag import app
-from rostools.cli.common import FINITE, Format, FormatOpt, node_session, output_format, render
+from rostools.cli.common import FINITE, FormatOpt, node_session, output_format
+from rostools.cli.output import Format, render
 from rostools.errors import UsageError
 
 if TYPE_CHECKING:

@@ -12,7 +12,8 @@ import typer
 
 from rostools.bag.api import WRITE_COMPRESSIONS
 from rostools.cli.bag import app
-from rostools.cli.common import Format, node_session, output_format, render
+from rostools.cli.common import node_session, output_format
+from rostools.cli.output import Format, render
 from rostools.errors import DataLossError, UsageError
 
 if TYPE_CHECKING:

@@ -12,15 +12,8 @@ from typing import Annotated, Any
 
 import typer
 
-from rostools.cli.common import (
-    Format,
-    FormatOpt,
-    MsgPathOpt,
-    emit,
-    master,
-    output_format,
-    type_store,
-)
+from rostools.cli.common import FormatOpt, MsgPathOpt, master, output_format, type_store
+from rostools.cli.output import Format, emit
 from rostools.cli.topiclist import list_text
 from rostools.errors import NotFoundError, UsageError
 from rostools.names import script_resolve

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from rostools.cli.common import Format, emit
+from rostools.cli.output import Format, emit
 
 
 def list_bag_topics(bag: Path, namespace: str | None, fmt: Format) -> None:

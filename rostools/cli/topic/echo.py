@@ -13,13 +13,13 @@ import typer
 
 from rostools.cli.common import (
     FINITE,
-    Format,
     FormatOpt,
     MsgPathOpt,
     node_session,
     output_format,
     type_store,
 )
+from rostools.cli.output import Format
 from rostools.cli.topic import app
 from rostools.errors import TimeoutExpired, UsageError
 from rostools.names import script_resolve
@@ -126,11 +126,9 @@ class Printer:
 
             prefix = "\033[2J\033[;H" if opts.clear else ""
             return prefix + self.text(value, Time.now() if opts.offset else None) + "\n---\n"
-        if opts.fmt is Format.json:
-            return plain.dumps(self.plain(value)) + "\n"
-        import yaml
+        from rostools.cli import output
 
-        return str(yaml.safe_dump(self.plain(value), sort_keys=False)) + "---\n"
+        return output.record(opts.fmt, self.plain(value))
 
 
 class Echo:

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import json
 import struct
 import sys
 import time
@@ -11,7 +10,9 @@ from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
-from rostools.cli.common import Format, FormatOpt, node_session, output_format
+from rostools.cli import output
+from rostools.cli.common import FormatOpt, node_session, output_format
+from rostools.cli.output import Format
 from rostools.cli.topic import app
 from rostools.cli.topic.echo import FilterOpt, TimeoutOpt, _resolve
 from rostools.errors import NotFoundError, TimeoutExpired, UsageError
@@ -91,10 +92,6 @@ def _run(ctx: typer.Context, meter: Meter, sink: Any, report: Any) -> None:
         raise TimeoutExpired(f"no message on {', '.join(meter.topics)} within {meter.timeout:g} s")
 
 
-def _json(row: dict[str, Any]) -> None:
-    sys.stdout.write(json.dumps(row) + "\n")
-
-
 @app.command()
 def hz(
     ctx: typer.Context,
@@ -125,8 +122,9 @@ def hz(
         rows = [(n, s) for n in names if (s := meters[n].report()) is not None]
         if fmt is not Format.text:
             for n, s in rows:
-                _json({"topic": n, "rate": s.value, "min": s.min, "max": s.max,
-                       "std_dev": s.std_dev, "window": s.window})  # fmt: skip
+                row = {"topic": n, "rate": s.value, "min": s.min, "max": s.max,
+                       "std_dev": s.std_dev, "window": s.window}  # fmt: skip
+                output.write(fmt, row)
         elif not rows:
             sys.stdout.write("no new messages\n")
         elif len(names) == 1:
@@ -185,8 +183,9 @@ def bw(
         if stats is None:
             return
         if fmt is not Format.text:
-            _json({"topic": name, "bytes_per_s": stats.rate, "mean": stats.mean, "min": stats.min,
-                   "max": stats.max, "window": stats.window})  # fmt: skip
+            row = {"topic": name, "bytes_per_s": stats.rate, "mean": stats.mean,
+                   "min": stats.min, "max": stats.max, "window": stats.window}  # fmt: skip
+            output.write(fmt, row)
         else:
             sys.stdout.write(format_bandwidth(stats) + "\n")
 
@@ -227,8 +226,9 @@ def delay(
         if stats is None:
             return
         if fmt is not Format.text:
-            _json({"topic": name, "delay": stats.value, "min": stats.min, "max": stats.max,
-                   "std_dev": stats.std_dev, "window": stats.window})  # fmt: skip
+            row = {"topic": name, "delay": stats.value, "min": stats.min, "max": stats.max,
+                   "std_dev": stats.std_dev, "window": stats.window}  # fmt: skip
+            output.write(fmt, row)
         else:
             sys.stdout.write(format_delay(stats) + "\n")
 

@@ -1,0 +1,65 @@
+"""How commands print: one result in text, JSON or YAML, or a stream of records as they come.
+
+One-shot results (``render``/``emit``) are one document: indented JSON, or YAML. Streams
+(``record``/``write``: echo's messages, hz/bw/delay's reports, ``node ping``'s replies, bag
+progress, ``bag filter --print``, a running node's notices) read the same whichever command
+made them:
+
+- text: the command's own line (``text(data)``);
+- ``--format yaml``: each record a YAML document that ends with ``---``, as ``rostopic echo``
+  ends each message;
+- ``--format json``: NDJSON, one compact object a line, always valid JSON (NaN and infinity,
+  which JSON lacks, become null).
+"""
+
+from __future__ import annotations
+
+import enum
+import json
+import sys
+from collections.abc import Callable
+from typing import Any
+
+
+class Format(str, enum.Enum):
+    """Output formats."""
+
+    text = "text"
+    json = "json"
+    yaml = "yaml"
+
+
+def render(fmt: Format, data: Any, text: Callable[[Any], str] | None = None) -> str:
+    """One result as text (``text(data)``), or as one JSON or YAML document."""
+    if fmt is Format.json:
+        return json.dumps(data, indent=2, ensure_ascii=False)
+    if fmt is Format.yaml:
+        import yaml
+
+        text_ = str(yaml.safe_dump(data, sort_keys=False, allow_unicode=True))
+        return text_.removesuffix("\n...\n").rstrip("\n")  # a scalar has no end-of-document mark
+    return text(data) if text is not None else str(data)
+
+
+def emit(fmt: Format, data: Any, text: Callable[[Any], str] | None = None) -> None:
+    """Print one result (see ``render``) and a newline."""
+    sys.stdout.write(render(fmt, data, text) + "\n")
+
+
+def record(fmt: Format, data: Any, text: Callable[[Any], str] | None = None) -> str:
+    """One record of a stream, with its line end (see the module's rules)."""
+    if fmt is Format.json:
+        from rostools.msgs.plain import dumps
+
+        return dumps(data) + "\n"
+    if fmt is Format.yaml:
+        import yaml
+
+        return str(yaml.safe_dump(data, sort_keys=False, allow_unicode=True)) + "---\n"
+    return (text(data) if text is not None else str(data)) + "\n"
+
+
+def write(fmt: Format, data: Any, text: Callable[[Any], str] | None = None) -> None:
+    """Print one record now (a stream is read as it comes, so each is flushed)."""
+    sys.stdout.write(record(fmt, data, text))
+    sys.stdout.flush()

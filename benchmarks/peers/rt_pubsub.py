@@ -14,10 +14,10 @@ import json
 import sys
 import time
 
-from rostools.graph.node import Node
-from rostools.graph.topic import TopicType
 from rostools.msgs.codec import Codec
 from rostools.msgs.store import BuiltinSource, TypeStore
+from rostools.msgs.topictype import TopicType
+from rostools.node.node import Node
 
 
 async def publish(master: str, topic: str, size: int, seconds: float) -> None:

@@ -10,11 +10,11 @@ import json
 import sys
 import time
 
-from rostools.graph.blocking import BlockingServiceClient
-from rostools.graph.masterapi import MasterProxy
-from rostools.graph.node import Node
-from rostools.graph.service import ServiceClient, ServiceType
 from rostools.msgs.store import BuiltinSource, TypeStore
+from rostools.node.node import Node
+from rostools.node.service import ServiceClient, ServiceType
+from rostools.rosgraph.masterapi import MasterProxy
+from rostools.rosgraph.serviceclient import BlockingServiceClient
 
 MD5 = TypeStore([BuiltinSource()]).srv_md5("std_srvs/Trigger")
 

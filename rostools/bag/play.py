@@ -22,12 +22,12 @@ from rostools.bag.base import BagReader
 from rostools.bag.model import NS_PER_SEC, Connection
 from rostools.bag.play_control import SET_BOOL, RateControl, set_bool_reply
 from rostools.errors import UsageError
-from rostools.graph.clock import CLOCK, TIME
-from rostools.graph.connection import Frame
-from rostools.graph.node import Node
-from rostools.graph.publisher import Publisher
-from rostools.graph.session import first
-from rostools.graph.topic import TopicType
+from rostools.msgs.topictype import TopicType
+from rostools.node.clock import CLOCK, TIME
+from rostools.node.connection import Frame
+from rostools.node.node import Node
+from rostools.node.publisher import Publisher
+from rostools.node.session import first
 
 #: The last stretch before a due time is slept with ``time.sleep`` (asyncio wakes late).
 FINE_SLEEP = 0.002

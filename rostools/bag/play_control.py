@@ -12,9 +12,9 @@ import struct
 from collections.abc import Callable
 
 from rostools.bag.model import NS_PER_SEC
-from rostools.graph.connection import Frame, InboundConnection
-from rostools.graph.node import Node
-from rostools.graph.service import ServiceType
+from rostools.node.connection import Frame, InboundConnection
+from rostools.node.node import Node
+from rostools.node.service import ServiceType
 
 log = logging.getLogger(__name__)
 

@@ -27,11 +27,11 @@ from rostools.bag.api import open_writer
 from rostools.bag.base import BagWriter
 from rostools.bag.model import Connection
 from rostools.errors import RostoolsError, UsageError
-from rostools.graph.clock import RosClock
-from rostools.graph.connection import Frame, InboundConnection
-from rostools.graph.node import Node
-from rostools.graph.publisher import Publisher
-from rostools.graph.topic import TopicType
+from rostools.msgs.topictype import TopicType
+from rostools.node.clock import RosClock
+from rostools.node.connection import Frame, InboundConnection
+from rostools.node.node import Node
+from rostools.node.publisher import Publisher
 
 log = logging.getLogger(__name__)
 
@@ -416,7 +416,7 @@ class Recorder:
 
     async def _node_topics(self, name: str) -> list[str]:
         """The topics node ``name`` subscribes to (rosbag record --node)."""
-        from rostools.graph.xmlrpc import call
+        from rostools.node.xmlrpc import call
 
         try:
             uri = await self.node.master_call("lookupNode", self.node.resolve(name))
@@ -442,7 +442,7 @@ class Recorder:
         self, stop: asyncio.Event, tick: Callable[[Recorder], None] | None = None
     ) -> None:
         """Record until ``stop`` or ``_finished``; ``tick`` is called four times a second."""
-        from rostools.graph.session import first
+        from rostools.node.session import first
 
         self.check_disk(started=False)
         await self.clock.start(self.node)  # no master: say so (no file) rather than wait forever
@@ -473,7 +473,7 @@ class Recorder:
 
     async def _clock_valid(self, stop: asyncio.Event) -> bool:
         """Under sim time, wait for the first /clock (False if stopped first), as rosbag."""
-        from rostools.graph.session import first
+        from rostools.node.session import first
 
         warn_at = time.monotonic() + 2.0
         while not self.clock.valid:

@@ -18,9 +18,9 @@ T = TypeVar("T")
 if TYPE_CHECKING:
     from collections.abc import Awaitable, Callable
 
-    from rostools.graph.masterapi import MasterProxy
-    from rostools.graph.notice import Notice
     from rostools.msgs.store import TypeStore
+    from rostools.node.notice import Notice
+    from rostools.rosgraph.masterapi import MasterProxy
 
 DEFAULT_MASTER_URI = "http://localhost:11311"
 
@@ -76,8 +76,8 @@ def output_format(ctx: typer.Context, local: Format | None) -> Format:
 
 def master(ctx: typer.Context, tool: str) -> MasterProxy:
     """A master client for this invocation, named like rospy tools name themselves."""
-    from rostools.graph.masterapi import MasterProxy
     from rostools.names import ros_namespace
+    from rostools.rosgraph.masterapi import MasterProxy
 
     caller_id = f"{ros_namespace()}{tool}_{os.getpid()}"
     return MasterProxy(settings(ctx).resolved_master_uri(), caller_id)
@@ -95,8 +95,8 @@ def node_session(
     node's notices go to stderr; a stream printed with ``fmt`` json also carries them as
     ``{"event": ...}`` objects.
     """
-    from rostools.graph.notice import to_stderr
-    from rostools.graph.session import run_node
+    from rostools.node.notice import to_stderr
+    from rostools.node.session import run_node
 
     def notify(notice: Notice) -> None:
         to_stderr(notice)

@@ -171,7 +171,7 @@ class Completer:
         return source(self) if source is not None else []
 
     def _master(self) -> Any:
-        from rostools.graph.masterapi import MasterProxy
+        from rostools.rosgraph.masterapi import MasterProxy
 
         return MasterProxy(self.master_uri, "/rostools_complete", timeout=self.left())
 
@@ -275,7 +275,7 @@ class Completer:
         if not self.positionals or self.cur:
             return []
         from rostools.errors import RostoolsError
-        from rostools.graph.blocking import BlockingServiceClient
+        from rostools.rosgraph.serviceclient import BlockingServiceClient
 
         name = self.positionals[0]
         name = name if name.startswith("/") else "/" + name

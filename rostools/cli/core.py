@@ -38,9 +38,9 @@ def core(
     fmt: FormatOpt = None,
 ) -> None:
     """Run a ROS master and parameter server until Ctrl-C (SIGINT) or SIGTERM."""
-    from rostools.graph.masterapi import probe
     from rostools.master.core import choose_address, run_core
     from rostools.master.server import Master
+    from rostools.rosgraph.masterapi import probe
 
     address = choose_address(host, port)
     local = "127.0.0.1" if address.bind == "0.0.0.0" else address.bind  # noqa: S104

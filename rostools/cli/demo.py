@@ -66,11 +66,11 @@ class Graph:
             self.loop.close()
 
     async def _main(self) -> None:
-        from rostools.graph.node import Node
-        from rostools.graph.service import ServiceType
-        from rostools.graph.topic import TopicType
         from rostools.msgs.codec import Codec
         from rostools.msgs.store import BuiltinSource, TypeStore
+        from rostools.msgs.topictype import TopicType
+        from rostools.node.node import Node
+        from rostools.node.service import ServiceType
 
         store = TypeStore([BuiltinSource()])
         srv_type = ServiceType.of(store, "rospy_tutorials/AddTwoInts")  # defines its messages

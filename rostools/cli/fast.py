@@ -38,9 +38,9 @@ def _topic_list(namespace: str | None) -> int:
 
     from rostools.cli.common import DEFAULT_MASTER_URI
     from rostools.cli.topiclist import list_text
-    from rostools.graph.masterapi import MasterProxy
-    from rostools.graph.topics import topic_table
     from rostools.names import ros_namespace, script_resolve
+    from rostools.rosgraph.masterapi import MasterProxy
+    from rostools.rosgraph.topics import topic_table
 
     uri = os.environ.get("ROS_MASTER_URI") or DEFAULT_MASTER_URI
     proxy = MasterProxy(uri, f"{ros_namespace()}rostopic_{os.getpid()}")

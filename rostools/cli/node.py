@@ -28,7 +28,7 @@ from rostools.errors import (
 from rostools.names import script_resolve
 
 if TYPE_CHECKING:
-    from rostools.graph.introspect import BusConnection, Graph, NodeInfo, Probe, RosGraph
+    from rostools.rosgraph.introspect import BusConnection, Graph, NodeInfo, Probe, RosGraph
 
 app = typer.Typer(
     name="node",
@@ -55,7 +55,7 @@ TimeoutOpt = Annotated[
 
 
 def _graph(ctx: typer.Context, timeout: float = NODE_TIMEOUT) -> Graph:
-    from rostools.graph.introspect import Graph
+    from rostools.rosgraph.introspect import Graph
 
     return Graph(master(ctx, TOOL), timeout)
 
@@ -162,7 +162,7 @@ def info(
     fmt: FormatOpt = None,
 ) -> None:
     """Publications, subscriptions and services of nodes, and their pid and live connections."""
-    from rostools.graph.introspect import node_info
+    from rostools.rosgraph.introspect import node_info
 
     graph = _graph(ctx, timeout)
     names = [_resolve(n) for n in nodes]
@@ -351,7 +351,7 @@ def kill(
 
     With no names on a terminal, pick one from a numbered menu, as rosnode kill.
     """
-    from rostools.graph.introspect import kill_nodes
+    from rostools.rosgraph.introspect import kill_nodes
 
     if all_ and nodes:
         raise UsageError("give node names or -a/--all, not both")
@@ -407,7 +407,7 @@ def machine(
     fmt: FormatOpt = None,
 ) -> None:
     """The hosts the nodes run on; with a host, the nodes that run on it."""
-    from rostools.graph.introspect import machines, nodes_on_machine
+    from rostools.rosgraph.introspect import machines, nodes_on_machine
 
     graph = _graph(ctx)
     uris = {n: graph.uri(n) for n in graph.state().nodes()}
@@ -459,7 +459,7 @@ def cleanup(
     fmt: FormatOpt = None,
 ) -> None:
     """Purge the registrations of nodes that do not answer a ping from the master."""
-    from rostools.graph.introspect import apply_cleanup, plan_cleanup, probe_nodes, service_apis
+    from rostools.rosgraph.introspect import apply_cleanup, plan_cleanup, probe_nodes, service_apis
 
     graph = _graph(ctx, timeout)
     state = graph.state()
@@ -587,7 +587,7 @@ def graph_cmd(
     ] = None,
 ) -> None:
     """Nodes and the topics between them, like rqt_graph, from the master's registrations."""
-    from rostools.graph.introspect import build_graph, system_state
+    from rostools.rosgraph.introspect import build_graph, system_state
 
     proxy = master(ctx, TOOL)
     graph = build_graph(system_state(proxy), proxy.topic_types(), include_debug=all_)

@@ -15,9 +15,9 @@ from rostools.errors import NotFoundError, TimeoutExpired, UsageError
 from rostools.names import make_global_ns, ros_namespace, script_resolve
 
 if TYPE_CHECKING:
-    from rostools.graph.blocking import BlockingServiceClient
-    from rostools.graph.masterapi import MasterProxy
     from rostools.msgs.store import TypeStore
+    from rostools.rosgraph.masterapi import MasterProxy
+    from rostools.rosgraph.serviceclient import BlockingServiceClient
 
 app = typer.Typer(
     name="service",
@@ -38,7 +38,7 @@ def _caller() -> str:
 
 
 def _client(proxy: MasterProxy, name: str, timeout: float) -> BlockingServiceClient:
-    from rostools.graph.blocking import BlockingServiceClient
+    from rostools.rosgraph.serviceclient import BlockingServiceClient
 
     return BlockingServiceClient(proxy, name, timeout)
 

@@ -11,11 +11,11 @@ from __future__ import annotations
 import os
 from typing import Any
 
-from rostools.graph import rosapi as check
-from rostools.graph.rosapi import Methods, Triple
 from rostools.master.params import ParamTree, subscription_key
 from rostools.master.registry import Outgoing, Registry
 from rostools.names import ANYTYPE, resolve
+from rostools.wire import rosapi as check
+from rostools.wire.rosapi import Methods, Triple
 from rostools.wire.xmlrpc import multicall
 
 

@@ -10,12 +10,18 @@ from dataclasses import dataclass
 from urllib.parse import urlsplit
 
 from rostools.errors import RostoolsError
-from rostools.graph.connection import Frame
-from rostools.graph.node import Node
-from rostools.graph.session import STOP_SIGNALS
 from rostools.master.server import Master
 from rostools.msgs.store import BuiltinSource, TypeStore
-from rostools.network import ANY_ADDRESS, address_override, bind_address, host_name, is_loopback
+from rostools.node.connection import Frame
+from rostools.node.node import Node
+from rostools.node.session import STOP_SIGNALS
+from rostools.rosgraph.network import (
+    ANY_ADDRESS,
+    address_override,
+    bind_address,
+    host_name,
+    is_loopback,
+)
 
 DEFAULT_PORT = 11311
 #: ``--host`` values that mean every interface.
@@ -135,7 +141,7 @@ class _Rosout:
 
 async def start_rosout(master_uri: str, host: str) -> Node:
     """roscore's /rosout node: every node's /rosout messages, republished on /rosout_agg."""
-    from rostools.graph.topic import TopicType
+    from rostools.msgs.topictype import TopicType
 
     store = TypeStore([BuiltinSource()])
     log_type = TopicType.of(store, "rosgraph_msgs/Log")
@@ -155,8 +161,8 @@ async def start_rosout(master_uri: str, host: str) -> Node:
 
 async def add_logger_services(node: Node, store: TypeStore) -> None:
     """``~get_loggers`` and ``~set_logger_level``, which every rospy and roscpp node offers."""
-    from rostools.graph.service import ServiceType
     from rostools.msgs.codec import Codec
+    from rostools.node.service import ServiceType
 
     codec = Codec.of(store)
     levels = {"ros": "info"}

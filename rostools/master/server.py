@@ -11,8 +11,8 @@ import threading
 from types import TracebackType
 from typing import Any
 
-from rostools.graph.xmlrpc import Encoded, Notifier, XmlRpcServer
 from rostools.master.api import MasterAPI
+from rostools.node.xmlrpc import Encoded, Notifier, XmlRpcServer
 from rostools.wire.xmlrpc import encode_result
 
 _READ_ONLY = frozenset(("getSystemState", "getTopicTypes", "getPublishedTopics", "getUri"))

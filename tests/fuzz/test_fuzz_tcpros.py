@@ -13,7 +13,7 @@ from typing import Any
 from hypothesis import given, seed
 from hypothesis import strategies as st
 
-from rostools.graph.connection import InboundConnection, ServerConnection
+from rostools.node.connection import InboundConnection, ServerConnection
 from rostools.wire.header import HeaderError, decode_fields, encode_header
 from rostools.wire.tcpros import (
     GROW_FIRST,

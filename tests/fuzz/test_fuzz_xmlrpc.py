@@ -13,9 +13,9 @@ from typing import Any
 from hypothesis import given, seed
 from hypothesis import strategies as st
 
-from rostools.graph.node import Node
-from rostools.graph.xmlrpc import encode_answer, run_call
 from rostools.master.api import MasterAPI
+from rostools.node.node import Node
+from rostools.node.xmlrpc import encode_answer, run_call
 from rostools.wire.xmlrpc import HttpError, HttpParser, decode_call
 from tests.fuzz.conftest import FUZZ, SEED
 

@@ -136,10 +136,10 @@ def _fake_server(behaviour: str) -> tuple[socket.socket, threading.Thread]:
 
 
 def test_persistent_async_client(services: Proc, rostools_master: str) -> None:
-    from rostools.graph.node import Node
-    from rostools.graph.service import ServiceClient, ServiceType
     from rostools.msgs.codec import Codec
     from rostools.msgs.store import BuiltinSource, TypeStore
+    from rostools.node.node import Node
+    from rostools.node.service import ServiceClient, ServiceType
 
     store = TypeStore([BuiltinSource()])
     codec = Codec.of(store)

@@ -9,9 +9,9 @@ import xmlrpc.client
 
 import pytest
 
-from rostools.graph import xmlrpc as graph_xmlrpc
-from rostools.graph.doctor import Doctor
 from rostools.master.server import MasterThread
+from rostools.node import xmlrpc as graph_xmlrpc
+from rostools.rosgraph.doctor import Doctor
 from tests.support.env import run_cli
 from tests.support.procs import free_port
 

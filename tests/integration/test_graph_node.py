@@ -12,11 +12,11 @@ from typing import Any
 
 import pytest
 
-from rostools.graph.node import Node
-from rostools.graph.topic import TopicType
 from rostools.master.server import MasterThread
 from rostools.msgs.codec import Codec
 from rostools.msgs.store import BuiltinSource, TypeStore
+from rostools.msgs.topictype import TopicType
+from rostools.node.node import Node
 from rostools.wire.header import encode_header
 
 STORE = TypeStore([BuiltinSource()])

@@ -13,11 +13,11 @@ from pathlib import Path
 
 import pytest
 
-from rostools.graph import connection
-from rostools.graph.node import Node
-from rostools.graph.topic import TopicType
 from rostools.master.server import MasterThread
 from rostools.msgs.store import BuiltinSource, TypeStore
+from rostools.msgs.topictype import TopicType
+from rostools.node import connection
+from rostools.node.node import Node
 from tests.support.fakepeer import FakePublisher, frame, valid_header
 from tests.support.procs import Proc
 

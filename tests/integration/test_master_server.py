@@ -13,8 +13,8 @@ from xmlrpc.server import SimpleXMLRPCServer
 
 import pytest
 
-from rostools.graph import xmlrpc as graph_xmlrpc
 from rostools.master.server import MasterThread
+from rostools.node import xmlrpc as graph_xmlrpc
 from tests.support.procs import wait_for
 
 

@@ -11,9 +11,9 @@ import pytest
 from rostools.bag import record
 from rostools.bag.api import open_bag
 from rostools.errors import RostoolsError
-from rostools.graph.node import Node
-from rostools.graph.topic import TopicType
 from rostools.master.server import MasterThread
+from rostools.msgs.topictype import TopicType
+from rostools.node.node import Node
 
 STRING = TopicType("std_msgs/String", "992ce8a1687cec8c8bd883ec73ca41d1", "string data\n")
 

@@ -8,7 +8,7 @@ import pytest
 
 from rostools.errors import UsageError
 from rostools.master.core import choose_address
-from rostools.network import address_override, bind_address, host_name, is_loopback
+from rostools.rosgraph.network import address_override, bind_address, host_name, is_loopback
 
 
 @pytest.fixture
@@ -16,7 +16,9 @@ def hostname(monkeypatch: pytest.MonkeyPatch) -> list[str]:
     """Pretend this machine is called whatever the test puts in the list."""
     name = ["robot"]
     monkeypatch.setattr(socket, "gethostname", lambda: name[0])
-    monkeypatch.setattr("rostools.network.local_addresses", lambda: ["127.0.0.1", "10.1.2.3"])
+    monkeypatch.setattr(
+        "rostools.rosgraph.network.local_addresses", lambda: ["127.0.0.1", "10.1.2.3"]
+    )
     return name
 
 
@@ -101,7 +103,7 @@ def test_core_host_loopback_stays_loopback() -> None:
 def test_a_node_on_the_masters_host_gives_out_the_hostname(
     hostname: list[str], monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    from rostools.graph.node import Node
+    from rostools.node.node import Node
 
     monkeypatch.delenv("ROS_IP", raising=False)
     monkeypatch.delenv("ROS_HOSTNAME", raising=False)

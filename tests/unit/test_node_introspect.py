@@ -1,4 +1,4 @@
-"""The pure parts of ``rostools.graph.introspect``: no sockets."""
+"""The pure parts of ``rostools.rosgraph.introspect``: no sockets."""
 
 from __future__ import annotations
 
@@ -7,7 +7,7 @@ import http.client
 import pytest
 
 from rostools.errors import NotFoundError, UnreachableError
-from rostools.graph.introspect import (
+from rostools.rosgraph.introspect import (
     BusConnection,
     SystemState,
     Unregistration,

@@ -11,7 +11,7 @@ from rostools.cli.node import (
     unreachable_text,
 )
 from rostools.errors import NotFoundError, TimeoutExpired, UnreachableError
-from rostools.graph.introspect import BusConnection, NodeInfo, Probe, SystemState, build_graph
+from rostools.rosgraph.introspect import BusConnection, NodeInfo, Probe, SystemState, build_graph
 
 # `rosnode info /listener` on roscore 1.15.15 with tests/support's talker and listener
 # (captured, byte for byte).

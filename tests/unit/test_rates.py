@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from rostools.graph.rates import (
+from rostools.rates import (
     BandwidthMeter,
     DelayMeter,
     RateMeter,

@@ -11,7 +11,7 @@ from typing import TYPE_CHECKING, Annotated
 
 import typer
 
-from rostools.cli.bag import app
+from rostools.cli.bag.group import app
 from rostools.cli.common import FINITE, FormatOpt, node_session, output_format
 from rostools.cli.output import Format, render
 from rostools.errors import UsageError
@@ -20,7 +20,7 @@ if TYPE_CHECKING:
     import asyncio
 
     from rostools.bag.play import Player, Status
-    from rostools.graph.node import Node
+    from rostools.node.node import Node
 
 
 def split_bags_and_topics(args: list[str], topics: list[str]) -> tuple[list[Path], list[str]]:

@@ -11,7 +11,7 @@ from typing import TYPE_CHECKING, Annotated, Any
 import typer
 
 from rostools.bag.api import WRITE_COMPRESSIONS
-from rostools.cli.bag import app
+from rostools.cli.bag.group import app
 from rostools.cli.common import node_session, output_format
 from rostools.cli.output import Format, render
 from rostools.errors import DataLossError, UsageError
@@ -20,7 +20,7 @@ if TYPE_CHECKING:
     import asyncio
 
     from rostools.bag.record import Recorder, RecordOptions
-    from rostools.graph.node import Node
+    from rostools.node.node import Node
 
 _UNITS = {"s": 1.0, "m": 60.0, "h": 3600.0}
 

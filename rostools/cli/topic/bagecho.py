@@ -8,16 +8,16 @@ from typing import TYPE_CHECKING
 from rostools.errors import NotFoundError
 
 if TYPE_CHECKING:
-    from rostools.cli.topic.echo import EchoOptions
+    from rostools.cli.topic.printing import EchoOptions
     from rostools.msgs.store import TypeStore
 
 
 def echo_bag(path: Path, name: str | None, store: TypeStore, opts: EchoOptions) -> None:
     """Print the messages of ``name`` (a topic, maybe with a field path), or of every topic."""
     from rostools.bag.api import open_bag
-    from rostools.cli.topic.echo import Echo
+    from rostools.cli.topic.printing import Echo
     from rostools.errors import InvalidDataError
-    from rostools.graph.topics import split_field
+    from rostools.rosgraph.topics import split_field
 
     with open_bag(path) as bag:
         types = {c.topic: c.type for c in bag.connections}

@@ -12,7 +12,7 @@ PROBE_TIMEOUT = 5.0
 
 def learn_type(ctx: typer.Context, topic: str, store: TypeStore) -> TypeStore:
     """``store`` plus the definition a publisher of ``topic`` sends."""
-    from rostools.graph.probe import probe_topic
+    from rostools.node.probe import probe_topic
 
     async def main(node, stop):  # type: ignore[no-untyped-def]
         return await probe_topic(node, topic, PROBE_TIMEOUT)

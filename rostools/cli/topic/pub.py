@@ -12,8 +12,8 @@ from typing import TYPE_CHECKING, Annotated, Any
 import typer
 
 from rostools.cli.common import FINITE, MsgPathOpt, node_session, type_store
-from rostools.cli.topic import TopicArg, app
-from rostools.cli.topic.echo import TimeoutOpt
+from rostools.cli.topic.group import app
+from rostools.cli.topic.live import TimeoutOpt, TopicArg
 from rostools.errors import NotFoundError, UsageError
 from rostools.names import script_resolve
 
@@ -129,9 +129,9 @@ def pub(
     msg_path: MsgPathOpt = None,
 ) -> None:
     """Publish messages (rostopic pub). By default: once, latched, until Ctrl-C."""
-    from rostools.graph.topic import TopicType
     from rostools.msgs.codec import Codec
     from rostools.msgs.fill import Filler
+    from rostools.msgs.topictype import TopicType
 
     if rate is not None and not 0 < rate < math.inf:  # nan compares false both ways
         raise UsageError("--rate must be a number above 0")
@@ -164,8 +164,8 @@ def pub(
     async def main(node: Any, stop: asyncio.Event) -> None:
         import asyncio
 
-        from rostools.graph.session import first
         from rostools.msgs.text import formatter, message_type
+        from rostools.node.session import first
 
         publisher = await node.advertise(name, ttype, latch=latched, queue_size=1000)
         show = formatter(codec, message_type(msg_type)) if verbose else None

@@ -13,8 +13,8 @@ import typer
 from rostools.cli import output
 from rostools.cli.common import FormatOpt, node_session, output_format
 from rostools.cli.output import Format
-from rostools.cli.topic import app
-from rostools.cli.topic.echo import FilterOpt, TimeoutOpt, _resolve
+from rostools.cli.topic.group import app
+from rostools.cli.topic.live import FilterOpt, TimeoutOpt, wait_for_topic
 from rostools.errors import NotFoundError, TimeoutExpired, UsageError
 from rostools.names import script_resolve
 
@@ -44,13 +44,13 @@ class Meter:
         report: Callable[[], None],
     ) -> str:
         """Subscribe to every topic and report until stopped or timed out."""
-        from rostools.graph.session import first
         from rostools.msgs.store import TypeStore
+        from rostools.node.session import first
 
         deadline = time.monotonic() + self.timeout if self.timeout is not None else None
         store = TypeStore.default()
         for topic in self.topics:
-            ref = await _resolve(node, topic, store, deadline, stop)
+            ref = await wait_for_topic(node, topic, store, deadline, stop)
             if ref is None:
                 return "stopped" if stop.is_set() else "timeout"
             if ref.field:
@@ -106,7 +106,7 @@ def hz(
     fmt: FormatOpt = None,
 ) -> None:
     """The publishing rate of topics (rostopic hz); counts raw frames, decodes only for --filter."""
-    from rostools.graph.rates import DEFAULT_WINDOW, RateMeter, format_rate, rate_table
+    from rostools.rates import DEFAULT_WINDOW, RateMeter, format_rate, rate_table
 
     fmt = output_format(ctx, fmt)
     names = [script_resolve(t, "rostopic") for t in topics]
@@ -169,7 +169,7 @@ def bw(
     fmt: FormatOpt = None,
 ) -> None:
     """The bandwidth a topic uses (rostopic bw), from the size of each raw frame."""
-    from rostools.graph.rates import BandwidthMeter, format_bandwidth
+    from rostools.rates import BandwidthMeter, format_bandwidth
 
     fmt = output_format(ctx, fmt)
     name = script_resolve(topic, "rostopic")
@@ -201,8 +201,8 @@ def delay(
     fmt: FormatOpt = None,
 ) -> None:
     """Now minus ``header.stamp`` of each message (rostopic delay); reads only the stamp."""
-    from rostools.graph.rates import DEFAULT_WINDOW, DelayMeter, format_delay
     from rostools.msgs.store import TypeStore
+    from rostools.rates import DEFAULT_WINDOW, DelayMeter, format_delay
 
     fmt = output_format(ctx, fmt)
     name = script_resolve(topic, "rostopic")

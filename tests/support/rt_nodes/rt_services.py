@@ -11,10 +11,10 @@ import asyncio
 import os
 
 from rostools.errors import ServiceError
-from rostools.graph.node import Node
-from rostools.graph.service import ServiceType
 from rostools.msgs.codec import Codec
 from rostools.msgs.store import BuiltinSource, TypeStore
+from rostools.node.node import Node
+from rostools.node.service import ServiceType
 
 
 async def main() -> None:

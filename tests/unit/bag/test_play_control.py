@@ -9,8 +9,8 @@ import pytest
 from rostools.bag.play import State, Status
 from rostools.bag.play_control import RateControl, header_first, set_bool_reply
 from rostools.cli.bag.play import status_line
-from rostools.graph.service import ServiceType
 from rostools.msgs.store import TypeStore
+from rostools.node.service import ServiceType
 
 
 def test_set_bool_type_is_std_srvs() -> None:

@@ -21,8 +21,14 @@ from typing import Any
 from urllib.parse import urlsplit
 
 from rostools.errors import RostoolsError
-from rostools.graph.notice import Failure, explain
-from rostools.network import host_name, is_loopback, local_addresses, uri_host
+from rostools.rosgraph.network import (
+    Failure,
+    explain,
+    host_name,
+    is_loopback,
+    local_addresses,
+    uri_host,
+)
 
 #: How far apart two clocks may be before we say so (s); HTTP dates have 1 s resolution.
 MAX_SKEW = 1.0

@@ -6,12 +6,12 @@ import struct
 import time
 from typing import TYPE_CHECKING
 
-from rostools.graph.connection import Frame, InboundConnection
-from rostools.graph.topic import TopicType
+from rostools.msgs.topictype import TopicType
+from rostools.node.connection import Frame, InboundConnection
 
 if TYPE_CHECKING:
-    from rostools.graph.node import Node
-    from rostools.graph.subscriber import FramesCallback
+    from rostools.node.node import Node
+    from rostools.node.subscriber import FramesCallback
 
 #: rosgraph_msgs/Clock, as roscpp and rospy announce it.
 CLOCK = TopicType(

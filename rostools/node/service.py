@@ -20,9 +20,9 @@ from rostools.errors import (
     TimeoutExpired,
     UnreachableError,
 )
-from rostools.graph.connection import Frame, ServerConnection, set_nodelay
-from rostools.graph.masterapi import MasterError
 from rostools.msgs.store import TypeStore
+from rostools.node.connection import Frame, ServerConnection, set_nodelay
+from rostools.rosgraph.masterapi import MasterError
 from rostools.wire import codes
 from rostools.wire.tcpros import (
     FrameError,
@@ -35,7 +35,7 @@ from rostools.wire.tcpros import (
 )
 
 if TYPE_CHECKING:
-    from rostools.graph.node import Node
+    from rostools.node.endpoint import Owner
 
 log = logging.getLogger(__name__)
 
@@ -59,7 +59,7 @@ class ServiceType(NamedTuple):
 class ServiceServer:
     """Serves one service; ``handler`` may raise ``ServiceError`` to answer a failure."""
 
-    def __init__(self, node: Node, name: str, srv_type: ServiceType, handler: Handler) -> None:
+    def __init__(self, node: Owner, name: str, srv_type: ServiceType, handler: Handler) -> None:
         self.node = node
         self.name = name
         self.type = srv_type
@@ -200,7 +200,7 @@ class _ClientProtocol(asyncio.Protocol):
         self._fail(ConnectionError("the service closed the connection"))
 
 
-async def lookup_service(node: Node, name: str) -> tuple[str, int]:
+async def lookup_service(node: Owner, name: str) -> tuple[str, int]:
     """Host and port of a service's provider."""
     try:
         uri = await node.master_call("lookupService", name)
@@ -218,7 +218,7 @@ class ServiceClient:
     """Calls one service; ``persistent`` keeps the connection for the next call."""
 
     def __init__(
-        self, node: Node, name: str, srv_type: ServiceType | None = None, persistent: bool = False
+        self, node: Owner, name: str, srv_type: ServiceType | None = None, persistent: bool = False
     ) -> None:
         self.node = node
         self.name = name

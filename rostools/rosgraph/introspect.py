@@ -1,6 +1,6 @@
 """What ``rostools node`` asks of the graph: registrations, node URIs, pids, live connections.
 
-Blocking and synchronous, over ``rostools.graph.masterapi``: the master for registrations and
+Blocking and synchronous, over ``rostools.rosgraph.masterapi``: the master for registrations and
 node URIs, each node's slave API (ROS1_PROTOCOL.md §4) for ``getPid``, ``getBusInfo`` and
 ``shutdown``. Every call to a node has a timeout; a node that does not answer in time raises
 ``TimeoutExpired``, one that cannot be reached (refused, reset, unknown host) raises
@@ -24,8 +24,8 @@ from typing import Any
 from urllib.parse import urlsplit
 
 from rostools.errors import NotFoundError, RostoolsError, TimeoutExpired, UnreachableError
-from rostools.graph.masterapi import MasterError, MasterProxy, TimeoutTransport, XmlRpcNode
 from rostools.names import make_global_ns
+from rostools.rosgraph.masterapi import MasterError, MasterProxy, TimeoutTransport, XmlRpcNode
 
 #: Seconds to wait for a node's answer; rosnode's ping uses 3 s (and 5 s for info).
 DEFAULT_NODE_TIMEOUT = 3.0

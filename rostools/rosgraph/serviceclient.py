@@ -13,7 +13,7 @@ import time
 from urllib.parse import urlsplit
 
 from rostools.errors import RostoolsError, ServiceError, TimeoutExpired, UnreachableError
-from rostools.graph.masterapi import MasterProxy
+from rostools.rosgraph.masterapi import MasterProxy
 from rostools.wire.tcpros import FrameError, ResponseReader, service_request_header
 
 

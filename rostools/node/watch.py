@@ -10,14 +10,34 @@ from __future__ import annotations
 import asyncio
 import logging
 import time
-from typing import TYPE_CHECKING, Any
+from collections.abc import Mapping
+from typing import TYPE_CHECKING, Any, Protocol
 
-from rostools.graph.notice import Notice, explain
-from rostools.graph.xmlrpc import call
-from rostools.network import uri_host
+from rostools.node.notice import Notice
+from rostools.node.xmlrpc import call
+from rostools.rosgraph.network import explain, uri_host
 
 if TYPE_CHECKING:
-    from rostools.graph.node import Node
+    from rostools.node.endpoint import Owner
+    from rostools.node.publisher import Publisher
+    from rostools.node.service import ServiceServer
+    from rostools.node.subscriber import Subscriber
+
+    class Registrations(Owner, Protocol):
+        """A node as its watch sees it: what it has registered with the master."""
+
+        @property
+        def publishers(self) -> Mapping[str, Publisher]:
+            """Topic -> its publisher."""
+
+        @property
+        def subscribers(self) -> Mapping[str, Subscriber]:
+            """Topic -> its subscriber."""
+
+        @property
+        def services(self) -> Mapping[str, ServiceServer]:
+            """Service -> its server."""
+
 
 log = logging.getLogger(__name__)
 
@@ -35,7 +55,7 @@ SUBSCRIBER_CHECK_PERIOD = 1.0
 class MasterWatch:
     """Runs beside a node until it closes (``asyncio.create_task(MasterWatch(node).run())``)."""
 
-    def __init__(self, node: Node) -> None:
+    def __init__(self, node: Registrations) -> None:
         self.node = node
         self.next_check = time.monotonic() + SUBSCRIBER_CHECK_PERIOD
         #: (topic, subscriber) -> when we first saw it registered and silent
@@ -143,17 +163,3 @@ class MasterWatch:
                 {"topic": topic, "node": name, "uri": node.uri},
             )
         )
-
-
-async def node_at(node: Node, uri: str, topic: str) -> str | None:
-    """The name of the publisher of ``topic`` whose slave API is ``uri``, if the master says."""
-    try:
-        _, _, state = await call(node.master_uri, "getSystemState", (node.name,), 2.0)
-        names: list[str] = next((n for t, n in state[0] if t == topic), [])
-        for name in names:
-            code, _, found = await call(node.master_uri, "lookupNode", (node.name, name), 2.0)
-            if code == 1 and found == uri:
-                return str(name)
-    except Exception as err:  # noqa: BLE001 - the name only decorates a message
-        log.debug("finding the node at %s: %s", uri, err)
-    return None

@@ -14,8 +14,8 @@ from collections.abc import Awaitable, Callable
 from typing import TypeVar
 
 from rostools.errors import RostoolsError
-from rostools.graph.node import Node
-from rostools.graph.notice import Notice
+from rostools.node.node import Node
+from rostools.node.notice import Notice
 
 T = TypeVar("T")
 

@@ -14,11 +14,13 @@ Only the standard library, as ``names``.
 
 from __future__ import annotations
 
+import errno
 import ipaddress
 import os
 import socket
 import struct
 from collections.abc import Mapping
+from dataclasses import dataclass
 from urllib.parse import urlsplit
 
 from rostools.errors import UsageError
@@ -133,3 +135,44 @@ def bind_address(name: str) -> str:
 def uri_host(uri: str) -> str:
     """The host part of an ``http://host:port/`` URI (``localhost`` when there is none)."""
     return urlsplit(uri).hostname or "localhost"
+
+
+#: A hint for a node whose address others cannot use.
+SET_ADDRESS = "set ROS_IP or ROS_HOSTNAME on that host to an address others reach it at"
+
+
+@dataclass(frozen=True)
+class Failure:
+    """Why a peer could not be reached, and whether retrying could soon change that."""
+
+    reason: str
+    hint: str = ""
+    #: False for what may clear up in a moment (a refused connection while a node exits).
+    lasting: bool = True
+    #: We connected, then dropped the connection (bad data), rather than failing to connect.
+    dropped: bool = False
+
+
+def explain(err: BaseException, host: str, peer: bool = True) -> Failure:
+    """A connection error to ``host`` as a reason and a hint a user can act on.
+
+    A ``peer`` (a node, not the master) that gives out a loopback address is named as such:
+    only its own host can reach it there.
+    """
+    if isinstance(err, socket.gaierror):
+        return Failure(f"{host} does not resolve here", SET_ADDRESS)
+    loopback = peer and is_loopback(host)
+    if isinstance(err, ConnectionRefusedError):
+        if loopback:
+            return Failure(f"connection refused at {host}, a loopback address", SET_ADDRESS, False)
+        return Failure(
+            "connection refused",
+            "the node may have died without unregistering ('rostools node cleanup' purges it)",
+            False,
+        )
+    if isinstance(err, TimeoutError) or type(err).__name__ == "TimeoutError":  # 3.10's asyncio's
+        return Failure(f"{host} did not answer in time", "check the address and any firewall")
+    if isinstance(err, OSError) and err.errno in (errno.EHOSTUNREACH, errno.ENETUNREACH):
+        return Failure(f"no route to {host}", "check the address and the network")
+    reason = (err.strerror if isinstance(err, OSError) else None) or str(err) or type(err).__name__
+    return Failure(reason, SET_ADDRESS if loopback else "", False)

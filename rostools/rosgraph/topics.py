@@ -7,9 +7,9 @@ from typing import Any
 from urllib.parse import urlsplit
 
 from rostools.errors import RostoolsError
-from rostools.graph.masterapi import MasterProxy
 from rostools.msgs.store import TypeStore
 from rostools.names import ANYTYPE, make_global_ns
+from rostools.rosgraph.masterapi import MasterProxy
 
 
 @dataclass

@@ -9,9 +9,9 @@ from __future__ import annotations
 import asyncio
 
 from rostools.errors import TimeoutExpired
-from rostools.graph.connection import InboundConnection
-from rostools.graph.node import Node
-from rostools.graph.topic import TopicType
+from rostools.msgs.topictype import TopicType
+from rostools.node.connection import InboundConnection
+from rostools.node.node import Node
 
 
 async def probe_topic(node: Node, topic: str, timeout: float) -> TopicType:

@@ -15,16 +15,15 @@ import time
 from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
-from rostools.graph.connection import Frame, InboundConnection
-from rostools.graph.notice import SET_ADDRESS, Failure, Notice, explain
-from rostools.graph.topic import TopicType
-from rostools.graph.watch import node_at
-from rostools.graph.xmlrpc import call
-from rostools.network import is_loopback, uri_host
+from rostools.msgs.topictype import TopicType
+from rostools.node.connection import Frame, InboundConnection
+from rostools.node.notice import Notice
+from rostools.node.xmlrpc import call
+from rostools.rosgraph.network import SET_ADDRESS, Failure, explain, is_loopback, uri_host
 from rostools.wire.tcpros import MAX_FRAME, subscriber_header
 
 if TYPE_CHECKING:
-    from rostools.graph.node import Node
+    from rostools.node.endpoint import Owner
 
 log = logging.getLogger(__name__)
 
@@ -42,7 +41,7 @@ class Subscriber:
 
     def __init__(
         self,
-        node: Node,
+        node: Owner,
         topic: str,
         topic_type: TopicType,
         callback: FramesCallback,
@@ -219,3 +218,17 @@ class Subscriber:
         for task in list(self.tasks.values()):
             with contextlib.suppress(asyncio.CancelledError, Exception):
                 await task
+
+
+async def node_at(node: Owner, uri: str, topic: str) -> str | None:
+    """The name of the publisher of ``topic`` whose slave API is ``uri``, if the master says."""
+    try:
+        _, _, state = await call(node.master_uri, "getSystemState", (node.name,), 2.0)
+        names: list[str] = next((n for t, n in state[0] if t == topic), [])
+        for name in names:
+            code, _, found = await call(node.master_uri, "lookupNode", (node.name, name), 2.0)
+            if code == 1 and found == uri:
+                return str(name)
+    except Exception as err:  # noqa: BLE001 - the name only decorates a message
+        log.debug("finding the node at %s: %s", uri, err)
+    return None

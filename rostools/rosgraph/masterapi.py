@@ -64,8 +64,7 @@ def no_answer(uri: str, what: str, method: str, timeout: float) -> TimeoutExpire
 def unreachable(err: BaseException, uri: str, what: str) -> UnreachableError:
     """The server at ``uri`` could not be reached (``err``: the transport's error)."""
     if what == "master":  # the reasons the multi-host notices give (imported on failure only)
-        from rostools.graph.notice import explain
-        from rostools.network import uri_host
+        from rostools.rosgraph.network import explain, uri_host
 
         reason = explain(err, uri_host(uri), peer=False).reason
     else:

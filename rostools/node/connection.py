@@ -14,9 +14,9 @@ import logging
 import socket
 import time
 from collections.abc import Callable
-from typing import TYPE_CHECKING, Any, Protocol
+from typing import Any, Protocol
 
-from rostools.graph.notice import Failure
+from rostools.rosgraph.network import Failure
 from rostools.wire.header import MAX_HEADER_LENGTH
 from rostools.wire.tcpros import (
     BIG_FRAME,
@@ -27,9 +27,6 @@ from rostools.wire.tcpros import (
     frame_prefix,
     parse_header,
 )
-
-if TYPE_CHECKING:
-    from rostools.graph.subscriber import Subscriber
 
 log = logging.getLogger(__name__)
 
@@ -223,10 +220,27 @@ class Outbound:
         self.conn.close()
 
 
+class Receiver(Protocol):
+    """What an inbound connection reports to: its subscriber (as ``Handler`` is a server's)."""
+
+    topic: str
+    #: The largest frame it accepts.
+    max_frame: int
+
+    def header_received(self, conn: InboundConnection) -> None:
+        """The publisher's header arrived and passed the checks."""
+
+    def frames_received(self, frames: list[Frame], conn: InboundConnection, now: float) -> None:
+        """Messages, raw, with the time they were read."""
+
+    def connection_closed(self, conn: InboundConnection) -> None:
+        """The connection is gone (``conn.failure`` says why, if it failed)."""
+
+
 class InboundConnection(asyncio.BufferedProtocol):
     """A subscriber's connection to one publisher."""
 
-    def __init__(self, subscriber: Subscriber, publisher_uri: str, conn_id: int, header: bytes):
+    def __init__(self, subscriber: Receiver, publisher_uri: str, conn_id: int, header: bytes):
         self.subscriber = subscriber
         self.publisher_uri = publisher_uri
         self.id = conn_id

@@ -6,12 +6,12 @@ import struct
 from collections.abc import Hashable
 from typing import TYPE_CHECKING
 
-from rostools.graph.connection import Frame, Outbound, ServerConnection, set_nodelay
-from rostools.graph.topic import TopicType
+from rostools.msgs.topictype import TopicType
+from rostools.node.connection import Frame, Outbound, ServerConnection, set_nodelay
 from rostools.wire.tcpros import check_subscription, error_header, publisher_header
 
 if TYPE_CHECKING:
-    from rostools.graph.node import Node
+    from rostools.node.endpoint import Owner
 
 _SEQ = struct.Struct("<I")
 
@@ -21,7 +21,7 @@ class Publisher:
 
     def __init__(
         self,
-        node: Node,
+        node: Owner,
         topic: str,
         topic_type: TopicType,
         latch: bool = False,

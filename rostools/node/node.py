@@ -14,20 +14,20 @@ import xmlrpc.client
 from collections.abc import Callable
 from typing import Any
 
-from rostools.graph import rosapi as check
-from rostools.graph.connection import Handler, ServerConnection
-from rostools.graph.masterapi import faulted, master_timeout, no_answer, ros_value, unreachable
-from rostools.graph.notice import Notice, to_stderr
-from rostools.graph.publisher import Publisher
-from rostools.graph.rosapi import Methods, Triple
-from rostools.graph.service import Handler as ServiceHandler
-from rostools.graph.service import ServiceServer, ServiceType
-from rostools.graph.subscriber import FramesCallback, Subscriber
-from rostools.graph.topic import ANY, TopicType
-from rostools.graph.watch import MasterWatch
-from rostools.graph.xmlrpc import XmlRpcServer, call
+from rostools.msgs.topictype import ANY, TopicType
 from rostools.names import anonymous, canonicalize, make_global_ns, resolve, ros_namespace
-from rostools.network import bind_address, host_name
+from rostools.node.connection import Handler, ServerConnection
+from rostools.node.notice import Notice, to_stderr
+from rostools.node.publisher import Publisher
+from rostools.node.service import Handler as ServiceHandler
+from rostools.node.service import ServiceServer, ServiceType
+from rostools.node.subscriber import FramesCallback, Subscriber
+from rostools.node.watch import MasterWatch
+from rostools.node.xmlrpc import XmlRpcServer, call
+from rostools.rosgraph.masterapi import faulted, master_timeout, no_answer, ros_value, unreachable
+from rostools.rosgraph.network import bind_address, host_name
+from rostools.wire import rosapi as check
+from rostools.wire.rosapi import Methods, Triple
 from rostools.wire.tcpros import error_header
 from rostools.wire.xmlrpc import multicall
 

@@ -1,0 +1,362 @@
+"""``rostools bag info|filter|convert|recover|reindex|compress|decompress``: the file commands.
+
+record and play live beside this module.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import sys
+from collections.abc import Callable
+from functools import partial
+from pathlib import Path
+from typing import TYPE_CHECKING, Annotated, Any
+
+import typer
+
+from rostools.cli import output
+from rostools.cli.bag.group import app
+from rostools.cli.common import FINITE, FormatOpt, output_format
+from rostools.cli.output import Format, emit, render
+from rostools.errors import UsageError
+
+if TYPE_CHECKING:
+    from rostools.bag.ops import CopyReport
+
+
+BagArg = Annotated[Path, typer.Argument(help="A .bag or .mcap file.")]
+OutArg = Annotated[Path, typer.Argument(help="The file to write; its name picks the format.")]
+ForceOpt = Annotated[bool, typer.Option("--force", "-f", help="Overwrite an existing output file.")]
+QuietOpt = Annotated[bool, typer.Option("--quiet", "-q", help="No progress bar.")]
+CompressionOpt = Annotated[
+    str | None,
+    typer.Option(
+        "--compression",
+        "-c",
+        help="Chunk compression: none, bz2 or lz4 (.bag); zstd, lz4 or none (MCAP).",
+    ),
+]
+
+
+@app.command()
+def info(
+    ctx: typer.Context,
+    bags: Annotated[list[str], typer.Argument(help="One or more .bag or .mcap files.")],
+    freq: Annotated[bool, typer.Option("--freq", help="Median rate of each topic.")] = False,
+    yaml_: Annotated[bool, typer.Option("--yaml", "-y", help="The same as -F yaml.")] = False,
+    key: Annotated[
+        str | None,
+        typer.Option("--key", "-k", help="Only this key, e.g. duration or topics[0].messages."),
+    ] = None,
+    fmt: FormatOpt = None,
+) -> None:
+    """Summarise bags from their index alone (rosbag info)."""
+    from rostools.bag.api import open_bag, topic_frequencies
+    from rostools.cli.bag.infotext import info_data, info_key, info_text
+
+    fmt = Format.yaml if yaml_ and fmt is None else output_format(ctx, fmt)
+    if key is not None and fmt is Format.text:
+        fmt = Format.yaml  # a key is a path into the YAML document; rosbag demands -y for it
+    results = []
+    for name in bags:
+        with open_bag(name) as reader:
+            summary = reader.info()
+            freqs = topic_frequencies(reader) if freq else None
+        results.append((summary, freqs, name))
+    if fmt is Format.text:
+        sys.stdout.write("\n---\n".join(info_text(*r) for r in results) + "\n")
+        return
+    data = [info_data(*r) for r in results]
+    if key is not None:
+        data = [info_key(d, key) for d in data]
+    emit(fmt, data[0] if len(data) == 1 else data)
+
+
+class Progress:
+    """A progress bar on a terminal (stderr), NDJSON with ``--format json``, else nothing."""
+
+    def __init__(self, label: str, fmt: Format, quiet: bool) -> None:
+        self.label = label
+        self.json = fmt is Format.json
+        self.bar = not quiet and not self.json and sys.stderr.isatty()
+        self.last = -1
+
+    def __call__(self, done: int, total: int) -> None:
+        """Messages copied so far, of ``total``."""
+        percent = int(100 * done / total) if total else 100
+        if percent == self.last:
+            return
+        self.last = percent
+        if self.json:
+            output.write(Format.json, {"progress": self.label, "done": done, "total": total})
+        elif self.bar:
+            width = 30
+            filled = width * percent // 100
+            sys.stderr.write(
+                f"\r{self.label} [{'#' * filled}{'.' * (width - filled)}] {percent:3d}%"
+            )
+            sys.stderr.flush()
+
+    def done(self) -> None:
+        """End the bar's line."""
+        if self.bar:
+            sys.stderr.write("\n")
+
+
+def _report(fmt: Format, report: CopyReport) -> None:
+    data = {
+        "source": str(report.source),
+        "output": str(report.output),
+        "format": report.format,
+        "compression": report.compression,
+        "messages_read": report.messages_read,
+        "messages_written": report.messages_written,
+        "connections": report.connections,
+        "extras_copied": report.extras_copied,
+        "extras_left_out": report.extras_left_out,
+    }
+    if fmt is Format.text:
+        sys.stderr.write(
+            f"wrote {report.messages_written} of {report.messages_read} messages to "
+            f"{report.output} ({report.format}, {report.compression})\n"
+        )
+        if report.extras_left_out:
+            sys.stderr.write(
+                f"left out {report.extras_left_out} MCAP attachment/metadata record(s): "
+                + (
+                    "a .bag has no place for them\n"
+                    if report.format == "bag"
+                    else "outside the time range\n"
+                )
+            )
+    elif fmt is Format.json:
+        output.write(fmt, data)  # the last record of the NDJSON progress stream
+    else:
+        emit(fmt, data)
+
+
+def _copy_command(
+    ctx: typer.Context,
+    fmt: Format | None,
+    quiet: bool,
+    label: str,
+    run: Callable[[Any], CopyReport],
+) -> None:
+    fmt = output_format(ctx, fmt)
+    progress = Progress(label, fmt, quiet)
+    try:
+        report = run(progress)
+    finally:
+        progress.done()
+    _report(fmt, report)
+
+
+def _time(value: float | None) -> int | None:
+    return None if value is None else round(value * 1e9)
+
+
+@app.command("filter")
+def filter_(
+    ctx: typer.Context,
+    src: BagArg,
+    dst: OutArg,
+    expression: Annotated[
+        str | None,
+        typer.Argument(
+            help="Python over topic, m (the message) and t (its time), as rosbag filter."
+        ),
+    ] = None,
+    topics: Annotated[
+        list[str] | None, typer.Option("--topics", "-t", help="Only these topics.")
+    ] = None,
+    start: Annotated[
+        float | None,
+        typer.Option("--start", click_type=FINITE, help="Seconds from the bag's start."),
+    ] = None,
+    end: Annotated[
+        float | None, typer.Option("--end", click_type=FINITE, help="Seconds from the bag's start.")
+    ] = None,
+    print_: Annotated[
+        str | None,
+        typer.Option(
+            "--print", "-p", help="Print MATCH or NO MATCH and this expression for each message."
+        ),
+    ] = None,
+    latched: Annotated[
+        bool,
+        typer.Option(
+            "--latched", help="With --start: keep each latched topic's last earlier message."
+        ),
+    ] = False,
+    compression: CompressionOpt = None,
+    force: ForceOpt = False,
+    quiet: QuietOpt = False,
+    fmt: FormatOpt = None,
+) -> None:
+    """Copy the messages that pass topic, time and expression filters (rosbag filter)."""
+    from rostools.bag.api import bag_info
+    from rostools.bag.ops import filter_bag
+
+    begin = bag_info(src).start_ns or 0 if (start is not None or end is not None) else 0
+    lo = None if start is None else begin + (_time(start) or 0)
+    hi = None if end is None else begin + (_time(end) or 0)
+    show = None if print_ is None else (print_, partial(_say, output_format(ctx, fmt)))
+    _copy_command(ctx, fmt, quiet or show is not None, "filter", lambda progress: filter_bag(
+        src, dst, topics=topics or None, start=lo, end=hi, expression=expression,
+        compression=compression, progress=progress, overwrite=force, show=show, latched=latched,
+    ))  # fmt: skip
+
+
+def _say(fmt: Format, matched: bool, value: Any) -> None:
+    """One line of ``filter --print``: text as rosbag prints it, or an NDJSON object."""
+    text = f"{'MATCH' if matched else 'NO MATCH'} {value}"
+    output.write(fmt, {"match": matched, "print": value}, lambda _: text)
+
+
+@app.command()
+def convert(
+    ctx: typer.Context,
+    src: BagArg,
+    dst: OutArg,
+    compression: CompressionOpt = None,
+    chunk_size: Annotated[int | None, typer.Option("--chunksize", help="Chunk size in KB.")] = None,
+    force: ForceOpt = False,
+    quiet: QuietOpt = False,
+    fmt: FormatOpt = None,
+) -> None:
+    """Convert .bag to MCAP or back, losslessly."""
+    from rostools.bag.ops import convert as run_convert
+
+    size = chunk_size * 1024 if chunk_size else None
+    _copy_command(ctx, fmt, quiet, "convert", lambda progress: run_convert(
+        src, dst, compression=compression, chunk_size=size, progress=progress, overwrite=force,
+    ))  # fmt: skip
+
+
+def _in_place(
+    ctx: typer.Context,
+    bags: list[Path],
+    output_dir: Path | None,
+    force: bool,
+    fmt: Format | None,
+    quiet: bool,
+    label: str,
+    run: Callable[[Path, Path, Any], CopyReport],
+) -> None:
+    """rosbag compress's way: write beside, keep the original as ``x.orig.bag``."""
+    for path in bags:
+        if output_dir is not None:
+            if not output_dir.is_dir():
+                raise UsageError(f"--output-dir {output_dir} is not a folder")
+            _copy_command(ctx, fmt, quiet, label, partial(run, path, output_dir / path.name))
+            continue
+        backup = path.with_name(path.stem + ".orig" + path.suffix)
+        if backup.exists() and not force:
+            raise UsageError(f"{backup} exists; use --force to replace it")
+        temp = path.with_name(path.name + ".tmp")
+
+        def in_place(progress: Any, path: Path = path, temp: Path = temp) -> CopyReport:
+            return dataclasses.replace(run(path, temp, progress), output=path)
+
+        _copy_command(ctx, fmt, quiet, label, in_place)
+        path.replace(backup)
+        temp.replace(path)
+
+
+OutputDirOpt = Annotated[
+    Path | None, typer.Option("--output-dir", help="Write here instead of replacing the bag.")
+]
+
+
+@app.command()
+def compress(
+    ctx: typer.Context,
+    bags: Annotated[list[Path], typer.Argument(help="Bags to compress.")],
+    bz2: Annotated[
+        bool, typer.Option("--bz2", "-j", help="bz2 chunks (the default for .bag).")
+    ] = False,
+    lz4: Annotated[bool, typer.Option("--lz4", help="lz4 chunks.")] = False,
+    output_dir: OutputDirOpt = None,
+    force: ForceOpt = False,
+    quiet: QuietOpt = False,
+    fmt: FormatOpt = None,
+) -> None:
+    """Compress bags in place, keeping the original as x.orig.bag (rosbag compress)."""
+    from rostools.bag.api import detect_format
+    from rostools.bag.ops import compress as run_compress
+
+    if bz2 and lz4:
+        raise UsageError("--bz2 and --lz4 cannot be combined")
+
+    def run(src: Path, dst: Path, progress: Any) -> CopyReport:
+        kind = "lz4" if lz4 else ("bz2" if detect_format(src) == "bag" else "zstd")
+        return run_compress(src, dst, kind, progress=progress, overwrite=True)
+
+    _in_place(ctx, bags, output_dir, force, fmt, quiet, "compress", run)
+
+
+@app.command()
+def decompress(
+    ctx: typer.Context,
+    bags: Annotated[list[Path], typer.Argument(help="Bags to decompress.")],
+    output_dir: OutputDirOpt = None,
+    force: ForceOpt = False,
+    quiet: QuietOpt = False,
+    fmt: FormatOpt = None,
+) -> None:
+    """Decompress bags in place, keeping the original as x.orig.bag (rosbag decompress)."""
+    from rostools.bag.ops import decompress as run_decompress
+
+    def run(src: Path, dst: Path, progress: Any) -> CopyReport:
+        return run_decompress(src, dst, progress=progress, overwrite=True)
+
+    _in_place(ctx, bags, output_dir, force, fmt, quiet, "decompress", run)
+
+
+def recovered_name(src: Path) -> Path:
+    """Where ``recover`` writes by default.
+
+    ``x.bag.active`` becomes ``x.bag`` (the name the recorder would have given it), ``x.bag``
+    becomes ``x.recovered.bag`` and ``x.mcap`` becomes ``x.recovered.mcap``.
+    """
+    if src.name.endswith(".active"):
+        final = src.with_name(src.name.removesuffix(".active"))
+        if not final.exists():
+            return final
+        src = final
+    suffix = src.suffix or ".bag"
+    return src.with_name(src.name.removesuffix(suffix) + ".recovered" + suffix)
+
+
+DstOpt = Annotated[Path | None, typer.Argument(help="Output (default: NAME.recovered.bag|mcap).")]
+
+
+@app.command()
+def recover(
+    ctx: typer.Context,
+    src: BagArg,
+    dst: DstOpt = None,
+    force: ForceOpt = False,
+    fmt: FormatOpt = None,
+) -> None:
+    """Rebuild an unindexed or cut-short bag or MCAP; exit 6 if anything was lost."""
+    from rostools.bag.recover import recover as run_recover
+
+    report = run_recover(src, dst or recovered_name(src), overwrite=force)
+    fmt = output_format(ctx, fmt)
+    data = {
+        "source": str(report.source), "output": str(report.output), "format": report.format,
+        "was_indexed": report.was_indexed, "messages": report.messages,
+        "connections": report.connections, "notes": list(report.notes), "lost": list(report.lost),
+    }  # fmt: skip
+    if fmt is Format.text:
+        for note in report.notes:
+            sys.stderr.write(f"note: {note}\n")
+        sys.stderr.write(f"recovered {report.messages} messages into {report.output}\n")
+    else:
+        sys.stdout.write(render(fmt, data) + "\n")
+    report.raise_if_lost()
+
+
+_REINDEX_HELP = "The same as recover (rosbag reindex), without touching the original."
+app.command("reindex", help=_REINDEX_HELP)(recover)

@@ -1,1 +1,0 @@
-"""The live ROS graph on asyncio: master proxy, Node, Publisher, Subscriber, services."""

@@ -22,8 +22,11 @@ from rostools.wire.tcpros import (
     BIG_FRAME,
     HANDSHAKE_TIMEOUT,
     MAX_FRAME,
+    Accepted,
     FrameError,
     FrameReader,
+    Messages,
+    Subscription,
     frame_prefix,
     parse_header,
 )
@@ -245,7 +248,7 @@ class InboundConnection(asyncio.BufferedProtocol):
         self.publisher_uri = publisher_uri
         self.id = conn_id
         self.request = header
-        self.reader = FrameReader(subscriber.max_frame, first_max=MAX_HEADER_LENGTH)
+        self.session = Subscription(subscriber.max_frame)
         self.transport: asyncio.Transport | None = None
         self.header: dict[str, str] | None = None
         self.closed: asyncio.Future[None] = asyncio.get_running_loop().create_future()
@@ -271,42 +274,21 @@ class InboundConnection(asyncio.BufferedProtocol):
 
     def get_buffer(self, sizehint: int) -> memoryview:
         """Asyncio: where to receive into."""
-        return self.reader.get_buffer()
+        return self.session.get_buffer()
 
     def buffer_updated(self, nbytes: int) -> None:
         """Asyncio: bytes arrived."""
         now = time.monotonic()
-        error: FrameError | None = None
-        try:
-            frames = self.reader.buffer_updated(nbytes)
-        except FrameError as err:
-            frames, error = err.frames, err  # the frames before the bad one still count
-        if frames and self.header is None:
-            problem = self._take_header(frames[0])
-            if problem is not None:
-                self._drop(problem)
-                return
-            frames = frames[1:]
-        if frames:
-            self.messages_received += len(frames)
-            self.bytes_received += nbytes  # what arrived on the wire, prefixes included
-            self.subscriber.frames_received(frames, self, now)
-        if error is not None:
-            self._drop(str(error))
-
-    def _take_header(self, frame: Frame) -> str | None:
-        """Accept the publisher's header; why not, when it is refused or malformed."""
-        try:
-            header = parse_header(frame)
-        except FrameError as err:
-            return str(err)
-        if "error" in header:
-            return f"it refused us: {header['error']}"
-        if "md5sum" not in header or "type" not in header:
-            return "reply header lacks md5sum or type"
-        self.header = header
-        self.subscriber.header_received(self)
-        return None
+        for event in self.session.buffer_updated(nbytes):
+            if isinstance(event, Messages):
+                self.messages_received += len(event.frames)
+                self.bytes_received += nbytes  # what arrived on the wire, prefixes included
+                self.subscriber.frames_received(event.frames, self, now)
+            elif isinstance(event, Accepted):
+                self.header = event.header
+                self.subscriber.header_received(self)
+            else:
+                self._drop(event.reason)
 
     def _drop(self, reason: str) -> None:
         # the subscriber reports it once (a publisher that keeps refusing is not a flood)

@@ -29,6 +29,7 @@ from rostools.wire.tcpros import (
     ResponseReader,
     check_service_request,
     error_header,
+    frame,
     service_reply_header,
     service_request_header,
     service_response,
@@ -273,7 +274,7 @@ class ServiceClient:
             proto, _ = await self._connect(False, timeout)
         assert proto.transport is not None
         response = proto.next_response()
-        proto.transport.write(len(request).to_bytes(4, "little") + request)
+        proto.transport.write(frame(request))
         # A timer, not wait_for: wait_for makes a task per call, a third of a fast call's cost.
         timer = asyncio.get_running_loop().call_later(timeout, response.cancel)
         try:

@@ -14,7 +14,7 @@ from urllib.parse import urlsplit
 
 from rostools.errors import RostoolsError, ServiceError, TimeoutExpired, UnreachableError
 from rostools.rosgraph.masterapi import MasterProxy
-from rostools.wire.tcpros import FrameError, ResponseReader, service_request_header
+from rostools.wire.tcpros import FrameError, ResponseReader, frame, service_request_header
 
 
 class BlockingServiceClient:
@@ -109,7 +109,7 @@ class BlockingServiceClient:
             self._md5 = md5sum
         sock, reader = self._sock, self._reader
         try:
-            sock.sendall(len(request).to_bytes(4, "little") + request)
+            sock.sendall(frame(request))
             responses: list[tuple[bool, bytes]] = []
             while not responses:
                 responses = self._receive(sock, reader, deadline, "responding")

@@ -10,8 +10,9 @@ That is what lets Python receive at the speed the socket allows (LIBRARIES.md §
 from __future__ import annotations
 
 import struct
+from typing import NamedTuple
 
-from rostools.wire.header import HeaderError, decode_fields, encode_header
+from rostools.wire.header import MAX_HEADER_LENGTH, HeaderError, decode_fields, encode_header
 
 _U32 = struct.Struct("<I")
 
@@ -40,6 +41,11 @@ class FrameError(ValueError):
     def __init__(self, message: str, frames: list[bytes | memoryview] | None = None) -> None:
         super().__init__(message)
         self.frames: list[bytes | memoryview] = frames or []
+
+
+def frame(payload: bytes) -> bytes:
+    """``payload`` as one TCPROS frame: its length prefix, then itself."""
+    return _U32.pack(len(payload)) + payload
 
 
 def frame_prefix(length: int) -> bytes:
@@ -139,6 +145,87 @@ class FrameReader:
             start = end = 0
         self._start, self._end = start, end
         return frames
+
+
+class Accepted(NamedTuple):
+    """The publisher's header, checked: messages follow."""
+
+    header: dict[str, str]
+
+
+class Messages(NamedTuple):
+    """Complete messages, raw, in order."""
+
+    frames: list[bytes | memoryview]
+
+
+class Failed(NamedTuple):
+    """The connection is done for: refused, malformed, or a frame over the limit."""
+
+    reason: str
+
+
+Event = Accepted | Messages | Failed
+
+
+class Subscription:
+    """A subscriber's end of one TCPROS connection, sans-IO: bytes in, events out.
+
+    Feed it what the socket receives (``get_buffer``/``buffer_updated``, the shape of
+    asyncio's ``BufferedProtocol``). The first frame is the publisher's header: ``Accepted``
+    when it names an md5sum and a type, else ``Failed``, with the publisher's own reason when
+    it refused us. Then each read's complete messages come out as one ``Messages``. A frame
+    over ``max_frame`` is ``Failed``, after the messages before it. Nothing follows ``Failed``.
+    """
+
+    __slots__ = ("failed", "header", "reader")
+
+    def __init__(self, max_frame: int = MAX_FRAME) -> None:
+        self.reader = FrameReader(max_frame, first_max=MAX_HEADER_LENGTH)
+        self.header: dict[str, str] | None = None
+        self.failed = False
+
+    def get_buffer(self) -> memoryview:
+        """Where the next bytes from the socket go."""
+        return self.reader.get_buffer()
+
+    def buffer_updated(self, nbytes: int) -> list[Event]:
+        """Account for ``nbytes`` received; what they completed."""
+        if self.failed:
+            return []
+        error: FrameError | None = None
+        try:
+            frames = self.reader.buffer_updated(nbytes)
+        except FrameError as err:
+            frames, error = err.frames, err  # the frames before the bad one still count
+        events: list[Event] = []
+        if frames and self.header is None:
+            header = _checked_reply(frames[0])
+            if isinstance(header, str):
+                self.failed = True
+                return [Failed(header)]
+            self.header = header
+            events.append(Accepted(header))
+            frames = frames[1:]
+        if frames:
+            events.append(Messages(frames))
+        if error is not None:
+            self.failed = True
+            events.append(Failed(str(error)))
+        return events
+
+
+def _checked_reply(first: bytes | memoryview) -> dict[str, str] | str:
+    """A publisher's reply header, or why it is refused."""
+    try:
+        header = parse_header(first)
+    except FrameError as err:
+        return str(err)
+    if "error" in header:
+        return f"it refused us: {header['error']}"
+    if "md5sum" not in header or "type" not in header:
+        return "reply header lacks md5sum or type"
+    return header
 
 
 def parse_header(frame: bytes | memoryview) -> dict[str, str]:
@@ -249,7 +336,7 @@ def check_service_request(fields: dict[str, str], service: str, md5sum: str) -> 
 
 def service_response(ok: bool, payload: bytes) -> bytes:
     """A response: one ok byte, then a length-prefixed payload (the error text when not ok)."""
-    return (b"\x01" if ok else b"\x00") + _U32.pack(len(payload)) + payload
+    return (b"\x01" if ok else b"\x00") + frame(payload)
 
 
 class ResponseReader:

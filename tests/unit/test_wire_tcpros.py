@@ -12,8 +12,13 @@ from rostools.wire.header import decode_fields, encode_header
 from rostools.wire.tcpros import (
     BIG_FRAME,
     GROW_FIRST,
+    Accepted,
+    Event,
+    Failed,
     FrameError,
     FrameReader,
+    Messages,
+    Subscription,
     check_subscription,
     publisher_header,
     subscriber_header,
@@ -189,3 +194,46 @@ def test_the_first_frame_has_its_own_limit() -> None:
     assert feed(reader, framed([header, message]), 1 << 20) == [header, message]
     with pytest.raises(FrameError, match="exceeds the limit of 100"):
         feed(FrameReader(max_frame=1000, first_max=100), framed([message]), 1 << 20)
+
+
+def _session_events(data: bytes, chunk: int, max_frame: int = 1 << 20) -> list[Event]:
+    """Feed ``data`` to a Subscription in chunks; every event, in order (no socket)."""
+    session = Subscription(max_frame)
+    events: list[Event] = []
+    for pos in range(0, len(data), chunk):
+        piece = data[pos : pos + chunk]
+        session.get_buffer()[: len(piece)] = piece
+        events += session.buffer_updated(len(piece))
+    return events
+
+
+@pytest.mark.parametrize("chunk", [1, 7, 4096])
+def test_a_subscription_takes_the_header_then_messages(chunk: int) -> None:
+    reply = publisher_header("/talker", "/chatter", "m" * 32, "std_msgs/String", "", False)
+    events = _session_events(reply + framed([b"one", b"", b"three"]), chunk)
+    assert isinstance(events[0], Accepted) and events[0].header["callerid"] == "/talker"
+    got = [bytes(f) for e in events[1:] if isinstance(e, Messages) for f in e.frames]
+    assert got == [b"one", b"", b"three"]
+
+
+@pytest.mark.parametrize(
+    ("reply", "reason"),
+    [
+        (encode_header({"error": "md5 mismatch"}), "it refused us: md5 mismatch"),
+        (encode_header({"callerid": "/x"}), "reply header lacks md5sum or type"),
+        (struct.pack("<I", 3) + b"abc", "bad connection header"),
+    ],
+)
+def test_a_refusal_or_a_bad_header_fails_the_subscription(reply: bytes, reason: str) -> None:
+    events = _session_events(reply + framed([b"ignored"]), 4096)
+    assert len(events) == 1 and isinstance(events[0], Failed), events
+    assert events[0].reason.startswith(reason)
+
+
+def test_an_oversized_frame_fails_after_the_messages_before_it() -> None:
+    reply = publisher_header("/t", "/c", "m" * 32, "std_msgs/String", "", False)
+    data = reply + framed([b"kept"]) + struct.pack("<I", 1 << 21)
+    events = _session_events(data, 4096)
+    assert [type(e) for e in events] == [Accepted, Messages, Failed]
+    assert "exceeds the limit" in events[2].reason  # type: ignore[union-attr]
+    assert _session_events(data + framed([b"late"]), 4096)[3:] == []  # nothing after Failed

@@ -2,14 +2,11 @@
 
 from __future__ import annotations
 
-from rostools.cli.node import (
-    failure_class,
-    graph_dot,
-    graph_text,
-    info_text,
-    reply_text,
-    unreachable_text,
-)
+from rostools.cli.node.graph import graph_dot, graph_text
+from rostools.cli.node.group import failure_class
+from rostools.cli.node.kill import unreachable_text
+from rostools.cli.node.ping import reply_text
+from rostools.cli.node.query import info_text
 from rostools.errors import NotFoundError, TimeoutExpired, UnreachableError
 from rostools.rosgraph.introspect import BusConnection, NodeInfo, Probe, SystemState, build_graph
 

@@ -1,0 +1,109 @@
+"""``rostools node graph``: the graph as a tree of nodes and topics, or as Graphviz."""
+
+from __future__ import annotations
+
+import enum
+import sys
+from typing import TYPE_CHECKING, Annotated
+
+import typer
+
+from rostools.cli.common import master, settings
+from rostools.cli.output import Format, emit
+
+if TYPE_CHECKING:
+    from rostools.rosgraph.introspect import RosGraph
+
+
+from rostools.cli.node.group import TOOL, app, warn
+
+
+class GraphFormat(str, enum.Enum):
+    """Output formats of ``node graph``: the usual ones and Graphviz."""
+
+    text = "text"
+    json = "json"
+    yaml = "yaml"
+    dot = "dot"
+
+
+def graph_text(graph: RosGraph) -> str:
+    """Each node, the topics it publishes and subscribes, and the nodes at the other end."""
+    lines: list[str] = []
+    for node in graph.nodes:
+        lines.append(node.name)
+        groups = [
+            ("publishes", "→", [(t, graph.topic(t).subscribers) for t in node.publishes]),
+            ("subscribes", "←", [(t, graph.topic(t).publishers) for t in node.subscribes]),
+        ]
+        groups = [g for g in groups if g[2]]
+        if not groups:
+            lines.append("└── (no topics)")
+        for gi, (title, arrow, topics) in enumerate(groups):
+            last_group = gi == len(groups) - 1
+            lines.append(("└── " if last_group else "├── ") + title)
+            stem = "    " if last_group else "│   "
+            for ti, (topic, peers) in enumerate(topics):
+                branch = "└── " if ti == len(topics) - 1 else "├── "
+                others = (
+                    ", ".join(peers)
+                    if peers
+                    else ("(no subscribers)" if arrow == "→" else "(no publishers)")
+                )
+                ty = graph.topic(topic).type
+                lines.append(f"{stem}{branch}{topic} [{ty}] {arrow} {others}")
+    return "\n".join(lines)
+
+
+def _dot_id(text: str) -> str:
+    return '"' + text.replace("\\", "\\\\").replace('"', '\\"') + '"'
+
+
+def graph_dot(graph: RosGraph) -> str:
+    """Graphviz: nodes as ellipses, topics as boxes, arrows along the data flow."""
+    lines = ["digraph rosgraph {", "  rankdir=LR;"]
+    for node in graph.nodes:
+        lines.append(f"  {_dot_id('n:' + node.name)} [label={_dot_id(node.name)}, shape=ellipse];")
+    for topic in graph.topics:
+        label = _dot_id(f"{topic.name}\n{topic.type}").replace("\n", "\\n")
+        lines.append(f"  {_dot_id('t:' + topic.name)} [label={label}, shape=box];")
+    for topic in graph.topics:
+        tid = _dot_id("t:" + topic.name)
+        lines += [f"  {_dot_id('n:' + p)} -> {tid};" for p in topic.publishers]
+        lines += [f"  {tid} -> {_dot_id('n:' + s)};" for s in topic.subscribers]
+    lines.append("}")
+    return "\n".join(lines)
+
+
+@app.command("graph")
+def graph_cmd(
+    ctx: typer.Context,
+    all_: Annotated[
+        bool,
+        typer.Option("-a", "--all", help="Include /rosout, /rosout_agg and the rosout node."),
+    ] = False,
+    fmt: Annotated[
+        GraphFormat | None,
+        typer.Option(
+            "--format",
+            "-F",
+            help="text (a tree), json, yaml or dot (Graphviz).",
+            show_default=False,
+        ),
+    ] = None,
+) -> None:
+    """Nodes and the topics between them, like rqt_graph, from the master's registrations."""
+    from rostools.rosgraph.introspect import build_graph, system_state
+
+    proxy = master(ctx, TOOL)
+    graph = build_graph(system_state(proxy), proxy.topic_types(), include_debug=all_)
+    chosen = fmt if fmt is not None else GraphFormat(settings(ctx).format.value)
+    if chosen is GraphFormat.dot:
+        sys.stdout.write(graph_dot(graph) + "\n")
+    elif chosen is GraphFormat.text:
+        if graph.nodes:
+            sys.stdout.write(graph_text(graph) + "\n")
+        else:
+            warn("no nodes are registered")
+    else:
+        emit(Format(chosen.value), graph.to_data())

@@ -1,0 +1,88 @@
+"""The ``rostools node`` group and what its commands share: timeouts, names, errors."""
+
+from __future__ import annotations
+
+import sys
+from typing import TYPE_CHECKING, Annotated
+
+import typer
+
+from rostools.cli.common import FiniteFloat, master
+from rostools.errors import (
+    NotFoundError,
+    RostoolsError,
+    TimeoutExpired,
+    UnreachableError,
+)
+from rostools.names import script_resolve
+
+if TYPE_CHECKING:
+    from rostools.rosgraph.introspect import Graph
+
+
+app = typer.Typer(
+    name="node",
+    help="ROS nodes: list, info, ping, kill, machine, cleanup, and graph.",
+    no_args_is_help=True,
+    add_completion=False,
+)
+
+
+TOOL = "rosnode"
+
+
+#: Seconds to wait for a node's answer: rosnode's ping timeout.
+NODE_TIMEOUT = 3.0
+
+
+#: Seconds between two pings of one node, as rosnode.
+PING_INTERVAL = 1.0
+
+
+TimeoutOpt = Annotated[
+    float,
+    typer.Option(
+        "--timeout",
+        "-t",
+        click_type=FiniteFloat(min=0.001),
+        help="Seconds to wait for each node's answer.",
+    ),
+]
+
+
+def node_graph(ctx: typer.Context, timeout: float = NODE_TIMEOUT) -> Graph:
+    """The graph as this command sees it: the master, and nodes asked with ``timeout``."""
+    from rostools.rosgraph.introspect import Graph
+
+    return Graph(master(ctx, TOOL), timeout)
+
+
+def resolve_node(name: str) -> str:
+    """A node name from the command line, resolved as rosnode does."""
+    return script_resolve(name, TOOL)
+
+
+def warn(text: str) -> None:
+    """One line on stderr that does not stop the command."""
+    sys.stderr.write(f"rostools: {text}\n")
+
+
+def failure_class(errors: list[RostoolsError]) -> type[RostoolsError]:
+    """The error class (so the exit code) for several nodes' failures.
+
+    Each kind alone keeps its own code (not found 3, timeout 5); a mix is "unreachable" (4),
+    the code for a node that cannot be talked to.
+    """
+    for kind in (NotFoundError, TimeoutExpired):
+        if all(isinstance(e, kind) for e in errors):
+            return kind
+    return UnreachableError
+
+
+def worst(errors: list[RostoolsError], what: str) -> RostoolsError:
+    """One error for several failures: the first's, or a summary with the right exit code."""
+    if len(errors) == 1:
+        return errors[0]
+    return failure_class(errors)(
+        f"{what} {len(errors)} nodes: " + "; ".join(str(e) for e in errors)
+    )

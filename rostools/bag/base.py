@@ -74,11 +74,6 @@ class BagReader(ABC):
         self.notes: list[str] = []
         self.damage: list[str] = []
 
-    @property
-    def problems(self) -> list[str]:
-        """Notes and damage together, for display."""
-        return [*self.notes, *self.damage]
-
     def note(self, text: str) -> None:
         """Record how the file had to be read (no data lost)."""
         if text not in self.notes:

@@ -485,11 +485,6 @@ def encode_chunk_head(start: int, end: int, size: int, compression: str, data_le
     return PREFIX.pack(OP_CHUNK, len(content_head) + data_len) + content_head
 
 
-def encode_chunk(start: int, end: int, size: int, compression: str, data: bytes) -> bytes:
-    """A whole Chunk record around already compressed ``data``."""
-    return encode_chunk_head(start, end, size, compression, len(data)) + data
-
-
 def encode_message_index(channel_id: int, entries: bytes) -> bytes:
     """A MessageIndex record from packed (u64 log_time, u64 offset) pairs."""
     return _record(OP_MESSAGE_INDEX, _U16.pack(channel_id) + _U32.pack(len(entries)) + entries)

@@ -32,6 +32,7 @@ from rostools.node.clock import RosClock
 from rostools.node.connection import Frame, InboundConnection
 from rostools.node.node import Node
 from rostools.node.publisher import Publisher
+from rostools.wire.codes import SUCCESS
 
 log = logging.getLogger(__name__)
 
@@ -424,7 +425,7 @@ class Recorder:
         except (RostoolsError, OSError) as err:
             log.debug("node %s: %s", name, err)
             return []
-        return [topic for topic, _ in subs] if code == 1 else []
+        return [topic for topic, _ in subs] if code == SUCCESS else []
 
     def _finished(self) -> bool:
         """A count, a size or a duration without --split, or the writer failed."""

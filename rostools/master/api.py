@@ -15,6 +15,7 @@ from rostools.master.params import ParamTree, subscription_key
 from rostools.master.registry import Outgoing, Registry
 from rostools.names import ANYTYPE, resolve
 from rostools.wire import rosapi as check
+from rostools.wire.codes import ERROR, SUCCESS
 from rostools.wire.rosapi import Methods, Triple
 from rostools.wire.xmlrpc import multicall
 
@@ -86,23 +87,23 @@ class MasterAPI:
 
     def getUri(self, caller_id: str) -> Triple:  # noqa: N802 - ROS API names
         """The master's URI."""
-        return 1, "", self.uri
+        return SUCCESS, "", self.uri
 
     def getPid(self, caller_id: str) -> Triple:  # noqa: N802
         """The master's process id."""
-        return 1, "", self.pid
+        return SUCCESS, "", self.pid
 
     def shutdown(self, caller_id: str, msg: Any) -> Triple:
         """Stop the master."""
         self.shutdown_requested = f"{msg}" if msg else "external shutdown request"
-        return 1, "shutdown", 0
+        return SUCCESS, "shutdown", 0
 
     def registerService(  # noqa: N802
         self, caller_id: str, service: str, service_api: str, caller_api: str
     ) -> Triple:
         """Register a service provider; the last one wins."""
         self.outgoing += self.registry.register("srv", service, caller_id, caller_api, service_api)
-        return 1, f"Registered [{caller_id}] as provider of [{service}]", 1
+        return SUCCESS, f"Registered [{caller_id}] as provider of [{service}]", 1
 
     def unregisterService(self, caller_id: str, service: str, service_api: str) -> Triple:  # noqa: N802
         """Unregister a service provider, if it is still the current one."""
@@ -112,8 +113,8 @@ class MasterAPI:
         """The rosrpc URI of a service."""
         entry = self.registry.services.get(service)
         if entry is None:
-            return -1, "no provider", ""
-        return 1, f"rosrpc URI: [{entry[2]}]", entry[2]
+            return ERROR, "no provider", ""
+        return SUCCESS, f"rosrpc URI: [{entry[2]}]", entry[2]
 
     def registerSubscriber(  # noqa: N802
         self, caller_id: str, topic: str, topic_type: str, caller_api: str
@@ -122,7 +123,7 @@ class MasterAPI:
         self.outgoing += self.registry.register("sub", topic, caller_id, caller_api)
         if topic not in self.registry.topic_types and topic_type != ANYTYPE:
             self.registry.topic_types[topic] = topic_type
-        return 1, f"Subscribed to [{topic}]", self.registry.apis("pub", topic)
+        return SUCCESS, f"Subscribed to [{topic}]", self.registry.apis("pub", topic)
 
     def unregisterSubscriber(self, caller_id: str, topic: str, caller_api: str) -> Triple:  # noqa: N802
         """Unregister a subscriber."""
@@ -153,8 +154,8 @@ class MasterAPI:
         """A node's XML-RPC URI."""
         ref = self.registry.nodes.get(node)
         if ref is None:
-            return -1, f"unknown node [{node}]", ""
-        return 1, "node api", ref.api
+            return ERROR, f"unknown node [{node}]", ""
+        return SUCCESS, "node api", ref.api
 
     def getPublishedTopics(self, caller_id: str, subgraph: str) -> Triple:  # noqa: N802
         """Topics with at least one publisher, under ``subgraph``."""
@@ -162,15 +163,19 @@ class MasterAPI:
             subgraph += "/"
         types = self.registry.topic_types
         topics = [[t, types[t]] for t in self.registry.publishers if t.startswith(subgraph)]
-        return 1, "current topics", topics
+        return SUCCESS, "current topics", topics
 
     def getTopicTypes(self, caller_id: str) -> Triple:  # noqa: N802
         """Every topic in the graph, with its type (a type is forgotten with its last user)."""
-        return 1, "current system state", [[t, ty] for t, ty in self.registry.topic_types.items()]
+        return (
+            SUCCESS,
+            "current system state",
+            [[t, ty] for t, ty in self.registry.topic_types.items()],
+        )
 
     def getSystemState(self, caller_id: str) -> Triple:  # noqa: N802
         """Publishers, subscribers and services, by node name."""
-        return 1, "current system state", self.registry.state()
+        return SUCCESS, "current system state", self.registry.state()
 
     # parameter API --------------------------------------------------------------------
 
@@ -180,19 +185,19 @@ class MasterAPI:
         try:
             updates = self.params.set(key, value, caller_id)
         except TypeError as err:
-            return -1, f"Error: invalid arguments: {err}", 0
+            return ERROR, f"Error: invalid arguments: {err}", 0
         except ValueError as err:
-            return -1, f"ERROR: {err}", 0
+            return ERROR, f"ERROR: {err}", 0
         self._notify_params(updates)
-        return 1, f"parameter {key} set", 0
+        return SUCCESS, f"parameter {key} set", 0
 
     def getParam(self, caller_id: str, key: str) -> Triple:  # noqa: N802
         """A parameter's value, or a dict for a namespace."""
         key = resolve(key, caller_id)
         try:
-            return 1, f"Parameter [{key}]", self.params.get(key)
+            return SUCCESS, f"Parameter [{key}]", self.params.get(key)
         except KeyError:
-            return -1, f"Parameter [{key}] is not set", 0
+            return ERROR, f"Parameter [{key}] is not set", 0
 
     def deleteParam(self, caller_id: str, key: str) -> Triple:  # noqa: N802
         """Delete a parameter or namespace."""
@@ -200,21 +205,21 @@ class MasterAPI:
         try:
             updates = self.params.delete(key)
         except KeyError:
-            return -1, f"parameter [{key}] is not set", 0
+            return ERROR, f"parameter [{key}] is not set", 0
         self._notify_params(updates)
-        return 1, f"parameter {key} deleted", 0
+        return SUCCESS, f"parameter {key} deleted", 0
 
     def hasParam(self, caller_id: str, key: str) -> Triple:  # noqa: N802
         """Whether a parameter is set."""
         key = resolve(key, caller_id)
-        return 1, key, self.params.has(key)
+        return SUCCESS, key, self.params.has(key)
 
     def searchParam(self, caller_id: str, key: str) -> Triple:  # noqa: N802
         """Search upwards from the caller's namespace."""
         found = self.params.search(caller_id, key)
         if found is None:
-            return -1, f"Cannot find parameter [{key}] in an upwards search", ""
-        return 1, f"Found [{found}]", found
+            return ERROR, f"Cannot find parameter [{key}] in an upwards search", ""
+        return SUCCESS, f"Found [{found}]", found
 
     def subscribeParam(self, caller_id: str, caller_api: str, key: str) -> Triple:  # noqa: N802
         """Subscribe to a parameter; its value, or ``{}`` when unset."""
@@ -225,14 +230,14 @@ class MasterAPI:
             value = self.params.get(skey)
         except KeyError:
             value = {}
-        return 1, f"Subscribed to parameter [{key}]", value
+        return SUCCESS, f"Subscribed to parameter [{key}]", value
 
     def unsubscribeParam(self, caller_id: str, caller_api: str, key: str) -> Triple:  # noqa: N802
         """Unsubscribe from a parameter (always answers 1)."""
         key = resolve(key, caller_id)
         self.registry.unregister("param", subscription_key(key), caller_id, caller_api)
-        return 1, f"Unsubscribe to parameter [{key}]", 1
+        return SUCCESS, f"Unsubscribe to parameter [{key}]", 1
 
     def getParamNames(self, caller_id: str) -> Triple:  # noqa: N802
         """Every parameter leaf name."""
-        return 1, "Parameter names", self.params.names()
+        return SUCCESS, "Parameter names", self.params.names()

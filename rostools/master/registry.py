@@ -9,6 +9,8 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any, Literal
 
+from rostools.wire.codes import SUCCESS
+
 Kind = Literal["pub", "sub", "srv", "param"]
 #: (caller_id, caller_api) pairs registered under one key, in registration order.
 Providers = list[tuple[str, str]]
@@ -99,7 +101,7 @@ class Registry:
         """Remove a registration; rosmaster's ``[1, message, removed]`` answer."""
         node = self.nodes.get(caller_id)
         if node is None:
-            return 1, f"[{caller_id}] is not a registered node", 0
+            return SUCCESS, f"[{caller_id}] is not a registered node", 0
         if kind == "srv":
             current = self.services.get(key)
             if current is None:

@@ -27,6 +27,7 @@ from rostools.node.xmlrpc import XmlRpcServer, call
 from rostools.rosgraph.masterapi import faulted, master_timeout, no_answer, ros_value, unreachable
 from rostools.rosgraph.network import bind_address, host_name
 from rostools.wire import rosapi as check
+from rostools.wire.codes import ERROR, FAILURE, SUCCESS
 from rostools.wire.rosapi import Methods, Triple
 from rostools.wire.tcpros import error_header
 from rostools.wire.xmlrpc import multicall
@@ -178,13 +179,6 @@ class Node:
             await self.master_call("registerPublisher", topic, topic_type.type, self.uri)
         return pub
 
-    async def unadvertise(self, topic: str) -> None:
-        """Stop publishing on ``topic``."""
-        pub = self.publishers.pop(self.resolve(topic), None)
-        if pub is not None:
-            pub.close()
-            await self.master_call("unregisterPublisher", pub.topic, self.uri)
-
     async def subscribe(
         self,
         topic: str,
@@ -272,32 +266,32 @@ class Node:
     def _shutdown(self, caller: str, reason: Any) -> Triple:
         self.shutdown_reason = str(reason)
         self.shutdown_requested.set()
-        return 1, "shutdown", 0
+        return SUCCESS, "shutdown", 0
 
     def _subscriptions(self, caller: str) -> Triple:
-        return 1, "subscriptions", [[t, s.type.type] for t, s in self.subscribers.items()]
+        return SUCCESS, "subscriptions", [[t, s.type.type] for t, s in self.subscribers.items()]
 
     def _publications(self, caller: str) -> Triple:
-        return 1, "publications", [[t, p.type.type] for t, p in self.publishers.items()]
+        return SUCCESS, "publications", [[t, p.type.type] for t, p in self.publishers.items()]
 
     def _publisher_update(self, caller: str, topic: str, uris: list[str]) -> Triple:
         sub = self.subscribers.get(self.resolve(topic))
         if sub is not None:
             sub.update(uris)
-        return 1, "", 0
+        return SUCCESS, "", 0
 
     def _request_topic(self, caller: str, topic: str, protocols: Any) -> Triple:
         topic = self.resolve(topic)
         pub = self.publishers.get(topic)
         if pub is None:
-            return -1, f"Not a publisher of [{topic}]", []
+            return ERROR, f"Not a publisher of [{topic}]", []
         pub.contacted.add(caller)  # it reaches us (see MasterWatch)
         for proto in protocols if isinstance(protocols, list) else []:
             if isinstance(proto, list) and proto and proto[0] == "TCPROS":
-                return 1, f"ready on {self.host}:{self.tcpros_port}", [
+                return SUCCESS, f"ready on {self.host}:{self.tcpros_port}", [
                     "TCPROS", self.host, self.tcpros_port
                 ]  # fmt: skip
-        return 0, "no supported protocol implementations", []
+        return FAILURE, "no supported protocol implementations", []
 
     def _bus_stats(self) -> Triple:
         pubs = [
@@ -306,7 +300,7 @@ class Node:
             for t, p in self.publishers.items()
         ]  # fmt: skip
         subs = [[t, s.stats()] for t, s in self.subscribers.items()]
-        return 1, "", [pubs, subs, []]
+        return SUCCESS, "", [pubs, subs, []]
 
     def _bus_info(self) -> Triple:
         info: list[Any] = []
@@ -318,4 +312,4 @@ class Node:
             for uri, conn in sub.connections.items():
                 text = f"TCPROS connection to [{conn.peer}]"
                 info.append([conn.id, uri, "i", "TCPROS", topic, True, text])
-        return 1, "bus info", info
+        return SUCCESS, "bus info", info

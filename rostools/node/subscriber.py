@@ -20,6 +20,7 @@ from rostools.node.connection import Frame, InboundConnection
 from rostools.node.notice import Notice
 from rostools.node.xmlrpc import call
 from rostools.rosgraph.network import SET_ADDRESS, Failure, explain, is_loopback, uri_host
+from rostools.wire.codes import SUCCESS
 from rostools.wire.tcpros import MAX_FRAME, subscriber_header
 
 if TYPE_CHECKING:
@@ -153,7 +154,7 @@ class Subscriber:
         except Exception as err:  # noqa: BLE001 - any failure means: report, try again later
             log.debug("requestTopic %s at %s failed: %s", self.topic, uri, err)
             return explain(err, host)
-        if code != 1 or not isinstance(proto, list) or len(proto) < 3 or proto[0] != "TCPROS":
+        if code != SUCCESS or not isinstance(proto, list) or len(proto) < 3 or proto[0] != "TCPROS":
             log.debug("requestTopic %s at %s: %s %s", self.topic, uri, code, message)
             return Failure(
                 f"it refused the topic: {message}", SET_ADDRESS if is_loopback(host) else ""
@@ -227,7 +228,7 @@ async def node_at(node: Owner, uri: str, topic: str) -> str | None:
         names: list[str] = next((n for t, n in state[0] if t == topic), [])
         for name in names:
             code, _, found = await call(node.master_uri, "lookupNode", (node.name, name), 2.0)
-            if code == 1 and found == uri:
+            if code == SUCCESS and found == uri:
                 return str(name)
     except Exception as err:  # noqa: BLE001 - the name only decorates a message
         log.debug("finding the node at %s: %s", uri, err)

@@ -16,6 +16,7 @@ from typing import TYPE_CHECKING, Any, Protocol
 from rostools.node.notice import Notice
 from rostools.node.xmlrpc import call
 from rostools.rosgraph.network import explain, uri_host
+from rostools.wire.codes import SUCCESS
 
 if TYPE_CHECKING:
     from rostools.node.endpoint import Owner
@@ -84,7 +85,7 @@ class MasterWatch:
         code, _, _ = await call(
             node.master_uri, "lookupNode", (node.name, node.name), WATCH_TIMEOUT
         )
-        if code != 1:
+        if code != SUCCESS:
             await self.register_again()
         elif node.master_lost:
             node.notify(Notice("master_back", f"the master at {node.master_uri} is back"))
@@ -120,7 +121,7 @@ class MasterWatch:
         results = await call(node.master_uri, "system.multicall", (multi,), WATCH_TIMEOUT * 5)
         first_sub = len(node.publishers)
         for sub, result in zip(subs, results[first_sub : first_sub + len(subs)], strict=True):
-            if isinstance(result, list) and result and result[0][0] == 1:
+            if isinstance(result, list) and result and result[0][0] == SUCCESS:
                 sub.update([u for u in result[0][2] if isinstance(u, str)])
         node.notify(
             Notice(

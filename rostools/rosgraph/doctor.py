@@ -29,6 +29,7 @@ from rostools.rosgraph.network import (
     local_addresses,
     uri_host,
 )
+from rostools.wire.codes import SUCCESS
 
 #: How far apart two clocks may be before we say so (s); HTTP dates have 1 s resolution.
 MAX_SKEW = 1.0
@@ -189,7 +190,7 @@ class Doctor:
         if answer.skew is not None and uri == self.master_uri:
             self.skews["the master"] = answer.skew
         code, message, value = answer.value
-        if code != 1:
+        if code != SUCCESS:
             raise RostoolsError(f"{method}: {message}")
         return value
 

@@ -14,6 +14,7 @@ from typing import Any
 from urllib.parse import urlsplit
 
 from rostools.names import ANYTYPE, GLOBAL_NS, resolve
+from rostools.wire.codes import ERROR, FAILURE
 
 Triple = tuple[int, str, Any]
 Check = Callable[[Any, str], Any]
@@ -167,16 +168,16 @@ def checked(methods: Methods, method: str, params: tuple[Any, ...]) -> list[Any]
         raise unsupported(method)
     _, error_value, checks = entry
     if not params:
-        return (-1, "missing required caller_id parameter", error_value)
+        return (ERROR, "missing required caller_id parameter", error_value)
     if len(params) != len(checks) + 1:
-        return (-1, "Error: bad call arity", error_value)
+        return (ERROR, "Error: bad call arity", error_value)
     caller_id = params[0]
     if not isinstance(caller_id, str):
-        return (-1, "caller_id must be a string", error_value)
+        return (ERROR, "caller_id must be a string", error_value)
     try:
         return [caller_id, *(c(v, caller_id) for c, v in zip(checks, params[1:], strict=True))]
     except ArgumentError as err:
-        return (-1, str(err), error_value)
+        return (ERROR, str(err), error_value)
 
 
 def dispatch(methods: Methods, method: str, params: tuple[Any, ...]) -> list[Any]:
@@ -188,7 +189,7 @@ def dispatch(methods: Methods, method: str, params: tuple[Any, ...]) -> list[Any
     try:
         code, message, value = handler(*args)
     except Exception as err:  # noqa: BLE001 - rosmaster and rospy answer any failure this way
-        return [0, f"Internal failure: {err}", error_value]
+        return [FAILURE, f"Internal failure: {err}", error_value]
     return [code, message, value]
 
 

@@ -48,12 +48,12 @@ def load_all(
         if docs is None:
             docs = list(yaml.load_all(text, Loader=loader))
     except yaml.YAMLError as err:
-        raise UsageError(f"bad YAML in {source}: {_problem(err)}") from None
+        raise UsageError(f"bad YAML in {source}: {_problem(err)}") from err
     except RecursionError:
         raise UsageError(f"bad YAML in {source}: nested deeper than {MAX_DEPTH} levels") from None
     except ValueError as err:  # Python refuses to read an integer of thousands of digits
         problem = "an integer too long to read" if "digits" in str(err) else str(err)
-        raise UsageError(f"bad YAML in {source}: {problem}") from None
+        raise UsageError(f"bad YAML in {source}: {problem}") from err
     for doc in docs:
         check_size(doc, source, max_values)
     return docs

@@ -51,7 +51,7 @@ def salvage(data: bytes | memoryview, limit: int) -> bytes:
             try:
                 out += lz4.block.decompress(block, uncompressed_size=block_max, dict=history)
             except lz4.block.LZ4BlockError as err:
-                raise ValueError(f"LZ4 block does not decompress: {err}") from None
+                raise ValueError(f"LZ4 block does not decompress: {err}") from err
         else:
             out += decode_cut_block(block, history)
         if len(block) < size:

@@ -133,7 +133,7 @@ class Selection:
             self.patterns = [re.compile(p) for p in opts.topics] if opts.regex else []
             self.exclude = [re.compile(x) for x in opts.exclude]
         except re.error as err:
-            raise UsageError(f"bad regular expression: {err}") from None
+            raise UsageError(f"bad regular expression: {err}") from err
         # --node records what the node subscribes to; -x alone means everything but that
         self.everything = (
             opts.all or opts.node is not None or (bool(opts.exclude) and not opts.topics)

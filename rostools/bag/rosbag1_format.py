@@ -127,7 +127,7 @@ def read_record(
     try:
         fields = parse_header(buf, pos + 4, pos + 4 + hlen)
     except RecordError as err:
-        raise RecordError(f"record header at {pos}: {err}") from None
+        raise RecordError(f"record header at {pos}: {err}") from err
     (dlen,) = _LEN.unpack_from(buf, pos + 4 + hlen)
     data = pos + 8 + hlen
     if max_data is not None and dlen > max_data:

@@ -117,7 +117,7 @@ def _read(path: Path) -> bytes:
     except FileNotFoundError:
         raise NotFoundError(f"file {path} does not exist") from None
     except OSError as err:
-        raise UsageError(f"cannot read {path}: {err.strerror}") from None
+        raise UsageError(f"cannot read {path}: {err.strerror}") from err
 
 
 @app.command()

@@ -13,6 +13,7 @@ from rostools.cli.common import FINITE, FormatOpt, MsgPathOpt, master, output_fo
 from rostools.cli.output import Format, emit
 from rostools.errors import NotFoundError, TimeoutExpired, UsageError
 from rostools.names import make_global_ns, ros_namespace, script_resolve
+from rostools.rosgraph.serviceclient import SERVICE_TIMEOUT
 
 if TYPE_CHECKING:
     from rostools.msgs.store import TypeStore
@@ -30,7 +31,6 @@ ServiceArg = Annotated[str, typer.Argument(help="Service name; relative names jo
 TimeoutOpt = Annotated[
     float, typer.Option("--timeout", click_type=FINITE, help="Seconds to wait for the service.")
 ]
-DEFAULT_TIMEOUT = 10.0
 
 
 def _caller() -> str:
@@ -103,7 +103,7 @@ def uri(ctx: typer.Context, service: ServiceArg, fmt: FormatOpt = None) -> None:
 def type_(
     ctx: typer.Context,
     service: ServiceArg,
-    timeout: TimeoutOpt = DEFAULT_TIMEOUT,
+    timeout: TimeoutOpt = SERVICE_TIMEOUT,
     fmt: FormatOpt = None,
 ) -> None:
     """A service's type, asked of its server (rosservice type)."""
@@ -118,7 +118,7 @@ def type_(
 def args(
     ctx: typer.Context,
     service: ServiceArg,
-    timeout: TimeoutOpt = DEFAULT_TIMEOUT,
+    timeout: TimeoutOpt = SERVICE_TIMEOUT,
     fmt: FormatOpt = None,
     msg_path: MsgPathOpt = None,
 ) -> None:
@@ -133,7 +133,7 @@ def args(
 def info(
     ctx: typer.Context,
     service: ServiceArg,
-    timeout: TimeoutOpt = DEFAULT_TIMEOUT,
+    timeout: TimeoutOpt = SERVICE_TIMEOUT,
     fmt: FormatOpt = None,
     msg_path: MsgPathOpt = None,
 ) -> None:
@@ -202,7 +202,7 @@ def call(
     wait: Annotated[
         bool, typer.Option("--wait", help="Wait for the service to appear (up to --timeout).")
     ] = False,
-    timeout: TimeoutOpt = DEFAULT_TIMEOUT,
+    timeout: TimeoutOpt = SERVICE_TIMEOUT,
     fmt: FormatOpt = None,
     msg_path: MsgPathOpt = None,
 ) -> None:
@@ -235,7 +235,7 @@ def call(
             request = filler.message(spec.request.name, arguments)
         except UsageError as err:
             fields = " ".join(f.name for f in spec.request.fields) or "(none)"
-            raise UsageError(f"{err}", hint=f"{name} takes: {fields}") from None
+            raise UsageError(f"{err}", hint=f"{name} takes: {fields}") from err
         answer = client.call(_caller(), md5, request.serialize())
         response = codec.decode(spec.response.name, answer)
         _print(codec, spec, request, response, verbose, fmt)

@@ -80,7 +80,7 @@ async def run_core(address: Address, ready: Callable[[Master, str], None]) -> No
         raise RostoolsError(
             f"cannot listen on {address.bind}:{address.port}: {err.strerror or err}",
             hint="another program holds the port; pick one with --port",
-        ) from None
+        ) from err
     assert master.api is not None
     run_id = str(uuid.uuid1())
     for key, value in (("/run_id", run_id), ("/rosdistro", ROSDISTRO), ("/rosversion", ROSVERSION)):

@@ -139,7 +139,7 @@ class Node:
         if calls:
             multi = [{"methodName": m, "params": list(p)} for m, p in calls]
             try:
-                await call(self.master_uri, "system.multicall", (multi,), timeout=2.0)
+                await call(self.master_uri, "system.multicall", (multi,), master_timeout())
             except Exception as err:  # noqa: BLE001 - leaving anyway; the master may be gone
                 log.debug("unregistering from %s failed: %s", self.master_uri, err)
         for sub in list(self.subscribers.values()):

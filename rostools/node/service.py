@@ -23,6 +23,7 @@ from rostools.errors import (
 from rostools.msgs.store import TypeStore
 from rostools.node.connection import Frame, ServerConnection, set_nodelay
 from rostools.rosgraph.masterapi import MasterError
+from rostools.rosgraph.serviceclient import SERVICE_TIMEOUT
 from rostools.wire import codes
 from rostools.wire.tcpros import (
     FrameError,
@@ -42,7 +43,6 @@ log = logging.getLogger(__name__)
 
 #: A handler gets the serialised request and returns the serialised response.
 Handler = Callable[[bytes], bytes | Awaitable[bytes]]
-DEFAULT_CALL_TIMEOUT = 10.0
 
 
 class ServiceType(NamedTuple):
@@ -241,7 +241,7 @@ class ServiceClient:
         except (OSError, asyncio.TimeoutError) as err:
             raise UnreachableError(
                 f"cannot connect to service {self.name} at {host}:{port}: {err or 'timed out'}"
-            ) from None
+            ) from err
         assert proto.transport is not None
         proto.transport.write(header)
         try:
@@ -260,14 +260,14 @@ class ServiceClient:
             raise RostoolsError(f"service {self.name} refused the call: {fields['error']}")
         return proto, fields
 
-    async def probe(self, timeout: float = DEFAULT_CALL_TIMEOUT) -> dict[str, str]:
+    async def probe(self, timeout: float = SERVICE_TIMEOUT) -> dict[str, str]:
         """The server's header (``type``, ``md5sum``, ...), without calling it."""
         proto, fields = await self._connect(True, timeout)
         assert proto.transport is not None
         proto.transport.close()  # roscpp keeps a probe open; we close it ourselves
         return fields
 
-    async def call(self, request: bytes, timeout: float = DEFAULT_CALL_TIMEOUT) -> bytes:
+    async def call(self, request: bytes, timeout: float = SERVICE_TIMEOUT) -> bytes:
         """Send one request; the response bytes. ``ServiceError`` when the server says no."""
         proto = self._proto
         if proto is None or proto.transport is None or proto.transport.is_closing():

@@ -67,7 +67,7 @@ def run_node(
         try:
             await node.start()
         except OSError as err:
-            raise RostoolsError(f"cannot open the node's sockets: {err.strerror or err}") from None
+            raise RostoolsError(f"cannot open the node's sockets: {err.strerror or err}") from err
         loop = asyncio.get_running_loop()
         stop = asyncio.Event()
         for sig in STOP_SIGNALS:

@@ -19,6 +19,7 @@ from rostools.msgs.topictype import TopicType
 from rostools.node.connection import Frame, InboundConnection
 from rostools.node.notice import Notice
 from rostools.node.xmlrpc import call
+from rostools.rosgraph.masterapi import master_timeout
 from rostools.rosgraph.network import SET_ADDRESS, Failure, explain, is_loopback, uri_host
 from rostools.wire.codes import SUCCESS
 from rostools.wire.tcpros import MAX_FRAME, subscriber_header
@@ -224,10 +225,12 @@ class Subscriber:
 async def node_at(node: Owner, uri: str, topic: str) -> str | None:
     """The name of the publisher of ``topic`` whose slave API is ``uri``, if the master says."""
     try:
-        _, _, state = await call(node.master_uri, "getSystemState", (node.name,), 2.0)
+        _, _, state = await call(node.master_uri, "getSystemState", (node.name,), master_timeout())
         names: list[str] = next((n for t, n in state[0] if t == topic), [])
         for name in names:
-            code, _, found = await call(node.master_uri, "lookupNode", (node.name, name), 2.0)
+            code, _, found = await call(
+                node.master_uri, "lookupNode", (node.name, name), master_timeout()
+            )
             if code == SUCCESS and found == uri:
                 return str(name)
     except Exception as err:  # noqa: BLE001 - the name only decorates a message

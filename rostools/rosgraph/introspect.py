@@ -25,10 +25,14 @@ from urllib.parse import urlsplit
 
 from rostools.errors import NotFoundError, RostoolsError, TimeoutExpired, UnreachableError
 from rostools.names import make_global_ns
-from rostools.rosgraph.masterapi import MasterError, MasterProxy, TimeoutTransport, XmlRpcNode
+from rostools.rosgraph.masterapi import (
+    NODE_TIMEOUT,
+    MasterError,
+    MasterProxy,
+    TimeoutTransport,
+    XmlRpcNode,
+)
 
-#: Seconds to wait for a node's answer; rosnode's ping uses 3 s (and 5 s for info).
-DEFAULT_NODE_TIMEOUT = 3.0
 #: The reason rosnode gives in ``shutdown`` calls (observed on the wire).
 KILL_REASON = "user request"
 #: Nodes probed at once by ``probe_nodes``: dead nodes cost a timeout each, so run in parallel.
@@ -223,7 +227,7 @@ class NodeApi(XmlRpcNode):
 class Graph:
     """The master of one command, with node URIs looked up once and remembered."""
 
-    def __init__(self, master: MasterProxy, timeout: float = DEFAULT_NODE_TIMEOUT) -> None:
+    def __init__(self, master: MasterProxy, timeout: float = NODE_TIMEOUT) -> None:
         self.master = master
         self.timeout = timeout
         self._uris: dict[str, str | None] = {}

@@ -17,6 +17,8 @@ from rostools.wire import codes
 
 #: Seconds to wait for the master before giving up; ``ROSTOOLS_MASTER_TIMEOUT`` changes it.
 DEFAULT_TIMEOUT = 3.0
+#: Seconds to wait for a node's answer; rosnode's ping uses 3 s (and 5 s for info).
+NODE_TIMEOUT = 3.0
 
 
 def master_timeout() -> float:
@@ -138,7 +140,7 @@ class MasterProxy(XmlRpcNode):
             return self.call("getParam", key)
         except MasterError as err:
             if err.code == codes.ERROR:
-                raise NotFoundError(f"parameter {key} is not set") from None
+                raise NotFoundError(f"parameter {key} is not set") from err
             raise
 
     def set_param(self, key: str, value: Any) -> None:
@@ -151,7 +153,7 @@ class MasterProxy(XmlRpcNode):
             self.call("deleteParam", key)
         except MasterError as err:
             if err.code == codes.ERROR:
-                raise NotFoundError(f"parameter {key} is not set") from None
+                raise NotFoundError(f"parameter {key} is not set") from err
             raise
 
     def param_names(self) -> list[str]:
@@ -174,7 +176,7 @@ class MasterProxy(XmlRpcNode):
             uri: str = self.call("lookupNode", name)
         except MasterError as err:
             if err.code == codes.ERROR:
-                raise NotFoundError(f"unknown node {name}") from None
+                raise NotFoundError(f"unknown node {name}") from err
             raise
         return uri
 
@@ -184,7 +186,7 @@ class MasterProxy(XmlRpcNode):
             uri: str = self.call("lookupService", name)
         except MasterError as err:
             if err.code == codes.ERROR:
-                raise NotFoundError(f"unknown service {name}") from None
+                raise NotFoundError(f"unknown service {name}") from err
             raise
         return uri
 

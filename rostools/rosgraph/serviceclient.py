@@ -16,6 +16,9 @@ from rostools.errors import RostoolsError, ServiceError, TimeoutExpired, Unreach
 from rostools.rosgraph.masterapi import MasterProxy
 from rostools.wire.tcpros import FrameError, ResponseReader, frame, service_request_header
 
+#: Seconds a service call may take, connecting included, unless the caller says otherwise.
+SERVICE_TIMEOUT = 10.0
+
 
 class BlockingServiceClient:
     """Probe or call one service; ``persistent`` keeps one connection for every call."""
@@ -24,7 +27,7 @@ class BlockingServiceClient:
         self,
         master: MasterProxy,
         name: str,
-        timeout: float = 10.0,
+        timeout: float = SERVICE_TIMEOUT,
         *,
         persistent: bool = False,
     ) -> None:
@@ -52,7 +55,7 @@ class BlockingServiceClient:
         except OSError as err:
             raise UnreachableError(
                 f"cannot connect to service {self.name} at {host}:{port}: {err.strerror or err}"
-            ) from None
+            ) from err
         sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
         reader = ResponseReader()
         try:
@@ -80,13 +83,13 @@ class BlockingServiceClient:
         except ConnectionResetError:
             data = b""  # a server that died mid-call: the same as one that closed
         except OSError as err:
-            raise RostoolsError(f"service {self.name}: {err.strerror or err}") from None
+            raise RostoolsError(f"service {self.name}: {err.strerror or err}") from err
         if not data:
             raise RostoolsError(f"service {self.name} closed the connection without {what}")
         try:
             return reader.feed(data)
         except FrameError as err:
-            raise RostoolsError(f"garbage from service {self.name}: {err}") from None
+            raise RostoolsError(f"garbage from service {self.name}: {err}") from err
 
     def probe(self, caller_id: str) -> dict[str, str]:
         """The server's header: ``type`` and ``md5sum``."""

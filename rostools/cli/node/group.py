@@ -15,6 +15,7 @@ from rostools.errors import (
     UnreachableError,
 )
 from rostools.names import script_resolve
+from rostools.rosgraph.masterapi import NODE_TIMEOUT
 
 if TYPE_CHECKING:
     from rostools.rosgraph.introspect import Graph
@@ -29,10 +30,6 @@ app = typer.Typer(
 
 
 TOOL = "rosnode"
-
-
-#: Seconds to wait for a node's answer: rosnode's ping timeout.
-NODE_TIMEOUT = 3.0
 
 
 #: Seconds between two pings of one node, as rosnode.

@@ -19,7 +19,6 @@ if TYPE_CHECKING:
 
 
 from rostools.cli.node.group import (
-    NODE_TIMEOUT,
     TimeoutOpt,
     app,
     node_graph,
@@ -27,6 +26,7 @@ from rostools.cli.node.group import (
     warn,
     worst,
 )
+from rostools.rosgraph.masterapi import NODE_TIMEOUT
 
 
 def _choose(known: list[str]) -> list[str]:

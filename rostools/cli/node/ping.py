@@ -23,7 +23,6 @@ if TYPE_CHECKING:
 
 
 from rostools.cli.node.group import (
-    NODE_TIMEOUT,
     PING_INTERVAL,
     TimeoutOpt,
     app,
@@ -32,6 +31,7 @@ from rostools.cli.node.group import (
     resolve_node,
     warn,
 )
+from rostools.rosgraph.masterapi import NODE_TIMEOUT
 
 
 def reply_text(uri: str, ms: float) -> str:

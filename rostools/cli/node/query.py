@@ -21,7 +21,8 @@ if TYPE_CHECKING:
     from rostools.rosgraph.introspect import BusConnection, NodeInfo
 
 
-from rostools.cli.node.group import NODE_TIMEOUT, TimeoutOpt, app, node_graph, resolve_node, worst
+from rostools.cli.node.group import TimeoutOpt, app, node_graph, resolve_node, worst
+from rostools.rosgraph.masterapi import NODE_TIMEOUT
 
 
 @app.command("list")

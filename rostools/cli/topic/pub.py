@@ -43,9 +43,9 @@ def _message_source(
         try:
             text = file.read_text()
         except OSError as err:
-            raise NotFoundError(f"cannot read {file}: {err.strerror}") from None
+            raise NotFoundError(f"cannot read {file}: {err.strerror}") from err
         except UnicodeDecodeError as err:
-            raise UsageError(f"{file} is not UTF-8 text (byte {err.start})") from None
+            raise UsageError(f"{file} is not UTF-8 text (byte {err.start})") from err
         docs = _yaml_docs(text, str(file))
         return (lambda: (filler.message(type_name, [d]) for d in docs)), len(docs) == 1
     if args:

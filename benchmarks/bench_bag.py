@@ -43,7 +43,7 @@ def _small_bag() -> Path:
         return SMALL_BAG
     import struct
 
-    from rostools.bag.api import open_writer
+    from rostools.bag.access import open_writer
 
     BUILD.mkdir(parents=True, exist_ok=True)
     tmp = SMALL_BAG.with_suffix(".tmp")
@@ -77,7 +77,7 @@ def _mixed_bag() -> Path:
         return MIXED_BAG
     import numpy as np
 
-    from rostools.bag.api import open_writer
+    from rostools.bag.access import open_writer
 
     BUILD.mkdir(parents=True, exist_ok=True)
     rng = np.random.default_rng(1)
@@ -222,7 +222,7 @@ print(n / (time.perf_counter() - start))
 
 OUR_READ = r"""
 import sys, time
-from rostools.bag.api import open_bag
+from rostools.bag.access import open_bag
 start = time.perf_counter()
 with open_bag(sys.argv[1]) as reader:
     n = sum(1 for _ in reader.messages())

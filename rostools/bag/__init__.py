@@ -2,7 +2,7 @@
 
 Entry points (import the module you need; nothing is imported here, to keep start-up fast):
 
-- ``rostools.bag.api``: ``open_bag(path) -> BagReader`` (format from the file's content),
+- ``rostools.bag.access``: ``open_bag(path) -> BagReader`` (format from the file's content),
   ``open_writer(path, format=None, compression=None, chunk_size=None) -> BagWriter`` (format
   from the name), ``bag_info``, ``detect_format``, ``merged_messages``, ``topic_frequencies``.
 - ``rostools.bag.ops``: ``convert``, ``filter`` (``filter_bag``), ``compress``, ``decompress``.

@@ -19,7 +19,7 @@ from rostools.bag.model import (
     Connection,
     connection_from_header,
 )
-from rostools.bag.ordering import Block, Entry, Message
+from rostools.bag.ordering import Block, Entry, RawMessage
 from rostools.bag.sink import Sink
 from rostools.errors import InvalidDataError
 
@@ -95,13 +95,13 @@ class BagReader(ABC):
         start: int | None = None,
         end: int | None = None,
         connections: Iterable[Connection] | None = None,
-    ) -> Iterator[Message]:
+    ) -> Iterator[RawMessage]:
         """Messages in time order, optionally only some topics/connections and times.
 
         ``start`` and ``end`` are inclusive bounds in ns; None means unbounded (0 is a time).
         """
 
-    def times(self, topics: Collection[str] | None = None) -> Iterator[Message]:
+    def times(self, topics: Collection[str] | None = None) -> Iterator[RawMessage]:
         """Like ``messages`` but the data may be left empty: for timing statistics only.
 
         Formats with a per-message index answer from it without reading the messages.
@@ -218,7 +218,7 @@ class BagWriter(ABC):
     def _store(self, cid: int, t_ns: int, data: bytes | bytearray | memoryview) -> None:
         """Store one message of connection ``cid`` (already checked)."""
 
-    def write_many(self, messages: Iterable[Message], targets: Targets) -> int:
+    def write_many(self, messages: Iterable[RawMessage], targets: Targets) -> int:
         """Store a stream of messages read from another bag; how many were written.
 
         ``targets`` maps source connections to this writer's (see ``Targets``).

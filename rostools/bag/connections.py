@@ -1,13 +1,13 @@
 """The connections (topic, type, md5sum, definition) recorded in a ``.bag`` or MCAP file.
 
-Kept for ``msg show --bag``; the readers behind it are in ``rostools.bag.api``.
+Kept for ``msg show --bag``; the readers behind it are in ``rostools.bag.access``.
 """
 
 from __future__ import annotations
 
 from pathlib import Path
 
-from rostools.bag.api import detect_format, open_bag
+from rostools.bag.access import detect_format, open_bag
 from rostools.bag.model import BagFormatError, Connection
 
 __all__ = ["BagFormatError", "Connection", "detect_format", "read_connections"]

@@ -97,7 +97,7 @@ class Channel(NamedTuple):
     metadata: dict[str, str]
 
 
-class Message(NamedTuple):
+class MessageRecord(NamedTuple):
     """One message."""
 
     channel_id: int
@@ -210,7 +210,7 @@ Record = (
     | Footer
     | Schema
     | Channel
-    | Message
+    | MessageRecord
     | Chunk
     | MessageIndex
     | ChunkIndex
@@ -288,7 +288,7 @@ def parse(op: int, buf: Buffer, pos: int, end: int) -> Record | None:
     try:
         if op == OP_MESSAGE:
             channel, seq, log, pub = struct.unpack_from("<HIQQ", buf, c.take(22))
-            return Message(channel, seq, log, pub, bytes(buf[c.pos : end]))
+            return MessageRecord(channel, seq, log, pub, bytes(buf[c.pos : end]))
         if op == OP_SCHEMA:
             return Schema(c.u16(), c.string(), c.string(), c.raw(c.u32()))
         if op == OP_CHANNEL:

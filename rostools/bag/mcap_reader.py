@@ -25,7 +25,7 @@ from rostools.bag.model import (
     compression_rows,
     summarize,
 )
-from rostools.bag.ordering import Block, Entry, Message, ordered
+from rostools.bag.ordering import Block, Entry, RawMessage, ordered
 
 _MSG = fmt.MESSAGE_PREFIX
 _PREFIX = fmt.PREFIX
@@ -349,7 +349,7 @@ class McapReader(BagReader):
         start: int | None = None,
         end: int | None = None,
         connections: Iterable[Connection] | None = None,
-    ) -> Iterator[Message]:
+    ) -> Iterator[RawMessage]:
         """Messages in log-time order; see ``BagReader.messages``."""
         wanted = dict(self.wanted(topics, connections))
         lo = 0 if start is None else start

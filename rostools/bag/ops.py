@@ -13,11 +13,11 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Final
 
-from rostools.bag.api import copy_extras, format_for_name, latched_before, open_bag, open_writer
+from rostools.bag.access import copy_extras, format_for_name, latched_before, open_bag, open_writer
 from rostools.bag.base import BagReader, BagWriter, Targets
 from rostools.bag.mcap_reader import McapReader
 from rostools.bag.model import BagUsageError, Connection, UnsupportedBagError
-from rostools.bag.ordering import Message
+from rostools.bag.ordering import RawMessage
 from rostools.errors import RostoolsError
 from rostools.msgs.expr import Expression, compile_expression
 
@@ -89,7 +89,7 @@ def decompress(
 
 
 def _same_format(src: str | Path) -> str:
-    from rostools.bag.api import detect_format
+    from rostools.bag.access import detect_format
 
     return detect_format(src)
 
@@ -255,7 +255,7 @@ def _copy(
 def _pump(
     reader: BagReader,
     writer: BagWriter,
-    stream: Iterator[Message],
+    stream: Iterator[RawMessage],
     everything: bool,
     eager: bool,
     keep: Callable[[Connection, int, memoryview], bool] | None,
@@ -289,7 +289,7 @@ def _pump(
     return read, written, len(out)
 
 
-def _counting(stream: Iterator[Message], progress: Progress, total: int) -> Iterator[Message]:
+def _counting(stream: Iterator[RawMessage], progress: Progress, total: int) -> Iterator[RawMessage]:
     """The stream, calling ``progress`` every ``PROGRESS_EVERY`` messages."""
     for done, message in enumerate(stream, 1):
         if done % PROGRESS_EVERY == 0:

@@ -24,7 +24,7 @@ if TYPE_CHECKING:
 #: ties between connections the way rosbag does (order of the connection records).
 Entry = tuple[int, int, int, "Connection", memoryview]
 #: What readers yield: the connection, the receive time in ns, the raw serialized message.
-Message = tuple["Connection", int, memoryview]
+RawMessage = tuple["Connection", int, memoryview]
 
 
 @dataclass(frozen=True)
@@ -40,7 +40,7 @@ class Block:
     load: Callable[[], list[Entry]]
 
 
-def ordered(blocks: Iterable[Block]) -> Iterator[Message]:
+def ordered(blocks: Iterable[Block]) -> Iterator[RawMessage]:
     """Every entry of every block, in time order (ties: rank, block order, position)."""
     todo = sorted(blocks, key=lambda b: (b.start_ns, b.order))
     count = len(todo)
@@ -79,7 +79,7 @@ def ordered(blocks: Iterable[Block]) -> Iterator[Message]:
             heapq.heappush(heap, (e[0], e[1], order, e[2], k, entries))
 
 
-def merge(streams: Iterable[Iterator[Message]]) -> Iterator[Message]:
+def merge(streams: Iterable[Iterator[RawMessage]]) -> Iterator[RawMessage]:
     """Several readers' message streams merged in time order (``bag play a.bag b.bag``).
 
     Ties go to the earlier stream (``heapq.merge`` is stable), as ``rosbag play`` does.

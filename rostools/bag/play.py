@@ -17,7 +17,7 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from enum import Enum
 
-from rostools.bag.api import latched_before, merged_messages
+from rostools.bag.access import latched_before, merged_messages
 from rostools.bag.base import BagReader
 from rostools.bag.model import NS_PER_SEC, Connection
 from rostools.bag.play_control import SET_BOOL, RateControl, set_bool_reply

@@ -23,7 +23,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from rostools.bag.api import open_writer
+from rostools.bag.access import open_writer
 from rostools.bag.base import BagWriter
 from rostools.bag.model import Connection
 from rostools.errors import RostoolsError, UsageError

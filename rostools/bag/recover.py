@@ -11,7 +11,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
-from rostools.bag.api import copy_extras, format_for_name, open_bag, open_writer
+from rostools.bag.access import copy_extras, format_for_name, open_bag, open_writer
 from rostools.bag.base import Targets
 from rostools.bag.model import BagDataLossError, BagUsageError, CompressionStats
 

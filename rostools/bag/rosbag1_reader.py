@@ -28,7 +28,7 @@ from rostools.bag.model import (
     connection_from_header,
     summarize,
 )
-from rostools.bag.ordering import Block, Entry, Message, ordered
+from rostools.bag.ordering import Block, Entry, RawMessage, ordered
 from rostools.wire.header import HeaderError, split_fields
 
 #: A chunk's records: the file map (uncompressed chunks) or the decompressed bytes.
@@ -367,7 +367,7 @@ class Bag1Reader(BagReader):
         start: int | None = None,
         end: int | None = None,
         connections: Iterable[Connection] | None = None,
-    ) -> Iterator[Message]:
+    ) -> Iterator[RawMessage]:
         """Messages in time order; see ``BagReader.messages``."""
         wanted = self.wanted(topics, connections)
         lo = 0 if start is None else start
@@ -388,12 +388,12 @@ class Bag1Reader(BagReader):
 
     def chunk_messages(
         self, chunk: Chunk, wanted: Mapping[int, tuple[int, Connection]]
-    ) -> Iterator[Message]:
+    ) -> Iterator[RawMessage]:
         """The wanted messages of one chunk, in time order."""
         for t, _, _, conn, data in self._entries(chunk, wanted, 0, MAX_TIME_NS):
             yield conn, t, data
 
-    def times(self, topics: Collection[str] | None = None) -> Iterator[Message]:
+    def times(self, topics: Collection[str] | None = None) -> Iterator[RawMessage]:
         """(connection, time, empty data) of each message in time order, from the index alone.
 
         What ``info --freq`` needs, without decompressing a chunk (unindexed bags: a full read).

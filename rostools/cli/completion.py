@@ -3,7 +3,7 @@
 ``build_tree`` walks the Typer app into ``tree.json``: every group, command and option, and
 the kind of value each argument takes (a topic, a node, a bag file, ...). ``script`` renders
 the bash, zsh and fish glue that hands the command line to ``rostools __complete`` (see
-``rostools.cli.complete``). Both are checked in; a test fails when they are stale
+``rostools.cli.completer``). Both are checked in; a test fails when they are stale
 (``python -m rostools.cli.completion`` rewrites them).
 """
 
@@ -110,7 +110,7 @@ def _command(group: str, name: str, cmd: Any) -> dict[str, Any]:
 
 
 def build_tree() -> dict[str, Any]:
-    """The command tree of the app, as ``rostools.cli.complete`` reads it."""
+    """The command tree of the app, as ``rostools.cli.completer`` reads it."""
     from rostools.cli.app import GROUPS
     from rostools.cli.app import app as root_app
 
@@ -243,7 +243,7 @@ def script(shell: str) -> str:
 
 def write_all() -> list[Path]:
     """Regenerate ``tree.json`` and ``completions/*``; the files written."""
-    from rostools.cli.complete import TREE
+    from rostools.cli.completer import TREE
 
     TREE.write_text(tree_text())
     written = [TREE]

@@ -40,12 +40,12 @@ def core(
     """Run a ROS master and parameter server until Ctrl-C (SIGINT) or SIGTERM."""
     from rostools.master.core import choose_address, run_core
     from rostools.master.server import Master
-    from rostools.rosgraph.masterapi import probe
+    from rostools.rosgraph.masterapi import master_answers
 
     address = choose_address(host, port)
     local = "127.0.0.1" if address.bind == "0.0.0.0" else address.bind  # noqa: S104
     probe_uri = f"http://{local}:{address.port}/"
-    if probe(probe_uri, timeout=1.0):
+    if master_answers(probe_uri, timeout=1.0):
         raise RostoolsError(
             f"a master is already running at {probe_uri}",
             hint="stop it first, or use another --port",

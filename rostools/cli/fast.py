@@ -14,7 +14,7 @@ from collections.abc import Sequence
 def dispatch(argv: Sequence[str]) -> int | None:
     """Run ``argv`` if it is a fast command and return its exit status, else None."""
     if argv and argv[0] == "__complete":  # the shells' completion scripts call this
-        from rostools.cli.complete import main
+        from rostools.cli.completer import main
 
         return main(argv[1:])
     if len(argv) == 3 and argv[0] == "msg" and argv[1] == "md5" and not argv[2].startswith("-"):

@@ -11,7 +11,7 @@ import threading
 from types import TracebackType
 from typing import Any
 
-from rostools.master.api import MasterAPI
+from rostools.master.master_api import MasterAPI
 from rostools.node.xmlrpc import Encoded, Notifier, XmlRpcServer
 from rostools.wire.xmlrpc import encode_result
 

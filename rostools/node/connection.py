@@ -47,7 +47,7 @@ def set_nodelay(transport: asyncio.BaseTransport) -> None:
             sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
 
 
-class Handler(Protocol):
+class ConnectionHandler(Protocol):
     """What an accepted connection hands its traffic to after the header."""
 
     def frames_received(self, frames: list[Frame]) -> None:
@@ -67,12 +67,12 @@ class ServerConnection(asyncio.BufferedProtocol):
     """A connection accepted by a node's TCPROS server."""
 
     def __init__(
-        self, accept: Callable[[dict[str, str], ServerConnection], Handler | None]
+        self, accept: Callable[[dict[str, str], ServerConnection], ConnectionHandler | None]
     ) -> None:
         self.accept = accept
         self.reader = FrameReader(MAX_FRAME, first_max=MAX_HEADER_LENGTH)
         self.transport: asyncio.Transport | None = None
-        self.handler: Handler | None = None
+        self.handler: ConnectionHandler | None = None
         self.peer = "?"
 
     def connection_made(self, transport: asyncio.BaseTransport) -> None:
@@ -224,7 +224,7 @@ class Outbound:
 
 
 class Receiver(Protocol):
-    """What an inbound connection reports to: its subscriber (as ``Handler`` is a server's)."""
+    """What an inbound connection reports to: its subscriber (``ConnectionHandler``: a server)."""
 
     topic: str
     #: The largest frame it accepts.

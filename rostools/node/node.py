@@ -16,11 +16,10 @@ from typing import Any
 
 from rostools.msgs.topictype import ANY, TopicType
 from rostools.names import anonymous, canonicalize, make_global_ns, resolve, ros_namespace
-from rostools.node.connection import Handler, ServerConnection
+from rostools.node.connection import ConnectionHandler, ServerConnection
 from rostools.node.notice import Notice, to_stderr
 from rostools.node.publisher import Publisher
-from rostools.node.service import Handler as ServiceHandler
-from rostools.node.service import ServiceServer, ServiceType
+from rostools.node.service import ServiceHandler, ServiceServer, ServiceType
 from rostools.node.subscriber import FramesCallback, Subscriber
 from rostools.node.watch import MasterWatch
 from rostools.node.xmlrpc import XmlRpcServer, call
@@ -207,7 +206,7 @@ class Node:
 
     # TCPROS ---------------------------------------------------------------------------
 
-    def _accept(self, fields: dict[str, str], conn: ServerConnection) -> Handler | None:
+    def _accept(self, fields: dict[str, str], conn: ServerConnection) -> ConnectionHandler | None:
         if "topic" in fields:
             pub = self.publishers.get(fields["topic"])
             if pub is None:
@@ -227,7 +226,7 @@ class Node:
                 )
                 conn.close()
                 return None
-            handler: Handler | None = server.accept(fields, conn)
+            handler: ConnectionHandler | None = server.accept(fields, conn)
             return handler
         conn.write(error_header("no topic or service name detected"))
         conn.close()

@@ -42,7 +42,7 @@ if TYPE_CHECKING:
 log = logging.getLogger(__name__)
 
 #: A handler gets the serialised request and returns the serialised response.
-Handler = Callable[[bytes], bytes | Awaitable[bytes]]
+ServiceHandler = Callable[[bytes], bytes | Awaitable[bytes]]
 
 
 class ServiceType(NamedTuple):
@@ -60,7 +60,9 @@ class ServiceType(NamedTuple):
 class ServiceServer:
     """Serves one service; ``handler`` may raise ``ServiceError`` to answer a failure."""
 
-    def __init__(self, node: Owner, name: str, srv_type: ServiceType, handler: Handler) -> None:
+    def __init__(
+        self, node: Owner, name: str, srv_type: ServiceType, handler: ServiceHandler
+    ) -> None:
         self.node = node
         self.name = name
         self.type = srv_type

@@ -3,7 +3,7 @@
 The server is an ``asyncio.Protocol``: a request is parsed, dispatched and answered in one
 ``data_received`` call, with HTTP/1.1 keep-alive, any request path, and limits on what a
 client can make it buffer. Dispatch is synchronous: the handlers are pure (see
-``rostools.master.api``) and anything slow they cause is scheduled, never awaited inline.
+``rostools.master.master_api``) and anything slow they cause is scheduled, never awaited inline.
 """
 
 from __future__ import annotations

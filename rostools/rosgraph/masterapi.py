@@ -191,7 +191,7 @@ class MasterProxy(XmlRpcNode):
         return uri
 
 
-def probe(uri: str, timeout: float = 1.0) -> bool:
+def master_answers(uri: str, timeout: float = 1.0) -> bool:
     """Whether an XML-RPC server (a master) answers at ``uri``."""
     try:
         XmlRpcNode(uri, "/rostools_probe", timeout).raw("getPid")

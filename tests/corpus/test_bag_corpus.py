@@ -13,7 +13,7 @@ import pytest
 import yaml
 
 from rostools.bag import mcap_format
-from rostools.bag.api import bag_info, open_bag, topic_frequencies
+from rostools.bag.access import bag_info, open_bag, topic_frequencies
 from rostools.bag.mcap_reader import McapReader
 from rostools.bag.model import BagFormatError
 from rostools.bag.recover import recover

@@ -13,7 +13,7 @@ from typing import Any
 from hypothesis import given, seed
 from hypothesis import strategies as st
 
-from rostools.master.api import MasterAPI
+from rostools.master.master_api import MasterAPI
 from rostools.node.node import Node
 from rostools.node.xmlrpc import encode_answer, run_call
 from rostools.wire.xmlrpc import HttpError, HttpParser, decode_call

@@ -9,7 +9,7 @@ from pathlib import Path
 import pytest
 import yaml
 
-from rostools.bag.api import bag_info, open_bag
+from rostools.bag.access import bag_info, open_bag
 from tests.support.bagdata import STEP_NS, STRING_MD5, read_stream, write_play_bag, write_sample
 from tests.support.env import run_cli
 

@@ -14,7 +14,7 @@ from typing import Any
 
 import pytest
 
-from rostools.cli.complete import load_tree
+from rostools.cli.completer import load_tree
 from tests.support.bagdata import write_sample
 from tests.support.env import run_cli
 from tests.support.procs import Proc, free_port, start_rostools_core, wait_for

@@ -10,7 +10,7 @@ from pathlib import Path
 
 import pytest
 
-from rostools.cli.complete import TREE
+from rostools.cli.completer import TREE
 from rostools.cli.completion import SCRIPT_NAMES, script, tree_text
 from tests.support.procs import Proc, wait_for
 from tests.support.shells import ROOT, Shell, shell_missing

@@ -7,7 +7,7 @@ import socket
 import time
 from pathlib import Path
 
-from rostools.bag.api import bag_info
+from rostools.bag.access import bag_info
 from tests.support.env import run_cli
 
 

@@ -9,7 +9,7 @@ from pathlib import Path
 import pytest
 
 from rostools.bag import record
-from rostools.bag.api import open_bag
+from rostools.bag.access import open_bag
 from rostools.errors import RostoolsError
 from rostools.master.server import MasterThread
 from rostools.msgs.topictype import TopicType

@@ -18,7 +18,7 @@ from pathlib import Path
 
 import pytest
 
-from rostools.bag.api import open_bag
+from rostools.bag.access import open_bag
 from tests.conftest import MasterInfo
 from tests.interop.test_bag_interop import as_rosbag_sees, rosbag_view
 from tests.support import cppbuild

@@ -12,7 +12,7 @@ import pytest
 import yaml
 
 from rostools.bag import ops
-from rostools.bag.api import bag_info
+from rostools.bag.access import bag_info
 from rostools.bag.recover import recover
 from tests.support.bagdata import digest, first_chunk_data, headers, read_stream, write_sample
 from tests.support.env import SYSTEM_PYTHON, needs_ros1, run_system_python

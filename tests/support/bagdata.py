@@ -11,7 +11,7 @@ import struct
 from dataclasses import dataclass
 from pathlib import Path
 
-from rostools.bag.api import open_bag, open_writer
+from rostools.bag.access import open_bag, open_writer
 from rostools.bag.model import Connection
 
 STRING_MD5 = "992ce8a1687cec8c8bd883ec73ca41d1"

@@ -6,7 +6,7 @@ import time
 
 import pytest
 
-from rostools.cli.complete import Completer, _join_breaks
+from rostools.cli.completer import Completer, _join_breaks
 
 
 @pytest.mark.parametrize(

@@ -6,7 +6,7 @@ import xmlrpc.client
 
 import pytest
 
-from rostools.master.api import MasterAPI
+from rostools.master.master_api import MasterAPI
 
 NODE_A = "http://127.0.0.1:40001/"
 NODE_B = "http://127.0.0.1:40002/"

@@ -51,7 +51,7 @@ def info(
     fmt: FormatOpt = None,
 ) -> None:
     """Summarise bags from their index alone (rosbag info)."""
-    from rostools.bag.api import open_bag, topic_frequencies
+    from rostools.bag.access import open_bag, topic_frequencies
     from rostools.cli.bag.infotext import info_data, info_key, info_text
 
     fmt = Format.yaml if yaml_ and fmt is None else output_format(ctx, fmt)
@@ -194,7 +194,7 @@ def filter_(
     fmt: FormatOpt = None,
 ) -> None:
     """Copy the messages that pass topic, time and expression filters (rosbag filter)."""
-    from rostools.bag.api import bag_info
+    from rostools.bag.access import bag_info
     from rostools.bag.ops import filter_bag
 
     begin = bag_info(src).start_ns or 0 if (start is not None or end is not None) else 0
@@ -282,7 +282,7 @@ def compress(
     fmt: FormatOpt = None,
 ) -> None:
     """Compress bags in place, keeping the original as x.orig.bag (rosbag compress)."""
-    from rostools.bag.api import detect_format
+    from rostools.bag.access import detect_format
     from rostools.bag.ops import compress as run_compress
 
     if bz2 and lz4:

@@ -164,7 +164,7 @@ def play(
     Remap topics with old:=new arguments. Keys: space pauses, s steps while paused, t turns
     --pause-topics on and off. The service ~pause_playback (std_srvs/SetBool) pauses too.
     """
-    from rostools.bag.api import open_bag
+    from rostools.bag.access import open_bag
     from rostools.bag.play import Player, PlayOptions
 
     paths, wanted = split_bags_and_topics(bags or [], topics or [])

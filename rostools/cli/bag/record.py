@@ -10,7 +10,7 @@ from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
-from rostools.bag.api import WRITE_COMPRESSIONS
+from rostools.bag.access import WRITE_COMPRESSIONS
 from rostools.cli.bag.group import app
 from rostools.cli.common import node_session, output_format
 from rostools.cli.output import Format, render

@@ -14,7 +14,7 @@ if TYPE_CHECKING:
 
 def echo_bag(path: Path, name: str | None, store: TypeStore, opts: EchoOptions) -> None:
     """Print the messages of ``name`` (a topic, maybe with a field path), or of every topic."""
-    from rostools.bag.api import open_bag
+    from rostools.bag.access import open_bag
     from rostools.cli.topic.printing import Echo
     from rostools.errors import InvalidDataError
     from rostools.rosgraph.topics import split_field

@@ -140,7 +140,7 @@ def pub(
     name = script_resolve(topic, "rostopic")
     store = type_store(msg_path)
     if not store.has_msg(msg_type):
-        from rostools.cli.topic.probe import learn_type
+        from rostools.cli.topic.learntype import learn_type
 
         try:
             store = learn_type(ctx, name, store)

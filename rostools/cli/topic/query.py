@@ -140,7 +140,7 @@ def type_(
     from rostools.msgs import fieldpath
 
     if not store.has_msg(ref.type):
-        from rostools.cli.topic.probe import learn_type
+        from rostools.cli.topic.learntype import learn_type
 
         store = learn_type(ctx, ref.topic, store)
     path = fieldpath.resolve(store, ref.type, ref.field)

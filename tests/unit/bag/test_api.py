@@ -7,7 +7,7 @@ from pathlib import Path
 import pytest
 
 from rostools.bag import rosbag1_format as bagfmt
-from rostools.bag.api import detect_format, format_for_name, open_bag
+from rostools.bag.access import detect_format, format_for_name, open_bag
 from rostools.bag.connections import read_connections
 from rostools.bag.model import BagFormatError, UnsupportedBagError
 from rostools.errors import InvalidDataError, NotFoundError, RostoolsError

@@ -7,7 +7,7 @@ from pathlib import Path
 
 import pytest
 
-from rostools.bag.api import open_bag
+from rostools.bag.access import open_bag
 from rostools.bag.recover import recover
 from rostools.errors import RostoolsError
 from tests.support.bagdata import write_sample

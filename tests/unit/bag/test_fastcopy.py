@@ -8,7 +8,7 @@ from pathlib import Path
 import pytest
 
 from rostools.bag import mcap_format as fmt
-from rostools.bag.api import open_writer
+from rostools.bag.access import open_writer
 from rostools.bag.base import Targets
 from rostools.bag.fastcopy import convert_chunks
 from rostools.bag.mcap_writer import McapWriter

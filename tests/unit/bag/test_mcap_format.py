@@ -67,7 +67,7 @@ def test_message_index_round_trip(entries: list[tuple[int, int]]) -> None:
 
 def test_message_prefix_is_a_message_record() -> None:
     raw = fmt.MESSAGE_PREFIX.pack(fmt.OP_MESSAGE, 22 + 3, 9, 4, 100, 200) + b"abc"
-    assert parse_one(raw) == fmt.Message(9, 4, 100, 200, b"abc")
+    assert parse_one(raw) == fmt.MessageRecord(9, 4, 100, 200, b"abc")
 
 
 def test_padding_after_known_fields_is_ignored() -> None:

@@ -7,7 +7,7 @@ from pathlib import Path
 import pytest
 
 from rostools.bag import ops
-from rostools.bag.api import bag_info, open_bag, open_writer
+from rostools.bag.access import bag_info, open_bag, open_writer
 from rostools.bag.model import BagUsageError, UnsupportedBagError
 from rostools.msgs.expr import ExpressionError
 from tests.support.bagdata import STEP_NS, STRING_MD5, headers, read_stream, write_sample

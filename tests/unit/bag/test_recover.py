@@ -11,7 +11,7 @@ from pathlib import Path
 
 import pytest
 
-from rostools.bag.api import bag_info, open_bag
+from rostools.bag.access import bag_info, open_bag
 from rostools.bag.mcap_reader import McapReader
 from rostools.bag.model import BagFormatError
 from rostools.bag.recover import recover, reindex
@@ -118,7 +118,7 @@ CHILD = textwrap.dedent(
     import sys, time
     sys.path.insert(0, {root!r})
     from tests.support.bagdata import SAMPLE_CONNECTIONS, message
-    from rostools.bag.api import open_writer
+    from rostools.bag.access import open_writer
 
     path, compression = sys.argv[1], sys.argv[2]
     writer = open_writer(path, compression=compression, chunk_size=20_000)

@@ -8,7 +8,7 @@ from pathlib import Path
 import pytest
 
 from rostools.bag import rosbag1_format as bagfmt
-from rostools.bag.api import bag_info, open_bag, open_writer
+from rostools.bag.access import bag_info, open_bag, open_writer
 from rostools.bag.model import BagUsageError, UnsupportedBagError
 from rostools.errors import UsageError
 from tests.support.bagdata import SAMPLE_CONNECTIONS, STEP_NS, read_stream, write_sample
@@ -196,7 +196,7 @@ def test_abort_and_exceptions_delete_the_file(tmp_path: Path, name: str) -> None
 
 @pytest.mark.parametrize("name", ["x.bag", "x.mcap"])
 def test_times_and_frequencies(tmp_path: Path, name: str) -> None:
-    from rostools.bag.api import topic_frequencies
+    from rostools.bag.access import topic_frequencies
 
     sample = write_sample(tmp_path / name, 401, chunk_size=3000)
     with open_bag(sample.path) as reader:

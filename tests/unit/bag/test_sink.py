@@ -43,7 +43,7 @@ def test_mutable_payloads_are_copied() -> None:
 
 
 def test_a_reused_buffer_does_not_change_written_messages(tmp_path: Path) -> None:
-    from rostools.bag.api import open_bag, open_writer
+    from rostools.bag.access import open_bag, open_writer
 
     for name in ("x.bag", "x.mcap"):
         writer = open_writer(tmp_path / name, compression="none")

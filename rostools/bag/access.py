@@ -21,7 +21,7 @@ from rostools.bag.model import (
     BagUsageError,
     UnsupportedBagError,
 )
-from rostools.bag.ordering import Message, merge
+from rostools.bag.ordering import RawMessage, merge
 from rostools.errors import InvalidDataError
 
 FORMATS: Final = ("bag", "mcap")
@@ -130,14 +130,14 @@ def merged_messages(
     topics: Collection[str] | None = None,
     start: int | None = None,
     end: int | None = None,
-) -> Iterator[Message]:
+) -> Iterator[RawMessage]:
     """The messages of several bags in one time order (``bag play a.bag b.bag``)."""
     return merge(r.messages(topics=topics, start=start, end=end) for r in readers)
 
 
 def latched_before(
     readers: Sequence[BagReader], topics: Collection[str] | None, before: int
-) -> list[Message]:
+) -> list[RawMessage]:
     """The last message of every latched connection before ``before`` (ns), in time order.
 
     What a late subscriber would still get: ``play -s`` and ``filter --latched`` send them.
@@ -150,7 +150,7 @@ def latched_before(
     }
     if not latched:
         return []
-    last: dict[tuple[str, str], Message] = {}
+    last: dict[tuple[str, str], RawMessage] = {}
     for conn, t, data in merged_messages(readers, latched, None, before - 1):
         if conn.latching:
             last[(conn.topic, conn.callerid)] = (conn, t, data)

@@ -12,10 +12,10 @@ PROBE_TIMEOUT = 5.0
 
 def learn_type(ctx: typer.Context, topic: str, store: TypeStore) -> TypeStore:
     """``store`` plus the definition a publisher of ``topic`` sends."""
-    from rostools.node.probe import probe_topic
+    from rostools.node.learntype import learn_topic_type
 
     async def main(node, stop):  # type: ignore[no-untyped-def]
-        return await probe_topic(node, topic, PROBE_TIMEOUT)
+        return await learn_topic_type(node, topic, PROBE_TIMEOUT)
 
     learnt = node_session(ctx, main, "rostools_probe")
     return store.with_definition(learnt.type, learnt.definition)

@@ -14,7 +14,7 @@ from rostools.node.connection import InboundConnection
 from rostools.node.node import Node
 
 
-async def probe_topic(node: Node, topic: str, timeout: float) -> TopicType:
+async def learn_topic_type(node: Node, topic: str, timeout: float) -> TopicType:
     """The type one publisher of ``topic`` announces."""
     found: asyncio.Future[TopicType] = asyncio.get_running_loop().create_future()
 

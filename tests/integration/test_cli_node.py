@@ -334,8 +334,8 @@ def test_ping_runs_until_ctrl_c_and_prints_the_average(
 def test_ping_follows_a_node_that_moved(rostools_master: str) -> None:
     """A node restarted under the same name has a new URI: ping looks it up again once."""
     from rostools.cli.node.ping import _ping_replies
-    from rostools.rosgraph.introspect import Graph
     from rostools.rosgraph.masterapi import MasterProxy
+    from rostools.rosgraph.nodeapi import Graph
 
     old = f"http://127.0.0.1:{free_port()}/"
     register(rostools_master, "/mover", old, pubs=(("/m", "std_msgs/Empty"),))

@@ -8,7 +8,8 @@ from rostools.cli.node.kill import unreachable_text
 from rostools.cli.node.ping import reply_text
 from rostools.cli.node.query import info_text
 from rostools.errors import NotFoundError, TimeoutExpired, UnreachableError
-from rostools.rosgraph.introspect import BusConnection, NodeInfo, Probe, SystemState, build_graph
+from rostools.rosgraph.nodeapi import BusConnection, NodeInfo, Probe
+from rostools.rosgraph.snapshot import SystemState, build_graph
 
 # `rosnode info /listener` on roscore 1.15.15 with tests/support's talker and listener
 # (captured, byte for byte).

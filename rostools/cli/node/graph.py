@@ -12,7 +12,7 @@ from rostools.cli.common import master, settings
 from rostools.cli.output import Format, emit
 
 if TYPE_CHECKING:
-    from rostools.rosgraph.introspect import RosGraph
+    from rostools.rosgraph.snapshot import RosGraph
 
 
 from rostools.cli.node.group import TOOL, app, warn
@@ -93,7 +93,7 @@ def graph_cmd(
     ] = None,
 ) -> None:
     """Nodes and the topics between them, like rqt_graph, from the master's registrations."""
-    from rostools.rosgraph.introspect import build_graph, system_state
+    from rostools.rosgraph.snapshot import build_graph, system_state
 
     proxy = master(ctx, TOOL)
     graph = build_graph(system_state(proxy), proxy.topic_types(), include_debug=all_)

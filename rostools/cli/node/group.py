@@ -18,7 +18,7 @@ from rostools.names import script_resolve
 from rostools.rosgraph.masterapi import NODE_TIMEOUT
 
 if TYPE_CHECKING:
-    from rostools.rosgraph.introspect import Graph
+    from rostools.rosgraph.nodeapi import Graph
 
 
 app = typer.Typer(
@@ -49,7 +49,7 @@ TimeoutOpt = Annotated[
 
 def node_graph(ctx: typer.Context, timeout: float = NODE_TIMEOUT) -> Graph:
     """The graph as this command sees it: the master, and nodes asked with ``timeout``."""
-    from rostools.rosgraph.introspect import Graph
+    from rostools.rosgraph.nodeapi import Graph
 
     return Graph(master(ctx, TOOL), timeout)
 

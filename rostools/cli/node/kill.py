@@ -15,7 +15,7 @@ from rostools.errors import (
 )
 
 if TYPE_CHECKING:
-    from rostools.rosgraph.introspect import Probe
+    from rostools.rosgraph.nodeapi import Probe
 
 
 from rostools.cli.node.group import (
@@ -59,7 +59,7 @@ def kill(
 
     With no names on a terminal, pick one from a numbered menu, as rosnode kill.
     """
-    from rostools.rosgraph.introspect import kill_nodes
+    from rostools.rosgraph.nodeapi import kill_nodes
 
     if all_ and nodes:
         raise UsageError("give node names or -a/--all, not both")
@@ -135,7 +135,8 @@ def cleanup(
     fmt: FormatOpt = None,
 ) -> None:
     """Purge the registrations of nodes that do not answer a ping from the master."""
-    from rostools.rosgraph.introspect import apply_cleanup, plan_cleanup, probe_nodes, service_apis
+    from rostools.rosgraph.cleanup import apply_cleanup, plan_cleanup, service_apis
+    from rostools.rosgraph.nodeapi import probe_nodes
 
     graph = node_graph(ctx, timeout)
     state = graph.state()

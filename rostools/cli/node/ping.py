@@ -19,7 +19,7 @@ from rostools.errors import (
 )
 
 if TYPE_CHECKING:
-    from rostools.rosgraph.introspect import Graph
+    from rostools.rosgraph.nodeapi import Graph
 
 
 from rostools.cli.node.group import (

@@ -18,7 +18,7 @@ from rostools.errors import (
 )
 
 if TYPE_CHECKING:
-    from rostools.rosgraph.introspect import BusConnection, NodeInfo
+    from rostools.rosgraph.nodeapi import BusConnection, NodeInfo
 
 
 from rostools.cli.node.group import TimeoutOpt, app, node_graph, resolve_node, worst
@@ -113,7 +113,7 @@ def info(
     fmt: FormatOpt = None,
 ) -> None:
     """Publications, subscriptions and services of nodes, and their pid and live connections."""
-    from rostools.rosgraph.introspect import node_info
+    from rostools.rosgraph.nodeapi import node_info
 
     graph = node_graph(ctx, timeout)
     names = [resolve_node(n) for n in nodes]
@@ -150,7 +150,7 @@ def machine(
     fmt: FormatOpt = None,
 ) -> None:
     """The hosts the nodes run on; with a host, the nodes that run on it."""
-    from rostools.rosgraph.introspect import machines, nodes_on_machine
+    from rostools.rosgraph.machines import machines, nodes_on_machine
 
     graph = node_graph(ctx)
     uris = {n: graph.uri(n) for n in graph.state().nodes()}

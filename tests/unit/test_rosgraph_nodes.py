@@ -1,4 +1,4 @@
-"""The pure parts of ``rostools.rosgraph.introspect``: no sockets."""
+"""The pure parts of ``rostools.rosgraph.nodeapi``: no sockets."""
 
 from __future__ import annotations
 
@@ -7,16 +7,10 @@ import http.client
 import pytest
 
 from rostools.errors import NotFoundError, UnreachableError
-from rostools.rosgraph.introspect import (
-    BusConnection,
-    SystemState,
-    Unregistration,
-    _went_away,
-    build_graph,
-    machines,
-    nodes_on_machine,
-    plan_cleanup,
-)
+from rostools.rosgraph.cleanup import Unregistration, plan_cleanup
+from rostools.rosgraph.machines import machines, nodes_on_machine
+from rostools.rosgraph.nodeapi import BusConnection, _went_away
+from rostools.rosgraph.snapshot import SystemState, build_graph
 
 # getSystemState of a real roscore with the rospy talker and listener of tests/support
 # (captured), plus a node in a namespace that provides a service.

@@ -19,7 +19,7 @@ from rostools.bag.model import (
     Connection,
     connection_from_header,
 )
-from rostools.bag.ordering import Block, Entry, RawMessage
+from rostools.bag.ordering import Block, Entry, RawMessage, ordered
 from rostools.bag.sink import Sink
 from rostools.errors import InvalidDataError
 
@@ -88,7 +88,6 @@ class BagReader(ABC):
     def info(self) -> BagInfo:
         """The summary ``bag info`` shows, from the index alone when there is one."""
 
-    @abstractmethod
     def messages(
         self,
         topics: Collection[str] | None = None,
@@ -99,6 +98,20 @@ class BagReader(ABC):
         """Messages in time order, optionally only some topics/connections and times.
 
         ``start`` and ``end`` are inclusive bounds in ns; None means unbounded (0 is a time).
+        """
+        wanted = self.wanted(topics, connections)
+        lo = 0 if start is None else start
+        hi = MAX_TIME_NS if end is None else end
+        everything = topics is None and connections is None
+        return ordered(self.guarded(self.blocks(wanted, lo, hi, everything)))
+
+    @abstractmethod
+    def blocks(
+        self, wanted: Mapping[int, tuple[int, Connection]], lo: int, hi: int, everything: bool
+    ) -> list[Block]:
+        """The blocks that hold the wanted messages from ``lo`` to ``hi`` ns, each loaded lazily.
+
+        ``everything``: no topic or connection was named, so every connection is wanted.
         """
 
     def times(self, topics: Collection[str] | None = None) -> Iterator[RawMessage]:

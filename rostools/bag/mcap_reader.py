@@ -11,13 +11,13 @@ short are read up to the last complete record, plus what decompresses of a cut-s
 from __future__ import annotations
 
 import struct
-from collections.abc import Collection, Iterable, Iterator, Mapping
+from collections.abc import Iterator, Mapping
 from dataclasses import dataclass, field
 from functools import partial
 from pathlib import Path
 
 from rostools.bag import mcap_format as fmt
-from rostools.bag.base import MAX_TIME_NS, BagReader, map_file, release
+from rostools.bag.base import BagReader, map_file, release
 from rostools.bag.model import (
     BagFormatError,
     BagInfo,
@@ -25,7 +25,7 @@ from rostools.bag.model import (
     compression_rows,
     summarize,
 )
-from rostools.bag.ordering import Block, Entry, RawMessage, ordered
+from rostools.bag.ordering import Block, Entry
 
 _MSG = fmt.MESSAGE_PREFIX
 _PREFIX = fmt.PREFIX
@@ -343,22 +343,11 @@ class McapReader(BagReader):
             metadata_count=metadata,
         )
 
-    def messages(
-        self,
-        topics: Collection[str] | None = None,
-        start: int | None = None,
-        end: int | None = None,
-        connections: Iterable[Connection] | None = None,
-    ) -> Iterator[RawMessage]:
-        """Messages in log-time order; see ``BagReader.messages``."""
-        wanted = dict(self.wanted(topics, connections))
-        lo = 0 if start is None else start
-        hi = MAX_TIME_NS if end is None else end
-        everything = topics is None and connections is None
-        return ordered(self.guarded(self._blocks(wanted, everything, lo, hi)))
-
-    def _blocks(self, wanted: _Wanted, everything: bool, lo: int, hi: int) -> list[Block]:
+    def blocks(
+        self, wanted: Mapping[int, tuple[int, Connection]], lo: int, hi: int, everything: bool
+    ) -> list[Block]:
         """One block per chunk (loaded lazily) and per run of top-level messages."""
+        wanted = dict(wanted)  # channels first seen inside chunks join it as they come
         mm = self._mm
         by_offset = {i.chunk_start_offset: i for i in self.chunk_indexes}
         blocks: list[Block] = []

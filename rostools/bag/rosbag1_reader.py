@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import mmap
 import struct
-from collections.abc import Collection, Iterable, Iterator, Mapping
+from collections.abc import Collection, Iterator, Mapping
 from dataclasses import dataclass, field
 from functools import partial
 from pathlib import Path
@@ -361,17 +361,10 @@ class Bag1Reader(BagReader):
             types=types,
         )
 
-    def messages(
-        self,
-        topics: Collection[str] | None = None,
-        start: int | None = None,
-        end: int | None = None,
-        connections: Iterable[Connection] | None = None,
-    ) -> Iterator[RawMessage]:
-        """Messages in time order; see ``BagReader.messages``."""
-        wanted = self.wanted(topics, connections)
-        lo = 0 if start is None else start
-        hi = MAX_TIME_NS if end is None else end
+    def blocks(
+        self, wanted: Mapping[int, tuple[int, Connection]], lo: int, hi: int, everything: bool
+    ) -> list[Block]:
+        """One block per chunk that may hold a wanted message in time."""
         blocks = [
             Block(
                 chunk.start_ns,
@@ -384,7 +377,7 @@ class Bag1Reader(BagReader):
             and chunk.start_ns <= hi
             and not wanted.keys().isdisjoint(chunk.counts)
         ]
-        return ordered(self.guarded(blocks))
+        return blocks
 
     def chunk_messages(
         self, chunk: Chunk, wanted: Mapping[int, tuple[int, Connection]]

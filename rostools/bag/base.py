@@ -70,7 +70,10 @@ class BagReader(ABC):
     #: instead of ending the read with an error.
     skip_damaged = False
 
-    def __init__(self) -> None:
+    def __init__(self, path: str | Path) -> None:
+        self.path = Path(path)
+        self.connections = []
+        self.indexed = False
         self.notes: list[str] = []
         self.damage: list[str] = []
 

@@ -55,10 +55,7 @@ class McapReader(BagReader):
     format = "mcap"
 
     def __init__(self, path: str | Path) -> None:
-        super().__init__()
-        self.path = Path(path)
-        self.connections: list[Connection] = []
-        self.indexed = False
+        super().__init__(path)
         self.profile = ""
         self.library = ""
         self.schemas: dict[int, fmt.Schema] = {}

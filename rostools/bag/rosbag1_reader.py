@@ -71,11 +71,8 @@ class Bag1Reader(BagReader):
     format = "bag"
 
     def __init__(self, path: str | Path) -> None:
-        super().__init__()
-        self.path = Path(path)
-        self.connections: list[Connection] = []
+        super().__init__(path)
         self.chunks: list[Chunk] = []
-        self.indexed = False
         self._by_id: dict[int, Connection] = {}
         mm, self.size = map_file(self.path)
         if mm is None:

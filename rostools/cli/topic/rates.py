@@ -182,12 +182,9 @@ def bw(
         stats = meter.report()
         if stats is None:
             return
-        if fmt is not Format.text:
-            row = {"topic": name, "bytes_per_s": stats.rate, "mean": stats.mean,
-                   "min": stats.min, "max": stats.max, "window": stats.window}  # fmt: skip
-            output.write(fmt, row)
-        else:
-            sys.stdout.write(format_bandwidth(stats) + "\n")
+        row = {"topic": name, "bytes_per_s": stats.rate, "mean": stats.mean,
+               "min": stats.min, "max": stats.max, "window": stats.window}  # fmt: skip
+        output.write(fmt, row, lambda _: format_bandwidth(stats))
 
     _run(ctx, Meter([name], timeout, fmt), sink, report)
 
@@ -225,11 +222,8 @@ def delay(
         stats = meter.report()
         if stats is None:
             return
-        if fmt is not Format.text:
-            row = {"topic": name, "delay": stats.value, "min": stats.min, "max": stats.max,
-                   "std_dev": stats.std_dev, "window": stats.window}  # fmt: skip
-            output.write(fmt, row)
-        else:
-            sys.stdout.write(format_delay(stats) + "\n")
+        row = {"topic": name, "delay": stats.value, "min": stats.min, "max": stats.max,
+               "std_dev": stats.std_dev, "window": stats.window}  # fmt: skip
+        output.write(fmt, row, lambda _: format_delay(stats))
 
     _run(ctx, Meter([name], timeout, fmt), sink, report)

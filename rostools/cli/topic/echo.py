@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import time
 from pathlib import Path
-from typing import TYPE_CHECKING, Annotated, Any
+from typing import TYPE_CHECKING, Annotated
 
 import typer
 
@@ -23,6 +23,10 @@ from rostools.names import script_resolve
 
 if TYPE_CHECKING:
     import asyncio
+
+    from rostools.msgs.store import TypeStore
+    from rostools.node.connection import Frame, InboundConnection
+    from rostools.node.node import Node
 
 
 @app.command()
@@ -77,7 +81,12 @@ def echo(
 
 
 async def _live(
-    node: Any, stop: asyncio.Event, name: str, store: Any, opts: EchoOptions, timeout: float | None
+    node: Node,
+    stop: asyncio.Event,
+    name: str,
+    store: TypeStore,
+    opts: EchoOptions,
+    timeout: float | None,
 ) -> str:
     import asyncio
 
@@ -87,10 +96,10 @@ async def _live(
         return "stopped" if stop.is_set() else "timeout"
     opts.field = ref.field
     echo_ = Echo(store, opts)
-    pending: list[tuple[list[Any], Any]] = []
+    pending: list[tuple[list[Frame], InboundConnection]] = []
     wake = asyncio.Event()  # frames, a stop or the deadline: one event, no task per batch
 
-    def on_frames(frames: list[Any], conn: Any, now: float) -> None:
+    def on_frames(frames: list[Frame], conn: InboundConnection, now: float) -> None:
         pending.append((frames, conn))
         wake.set()
 

@@ -14,6 +14,9 @@ from rostools.cli.common import FINITE
 if TYPE_CHECKING:
     import asyncio
 
+    from rostools.msgs.store import TypeStore
+    from rostools.node.node import Node
+
 TopicArg = Annotated[str, typer.Argument(help="Topic name; relative names join ROS_NAMESPACE.")]
 CountOpt = Annotated[int | None, typer.Option("-n", help="Exit after this many messages.")]
 TimeoutOpt = Annotated[
@@ -34,7 +37,7 @@ FilterOpt = Annotated[
 
 
 async def wait_for_topic(
-    node: Any, name: str, store: Any, deadline: float | None, stop: asyncio.Event
+    node: Node, name: str, store: TypeStore, deadline: float | None, stop: asyncio.Event
 ) -> Any:
     """Wait until the topic is advertised; the topic and field path."""
     import asyncio

@@ -16,6 +16,8 @@ from rostools.errors import UsageError
 
 if TYPE_CHECKING:
     from rostools.msgs.expr import Expression
+    from rostools.msgs.store import TypeStore
+    from rostools.node.connection import Frame
 
 
 @dataclass
@@ -37,7 +39,7 @@ class EchoOptions:
 class Printer:
     """Turns raw messages of one type into output text, compiled once per type."""
 
-    def __init__(self, store: Any, type_name: str, topic: str, opts: EchoOptions) -> None:
+    def __init__(self, store: TypeStore, type_name: str, topic: str, opts: EchoOptions) -> None:
         from rostools.msgs import fieldpath, plain, text
         from rostools.msgs.codec import Codec
 
@@ -105,7 +107,7 @@ class Printer:
 class Echo:
     """Prints every message it is given; counts what it printed."""
 
-    def __init__(self, store: Any, opts: EchoOptions) -> None:
+    def __init__(self, store: TypeStore, opts: EchoOptions) -> None:
         self.store = store
         self.opts = opts
         self.printers: dict[tuple[str, str, str], Printer] = {}
@@ -121,7 +123,7 @@ class Echo:
             found = self.printers[key] = Printer(store, type_name, topic, self.opts)
         return found
 
-    def emit(self, printer: Printer, frames: list[Any], stamp_ns: int | None = None) -> bool:
+    def emit(self, printer: Printer, frames: list[Frame], stamp_ns: int | None = None) -> bool:
         """Print messages; False once ``-n`` is reached.
 
         Bytes that do not decode as their type says are a ``DecodeError`` naming both.
@@ -135,7 +137,7 @@ class Echo:
                 f"a message on {printer.topic} does not decode as {printer.type_name}: {err}"
             ) from err
 
-    def _emit(self, printer: Printer, frames: list[Any], stamp_ns: int | None) -> bool:
+    def _emit(self, printer: Printer, frames: list[Frame], stamp_ns: int | None) -> bool:
         limit = self.opts.count
         if printer.fast is not None and limit is None:
             texts: list[str] = printer.fast(frames)

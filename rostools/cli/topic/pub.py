@@ -20,6 +20,8 @@ from rostools.names import script_resolve
 if TYPE_CHECKING:
     import asyncio
 
+    from rostools.node.node import Node
+
 #: How long ``-1`` stays up so that late subscribers still get the latched message (rostopic).
 ONCE_LINGER = 3.0
 #: Rate for messages from a file or stdin when none is given (rostopic).
@@ -161,7 +163,7 @@ def pub(
     latched = latch or (rate is None and not streamed) or once
     ttype = TopicType.of(store, msg_type)
 
-    async def main(node: Any, stop: asyncio.Event) -> None:
+    async def main(node: Node, stop: asyncio.Event) -> None:
         import asyncio
 
         from rostools.msgs.text import formatter, message_type

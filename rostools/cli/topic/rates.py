@@ -21,6 +21,9 @@ from rostools.names import script_resolve
 if TYPE_CHECKING:
     import asyncio
 
+    from rostools.node.connection import Frame, InboundConnection
+    from rostools.node.node import Node
+
 _STAMP = struct.Struct("<II")
 WindowOpt = Annotated[int | None, typer.Option("--window", "-w", help="Messages to average over.")]
 REPORT_PERIOD = 1.0
@@ -38,9 +41,9 @@ class Meter:
 
     async def run(
         self,
-        node: Any,
+        node: Node,
         stop: asyncio.Event,
-        sink: Callable[[str, list[Any], Any, float], None],
+        sink: Callable[[str, list[Frame], InboundConnection, float], None],
         report: Callable[[], None],
     ) -> str:
         """Subscribe to every topic and report until stopped or timed out."""
@@ -56,7 +59,9 @@ class Meter:
             if ref.field:
                 raise UsageError(f"{topic}: field paths do not apply here; give the topic itself")
 
-            def on_frames(frames: list[Any], conn: Any, now: float, t: str = ref.topic) -> None:
+            def on_frames(
+                frames: list[Frame], conn: InboundConnection, now: float, t: str = ref.topic
+            ) -> None:
                 self.received += len(frames)
                 try:
                     sink(t, frames, conn, now)
@@ -113,7 +118,7 @@ def hz(
     meters = {n: RateMeter(window or DEFAULT_WINDOW) for n in names}
     check = _filter(filter_expr)
 
-    def sink(topic: str, frames: list[Any], conn: Any, now: float) -> None:
+    def sink(topic: str, frames: list[Frame], conn: InboundConnection, now: float) -> None:
         if check is not None:
             frames = check(frames, conn, topic)
         meters[topic].add(len(frames), now)
@@ -136,7 +141,9 @@ def hz(
     _run(ctx, Meter(names, timeout, fmt), sink, report)
 
 
-def _filter(expr: str | None) -> Callable[[list[Any], Any, str], list[Any]] | None:
+def _filter(
+    expr: str | None,
+) -> Callable[[list[Frame], InboundConnection, str], list[Frame]] | None:
     """A frames filter that decodes and evaluates ``expr``, or None."""
     if not expr:
         return None
@@ -148,7 +155,7 @@ def _filter(expr: str | None) -> Callable[[list[Any], Any, str], list[Any]] | No
     base = TypeStore.default()
     decoders: dict[tuple[str, str], Any] = {}
 
-    def keep(frames: list[Any], conn: Any, topic: str) -> list[Any]:
+    def keep(frames: list[Frame], conn: InboundConnection, topic: str) -> list[Frame]:
         header = conn.header or {}
         key = (header.get("type", ""), header.get("message_definition", ""))
         decode = decoders.get(key)
@@ -175,7 +182,7 @@ def bw(
     name = script_resolve(topic, "rostopic")
     meter = BandwidthMeter(window or 100)
 
-    def sink(t: str, frames: list[Any], conn: Any, now: float) -> None:
+    def sink(t: str, frames: list[Frame], conn: InboundConnection, now: float) -> None:
         meter.add([len(f) for f in frames], now)
 
     def report() -> None:
@@ -207,7 +214,7 @@ def delay(
     base = TypeStore.default()
     checked: dict[str, bool] = {}
 
-    def sink(t: str, frames: list[Any], conn: Any, now: float) -> None:
+    def sink(t: str, frames: list[Frame], conn: InboundConnection, now: float) -> None:
         header = conn.header or {}
         kind = header.get("type", "")
         if kind not in checked:

@@ -9,7 +9,7 @@ made them:
 - ``--format yaml``: each record a YAML document that ends with ``---``, as ``rostopic echo``
   ends each message;
 - ``--format json``: NDJSON, one compact object a line, always valid JSON (NaN and infinity,
-  which JSON lacks, become null).
+  which JSON lacks, become the strings "nan", "inf" and "-inf", as in echo's messages).
 """
 
 from __future__ import annotations

@@ -49,9 +49,11 @@ from benchmarks.common import (
     free_port,
     have,
     master,
+    masters,
     ros_env,
     rostools_cmd,
     start,
+    status_kb,
     stop,
     time_commands,
     wait_master,
@@ -88,26 +90,6 @@ GROWTH_TARGET_MB = 5.0
 
 
 # --- shared -----------------------------------------------------------------------------------
-
-
-def _status_kb(pid: int, field: str) -> int:
-    """A ``/proc/PID/status`` figure in kB (VmRSS, VmHWM); 0 once the process is gone."""
-    try:
-        text = Path(f"/proc/{pid}/status").read_text()
-    except OSError:
-        return 0
-    for line in text.splitlines():
-        if line.startswith(field + ":"):
-            return int(line.split()[1])
-    return 0
-
-
-def _masters() -> dict[str, list[str]]:
-    """Master command lines (the port is appended), ours first; rosmaster if installed."""
-    found = {"ours": [*rostools_cmd(), "core", "-p"]}
-    if have("rosmaster"):
-        found["theirs"] = ["rosmaster", "--core", "-p"]
-    return found
 
 
 @contextlib.contextmanager
@@ -177,7 +159,7 @@ class _PeakRss(threading.Thread):
 
     def run(self) -> None:
         while not self.done.wait(0.1):
-            kb = max(_status_kb(self.pid, "VmRSS"), _status_kb(self.pid, "VmHWM"))
+            kb = max(status_kb(self.pid, "VmRSS"), status_kb(self.pid, "VmHWM"))
             if kb == 0 and not Path(f"/proc/{self.pid}").exists():
                 return
             self.peak_kb = max(self.peak_kb, kb)
@@ -451,7 +433,7 @@ def bench_1000_nodes() -> list[Result]:
         tools["theirs"] = ["rostopic", "list"]
     latency: dict[str, float] = {}
     lists: dict[tuple[str, str], float] = {}  # (master, tool) -> s
-    for name, argv in _masters().items():
+    for name, argv in masters().items():
         with _running(argv) as (uri, _):
             client = _Client(uri)
             try:
@@ -561,7 +543,7 @@ def _growth(argv: Sequence[str], distinct: bool) -> _Growth:
         try:
             _run_cycles(client, distinct, -BATCH, BATCH)
             time.sleep(SETTLE)
-            before = _status_kb(proc.pid, "VmRSS")
+            before = status_kb(proc.pid, "VmRSS")
             began = time.monotonic()
             _run_cycles(client, distinct, 0, CYCLES)
             seconds = time.monotonic() - began
@@ -570,7 +552,7 @@ def _growth(argv: Sequence[str], distinct: bool) -> _Growth:
             if left:
                 raise RuntimeError(f"{len(left)} /cycle topics still have publishers")
             time.sleep(SETTLE)
-            after = _status_kb(proc.pid, "VmRSS")
+            after = status_kb(proc.pid, "VmRSS")
         finally:
             client.close()
     return _Growth(before, after, seconds)
@@ -578,10 +560,10 @@ def _growth(argv: Sequence[str], distinct: bool) -> _Growth:
 
 def bench_register_cycles() -> list[Result]:
     """100,000 registerPublisher + unregisterPublisher cycles: the master's RSS growth."""
-    masters = _masters()
+    found = masters()
     results = []
     for distinct, variant in ((False, "one topic name"), (True, "a new topic name each cycle")):
-        got = {name: _growth(argv, distinct) for name, argv in masters.items()}
+        got = {name: _growth(argv, distinct) for name, argv in found.items()}
         ours, theirs = got["ours"], got.get("theirs")
         note = "; ".join(
             f"{'rostools core' if name == 'ours' else 'rosmaster'} {g.before_kb / 1024:.1f} -> "
@@ -650,7 +632,7 @@ def _worst_wait(argv: Sequence[str]) -> tuple[float, float, int]:
 
 def bench_multicall_stall() -> list[Result]:
     """One 100,000-call multicall must not stall the master for everyone else."""
-    got = {name: _worst_wait(argv) for name, argv in _masters().items()}
+    got = {name: _worst_wait(argv) for name, argv in masters().items()}
     ours, theirs = got["ours"], got.get("theirs")
     note = "; ".join(
         f"{'rostools core' if name == 'ours' else 'rosmaster'}: multicall took {took:.2f} s"

@@ -11,7 +11,7 @@ import time
 import xmlrpc.client
 from pathlib import Path
 
-from benchmarks.common import BENCH_VENV, Result, have, rostools_cmd
+from benchmarks.common import BENCH_VENV, Result, masters, status_kb
 
 LOAD = Path(__file__).with_name("xmlrpc_load.py")
 SECONDS = 4.0
@@ -81,26 +81,12 @@ def _rate(port: int, clients: int, workload: str) -> float:
     return total / SECONDS
 
 
-def _rss_kb(pid: int) -> int:
-    for line in Path(f"/proc/{pid}/status").read_text().splitlines():
-        if line.startswith("VmRSS:"):
-            return int(line.split()[1])
-    return 0
-
-
-def _masters() -> dict[str, list[str]]:
-    masters = {"rostools": [*rostools_cmd(), "core", "--port"]}
-    if have("rosmaster"):
-        masters["rosmaster"] = ["rosmaster", "--core", "-p"]
-    return masters
-
-
 def bench_master_rates() -> list[Result]:
     env = {k: v for k, v in os.environ.items() if not k.startswith("ROS")}
     env["ROS_HOME"] = str(BENCH_VENV.parent / "build" / "ros_home")
     rates: dict[tuple[str, str, int], float] = {}
     rss: dict[str, int] = {}
-    for name, argv in _masters().items():
+    for name, argv in masters().items():
         port = _free_port()
         proc = _start([*argv, str(port)], port, env)
         try:
@@ -115,15 +101,15 @@ def bench_master_rates() -> list[Result]:
         try:
             _populate(port, 1000, 0)
             time.sleep(0.5)
-            rss[name] = _rss_kb(proc.pid)
+            rss[name] = status_kb(proc.pid)
         finally:
             _stop(proc)
     results = []
     labels = {"state": "getSystemState", "register": "registerPublisher+unregisterPublisher"}
     for workload in ("state", "register"):
         for clients in (1, 4):
-            ours = rates[("rostools", workload, clients)]
-            theirs = rates.get(("rosmaster", workload, clients))
+            ours = rates[("ours", workload, clients)]
+            theirs = rates.get(("theirs", workload, clients))
             met = None if theirs is None else ours >= 2 * theirs
             results.append(
                 Result(
@@ -140,8 +126,8 @@ def bench_master_rates() -> list[Result]:
         Result(
             "master resident memory, 1000 topics registered",
             "MB",
-            rss["rostools"] / 1024,
-            rss.get("rosmaster", 0) / 1024 or None,
+            rss["ours"] / 1024,
+            rss.get("theirs", 0) / 1024 or None,
             "report",
             None,
         )

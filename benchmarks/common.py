@@ -37,9 +37,9 @@ class Result:
     @property
     def ratio(self) -> float | None:
         """ours / theirs."""
-        if self.theirs in (None, 0):
+        if self.theirs is None or self.theirs == 0:
             return None
-        return self.ours / self.theirs  # type: ignore[operator]
+        return self.ours / self.theirs
 
     def as_dict(self) -> dict[str, object]:
         """For the JSON report."""
@@ -220,3 +220,23 @@ def cpp_peer(name: str, folder: Path | None = None) -> str:
     if reason is not None:
         raise RuntimeError(f"cannot build the roscpp source: {reason}")
     return str(build(name, folder))
+
+
+def status_kb(pid: int, field: str = "VmRSS") -> int:
+    """A ``/proc/PID/status`` figure in kB (VmRSS, VmHWM); 0 once the process is gone."""
+    try:
+        text = Path(f"/proc/{pid}/status").read_text()
+    except OSError:
+        return 0
+    for line in text.splitlines():
+        if line.startswith(field + ":"):
+            return int(line.split()[1])
+    return 0
+
+
+def masters() -> dict[str, list[str]]:
+    """Master command lines (the port is appended): ``ours``, and ``theirs`` if installed."""
+    found = {"ours": [*rostools_cmd(), "core", "-p"]}
+    if have("rosmaster"):
+        found["theirs"] = ["rosmaster", "--core", "-p"]
+    return found

@@ -115,6 +115,8 @@ def script_resolve(
     with ``field_path``, what follows a ``[`` (``/scan/ranges[0]``) is not checked.
     """
     checked = name.split("[", 1)[0] if field_path else name
+    if checked.startswith("-"):  # an option the command does not have, taken for a name
+        raise UsageError(f"no such option: {name} (and {name!r} is not a legal ROS name)")
     if not is_legal(checked):
         raise UsageError(
             f"{name!r} is not a legal ROS name",

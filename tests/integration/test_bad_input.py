@@ -25,6 +25,8 @@ DEEP = "[" * 10_000 + "]" * 10_000
         (["topic", "pub", "-r", "nan", "/x", "std_msgs/Empty", "{}"], "not a finite number"),
         (["bag", "play", "{tmp}/bomb.yaml", "-r", "inf"], "not a finite number"),
         (["param", "set", "--", "-x", "3"], "'-x' is not a legal ROS name"),  # was set
+        (["param", "set", "--verbos", "5"], "no such option: --verbos"),  # was /--verbos
+        (["topic", "pub", "-1", "-x", "/x", "std_msgs/String", "a"], "no such option: -x"),
         (["topic", "echo", "/a b"], "'/a b' is not a legal ROS name"),
         (["node", "info", "a//b"], "not a legal ROS name"),
         (["service", "call", "/s:x"], "not a legal ROS name"),

@@ -284,3 +284,13 @@ def test_remapping_arguments(rostools_master: str, cli_env: dict[str, str]) -> N
         assert run_cli("param", "get", "/probe/gain", env=cli_env).stdout == "2.5\n"
     finally:
         pub.stop()
+
+
+def test_pub_verbose_prints_every_message(rostools_master: str, cli_env: dict[str, str]) -> None:
+    """``-v -r`` says each message it sends, as rostopic does (it said only the first)."""
+    done = run_cli(
+        "topic", "pub", "-v", "-r", "20", "--timeout", "1", "/vv", "std_msgs/String", "data: v",
+        env=cli_env, timeout=30,
+    )  # fmt: skip
+    said = [ln for ln in done.stdout.splitlines() if ln == 'publishing data: "v"']
+    assert len(said) >= 15, done.stdout

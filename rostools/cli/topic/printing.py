@@ -84,8 +84,9 @@ class Printer:
         if opts.plot:
             now = time.time_ns()
             offset = now if opts.offset else 0
-            stamp = plain.stamp_ns(value)
-            t = stamp if stamp is not None else (stamp_ns if stamp_ns is not None else now)
+            # rostopic's order: a time given (a bag's record time), the header's stamp, now
+            t = stamp_ns if stamp_ns is not None else plain.stamp_ns(value)
+            t = now if t is None else t
             line = f"{t - offset},{self.row(value, offset)}\n"
             if header_needed:
                 line = (

@@ -195,21 +195,21 @@ def pub(
                 if await first(stop.wait(), timeout=0.05) == 0:
                     return
         cached: bytes | None = None
+        said = ""  # -v: what each message sent prints, as rostopic prints it every time
         start, sent = time.monotonic(), 0
         while not stop.is_set():
             due = int((time.monotonic() - start) * rate) + 1 - sent
             for _ in range(min(due, MAX_BURST)):
-                if repeated and cached is not None and not substitute:
-                    publisher.publish(cached)
-                else:
+                if not (repeated and cached is not None and not substitute):
                     try:
                         msg = next(messages)
                     except StopIteration:
                         return
                     cached = msg.serialize()
-                    publisher.publish(cached)
-                    if show is not None:
-                        sys.stdout.write(f"publishing {show(msg)}\n")
+                    said = f"publishing {show(msg)}\n" if show is not None else ""
+                publisher.publish(cached)
+                if said:
+                    sys.stdout.write(said)
                 sent += 1
             wait = start + sent / rate - time.monotonic()
             limit = left()

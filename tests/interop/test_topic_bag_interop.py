@@ -1,4 +1,4 @@
-"""``topic echo -b``, set beside ``rostopic echo -b`` on the same bag (issue 13)."""
+"""``topic echo -b`` and ``topic list -b``, set beside rostopic on the same bag (issue 13)."""
 
 from __future__ import annotations
 
@@ -41,3 +41,24 @@ def test_plot_time_is_the_record_time(tmp_path: Path) -> None:
     assert theirs.returncode == 0, theirs.stderr
     assert ours.stdout.splitlines()[1].startswith("200000000000,")  # was 100000000005
     assert ours.stdout == theirs.stdout
+
+
+def test_list_of_one_topic_counts_its_messages(tmp_path: Path) -> None:
+    """``list -b BAG /ns``: rostopic's "N message(s) from ... to ..." (it printed the name)."""
+    bag = tmp_path / "l.bag"
+    string_md5 = "992ce8a1687cec8c8bd883ec73ca41d1"
+    with open_writer(bag) as writer:
+        conns = [
+            writer.add_connection(t, "std_msgs/String", string_md5, "string data\n")
+            for t in ("/ns/a", "/ns/b", "/other")
+        ]
+        for i in range(30):
+            writer.write(conns[i % 3], 1_795_459_893_000_000_000 + i * 7_000_000_000, b"\0\0\0\0")
+    for name in ("/ns", "/ns/b"):
+        ours = run_cli("topic", "list", "-b", str(bag), name)
+        theirs = subprocess.run(
+            ["rostopic", "list", "-b", str(bag), name],
+            capture_output=True, text=True, timeout=60, check=False,
+        )  # fmt: skip
+        assert theirs.returncode == 0, theirs.stderr
+        assert ours.stdout == theirs.stdout and "message(s) from" in ours.stdout

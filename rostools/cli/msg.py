@@ -131,9 +131,11 @@ def package(
     """List the message (or service) types of one package."""
     store = type_store(msg_path)
     kind: Kind = "srv" if srv else "msg"
-    if name not in store.packages(kind):
-        raise NotFoundError(f"no {'service' if srv else 'message'} types in a package named {name}")
-    _emit_names(ctx, fmt, store.types(kind, name), one_line)
+    if name not in store.packages("msg") and name not in store.packages("srv"):
+        raise NotFoundError(f"no package named {name} holds message or service types")
+    # a package of the other kind only (std_srvs for messages): an empty list, as rosmsg
+    types = store.types(kind, name) if name in store.packages(kind) else []
+    _emit_names(ctx, fmt, types, one_line)
 
 
 @app.command()

@@ -268,12 +268,13 @@ def test_ping(
     uri = nodes["talker"].uri
     text = cli(cli_env, "ping", "-c", "2", "/talker")
     lines = text.splitlines()
-    assert lines[0] == "pinging /talker with a timeout of 3.0s"
+    # rosnode's first line, which we left out
+    assert lines[:2] == ["rosnode: node is [/talker]", "pinging /talker with a timeout of 3.0s"]
     assert all(
         re.fullmatch(re.escape(f"xmlrpc reply from {uri}") + r"\ttime=\d+\.\d{6}ms", line)
-        for line in lines[1:3]
+        for line in lines[2:4]
     ), lines
-    assert re.fullmatch(r"ping average: \d+\.\d{6}ms", lines[3]) and len(lines) == 4
+    assert re.fullmatch(r"ping average: \d+\.\d{6}ms", lines[4]) and len(lines) == 5
     # A YAML stream is documents that each end with ---, as echo's (ping began them with it).
     docs = cli(cli_env, "ping", "/talker", "-c2", "-F", "yaml")
     assert docs.endswith("---\n") and not docs.startswith("---")

@@ -59,7 +59,7 @@ def test_proto(cli_env: dict[str, str]) -> None:
         (["msg", "show", "nope/Nope"], 3, "unknown type nope/Nope"),
         (["msg", "md5", "NoSuchTypeAnywhere"], 3, "no message or service named NoSuchTypeAnywhere"),
         (["msg", "show", "std_msgs::String"], 2, "invalid type"),
-        (["msg", "package", "no_pkg"], 3, "no message types in a package named no_pkg"),
+        (["msg", "package", "no_pkg"], 3, "no package named no_pkg holds message or service"),
         (["msg", "show", "--bag", "/nonexistent.bag", "x/Y"], 3, "no such file"),
     ],
 )
@@ -71,6 +71,12 @@ def test_errors_are_one_line_with_exit_codes(
     assert message in out.stderr
     assert len(out.stderr.strip().splitlines()) == 1
     assert "Traceback" not in out.stderr
+
+
+def test_a_package_of_services_only_has_no_message_types(cli_env: dict[str, str]) -> None:
+    """As rosmsg: ``msg package -s std_srvs`` prints an empty line and exits 0 (it exited 3)."""
+    out = run_cli("msg", "package", "-s", "std_srvs", env=cli_env)
+    assert (out.returncode, out.stdout, out.stderr) == (0, "\n", "")
 
 
 def test_custom_package_and_malformed_msg(cli_env: dict[str, str], tmp_path: Path) -> None:

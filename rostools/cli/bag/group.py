@@ -6,7 +6,10 @@ import typer
 
 app = typer.Typer(
     name="bag",
-    help="Bags (.bag and MCAP): record, play, info, filter, convert, recover, compress.",
+    help=(
+        "Bags (.bag and MCAP): record, play, info, filter, convert, recover, reindex, "
+        "compress, decompress."
+    ),
     no_args_is_help=True,
     add_completion=False,
 )

@@ -96,7 +96,7 @@ def ping(
     name = resolve_node(node)
     graph.require_uri(name)
     if fmt is Format.text:
-        print(f"pinging {name} with a timeout of {timeout}s", flush=True)
+        print(f"rosnode: node is [{name}]\npinging {name} with a timeout of {timeout}s", flush=True)
     times: list[float] = []
     try:
         for seq, (uri, pid, ms) in enumerate(_ping_replies(graph, name, count), 1):

@@ -10,7 +10,7 @@ from typing import Annotated
 import typer
 
 from rostools import __version__
-from rostools.cli.common import FormatOpt, output_format
+from rostools.cli.common import FINITE, FormatOpt, output_format
 from rostools.cli.output import Format
 from rostools.errors import RostoolsError
 
@@ -36,8 +36,30 @@ def core(
         ),
     ] = None,
     fmt: FormatOpt = None,
+    # roscore's own flags, accepted so that scripts written for it run; none changes anything
+    # here: one event loop, no worker threads, no launch of separate processes.
+    verbose: Annotated[bool, typer.Option("-v", help="roscore's flag; no effect.")] = False,
+    workers: Annotated[
+        int | None, typer.Option("--numworkers", "-w", help="roscore's flag; no effect.")
+    ] = None,
+    socket_timeout: Annotated[
+        float | None,
+        typer.Option("--timeout", "-t", click_type=FINITE, help="roscore's flag; no effect."),
+    ] = None,
+    logger_level: Annotated[
+        str | None, typer.Option("--master-logger-level", help="roscore's flag; no effect.")
+    ] = None,
+    sigint_timeout: Annotated[
+        float | None,
+        typer.Option("--sigint-timeout", click_type=FINITE, help="roscore's flag; no effect."),
+    ] = None,
+    sigterm_timeout: Annotated[
+        float | None,
+        typer.Option("--sigterm-timeout", click_type=FINITE, help="roscore's flag; no effect."),
+    ] = None,
 ) -> None:
     """Run a ROS master and parameter server until Ctrl-C (SIGINT) or SIGTERM."""
+    del verbose, workers, socket_timeout, logger_level, sigint_timeout, sigterm_timeout
     from rostools.master.core import choose_address, run_core
     from rostools.master.server import Master
     from rostools.rosgraph.masterapi import master_answers

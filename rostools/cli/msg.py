@@ -88,6 +88,9 @@ def _store_from_bag(store: TypeStore, bag: Path, name: str) -> tuple[TypeStore, 
     raise NotFoundError(f"no connection of type {name} in {bag}")
 
 
+app.command("info", help="The same as show (rosmsg info).")(show)
+
+
 @app.command()
 def md5(
     ctx: typer.Context,

@@ -99,6 +99,16 @@ def uri(ctx: typer.Context, service: ServiceArg, fmt: FormatOpt = None) -> None:
     emit(output_format(ctx, fmt), {"service": name, "uri": found}, lambda d: d["uri"])
 
 
+@app.command()
+def node(ctx: typer.Context, service: ServiceArg, fmt: FormatOpt = None) -> None:
+    """The node that provides a service (rosservice node)."""
+    name = script_resolve(service, "rosservice")
+    providers = _services(master(ctx, "rosservice")).get(name)
+    if not providers:
+        raise NotFoundError(f"unknown service {name}")
+    emit(output_format(ctx, fmt), {"service": name, "node": providers[0]}, lambda d: d["node"])
+
+
 @app.command("type")
 def type_(
     ctx: typer.Context,

@@ -39,12 +39,14 @@ RECIPES: dict[str, list[str]] = {
     "service type": ["/add_two_ints"],
     "service find": ["std_srvs/Trigger"],
     "service uri": ["/add_two_ints"],
+    "service node": ["/add_two_ints"],
     "service args": ["/add_two_ints"],
     "service call": ["/add_two_ints", "{a: 1, b: 2}"],
     "param list": [],
     "param get": ["/demo"],
     "param dump": ["-"],
     "msg show": ["geometry_msgs/PoseStamped"],
+    "msg info": ["geometry_msgs/PoseStamped"],
     "msg md5": ["std_srvs/Trigger"],
     "msg list": [],
     "msg package": ["std_msgs"],
@@ -146,9 +148,26 @@ def test_format_json_is_valid_json(command: str, graph: tuple[dict[str, str], Pa
 def test_core_format_json(graph: tuple[dict[str, str], Path]) -> None:
     env, _ = graph
     port = free_port()
-    core = Proc([sys.executable, "-m", "rostools", "core", "-p", str(port), "-F", "json"], env=env)
+    # with every flag of roscore's: a script written for roscore must not die on a usage error
+    roscore_flags = ["-v", "-w", "3", "-t", "4", "--master-logger-level", "warn",
+                     "--sigint-timeout", "5", "--sigterm-timeout", "2"]  # fmt: skip
+    core = Proc(
+        [sys.executable, "-m", "rostools", "core", "-p", str(port), "-F", "json", *roscore_flags],
+        env=env,
+    )
     try:
         line = core.expect(r"^\{", timeout=20)
         assert json.loads(line)["uri"].endswith(f":{port}/")
     finally:
         assert core.stop() == 0
+
+
+@pytest.mark.parametrize(
+    "args",
+    [["topic", "hz", "--tcpnodelay", "/x"], ["topic", "delay", "--tcpnodelay", "/x"]],
+    ids=["hz", "delay"],
+)
+def test_rostopic_flags_are_taken(args: list[str], cli_env: dict[str, str]) -> None:
+    """rostopic's ``--tcpnodelay`` parses (it was a usage error); no master here, so exit 4."""
+    done = run_cli(*args, env=cli_env, timeout=30)
+    assert done.returncode == 4, done.stderr

@@ -73,6 +73,12 @@ def test_errors_are_one_line_with_exit_codes(
     assert "Traceback" not in out.stderr
 
 
+def test_info_is_show(cli_env: dict[str, str]) -> None:
+    """``rosmsg info`` is rosmsg's alias of show; ours too."""
+    shown = run_cli("msg", "show", "geometry_msgs/Pose", env=cli_env)
+    assert run_cli("msg", "info", "geometry_msgs/Pose", env=cli_env).stdout == shown.stdout != ""
+
+
 def test_a_package_of_services_only_has_no_message_types(cli_env: dict[str, str]) -> None:
     """As rosmsg: ``msg package -s std_srvs`` prints an empty line and exits 0 (it exited 3)."""
     out = run_cli("msg", "package", "-s", "std_srvs", env=cli_env)

@@ -26,16 +26,22 @@ if TYPE_CHECKING:
 
 _STAMP = struct.Struct("<II")
 WindowOpt = Annotated[int | None, typer.Option("--window", "-w", help="Messages to average over.")]
+NodelayOpt = Annotated[
+    bool, typer.Option("--tcpnodelay", help="Ask publishers for TCP_NODELAY (rostopic's flag).")
+]
 REPORT_PERIOD = 1.0
 
 
 class Meter:
     """Resolves topics, subscribes, feeds a per-topic sink, reports every second."""
 
-    def __init__(self, topics: list[str], timeout: float | None, fmt: Format) -> None:
+    def __init__(
+        self, topics: list[str], timeout: float | None, fmt: Format, tcp_nodelay: bool = False
+    ) -> None:
         self.topics = topics
         self.timeout = timeout
         self.fmt = fmt
+        self.tcp_nodelay = tcp_nodelay
         self.received = 0
         self.error: BaseException | None = None
 
@@ -69,7 +75,7 @@ class Meter:
                     self.error = err
                     stop.set()
 
-            await node.subscribe(ref.topic, on_frames)
+            await node.subscribe(ref.topic, on_frames, tcp_nodelay=self.tcp_nodelay)
             sys.stderr.write(f"subscribed to [{ref.topic}]\n")
         next_report = time.monotonic() + REPORT_PERIOD
         while True:
@@ -107,6 +113,7 @@ def hz(
         bool,
         typer.Option("--wall-time", help="rostopic's flag; rates always use the wall clock."),
     ] = False,
+    tcp_nodelay: NodelayOpt = False,
     timeout: TimeoutOpt = None,
     fmt: FormatOpt = None,
 ) -> None:
@@ -138,7 +145,7 @@ def hz(
             sys.stdout.write(rate_table(rows))
 
     del wall_time  # arrival times are always taken from the wall clock
-    _run(ctx, Meter(names, timeout, fmt), sink, report)
+    _run(ctx, Meter(names, timeout, fmt, tcp_nodelay), sink, report)
 
 
 def _filter(
@@ -201,6 +208,7 @@ def delay(
     ctx: typer.Context,
     topic: Annotated[str, typer.Argument(help="A topic whose messages start with a Header.")],
     window: WindowOpt = None,
+    tcp_nodelay: NodelayOpt = False,
     timeout: TimeoutOpt = None,
     fmt: FormatOpt = None,
 ) -> None:
@@ -233,4 +241,4 @@ def delay(
                "std_dev": stats.std_dev, "window": stats.window}  # fmt: skip
         output.write(fmt, row, lambda _: format_delay(stats))
 
-    _run(ctx, Meter([name], timeout, fmt), sink, report)
+    _run(ctx, Meter([name], timeout, fmt, tcp_nodelay), sink, report)

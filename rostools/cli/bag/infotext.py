@@ -156,11 +156,8 @@ def info_data(
     if info.format == "mcap":
         data |= {"profile": info.profile, "library": info.library}
     if info.start_ns is not None and info.end_ns is not None:
-        data |= {
-            "duration": info.duration_ns / _NS,
-            "start": info.start_ns / _NS,
-            "end": info.end_ns / _NS,
-        }
+        start, end = info.start_ns / _NS, info.end_ns / _NS
+        data |= {"duration": _micro(end - start), "start": _micro(start), "end": _micro(end)}
     data |= {"size": info.size, "messages": info.message_count, "indexed": info.indexed}
     data["compression"] = info.compression[0].compression if info.compression else "none"
     if any(c.compression != "none" for c in info.compression):
@@ -179,6 +176,11 @@ def info_data(
         topics.append(row)
     data["topics"] = topics
     return data
+
+
+def _micro(seconds: float) -> float:
+    """Seconds as rosbag's YAML gives them: printed with 6 decimals, then read back."""
+    return float(f"{seconds:.6f}")
 
 
 _KEY_STEP = re.compile(r"\.?([A-Za-z_]\w*)|\[(-?\d+)\]")

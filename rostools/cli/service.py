@@ -13,7 +13,7 @@ from rostools.cli.common import FINITE, FormatOpt, MsgPathOpt, master, output_fo
 from rostools.cli.output import Format, emit
 from rostools.errors import NotFoundError, TimeoutExpired, UsageError
 from rostools.names import make_global_ns, ros_namespace, script_resolve
-from rostools.rosgraph.serviceclient import SERVICE_TIMEOUT
+from rostools.rosgraph.masterapi import SERVICE_TIMEOUT
 
 if TYPE_CHECKING:
     from rostools.msgs.store import TypeStore

@@ -22,8 +22,7 @@ from rostools.errors import (
 )
 from rostools.msgs.store import TypeStore
 from rostools.node.connection import Frame, ServerConnection, set_nodelay
-from rostools.rosgraph.masterapi import MasterError
-from rostools.rosgraph.serviceclient import SERVICE_TIMEOUT
+from rostools.rosgraph.masterapi import SERVICE_TIMEOUT, MasterError
 from rostools.wire import codes
 from rostools.wire.tcpros import (
     FrameError,

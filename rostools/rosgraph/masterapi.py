@@ -19,6 +19,8 @@ from rostools.wire import codes
 DEFAULT_TIMEOUT = 3.0
 #: Seconds to wait for a node's answer; rosnode's ping uses 3 s (and 5 s for info).
 NODE_TIMEOUT = 3.0
+#: Seconds a service call may take, connecting included, unless the caller says otherwise.
+SERVICE_TIMEOUT = 10.0
 
 
 def master_timeout() -> float:

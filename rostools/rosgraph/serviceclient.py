@@ -13,11 +13,8 @@ import time
 from urllib.parse import urlsplit
 
 from rostools.errors import RostoolsError, ServiceError, TimeoutExpired, UnreachableError
-from rostools.rosgraph.masterapi import MasterProxy
+from rostools.rosgraph.masterapi import SERVICE_TIMEOUT, MasterProxy
 from rostools.wire.tcpros import FrameError, ResponseReader, frame, service_request_header
-
-#: Seconds a service call may take, connecting included, unless the caller says otherwise.
-SERVICE_TIMEOUT = 10.0
 
 
 class BlockingServiceClient:

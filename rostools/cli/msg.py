@@ -11,7 +11,7 @@ import typer
 from rostools.cli.common import FormatOpt, MsgPathOpt, output_format, type_store
 from rostools.cli.lookup import Kind, matches, md5_text, md5sums, read_type
 from rostools.cli.output import Format, emit
-from rostools.errors import NotFoundError, UsageError
+from rostools.errors import NotFoundError, RostoolsError, UsageError
 from rostools.msgs.store import TypeStore
 
 app = typer.Typer(
@@ -156,19 +156,63 @@ def proto(
     ctx: typer.Context,
     type_name: TypeArg = None,
     flow_style: Annotated[
-        bool, typer.Option("--flow-style", "-f", help="One line, in brackets.")
-    ] = False,
+        int | None,
+        typer.Option(
+            "--flow-style",
+            "-f",
+            min=0,
+            max=1,
+            help="1: one line, in brackets; 0: never brackets. Default: brackets for times and "
+            "arrays of scalars.",
+            show_default=False,
+        ),
+    ] = None,
     empty_arrays: Annotated[
         bool,
         typer.Option("--empty-arrays", "-e", help="Leave arrays empty instead of one element."),
     ] = False,
     no_quotes: Annotated[
-        bool, typer.Option("--no-quotes", help="Do not wrap the text in quotes.")
+        bool,
+        typer.Option("--no-quotes", "--no-hyphens", "-H", help="Do not wrap the text in quotes."),
+    ] = False,
+    prefix: Annotated[
+        str, typer.Option("--prefix", "-p", help="Put this before every line, e.g. an indent.")
+    ] = "",
+    exclude: Annotated[
+        str,
+        typer.Option(
+            "--exclude-slots", "-x", help="Comma-separated field names to leave out, at any depth."
+        ),
+    ] = "",
+    silent: Annotated[
+        bool,
+        typer.Option(
+            "--silent", "-s", help="No error message on failure (the exit code still says it)."
+        ),
     ] = False,
     fmt: FormatOpt = None,
     msg_path: MsgPathOpt = None,
 ) -> None:
     """Print a YAML template of a message, or of a service's request (rosmsg-proto)."""
+    try:
+        text = _proto_text(type_name, msg_path, flow_style, empty_arrays, exclude)
+    except RostoolsError as exc:
+        if silent:
+            raise typer.Exit(exc.exit_code) from None
+        raise
+    fmt = output_format(ctx, fmt)
+    if fmt is not Format.text:
+        import yaml
+
+        emit(fmt, yaml.safe_load(text) or {})
+        return
+    text = "\n".join(prefix + line for line in text.split("\n"))
+    sys.stdout.write((text if no_quotes else f'"{text}"') + "\n")
+
+
+def _proto_text(
+    type_name: str | None, msg_path: list[Path] | None, flow: int | None, empty: bool, exclude: str
+) -> str:
     from rostools.msgs import describe
 
     name = read_type(type_name)
@@ -179,11 +223,7 @@ def proto(
         raise UsageError(f"{name} is ambiguous: {choices}", hint="give the package too")
     kind, full = found[0]
     spec = store.msg(full) if kind == "msg" else store.srv(full).request
-    text = describe.proto(store, spec, flow=flow_style, empty_arrays=empty_arrays)
-    fmt = output_format(ctx, fmt)
-    if fmt is not Format.text:
-        import yaml
-
-        emit(fmt, yaml.safe_load(text) or {})
-        return
-    sys.stdout.write((text if no_quotes else f'"{text}"') + "\n")
+    skip = frozenset(n.strip() for n in exclude.split(",") if n.strip())
+    return describe.proto(
+        store, spec, flow=None if flow is None else bool(flow), empty_arrays=empty, exclude=skip
+    )

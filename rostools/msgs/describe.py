@@ -8,7 +8,6 @@ from rostools.msgs.spec import BUILTIN_TYPES, Field, MsgSpec, SrvSpec
 from rostools.msgs.store import TypeStore
 
 _SCALAR_DEFAULTS = {"string": "''", "bool": "false", "float32": "0.0", "float64": "0.0"}
-_TIME_DEFAULT = "{secs: 0, nsecs: 0}"
 
 
 def show_text(store: TypeStore, spec: MsgSpec, indent: str = "") -> str:
@@ -47,53 +46,92 @@ def structure(store: TypeStore, spec: MsgSpec) -> dict[str, Any]:
 
 
 def _scalar_default(base: str) -> str:
-    if base in ("time", "duration"):
-        return _TIME_DEFAULT
     return _SCALAR_DEFAULTS.get(base, "0")
 
 
+# A template value: a scalar's YAML text, a mapping of (name, value) pairs, or a sequence.
+# The flag says whether the default style writes it inline, in brackets.
+_Node = tuple[str, list[Any], bool]
+_Value = str | _Node
+
+
 class _Proto:
-    def __init__(self, store: TypeStore, empty_arrays: bool) -> None:
+    """Builds a template tree of a type's default values, then writes it in one of three styles."""
+
+    def __init__(self, store: TypeStore, empty_arrays: bool, exclude: frozenset[str]) -> None:
         self.store = store
         self.empty_arrays = empty_arrays
+        self.exclude = exclude
 
-    def flow(self, f: Field) -> str:
-        if f.is_array:
-            if self.empty_arrays and f.length is None:
-                return "[]"
-            one = self.flow(Field(f.name, f.base, f.base, False, None))
-            return "[" + ", ".join([one] * (f.length or 1)) + "]"
-        if f.base in BUILTIN_TYPES:
-            return _scalar_default(f.base)
-        spec = self.store.msg(f.base)
-        return "{" + ", ".join(f"{g.name}: {self.flow(g)}" for g in spec.fields) + "}"
+    def message(self, spec: MsgSpec) -> _Node:
+        items = [(f.name, self.field(f)) for f in spec.fields if f.name not in self.exclude]
+        return ("map", items, False)
 
-    def block(self, spec: MsgSpec, indent: str) -> list[str]:
-        lines: list[str] = []
-        for f in spec.fields:
-            nested = not f.is_builtin and (
-                not f.is_array or not (self.empty_arrays and f.length is None)
-            )
-            sub = self.store.msg(f.base) if nested else None
-            if sub is None or not sub.fields:
-                lines.append(f"{indent}{f.name}: {self.flow(f)}")
-            elif not f.is_array:
-                lines.append(f"{indent}{f.name}:")
-                lines += self.block(sub, indent + "  ")
-            else:
-                lines.append(f"{indent}{f.name}:")
-                item = self.block(sub, indent + "  ")
-                for _ in range(f.length or 1):
-                    lines.append(f"{indent}- {item[0][len(indent) + 2 :]}")
-                    lines += item[1:]
-        return lines
+    def field(self, f: Field) -> _Value:
+        if not f.is_array:
+            return self.element(f.base)
+        if self.empty_arrays and f.length is None:
+            return ("seq", [], True)
+        one = self.element(f.base)
+        return ("seq", [one] * (f.length or 1), isinstance(one, str))
+
+    def element(self, base: str) -> _Value:
+        if base in ("time", "duration"):
+            return ("map", [("secs", "0"), ("nsecs", "0")], True)
+        if base in BUILTIN_TYPES:
+            return _scalar_default(base)
+        return self.message(self.store.msg(base))
+
+
+def _inline(value: _Value) -> str:
+    if isinstance(value, str):
+        return value
+    kind, items, _ = value
+    if kind == "seq":
+        return "[" + ", ".join(_inline(v) for v in items) + "]"
+    return "{" + ", ".join(f"{k}: {_inline(v)}" for k, v in items) + "}"
+
+
+def _writes_inline(value: _Value, flow: bool | None) -> bool:
+    if isinstance(value, str) or not value[1]:
+        return True
+    return value[2] if flow is None else flow
+
+
+def _block(value: _Node, indent: str, flow: bool | None) -> list[str]:
+    """Lines of a mapping or a sequence in block style; nested values by the chosen style."""
+    kind, items, _ = value
+    lines: list[str] = []
+    for item in items:
+        key, sub = item if kind == "map" else ("", item)
+        lead = f"{indent}{key}:" if kind == "map" else f"{indent}-"
+        if isinstance(sub, str) or _writes_inline(sub, flow):
+            lines.append(f"{lead} {_inline(sub)}")
+        elif kind == "seq":
+            # a mapping in a sequence starts on the hyphen's line
+            inner = _block(sub, indent + "  ", flow)
+            lines += [f"{lead} {inner[0].lstrip()}", *inner[1:]]
+        else:
+            # YAML allows a sequence under a key at the key's own indent, as rosmsg writes it
+            lines += [lead, *_block(sub, indent if sub[0] == "seq" else indent + "  ", flow)]
+    return lines
 
 
 def proto(
-    store: TypeStore, spec: MsgSpec, *, flow: bool = False, empty_arrays: bool = False
+    store: TypeStore,
+    spec: MsgSpec,
+    *,
+    flow: bool | None = None,
+    empty_arrays: bool = False,
+    exclude: frozenset[str] = frozenset(),
 ) -> str:
-    """A YAML template of a message with default values, as rosmsg-proto prints it."""
-    gen = _Proto(store, empty_arrays)
-    if flow or not spec.fields:
-        return gen.flow(Field("", spec.name, spec.name, False, None))
-    return "\n".join(gen.block(spec, ""))
+    """A YAML template of a message with default values, as rosmsg-proto prints it.
+
+    ``flow`` True writes everything in brackets on one line, False never uses brackets, and
+    None (the default) writes times and arrays of scalars in brackets, the rest as blocks.
+    Fields named in ``exclude`` are left out at every depth.
+    """
+    tree = _Proto(store, empty_arrays, exclude).message(spec)
+    if flow or not tree[1]:
+        return _inline(tree)
+    return "\n".join(_block(tree, "", flow))

@@ -156,10 +156,24 @@ def test_recover_reports_loss_with_exit_6(tmp_path: Path) -> None:
     assert report["lost"] and report["output"] == str(tmp_path / "cut.recovered.bag")
     recovered = read_stream(tmp_path / "cut.recovered.bag")
     assert 0 < len(recovered) < 3000 and recovered == sample.stream[: len(recovered)]
-    whole = write_sample(tmp_path / "w.bag", 500, close=False)
-    done = run_cli("bag", "reindex", str(whole.path))
-    assert done.returncode == 0, done.stderr
-    assert read_stream(tmp_path / "w.recovered.bag") == whole.stream
+
+
+def test_reindex_takes_several_bags_in_place_as_rosbag(tmp_path: Path) -> None:
+    """rosbag reindex A B: each rewritten in place, its original kept as A.orig.bag (issue 13)."""
+    bags = [write_sample(tmp_path / f"{name}.bag", 300, close=False) for name in "ab"]
+    originals = [b.path.read_bytes() for b in bags]
+    done = run_cli("bag", "reindex", "-q", *[str(b.path) for b in bags])
+    assert done.returncode == 0 and done.stderr == "", done.stderr
+    for bag, original in zip(bags, originals, strict=True):
+        assert read_stream(bag.path) == bag.stream
+        assert bag.path.with_name(bag.path.stem + ".orig.bag").read_bytes() == original
+    again = run_cli("bag", "reindex", str(bags[0].path))
+    assert again.returncode == 2 and "a.orig.bag exists; use --force" in again.stderr
+    out = tmp_path / "out"
+    out.mkdir()
+    done = run_cli("bag", "reindex", "--output-dir", str(out), str(bags[1].path), "-F", "json")
+    assert done.returncode == 0 and json.loads(done.stdout)["output"] == str(out / "b.bag")
+    assert read_stream(out / "b.bag") == bags[1].stream
 
 
 @pytest.mark.parametrize("out", ["cut.bag", "cut.mcap"])

@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 import shutil
 import subprocess
+import sys
 from pathlib import Path
 from typing import Any
 
@@ -97,6 +98,24 @@ def test_rosbag_reindex_keeps_a_closed_bag(tmp_path: Path) -> None:
     sample = write_sample(tmp_path / "x.bag", 500, compression="bz2", chunk_size=10_000)
     subprocess.run(["rosbag", "reindex", "-q", str(sample.path)], capture_output=True, check=True)
     assert read_stream(sample.path) == sample.stream
+
+
+def test_reindex_takes_what_rosbag_reindex_takes(tmp_path: Path) -> None:
+    """Several bags, -q, in place with x.orig.bag kept: the same files as rosbag's (issue 13)."""
+    sample = write_sample(tmp_path / "s.bag", 300, close=False)
+    trees = {}
+    for tool in ("rosbag", "rostools"):
+        work = tmp_path / tool
+        work.mkdir()
+        names = [work / "a.bag", work / "b.bag"]
+        for name in names:
+            shutil.copy(sample.path, name)
+        cmd = ["rosbag"] if tool == "rosbag" else [sys.executable, "-m", "rostools", "bag"]
+        subprocess.run([*cmd, "reindex", "-q", *map(str, names)], capture_output=True, check=True)
+        trees[tool] = sorted(p.name for p in work.iterdir())
+        view = rosbag_view(*names)
+        assert all("error" not in view[n] for n in names), view
+    assert trees["rostools"] == trees["rosbag"] == ["a.bag", "a.orig.bag", "b.bag", "b.orig.bag"]
 
 
 WRITE_WITH_ROSBAG = r"""

@@ -16,7 +16,7 @@ from rostools.msgs.fill import Filler
 from rostools.msgs.plain import CsvOptions, csv_header, csv_row, to_plain
 from rostools.msgs.store import BuiltinSource, TypeStore, default_sources
 from rostools.msgs.text import TextOptions, formatter, message_type
-from tests.support.env import ask_ros1, needs_ros1
+from tests.support.env import ask_ros1, needs_ros1, run_cli
 from tests.support.randmsg import RandomMessages
 
 pytestmark = [pytest.mark.interop, needs_ros1]
@@ -180,3 +180,40 @@ def test_echo_text_and_csv_equal_rostopics(
             assert "0," + csv_row(codec, vt, csv_opts)(value, 0) == ref["csv_row"], name
             compared_csv += 1
     assert compared_csv > 100
+
+
+PROTO_CASES = [
+    ["-f", "0", "msg", "std_msgs/Header"],
+    ["-f", "1", "msg", "std_msgs/Header"],
+    ["-f", "0", "msg", "geometry_msgs/Polygon"],
+    ["-f", "1", "-H", "msg", "geometry_msgs/Twist"],
+    ["-x", "stamp,x", "-f", "0", "msg", "geometry_msgs/PoseStamped"],
+    ["-p", "XX", "-f", "0", "msg", "geometry_msgs/Twist"],
+    ["-e", "-f", "0", "msg", "sensor_msgs/JointState"],
+    ["-f", "0", "srv", "std_srvs/SetBool"],
+    ["-x", "data", "msg", "std_msgs/String"],
+]
+
+ROSMSG_PROTO = """
+import contextlib, io, json, sys
+import rosmsg
+out = []
+for args in json.loads(sys.argv[1]):
+    buf = io.StringIO()
+    with contextlib.redirect_stdout(buf):
+        out.append(rosmsg.rosmsg_cmd_prototype(args))
+print(json.dumps(out))
+"""
+
+
+def test_msg_proto_flags_print_what_rosmsg_proto_prints() -> None:
+    """-f 0|1, -e, -x, -p and -H, as rosmsg-proto takes them (issue 13, defect 8)."""
+    import json
+
+    from tests.support.env import run_system_python
+
+    expected = json.loads(run_system_python(ROSMSG_PROTO, json.dumps(PROTO_CASES)))
+    for args, want in zip(PROTO_CASES, expected, strict=True):
+        ours = run_cli("msg", "proto", *[a for a in args if a not in ("msg", "srv")])
+        assert ours.returncode == 0, ours.stderr
+        assert ours.stdout == want + "\n", args

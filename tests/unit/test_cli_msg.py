@@ -49,7 +49,7 @@ def test_proto(cli_env: dict[str, str]) -> None:
     assert run_cli("msg", "proto", "geometry_msgs/Vector3", env=cli_env).stdout == (
         '"x: 0.0\ny: 0.0\nz: 0.0"\n'
     )
-    flow = run_cli("msg", "proto", "std_srvs/SetBool", "-f", "--no-quotes", env=cli_env)
+    flow = run_cli("msg", "proto", "std_srvs/SetBool", "-f", "1", "--no-quotes", env=cli_env)
     assert flow.stdout == "{data: false}\n"
 
 

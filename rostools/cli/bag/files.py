@@ -18,10 +18,11 @@ from rostools.cli import output
 from rostools.cli.bag.group import app
 from rostools.cli.common import FINITE, FormatOpt, output_format
 from rostools.cli.output import Format, emit, render
-from rostools.errors import UsageError
+from rostools.errors import DataLossError, UsageError
 
 if TYPE_CHECKING:
     from rostools.bag.ops import CopyReport
+    from rostools.bag.recover import RecoverReport
 
 
 BagArg = Annotated[Path, typer.Argument(help="A .bag or .mcap file.")]
@@ -244,23 +245,47 @@ def _in_place(
     run: Callable[[Path, Path, Any], CopyReport],
 ) -> None:
     """rosbag compress's way: write beside, keep the original as ``x.orig.bag``."""
+    for path, dst, keep in _targets(bags, output_dir, force):
+
+        def step(
+            progress: Any, src: Path = path, dst: Path = dst, out: Path = keep or dst
+        ) -> CopyReport:
+            return dataclasses.replace(run(src, dst, progress), output=out)
+
+        _copy_command(ctx, fmt, quiet, label, step)
+        _swap(path, dst, keep)
+
+
+def _targets(
+    bags: list[Path], output_dir: Path | None, force: bool
+) -> list[tuple[Path, Path, Path | None]]:
+    """For each bag: where to write, and the bag to replace (None with --output-dir).
+
+    Checked for every bag before any is touched, so a refusal leaves them all as they were.
+    """
+    if output_dir is not None and not output_dir.is_dir():
+        raise UsageError(f"--output-dir {output_dir} is not a folder")
+    out: list[tuple[Path, Path, Path | None]] = []
     for path in bags:
         if output_dir is not None:
-            if not output_dir.is_dir():
-                raise UsageError(f"--output-dir {output_dir} is not a folder")
-            _copy_command(ctx, fmt, quiet, label, partial(run, path, output_dir / path.name))
+            out.append((path, output_dir / path.name, None))
             continue
-        backup = path.with_name(path.stem + ".orig" + path.suffix)
+        backup = _backup_name(path)
         if backup.exists() and not force:
             raise UsageError(f"{backup} exists; use --force to replace it")
-        temp = path.with_name(path.name + ".tmp")
+        out.append((path, path.with_name(path.name + ".tmp"), path))
+    return out
 
-        def in_place(progress: Any, path: Path = path, temp: Path = temp) -> CopyReport:
-            return dataclasses.replace(run(path, temp, progress), output=path)
 
-        _copy_command(ctx, fmt, quiet, label, in_place)
-        path.replace(backup)
-        temp.replace(path)
+def _backup_name(path: Path) -> Path:
+    return path.with_name(path.stem + ".orig" + path.suffix)
+
+
+def _swap(path: Path, written: Path, keep: Path | None) -> None:
+    """Move the original to ``x.orig.bag`` and the new file into its place."""
+    if keep is not None:
+        path.replace(_backup_name(path))
+        written.replace(path)
 
 
 OutputDirOpt = Annotated[
@@ -343,20 +368,50 @@ def recover(
     from rostools.bag.recover import recover as run_recover
 
     report = run_recover(src, dst or recovered_name(src), overwrite=force)
-    fmt = output_format(ctx, fmt)
-    data = {
-        "source": str(report.source), "output": str(report.output), "format": report.format,
-        "was_indexed": report.was_indexed, "messages": report.messages,
-        "connections": report.connections, "notes": list(report.notes), "lost": list(report.lost),
-    }  # fmt: skip
-    if fmt is Format.text:
-        for note in report.notes:
-            sys.stderr.write(f"note: {note}\n")
-        sys.stderr.write(f"recovered {report.messages} messages into {report.output}\n")
-    else:
-        sys.stdout.write(render(fmt, data) + "\n")
+    _recover_report(output_format(ctx, fmt), report)
     report.raise_if_lost()
 
 
-_REINDEX_HELP = "The same as recover (rosbag reindex), without touching the original."
-app.command("reindex", help=_REINDEX_HELP)(recover)
+@app.command()
+def reindex(
+    ctx: typer.Context,
+    bags: Annotated[list[Path], typer.Argument(help="Bags to reindex.")],
+    output_dir: OutputDirOpt = None,
+    force: Annotated[
+        bool, typer.Option("--force", "-f", help="Replace an existing x.orig.bag backup.")
+    ] = False,
+    quiet: Annotated[bool, typer.Option("--quiet", "-q", help="No report line.")] = False,
+    fmt: FormatOpt = None,
+) -> None:
+    """Reindex bags in place, keeping each original as x.orig.bag (rosbag reindex).
+
+    Each bag is rebuilt as ``recover`` does, or written into ``--output-dir``; exit 6 if
+    anything was lost.
+    """
+    from rostools.bag.recover import recover as run_recover
+
+    fmt = output_format(ctx, fmt)
+    lost: list[str] = []
+    for path, dst, keep in _targets(bags, output_dir, force):
+        report = run_recover(path, dst, overwrite=True)
+        _swap(path, dst, keep)
+        report = dataclasses.replace(report, output=keep or dst)
+        _recover_report(fmt, report, quiet)
+        lost += [f"{path}: {what}" for what in report.lost]
+    if lost:
+        raise DataLossError("lost data: " + "; ".join(lost))
+
+
+def _recover_report(fmt: Format, report: RecoverReport, quiet: bool = False) -> None:
+    if fmt is not Format.text:
+        data = {
+            "source": str(report.source), "output": str(report.output), "format": report.format,
+            "was_indexed": report.was_indexed, "messages": report.messages,
+            "connections": report.connections, "notes": list(report.notes),
+            "lost": list(report.lost),
+        }  # fmt: skip
+        sys.stdout.write(render(fmt, data) + "\n")
+    elif not quiet:
+        for note in report.notes:
+            sys.stderr.write(f"note: {note}\n")
+        sys.stderr.write(f"recovered {report.messages} messages into {report.output}\n")

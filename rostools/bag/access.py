@@ -157,6 +157,27 @@ def latched_before(
     return sorted(last.values(), key=lambda m: m[1])
 
 
+def require_ros1(reader: BagReader, what: str, topics: Collection[str] | None = None) -> None:
+    """Refuse in one line to decode or rewrite messages that are not ROS 1 (ROS 2 CDR, JSON).
+
+    ``what`` names the command; ``topics`` limits the check to the topics it will read.
+    """
+    from rostools.bag.mcap_reader import McapReader
+
+    if not isinstance(reader, McapReader):
+        return
+    for channel in reader.channels.values():
+        if channel.message_encoding == "ros1" or (topics and channel.topic not in topics):
+            continue
+        schema = reader.schemas.get(channel.schema_id)
+        kind = "ROS 2 CDR" if channel.message_encoding == "cdr" else repr(channel.message_encoding)
+        raise UnsupportedBagError(
+            f"{reader.path}: {channel.topic} holds {kind} messages"
+            f" ({schema.name if schema else 'no schema'}); {what} does not support {kind},"
+            " only ROS 1 messages"
+        )
+
+
 def copy_extras(
     reader: BagReader, writer: BagWriter, start: int | None = None, end: int | None = None
 ) -> tuple[int, int]:

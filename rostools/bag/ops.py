@@ -13,9 +13,15 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Final
 
-from rostools.bag.access import copy_extras, format_for_name, latched_before, open_bag, open_writer
+from rostools.bag.access import (
+    copy_extras,
+    format_for_name,
+    latched_before,
+    open_bag,
+    open_writer,
+    require_ros1,
+)
 from rostools.bag.base import BagReader, BagWriter, Targets
-from rostools.bag.mcap_reader import McapReader
 from rostools.bag.model import BagUsageError, Connection, UnsupportedBagError
 from rostools.bag.ordering import RawMessage
 from rostools.errors import RostoolsError
@@ -222,7 +228,7 @@ def _copy(
         raise BagUsageError(f"cannot use the same file as input and output: {src}")
     kind = format or format_for_name(dst)
     with open_bag(src) as reader:
-        _check_ros1(reader, kind)
+        require_ros1(reader, f"writing to .{kind}", topics)
         total = reader.info().message_count
         writer = open_writer(dst, kind, compression, chunk_size, overwrite=overwrite)
         try:
@@ -295,17 +301,6 @@ def _counting(stream: Iterator[RawMessage], progress: Progress, total: int) -> I
         if done % PROGRESS_EVERY == 0:
             progress(done, total)
         yield message
-
-
-def _check_ros1(reader: BagReader, kind: str) -> None:
-    """Refuse to put non-ROS 1 messages (ROS 2 CDR, JSON, ...) under the ROS 1 profile."""
-    if isinstance(reader, McapReader):
-        for channel in reader.channels.values():
-            if channel.message_encoding != "ros1":
-                raise UnsupportedBagError(
-                    f"{reader.path}: channel {channel.topic} holds {channel.message_encoding!r}"
-                    f" messages; only ROS 1 messages can go into a {kind} file"
-                )
 
 
 def _chunk_for_chunk(

@@ -11,7 +11,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
-from rostools.bag.access import copy_extras, format_for_name, open_bag, open_writer
+from rostools.bag.access import copy_extras, format_for_name, open_bag, open_writer, require_ros1
 from rostools.bag.base import Targets
 from rostools.bag.model import BagDataLossError, BagUsageError, CompressionStats
 
@@ -64,6 +64,7 @@ def recover(
     if dst.exists() and src.resolve() == dst.resolve():
         raise BagUsageError(f"cannot recover {src} into itself; give another output file")
     with open_bag(src) as reader:
+        require_ros1(reader, f"writing to .{format_for_name(dst)}")
         reader.skip_damaged = True
         info = reader.info()
         writer = open_writer(

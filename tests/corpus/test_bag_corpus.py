@@ -341,3 +341,30 @@ def test_convert_keeps_mcap_attachments_and_metadata(path: Path, tmp_path: Path)
     assert stats is not None and stats.attachment_count + stats.metadata_count == len(expected)
     to_bag = convert(path, tmp_path / "out.bag")
     assert (to_bag.extras_copied, to_bag.extras_left_out) == (0, len(expected))
+
+
+TALKER = CORPUS / "mcap" / "rosbag2" / "rosbag2_py" / "talker" / "talker.mcap"
+
+
+@pytest.mark.parametrize(
+    ("args", "command"),
+    [
+        (["topic", "echo", "-b", "{bag}", "/topic", "-n", "1"], "topic echo -b"),
+        (["bag", "filter", "{bag}", "{tmp}/out.bag"], "writing to .bag"),
+        (["bag", "convert", "{bag}", "{tmp}/out.mcap"], "writing to .mcap"),
+        (["bag", "play", "{bag}", "-d", "0"], "bag play"),
+        (["bag", "recover", "{bag}", "{tmp}/out.mcap"], "writing to .mcap"),
+    ],
+    ids=lambda v: v if isinstance(v, str) else None,
+)
+def test_ros2_cdr_mcap_is_refused_in_one_line_not_misdecoded(
+    args: list[str], command: str, tmp_path: Path
+) -> None:
+    """Issue 13, defect 5: echo used to decode CDR as ROS 1 ("shorter than its type says")."""
+    filled = [a.replace("{bag}", str(TALKER)).replace("{tmp}", str(tmp_path)) for a in args]
+    done = run_cli(*filled)
+    assert done.returncode == 1 and done.stdout == "", done.stdout
+    assert done.stderr.count("\n") == 1 and "Traceback" not in done.stderr
+    assert "holds ROS 2 CDR messages" in done.stderr
+    assert f"{command} does not support ROS 2 CDR" in done.stderr
+    assert not list(tmp_path.iterdir())

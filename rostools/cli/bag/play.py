@@ -164,7 +164,7 @@ def play(
     Remap topics with old:=new arguments. Keys: space pauses, s steps while paused, t turns
     --pause-topics on and off. The service ~pause_playback (std_srvs/SetBool) pauses too.
     """
-    from rostools.bag.access import open_bag
+    from rostools.bag.access import open_bag, require_ros1
     from rostools.bag.play import Player, PlayOptions
 
     paths, wanted = split_bags_and_topics(bags or [], topics or [])
@@ -185,6 +185,8 @@ def play(
     show_status = not quiet and out is Format.text and sys.stderr.isatty()
     with contextlib.ExitStack() as stack:
         readers = [stack.enter_context(open_bag(p)) for p in paths]
+        for reader in readers:
+            require_ros1(reader, "bag play", wanted)
 
         async def main(node: Node, stop: asyncio.Event) -> int:
             import asyncio

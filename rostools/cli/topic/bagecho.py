@@ -14,7 +14,7 @@ if TYPE_CHECKING:
 
 def echo_bag(path: Path, name: str | None, store: TypeStore, opts: EchoOptions) -> None:
     """Print the messages of ``name`` (a topic, maybe with a field path), or of every topic."""
-    from rostools.bag.access import open_bag
+    from rostools.bag.access import open_bag, require_ros1
     from rostools.cli.topic.printing import Echo
     from rostools.errors import InvalidDataError
     from rostools.rosgraph.topics import split_field
@@ -28,6 +28,7 @@ def echo_bag(path: Path, name: str | None, store: TypeStore, opts: EchoOptions) 
                 raise NotFoundError(f"topic {name} is not in {path}")
             opts.field = ref.field
             topics = [ref.topic]
+        require_ros1(bag, "topic echo -b", topics)
         echo = Echo(store, opts)
         for conn, t_ns, data in bag.messages(topics=topics):
             try:

@@ -2,14 +2,19 @@
 
 from __future__ import annotations
 
+import re
+import signal
 import struct
 import subprocess
+import sys
+import time
 from pathlib import Path
 
 import pytest
 
 from rostools.bag.access import open_writer
 from tests.support.env import needs_ros1, run_cli
+from tests.support.procs import Proc, ros_env, wait_for
 
 pytestmark = [pytest.mark.interop, needs_ros1]
 
@@ -62,3 +67,59 @@ def test_list_of_one_topic_counts_its_messages(tmp_path: Path) -> None:
         )  # fmt: skip
         assert theirs.returncode == 0, theirs.stderr
         assert ours.stdout == theirs.stdout and "message(s) from" in ours.stdout
+
+
+def _averages(text: str, what: str) -> list[float]:
+    return [float(v) for v in re.findall(rf"average {what}: (-?[0-9.]+)", text)]
+
+
+def test_rates_follow_sim_time_from_clock(
+    tmp_path: Path, rostools_master: str, cli_env: dict[str, str]
+) -> None:
+    """Under /use_sim_time, hz and delay use /clock as rostopic's do (issue 13, defect 2).
+
+    A bag recorded at 10 Hz in 2020, stamps equal to record times, played at twice its pace
+    with --clock: in ROS time the rate is 10 Hz and the delay near 0; by the wall clock the
+    rate is 20 Hz (hz --wall-time), and the delay was years (430.547 s in the issue's run).
+    """
+    bag = tmp_path / "sim.bag"
+    start = 1_600_000_000_000_000_000
+    with open_writer(bag) as writer:
+        conn = writer.add_connection(
+            "/pose", "geometry_msgs/PointStamped", POINT_STAMPED_MD5, POINT_STAMPED_DEF
+        )
+        for i in range(400):
+            t = start + i * 100_000_000
+            header = struct.pack("<III", i, t // 10**9, t % 10**9) + struct.pack("<I", 0)
+            writer.write(conn, t, header + struct.pack("<3d", i, 0.0, 0.0))
+    assert run_cli("param", "set", "/use_sim_time", "true", env=cli_env).returncode == 0
+    here = [sys.executable, "-m", "rostools"]
+    player = Proc([*here, "bag", "play", str(bag), "--clock", "-r", "2"], env=cli_env)
+    meters: dict[str, Proc] = {}
+    try:
+        wait_for(lambda: "/pose" in run_cli("topic", "list", env=cli_env).stdout, 15, "play")
+        ros = ros_env(rostools_master, tmp_path / "ros_home")
+        meters = {
+            "ours hz": Proc([*here, "topic", "hz", "/pose"], env=cli_env),
+            "ours wall hz": Proc([*here, "topic", "hz", "/pose", "--wall-time"], env=cli_env),
+            "ours delay": Proc([*here, "topic", "delay", "/pose"], env=cli_env),
+            "rostopic hz": Proc(["rostopic", "hz", "/pose"], env=ros),
+            "rostopic delay": Proc(["rostopic", "delay", "/pose"], env=ros),
+        }
+        time.sleep(6)
+    finally:
+        out = {}
+        for proc in meters.values():
+            proc.signal(signal.SIGINT)
+        for name, proc in meters.items():
+            try:
+                out[name] = proc.output()[0]
+            finally:
+                proc.stop()
+        player.stop()
+    rates = {k: _averages(v, "rate")[-2:] for k, v in out.items() if "hz" in k}
+    delays = {k: _averages(v, "delay")[-2:] for k, v in out.items() if "delay" in k}
+    assert all(rates.values()) and all(delays.values()), out
+    assert all(9.0 < r < 11.0 for r in rates["rostopic hz"] + rates["ours hz"]), rates
+    assert all(18.0 < r < 22.0 for r in rates["ours wall hz"]), rates
+    assert all(abs(d) < 0.5 for d in delays["rostopic delay"] + delays["ours delay"]), delays

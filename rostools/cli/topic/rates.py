@@ -33,17 +33,35 @@ REPORT_PERIOD = 1.0
 
 
 class Meter:
-    """Resolves topics, subscribes, feeds a per-topic sink, reports every second."""
+    """Resolves topics, subscribes, feeds a per-topic sink, reports every second.
+
+    Under ``/use_sim_time`` the sink's times are ROS time from ``/clock``, as rostopic's, and
+    messages that come before the first ``/clock`` are not counted; ``wall_time`` keeps the
+    wall clock.
+    """
 
     def __init__(
-        self, topics: list[str], timeout: float | None, fmt: Format, tcp_nodelay: bool = False
+        self,
+        topics: list[str],
+        timeout: float | None,
+        fmt: Format,
+        tcp_nodelay: bool = False,
+        wall_time: bool = False,
     ) -> None:
+        from rostools.node.clock import RosClock
+
         self.topics = topics
         self.timeout = timeout
         self.fmt = fmt
         self.tcp_nodelay = tcp_nodelay
+        self.wall_time = wall_time
+        self.clock = RosClock()
         self.received = 0
         self.error: BaseException | None = None
+
+    def now(self) -> float:
+        """Seconds on the meter's clock: ROS time under sim time, else monotonic."""
+        return self.clock.now() / 1e9 if self.clock.sim else time.monotonic()
 
     async def run(
         self,
@@ -58,6 +76,8 @@ class Meter:
 
         deadline = time.monotonic() + self.timeout if self.timeout is not None else None
         store = TypeStore.default()
+        if not self.wall_time:
+            await self.clock.start(node)
         for topic in self.topics:
             ref = await wait_for_topic(node, topic, store, deadline, stop)
             if ref is None:
@@ -68,6 +88,10 @@ class Meter:
             def on_frames(
                 frames: list[Frame], conn: InboundConnection, now: float, t: str = ref.topic
             ) -> None:
+                if self.clock.sim:
+                    if not self.clock.valid:
+                        return  # sim time is zero until the first /clock: rostopic skips these
+                    now = self.clock.now() / 1e9
                 self.received += len(frames)
                 try:
                     sink(t, frames, conn, now)
@@ -75,7 +99,10 @@ class Meter:
                     self.error = err
                     stop.set()
 
-            await node.subscribe(ref.topic, on_frames, tcp_nodelay=self.tcp_nodelay)
+            if ref.topic == "/clock" and self.clock.sim:
+                self.clock.forward = on_frames  # the clock's subscription is this node's one
+            else:
+                await node.subscribe(ref.topic, on_frames, tcp_nodelay=self.tcp_nodelay)
             sys.stderr.write(f"subscribed to [{ref.topic}]\n")
         next_report = time.monotonic() + REPORT_PERIOD
         while True:
@@ -111,7 +138,9 @@ def hz(
     filter_expr: FilterOpt = None,
     wall_time: Annotated[
         bool,
-        typer.Option("--wall-time", help="rostopic's flag; rates always use the wall clock."),
+        typer.Option(
+            "--wall-time", help="Time arrivals by the wall clock, even under /use_sim_time."
+        ),
     ] = False,
     tcp_nodelay: NodelayOpt = False,
     timeout: TimeoutOpt = None,
@@ -144,8 +173,7 @@ def hz(
         else:
             sys.stdout.write(rate_table(rows))
 
-    del wall_time  # arrival times are always taken from the wall clock
-    _run(ctx, Meter(names, timeout, fmt, tcp_nodelay), sink, report)
+    _run(ctx, Meter(names, timeout, fmt, tcp_nodelay, wall_time), sink, report)
 
 
 def _filter(
@@ -188,19 +216,20 @@ def bw(
     fmt = output_format(ctx, fmt)
     name = script_resolve(topic, "rostopic")
     meter = BandwidthMeter(window or 100)
+    runner = Meter([name], timeout, fmt)
 
     def sink(t: str, frames: list[Frame], conn: InboundConnection, now: float) -> None:
         meter.add([len(f) for f in frames], now)
 
     def report() -> None:
-        stats = meter.report()
+        stats = meter.report(runner.now())
         if stats is None:
             return
         row = {"topic": name, "bytes_per_s": stats.rate, "mean": stats.mean,
                "min": stats.min, "max": stats.max, "window": stats.window}  # fmt: skip
         output.write(fmt, row, lambda _: format_bandwidth(stats))
 
-    _run(ctx, Meter([name], timeout, fmt), sink, report)
+    _run(ctx, runner, sink, report)
 
 
 @app.command()
@@ -219,6 +248,7 @@ def delay(
     fmt = output_format(ctx, fmt)
     name = script_resolve(topic, "rostopic")
     meter = DelayMeter(window or DEFAULT_WINDOW)
+    runner = Meter([name], timeout, fmt, tcp_nodelay)
     base = TypeStore.default()
     checked: dict[str, bool] = {}
 
@@ -230,8 +260,8 @@ def delay(
             checked[kind] = store.msg(kind).has_header
         if not checked[kind]:
             raise NotFoundError(f"{t} carries {kind}, which has no Header to take a stamp from")
-        wall = time.time()
-        meter.add([wall - (s + ns * 1e-9) for s, ns in (_STAMP.unpack_from(f, 4) for f in frames)])
+        ref = runner.clock.now() / 1e9  # ROS time: /clock under sim time, else the wall clock
+        meter.add([ref - (s + ns * 1e-9) for s, ns in (_STAMP.unpack_from(f, 4) for f in frames)])
 
     def report() -> None:
         stats = meter.report()
@@ -241,4 +271,4 @@ def delay(
                "std_dev": stats.std_dev, "window": stats.window}  # fmt: skip
         output.write(fmt, row, lambda _: format_delay(stats))
 
-    _run(ctx, Meter([name], timeout, fmt, tcp_nodelay), sink, report)
+    _run(ctx, runner, sink, report)

@@ -158,7 +158,10 @@ def format_delay(stats: Stats) -> str:
 
 
 def rate_table(rows: list[tuple[str, Stats]]) -> str:
-    """rostopic hz's table for several topics (each row with its own window)."""
+    """rostopic hz's report for several topics: its table, then the blank line its print adds.
+
+    Each row has its own window.
+    """
     header = ["topic", "rate", "min_delta", "max_delta", "std_dev", "window"]
     cols = [
         [t, f"{s.value:.4}", f"{s.min:.4}", f"{s.max:.4}", f"{s.std_dev:.4}", str(s.window)]
@@ -168,4 +171,4 @@ def rate_table(rows: list[tuple[str, Stats]]) -> str:
     lines = ["   ".join(h.center(w) for h, w in zip(header, widths, strict=True))]
     lines.append("=" * (sum(widths) + 3 * (len(header) - 1)))
     lines += ["   ".join(c.ljust(w) for c, w in zip(row, widths, strict=True)) for row in cols]
-    return "\n".join(lines) + "\n"
+    return "\n".join(lines) + "\n\n"

@@ -17,6 +17,7 @@ from rostools.rosgraph.masterapi import SERVICE_TIMEOUT
 
 if TYPE_CHECKING:
     from rostools.msgs.store import TypeStore
+    from rostools.msgs.text import TextOptions
     from rostools.rosgraph.masterapi import MasterProxy
     from rostools.rosgraph.serviceclient import BlockingServiceClient
 
@@ -212,6 +213,8 @@ def call(
     wait: Annotated[
         bool, typer.Option("--wait", help="Wait for the service to appear (up to --timeout).")
     ] = False,
+    nostr: Annotated[bool, typer.Option("--nostr", help="Hide strings, as echo does.")] = False,
+    noarr: Annotated[bool, typer.Option("--noarr", help="Hide arrays, as echo does.")] = False,
     timeout: TimeoutOpt = SERVICE_TIMEOUT,
     fmt: FormatOpt = None,
     msg_path: MsgPathOpt = None,
@@ -219,6 +222,7 @@ def call(
     """Call a service (rosservice call); stdin YAML documents make one call each."""
     from rostools.msgs.codec import Codec
     from rostools.msgs.fill import Filler, parse_yaml_args
+    from rostools.msgs.text import TextOptions
 
     name = script_resolve(service, "rosservice")
     proxy = master(ctx, "rosservice")
@@ -248,7 +252,7 @@ def call(
             raise UsageError(f"{err}", hint=f"{name} takes: {fields}") from err
         answer = client.call(_caller(), md5, request.serialize())
         response = codec.decode(spec.response.name, answer)
-        _print(codec, spec, request, response, verbose, fmt)
+        _print(codec, spec, request, response, verbose, fmt, TextOptions(nostr, noarr))
 
 
 def _wait_for(proxy: MasterProxy, name: str, timeout: float) -> None:
@@ -259,14 +263,23 @@ def _wait_for(proxy: MasterProxy, name: str, timeout: float) -> None:
         time.sleep(0.1)
 
 
-def _print(codec: Any, spec: Any, request: Any, response: Any, verbose: bool, fmt: Format) -> None:
+def _print(
+    codec: Any,
+    spec: Any,
+    request: Any,
+    response: Any,
+    verbose: bool,
+    fmt: Format,
+    options: TextOptions,
+) -> None:
     from rostools.msgs import plain, text
 
     if fmt is Format.text:
         out = ""
         if verbose:
-            out = text.formatter(codec, text.message_type(spec.request.name))(request) + "\n---\n"
-        out += text.formatter(codec, text.message_type(spec.response.name))(response)
+            show = text.formatter(codec, text.message_type(spec.request.name), options)
+            out = show(request) + "\n---\n"
+        out += text.formatter(codec, text.message_type(spec.response.name), options)(response)
         sys.stdout.write(out + "\n")
     else:
         data = plain.to_plain(codec, text.message_type(spec.response.name))(response)

@@ -57,6 +57,7 @@ def test_every_service_command(services: Proc, cli_env: dict[str, str]) -> None:
     )
     assert piped.stdout == "sum: 2\nsum: 4\n"
     assert cli("call", "/trigger") == 'success: True\nmessage: "triggered 1"\n'
+    assert cli("call", "/trigger", "--nostr") == 'success: True\nmessage: "<string length: 11>"\n'
 
 
 @pytest.mark.parametrize(

@@ -294,3 +294,33 @@ def test_pub_verbose_prints_every_message(rostools_master: str, cli_env: dict[st
     )  # fmt: skip
     said = [ln for ln in done.stdout.splitlines() if ln == 'publishing data: "v"']
     assert len(said) >= 15, done.stdout
+
+
+def test_pub_use_rostime_stamps_with_clock(rostools_master: str, cli_env: dict[str, str]) -> None:
+    """``pub --use-rostime``: ``now`` is /clock's time under sim time; without it, wall time.
+
+    rostopic pub stamps 0 when its first /clock has not come yet (seen here, latched); ours
+    waits up to 2 s for it.
+    """
+    assert run_cli("param", "set", "/use_sim_time", "true", env=cli_env).returncode == 0
+    here = [sys.executable, "-m", "rostools", "topic", "pub"]
+    clock = Proc(
+        [*here, "/clock", "rosgraph_msgs/Clock", "{clock: {secs: 1234}}", "-r", "20"], env=cli_env
+    )
+    header = ["std_msgs/Header", "{stamp: now}"]
+    pubs = [
+        Proc([*here, "/ros", *header, "--use-rostime"], env=cli_env),
+        Proc([*here, "/wall", *header], env=cli_env),
+    ]
+    try:
+        stamps = {}
+        for topic in ("/ros", "/wall"):
+            echo = run_cli(
+                "topic", "echo", topic, "-n", "1", "-F", "json", "--timeout", "20", env=cli_env
+            )
+            assert echo.returncode == 0, echo.stderr
+            stamps[topic] = json.loads(echo.stdout)["stamp"]["secs"]
+        assert stamps["/ros"] == 1234 and stamps["/wall"] > 1_700_000_000, stamps
+    finally:
+        for proc in [*pubs, clock]:
+            proc.stop()

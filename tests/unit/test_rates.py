@@ -60,6 +60,7 @@ def test_rostopic_text_formats() -> None:
         "window",
     ]
     assert table.splitlines()[2].split()[-1] == "3" and table.splitlines()[3].split()[-1] == "3"
+    assert table.endswith("3     \n\n")  # rostopic prints a table that ends in a newline
 
 
 def test_bandwidth() -> None:

@@ -28,14 +28,24 @@ ONCE_LINGER = 3.0
 STREAM_RATE = 10.0
 #: How long messages from a file or stdin wait for a first subscriber (rostopic).
 SUBSCRIBER_WAIT = 5.0
+#: How long ``--use-rostime`` waits for a first ``/clock`` under sim time.
+CLOCK_WAIT = 2.0
 #: At most this many messages per event-loop turn, so that sockets keep being served.
 MAX_BURST = 5000
 
 
 def _message_source(
-    filler: Any, type_name: str, args: list[str], file: Path | None, substitute: bool
+    filler: Any,
+    type_name: str,
+    args: list[str],
+    file: Path | None,
+    substitute: bool,
+    now: Callable[[], Any],
 ) -> tuple[Callable[[], Iterator[Any]], bool]:
-    """A generator of messages, and whether it is one message repeated."""
+    """A generator of messages, and whether it is one message repeated.
+
+    ``now`` gives the time that ``now`` and ``auto`` stand for when ``-s`` re-evaluates them.
+    """
     from rostools.msgs.fill import parse_yaml_args
 
     spec = filler.codec.store.msg(type_name)
@@ -53,7 +63,7 @@ def _message_source(
     if args:
         values = parse_yaml_args(args)
         if substitute:
-            return (lambda: _forever(lambda: _refill(filler, type_name, values))), True
+            return (lambda: _forever(lambda: _refill(filler, type_name, values, now))), True
         msg = filler.message(type_name, values)
         return (lambda: _forever(lambda: msg)), True
     if not spec.fields:
@@ -64,10 +74,8 @@ def _message_source(
     return (lambda: (filler.message(type_name, [d]) for d in _stdin_docs())), False
 
 
-def _refill(filler: Any, type_name: str, values: list[Any]) -> Any:
-    from rostools.msgs.message import Time
-
-    filler.now = Time.now()
+def _refill(filler: Any, type_name: str, values: list[Any], now: Callable[[], Any]) -> Any:
+    filler.now = now()
     return filler.message(type_name, values)
 
 
@@ -94,6 +102,23 @@ def _stdin_docs() -> Iterator[Any]:
             lines.append(line)
     if lines:
         yield from _yaml_docs("".join(lines), "stdin")
+
+
+async def _ros_now(node: Node, stop: asyncio.Event, limit: float | None) -> Callable[[], Any]:
+    """A function giving ROS time; under sim time, once the first ``/clock`` has come.
+
+    It waits for that at most ``CLOCK_WAIT`` seconds (or the --timeout); rospy would stamp 0.
+    """
+    from rostools.msgs.message import Time
+    from rostools.node.clock import RosClock
+    from rostools.node.session import first
+
+    clock = RosClock()
+    await clock.start(node)
+    give_up = time.monotonic() + (CLOCK_WAIT if limit is None else min(CLOCK_WAIT, limit))
+    while not clock.valid and not stop.is_set() and time.monotonic() < give_up:
+        await first(stop.wait(), timeout=0.02)
+    return lambda: Time(*divmod(clock.now(), 1_000_000_000))
 
 
 @app.command(context_settings={"ignore_unknown_options": True})
@@ -127,12 +152,19 @@ def pub(
     verbose: Annotated[
         bool, typer.Option("--verbose", "-v", help="Print each message published.")
     ] = False,
+    use_rostime: Annotated[
+        bool,
+        typer.Option(
+            "--use-rostime", help="now/auto are ROS time (/clock under /use_sim_time), not wall."
+        ),
+    ] = False,
     timeout: TimeoutOpt = None,
     msg_path: MsgPathOpt = None,
 ) -> None:
     """Publish messages (rostopic pub). By default: once, latched, until Ctrl-C."""
     from rostools.msgs.codec import Codec
     from rostools.msgs.fill import Filler
+    from rostools.msgs.message import Time
     from rostools.msgs.topictype import TopicType
 
     if rate is not None and not 0 < rate < math.inf:  # nan compares false both ways
@@ -154,7 +186,7 @@ def pub(
             raise NotFoundError(f"invalid message type: {msg_type}")
     codec = Codec.of(store)
     filler = Filler(codec)
-    source, repeated = _message_source(filler, msg_type, args or [], file, substitute)
+    source, repeated = _message_source(filler, msg_type, args or [], file, substitute, Time.now)
     streamed = file is not None or (not args and not repeated)
     if file is not None and rate is None:
         repeated = False  # a file's documents are sent once each unless a rate is given
@@ -176,7 +208,12 @@ def pub(
         def left() -> float | None:
             return None if deadline is None else max(deadline - time.monotonic(), 0)
 
-        messages = source()
+        messages_from = source
+        if use_rostime:
+            now = await _ros_now(node, stop, left())
+            filler.now = now()
+            messages_from = _message_source(filler, msg_type, args or [], file, substitute, now)[0]
+        messages = messages_from()
         if rate is None:  # one latched message, then wait
             msg = next(messages)
             publisher.publish(msg.serialize())

@@ -109,7 +109,7 @@ def test_record_names_like_rosbag(
 ) -> None:
     pubs = start_publishers(cli_env)
     try:
-        for args in (["-o", "pre"], ["-O", "named.mcap"], ["-O", "fmt", "--format", "mcap"], []):
+        for args in (["-o", "pre"], ["-O", "named.mcap"], ["-O", "fmt", "--storage", "mcap"], []):
             done = run_cli("bag", "record", "/latched", "-l", "1", *args, env=cli_env, cwd=tmp_path)
             assert done.returncode == 0, done.stderr
     finally:
@@ -155,8 +155,10 @@ def test_record_limit_duration_regex_and_late_topics(
 ) -> None:
     pubs = start_publishers(cli_env)
     try:
-        done = run_cli("bag", "record", "-O", str(tmp_path / "l.bag"), "-l", "5", "/h", env=cli_env)
-        assert done.returncode == 0, done.stderr
+        done = run_cli(
+            "bag", "record", "-q", "-O", str(tmp_path / "l.bag"), "-l", "5", "/h", env=cli_env
+        )
+        assert done.returncode == 0 and done.stderr == "", done.stderr  # -q: no summary either
         assert len(seqs(tmp_path / "l.bag", "/h")) == 5
         started = time.monotonic()
         done = run_cli(
@@ -322,10 +324,11 @@ def test_record_usage_errors(cli_env: dict[str, str], tmp_path: Path) -> None:
         (["/x", "--split"], "--split needs"),
         (["/x", "-O", "a", "-o", "b"], "cannot be combined"),
         (["/x", "--duration", "soon"], "bad duration"),
-        (["/x", "--format", "mcap", "--bz2"], "cannot use bz2"),
+        (["/x", "--storage", "mcap", "--bz2"], "cannot use bz2"),
         (["/x", "-O", str(tmp_path / "nowhere" / "x.bag")], "no such folder"),
         (["-a", "-l", "3"], "-l"),
         (["/x", "-L", "lots"], "bad size 'lots' for -L"),
+        (["-x", "/y"], "-x subtracts from -a or -e"),  # rosbag: "must specify a topic name"
     ):
         done = run_cli("bag", "record", *args, env=cli_env)
         assert done.returncode == 2, (args, done.stderr)

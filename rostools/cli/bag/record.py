@@ -12,7 +12,7 @@ import typer
 
 from rostools.bag.access import WRITE_COMPRESSIONS
 from rostools.cli.bag.group import app
-from rostools.cli.common import node_session, output_format
+from rostools.cli.common import FormatOpt, node_session, output_format
 from rostools.cli.output import Format, render
 from rostools.errors import DataLossError, UsageError
 
@@ -53,10 +53,10 @@ def parse_space(text: str) -> int:
 def output_name(
     name: str | None, prefix: str | None, storage: str | None, now: float | None = None
 ) -> tuple[Path, str]:
-    """The file to write and its format, from ``-O``, ``-o`` and ``--format``.
+    """The file to write and its format, from ``-O``, ``-o`` and ``--storage``.
 
     As rosbag: ``-O x`` writes ``x.bag``; ``-o p`` writes ``p_<date-time>.bag``; neither
-    writes ``<date-time>.bag``. A name ending in ``.mcap`` means MCAP, as ``--format mcap`` does.
+    writes ``<date-time>.bag``. A name ending in ``.mcap`` means MCAP, as ``--storage mcap`` does.
     """
     if name is not None and prefix is not None:
         raise UsageError("-O and -o cannot be combined")
@@ -64,7 +64,7 @@ def output_name(
     suffix = Path(given).suffix.lower() if given else ""
     storage = storage or ("mcap" if suffix == ".mcap" else "bag")
     if storage not in ("bag", "mcap"):
-        raise UsageError(f"unknown --format {storage!r} (bag or mcap)")
+        raise UsageError(f"unknown --storage {storage!r} (bag or mcap)")
     ext = "." + storage
     if suffix in (".bag", ".mcap"):
         given = given[: -len(suffix)] if given else given
@@ -133,6 +133,7 @@ class LiveTable:
         self.live = Live(console=Console(stderr=True), auto_refresh=False, transient=False)
         self.last: dict[str, tuple[float, int, int]] = {}
         self.rates: dict[str, tuple[float, float]] = {}
+        self.pubs: dict[str, int] = {}
         self.next_draw = 0.0
 
     def __enter__(self) -> LiveTable:
@@ -148,6 +149,17 @@ class LiveTable:
         if now < self.next_draw:
             return
         self.next_draw = now + 0.5
+        self.pubs = {topic: rec.publishers(topic) for topic in rec.stats}
+        self._draw(rec, now)
+
+    def last_frame(self, rec: Recorder) -> None:
+        """The frame left on screen: what was written, and the publishers recorded from.
+
+        By now the recorder has unsubscribed, so it has no publishers left to count.
+        """
+        self._draw(rec, time.monotonic())
+
+    def _draw(self, rec: Recorder, now: float) -> None:
         for topic, s in rec.stats.items():
             t0, m0, b0 = self.last.get(topic, (rec.started, 0, 0))
             if now - t0 >= 1.0:
@@ -166,15 +178,15 @@ class LiveTable:
             f"{_size(free)} free, {now - rec.started:.0f} s"
         )
         table = Table(title=title, title_justify="left")
-        for col in ("topic", "type", "pubs", "msgs", "rate", "bandwidth", "drops"):
+        for col in ("topic", "type", "pubs", "recorded", "rate", "bandwidth", "drops"):
             table.add_column(col, justify="left" if col in ("topic", "type") else "right")
         for topic, s in sorted(rec.stats.items()):
             hz, bw = self.rates.get(topic, (0.0, 0.0))
             drops = f"[bold red]{s.drops}[/]" if s.drops else "0"
             kind = s.type or "[dim]no publisher yet[/]"
-            pubs = str(rec.publishers(topic))
+            pubs = str(self.pubs.get(topic, 0))
             table.add_row(
-                topic, kind, pubs, str(s.messages), f"{hz:.1f} Hz", f"{_size(bw)}/s", drops
+                topic, kind, pubs, str(s.written), f"{hz:.1f} Hz", f"{_size(bw)}/s", drops
             )
         return table
 
@@ -209,7 +221,10 @@ def record(
         str | None, typer.Option("--output-prefix", "-o", help="A prefix for a dated file name.")
     ] = None,
     storage: Annotated[
-        str | None, typer.Option("--format", help="bag or mcap (default: from -O, else bag).")
+        str | None,
+        typer.Option(
+            "--storage", "-s", help="File format: bag or mcap (default: from -O, else bag)."
+        ),
     ] = None,
     split: Annotated[
         bool, typer.Option("--split", help="Start a new file at --size or --duration.")
@@ -261,17 +276,17 @@ def record(
         typer.Option("--publish", "-p", help="Announce each new file on begin_write (latched)."),
     ] = False,
     quiet: Annotated[bool, typer.Option("--quiet", "-q", help="No live table.")] = False,
-    fmt: Annotated[
-        Format | None,
-        typer.Option("-F", "--output-format", help="Summary format (--format is the file's)."),
-    ] = None,
+    fmt: FormatOpt = None,
 ) -> None:
     """Record topics to a .bag or MCAP file (rosbag record). Exit 6 if messages were dropped."""
     from rostools.bag.record import Recorder, RecordOptions
 
     topics = topics or []
-    if not (topics or all_ or node or (regex and topics) or exclude or types):
-        raise UsageError("give topics to record, or -a, -e REGEX, --topic-types or --node NAME")
+    if not (topics or all_ or node or types):
+        hint = "-x subtracts from -a or -e" if exclude else None
+        raise UsageError(
+            "give topics to record, or -a, -e REGEX, --topic-types or --node NAME", hint=hint
+        )
     if all_ and topics:
         raise UsageError("-a records every topic; do not also name topics")
     for value, flag in ((size, "--size"), (max_splits, "--max-splits"), (limit, "-l")):
@@ -305,13 +320,14 @@ def record(
             return rec
         with LiveTable() as table:
             await rec.run(stop, table.tick)
-            table.tick(rec)
+            table.last_frame(rec)
         return rec
 
     rec = node_session(ctx, main, "rostools_record")
     data = summary_data(rec)
     if out is Format.text:
-        sys.stderr.write(summary_text(data) + "\n")
+        if not quiet:
+            sys.stderr.write(summary_text(data) + "\n")
     else:
         sys.stdout.write(render(out, data) + "\n")
     if rec.drops:

@@ -33,6 +33,8 @@ from rostools.node.session import first
 FINE_SLEEP = 0.002
 #: The longest the event loop goes unserved while messages are sent back to back.
 YIELD_PERIOD = 0.001
+#: How long play waits for the subscribers the master listed to connect before it starts.
+CONNECT_GRACE = 2.0
 
 
 @dataclass
@@ -183,13 +185,16 @@ class Player:
     async def run(self, stop: asyncio.Event, show: Callable[[Status], None] | None = None) -> int:
         """Advertise, wait ``-d``, play (looping if asked); the number of messages sent."""
         await self.advertise()
+        advertised = time.monotonic()
+        await self._until_connected(stop, advertised + CONNECT_GRACE)
         if self.opts.wait_for_subscribers:
             while not stop.is_set() and any(
                 p.subscriber_count == 0 for p in self.publishers.values()
             ):
                 await first(stop.wait(), timeout=0.05)
-        if self.opts.delay > 0:
-            await first(stop.wait(), timeout=self.opts.delay)
+        rest = advertised + self.opts.delay - time.monotonic()
+        if rest > 0:
+            await first(stop.wait(), timeout=rest)
         if self.from_ns > self.bag_start:  # -s: what a late subscriber would still get
             for conn, _, data in latched_before(self.readers, self._topics(), self.from_ns):
                 self._publish(conn, data)
@@ -205,6 +210,18 @@ class Player:
         if self.opts.keep_alive:
             await stop.wait()
         return self.status.published
+
+    async def _until_connected(self, stop: asyncio.Event, deadline: float) -> None:
+        """Until every subscriber the master listed at advertising has connected.
+
+        A roscpp subscriber takes about 250 ms to connect (it polls its XML-RPC replies every
+        100 ms), longer than ``-d``'s 0.2 s: without this, it missed the first messages. A
+        listed subscriber that never connects (a dead node) holds play up to ``deadline``.
+        """
+        while not stop.is_set() and time.monotonic() < deadline:
+            if all(p.subscriber_count >= len(p.reported) for p in self.publishers.values()):
+                return
+            await first(stop.wait(), timeout=0.005)
 
     async def _play_once(self, stop: asyncio.Event, show: Callable[[Status], None] | None) -> None:
         messages = merged_messages(self.readers, self._topics(), self.from_ns, self.until_ns)

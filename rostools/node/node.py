@@ -175,7 +175,8 @@ class Node:
         pub = self.publishers.get(topic)
         if pub is None:
             pub = self.publishers[topic] = Publisher(self, topic, topic_type, latch, queue_size)
-            await self.master_call("registerPublisher", topic, topic_type.type, self.uri)
+            uris = await self.master_call("registerPublisher", topic, topic_type.type, self.uri)
+            pub.reported = [u for u in uris if isinstance(u, str)] if isinstance(uris, list) else []
         return pub
 
     async def subscribe(

@@ -39,6 +39,8 @@ class Publisher:
         self.closed = False
         #: Caller ids of the subscribers that reached us, connected or not.
         self.contacted: set[str] = set()
+        #: The subscribers the master listed when we advertised (their XML-RPC URIs).
+        self.reported: list[str] = []
 
     @property
     def subscriber_count(self) -> int:

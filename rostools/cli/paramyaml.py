@@ -12,11 +12,13 @@ import base64
 import math
 import operator
 import re
-import xmlrpc.client
 from collections.abc import Callable
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import yaml
+
+if TYPE_CHECKING:
+    import xmlrpc.client
 
 from rostools import yamlio
 from rostools.errors import UsageError
@@ -66,6 +68,8 @@ def _degrees(loader: yaml.SafeLoader, node: yaml.Node) -> float:
 
 
 def _binary(loader: yaml.SafeLoader, node: yaml.Node) -> xmlrpc.client.Binary:
+    import xmlrpc.client  # only for a !!binary: commands never pay 30 ms for it otherwise
+
     return xmlrpc.client.Binary(loader.construct_yaml_binary(node))  # type: ignore[arg-type]
 
 
@@ -84,17 +88,23 @@ class ParamDumper(yaml.SafeDumper):
     """safe_dump plus ``!!binary`` for XML-RPC binaries and dates as text."""
 
 
-def _represent_binary(dumper: yaml.SafeDumper, data: xmlrpc.client.Binary) -> yaml.Node:
-    text = base64.b64encode(data.data).decode()
-    return dumper.represent_scalar("tag:yaml.org,2002:binary", text, style="|")
+def _xmlrpc_kind(value: Any) -> str | None:
+    """``Binary`` or ``DateTime`` for ``xmlrpc.client``'s value types (without importing it)."""
+    kind = type(value)
+    return kind.__name__ if kind.__module__ == "xmlrpc.client" else None
 
 
-def _represent_date(dumper: yaml.SafeDumper, data: xmlrpc.client.DateTime) -> yaml.Node:
-    return dumper.represent_str(str(data))
+def _represent_xmlrpc(dumper: yaml.SafeDumper, data: Any) -> yaml.Node:
+    kind = _xmlrpc_kind(data)
+    if kind == "Binary":
+        text = base64.b64encode(data.data).decode()
+        return dumper.represent_scalar("tag:yaml.org,2002:binary", text, style="|")
+    if kind == "DateTime":
+        return dumper.represent_str(str(data))
+    return dumper.represent_undefined(data)
 
 
-ParamDumper.add_representer(xmlrpc.client.Binary, _represent_binary)
-ParamDumper.add_representer(xmlrpc.client.DateTime, _represent_date)
+ParamDumper.add_multi_representer(object, _represent_xmlrpc)
 
 
 #: Parameters go out as XML-RPC, which the master accepts up to 64 MiB: about a million values.
@@ -155,9 +165,10 @@ def check_value(value: Any, name: str) -> None:
 
 def to_plain(value: Any) -> Any:
     """Parameters as JSON-able data: binaries as base64 text, dates as ISO text."""
-    if isinstance(value, xmlrpc.client.Binary):
+    kind = _xmlrpc_kind(value)
+    if kind == "Binary":
         return base64.b64encode(value.data).decode()
-    if isinstance(value, xmlrpc.client.DateTime):
+    if kind == "DateTime":
         return str(value)
     if isinstance(value, dict):
         return {k: to_plain(v) for k, v in value.items()}

@@ -10,7 +10,6 @@ from __future__ import annotations
 import asyncio
 import logging
 import os
-import xmlrpc.client
 from collections.abc import Callable
 from typing import Any
 
@@ -30,6 +29,7 @@ from rostools.wire.codes import ERROR, FAILURE, SUCCESS
 from rostools.wire.rosapi import Methods, Triple
 from rostools.wire.tcpros import error_header
 from rostools.wire.xmlrpc import multicall
+from rostools.wire.xmlvalues import Fault
 
 log = logging.getLogger(__name__)
 
@@ -163,7 +163,7 @@ class Node:
             raise no_answer(self.master_uri, "master", method, timeout) from err
         except OSError as err:
             raise unreachable(err, self.master_uri, "master") from err
-        except xmlrpc.client.Fault as fault:
+        except Fault as fault:
             raise faulted(fault, self.master_uri, "master", method) from fault
         return ros_value(answer, method, "master")
 

@@ -8,10 +8,8 @@ nodes together for ``rostools node``.
 
 from __future__ import annotations
 
-import http.client
 import re
 import time
-import xmlrpc.client
 from collections.abc import Sequence
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
@@ -21,7 +19,6 @@ from rostools.errors import NotFoundError, RostoolsError, TimeoutExpired, Unreac
 from rostools.rosgraph.masterapi import (
     NODE_TIMEOUT,
     MasterProxy,
-    TimeoutTransport,
     XmlRpcNode,
 )
 
@@ -85,36 +82,20 @@ class BusConnection:
 
 def _went_away(err: BaseException) -> bool:
     """Whether a failed call failed because the node closed the connection while answering."""
-    cause = err.__context__
-    return isinstance(
-        cause, ConnectionResetError | BrokenPipeError | http.client.RemoteDisconnected
-    )
-
-
-class _OneShotTransport(TimeoutTransport):
-    """HTTP with a socket timeout that sends each request once.
-
-    The standard transport sends a request again when the connection drops before the
-    answer. A node told to shut down may drop it so, and the second try is then refused:
-    that would turn a node that did as asked into one that could not be reached.
-    """
-
-    def request(
-        self, host: Any, handler: str, request_body: Any, verbose: bool = False
-    ) -> tuple[Any, ...]:
-        result: tuple[Any, ...] = self.single_request(host, handler, request_body, verbose)
-        return result
+    return isinstance(err.__context__, ConnectionResetError | BrokenPipeError | EOFError)
 
 
 class NodeApi(XmlRpcNode):
-    """Calls to one node's slave API, each with a timeout, each sent once."""
+    """Calls to one node's slave API, each with a timeout, each sent once.
+
+    A node told to shut down may drop the connection before it answers; sent again, the
+    request would be refused, and a node that did as asked would look unreachable.
+    """
 
     def __init__(self, name: str, uri: str, caller_id: str, timeout: float) -> None:
         super().__init__(uri, caller_id, timeout, what=f"node {name}")
         self.name = name
-        self.proxy = xmlrpc.client.ServerProxy(
-            uri, transport=_OneShotTransport(timeout), allow_none=False
-        )
+        self.http.retry = False
 
     def get_pid(self) -> int:
         """The node's process id."""

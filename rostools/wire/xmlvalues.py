@@ -1,0 +1,184 @@
+"""XML-RPC calls and answers to and from bytes, without ``xmlrpc.client``.
+
+``xmlrpc.client`` imports ``http.client``, ``email`` and ``ssl``: 30 ms at every start of a
+command that only asks the master. This is the part a client needs, on ``pyexpat`` alone.
+It reads what ``xmlrpc.client.loads`` reads, including XmlRpc++'s untyped ``<value>text``
+strings, ``<i4>``/``<i8>`` and ``<nil/>``; ``base64`` and ``dateTime.iso8601`` values come back
+as ``xmlrpc.client``'s ``Binary`` and ``DateTime`` (imported only when one arrives).
+"""
+
+from __future__ import annotations
+
+import base64
+from typing import Any
+
+#: XML-RPC integers are 32-bit; ``xmlrpc.client`` refuses larger ones the same way.
+_INT_MAX = 2**31 - 1
+_INT_MIN = -(2**31)
+_ESCAPE = str.maketrans({"&": "&amp;", "<": "&lt;", ">": "&gt;"})
+
+
+class Fault(Exception):  # noqa: N818 - the XML-RPC name, as xmlrpc.client.Fault
+    """An XML-RPC fault answer."""
+
+    def __init__(self, code: int, message: str) -> None:
+        super().__init__(f"<Fault {code}: {message!r}>")
+        self.faultCode = code
+        self.faultString = message
+
+
+class BadAnswer(ValueError):  # noqa: N818 - reads as what it is
+    """Bytes that are not an XML-RPC method response."""
+
+
+def _value(out: list[str], value: Any) -> None:
+    if isinstance(value, bool):  # before int: bool is an int
+        out.append(f"<value><boolean>{int(value)}</boolean></value>")
+    elif isinstance(value, int):
+        if not _INT_MIN <= value <= _INT_MAX:
+            raise OverflowError("int exceeds XML-RPC limits")
+        out.append(f"<value><int>{value}</int></value>")
+    elif isinstance(value, str):
+        out.append(f"<value><string>{value.translate(_ESCAPE)}</string></value>")
+    elif isinstance(value, float):
+        out.append(f"<value><double>{value!r}</double></value>")
+    elif isinstance(value, list | tuple):
+        out.append("<value><array><data>\n")
+        for item in value:
+            _value(out, item)
+        out.append("</data></array></value>")
+    elif isinstance(value, dict):
+        out.append("<value><struct>\n")
+        for key, item in value.items():
+            if not isinstance(key, str):
+                raise TypeError("dictionary key must be string")
+            out.append(f"<member>\n<name>{key.translate(_ESCAPE)}</name>\n")
+            _value(out, item)
+            out.append("</member>\n")
+        out.append("</struct></value>")
+    elif isinstance(value, bytes | bytearray):
+        out.append(f"<value><base64>{base64.b64encode(value).decode()}</base64></value>")
+    elif type(value).__name__ == "Binary" and hasattr(value, "data"):  # xmlrpc.client's
+        out.append(f"<value><base64>{base64.b64encode(value.data).decode()}</base64></value>")
+    elif type(value).__name__ == "DateTime" and hasattr(value, "value"):
+        out.append(f"<value><dateTime.iso8601>{value.value}</dateTime.iso8601></value>")
+    else:
+        raise TypeError(f"cannot marshal {type(value)} objects")
+    out.append("\n")
+
+
+def dumps_call(method: str, params: tuple[Any, ...]) -> bytes:
+    """The body of a call of ``method`` with ``params``, as ``xmlrpc.client.dumps`` writes it."""
+    out = ["<?xml version='1.0'?>\n<methodCall>\n<methodName>", method.translate(_ESCAPE)]
+    out.append("</methodName>\n<params>\n")
+    for param in params:
+        out.append("<param>\n")
+        _value(out, param)
+        out.append("</param>\n")
+    out.append("</params>\n</methodCall>\n")
+    return "".join(out).encode()
+
+
+_SCALARS = {"string", "i4", "i8", "int", "boolean", "double", "base64", "dateTime.iso8601", "nil"}
+
+
+def _scalar(tag: str, text: str) -> Any:
+    if tag == "string":
+        return text
+    if tag in ("i4", "i8", "int"):
+        return int(text)
+    if tag == "boolean":
+        if text not in ("0", "1"):
+            raise BadAnswer(f"bad boolean value {text!r}")
+        return text == "1"
+    if tag == "double":
+        return float(text)
+    if tag == "nil":
+        return None
+    import xmlrpc.client  # rare in ROS: only then pay for the module
+
+    if tag == "base64":
+        return xmlrpc.client.Binary(base64.b64decode(text))
+    return xmlrpc.client.DateTime(text)
+
+
+class _Reader:
+    """Builds the values of a method response from pyexpat's events."""
+
+    def __init__(self) -> None:
+        self.stack: list[Any] = []  # open arrays (lists) and structs (dicts)
+        self.names: list[str | None] = []  # the member name pending in each open struct
+        self.values: list[Any] = []  # the params (or the fault struct)
+        self.text: list[str] = []
+        self.typed = False  # the current <value> had a type element
+        self.fault = False
+
+    def start(self, tag: str, attrs: dict[str, str]) -> None:
+        self.text = []
+        if tag == "value":
+            self.typed = False
+        elif tag == "array":
+            self.typed = True
+            self.stack.append([])
+            self.names.append(None)
+        elif tag == "struct":
+            self.typed = True
+            self.stack.append({})
+            self.names.append(None)
+        elif tag in _SCALARS:
+            self.typed = True
+        elif tag == "fault":
+            self.fault = True
+
+    def end(self, tag: str) -> None:
+        text = "".join(self.text)
+        self.text = []
+        if tag in _SCALARS:
+            self._add(_scalar(tag, text))
+        elif tag == "value" and not self.typed:
+            self._add(text)  # XmlRpc++ writes strings without a type
+        elif tag in ("array", "struct"):
+            self.names.pop()
+            self._add(self.stack.pop())
+        elif tag == "name":
+            self.names[-1] = text
+        if tag == "value":
+            self.typed = True  # text after a closed value belongs to no value
+
+    def _add(self, value: Any) -> None:
+        if not self.stack:
+            self.values.append(value)
+        elif isinstance(self.stack[-1], list):
+            self.stack[-1].append(value)
+        else:
+            name = self.names[-1]
+            if name is None:
+                raise BadAnswer("a struct member without a name")
+            self.stack[-1][name] = value
+            self.names[-1] = None
+
+    def chars(self, data: str) -> None:
+        self.text.append(data)
+
+
+def loads_response(body: bytes) -> Any:
+    """The value of a method response; ``Fault`` for a fault, ``BadAnswer`` for anything else."""
+    from xml.parsers import expat
+
+    reader = _Reader()
+    parser = expat.ParserCreate(encoding="utf-8")
+    parser.StartElementHandler = reader.start
+    parser.EndElementHandler = reader.end
+    parser.CharacterDataHandler = reader.chars
+    try:
+        parser.Parse(body, True)
+    except (expat.ExpatError, ValueError) as err:
+        raise BadAnswer(f"malformed XML-RPC answer: {err}") from err
+    if reader.fault:
+        fault = reader.values[0] if reader.values else {}
+        if not isinstance(fault, dict):
+            raise BadAnswer("a fault that is not a struct")
+        raise Fault(fault.get("faultCode", 0), str(fault.get("faultString", "")))
+    if len(reader.values) != 1:
+        raise BadAnswer(f"an answer with {len(reader.values)} values, not 1")
+    return reader.values[0]

@@ -62,7 +62,7 @@ def main(argv: Sequence[str] | None = None) -> None:
     """Run the ``rostools`` command line and exit with its status."""
     args = list(sys.argv[1:] if argv is None else argv)
     try:
-        from rostools.cli.fast import dispatch
+        from rostools.cli.launch import dispatch
 
         status = dispatch(args)
         if status is not None:

@@ -9,8 +9,8 @@ import typer
 from typer.core import TyperGroup
 
 from rostools import __version__
-from rostools.cli.common import Settings
 from rostools.cli.output import Format
+from rostools.cli.settings import Settings
 
 #: ``name:=value`` arguments that ``rostools.cli.main`` took off the command line.
 REMAPPINGS: dict[str, str] = {}

@@ -3,8 +3,6 @@
 from __future__ import annotations
 
 import math
-import os
-from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated, Any, TypeVar
 
@@ -12,6 +10,7 @@ import typer
 
 from rostools.cli import output
 from rostools.cli.output import Format
+from rostools.cli.settings import Settings
 
 T = TypeVar("T")
 
@@ -21,8 +20,6 @@ if TYPE_CHECKING:
     from rostools.msgs.store import TypeStore
     from rostools.node.notice import Notice
     from rostools.rosgraph.masterapi import MasterProxy
-
-DEFAULT_MASTER_URI = "http://localhost:11311"
 
 try:
     from typer._click.types import FloatRange
@@ -46,21 +43,6 @@ class FiniteFloat(FloatRange):  # type: ignore[misc,unused-ignore]
 FINITE = FiniteFloat()
 
 
-@dataclass
-class Settings:
-    """The global options, resolved. Stored on the root Typer context as ``ctx.obj``."""
-
-    master_uri: str | None = None
-    format: Format = Format.text
-    debug: bool = False
-    #: ``name:=value`` arguments taken off the command line (remaps, ``__name``, ...).
-    remappings: dict[str, str] = field(default_factory=dict)
-
-    def resolved_master_uri(self) -> str:
-        """``--master-uri``, then ``ROS_MASTER_URI``, then the ROS default."""
-        return self.master_uri or os.environ.get("ROS_MASTER_URI") or DEFAULT_MASTER_URI
-
-
 def settings(ctx: typer.Context) -> Settings:
     """The global settings of this invocation."""
     root = ctx.find_root()
@@ -71,16 +53,12 @@ def settings(ctx: typer.Context) -> Settings:
 
 def output_format(ctx: typer.Context, local: Format | None) -> Format:
     """A command's ``--format`` wins over the global one."""
-    return local if local is not None else settings(ctx).format
+    return settings(ctx).output_format(local)
 
 
 def master(ctx: typer.Context, tool: str) -> MasterProxy:
     """A master client for this invocation, named like rospy tools name themselves."""
-    from rostools.names import ros_namespace
-    from rostools.rosgraph.masterapi import MasterProxy
-
-    caller_id = f"{ros_namespace()}{tool}_{os.getpid()}"
-    return MasterProxy(settings(ctx).resolved_master_uri(), caller_id)
+    return settings(ctx).master(tool)
 
 
 def node_session(

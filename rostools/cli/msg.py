@@ -8,9 +8,11 @@ from typing import Annotated, Any
 
 import typer
 
-from rostools.cli.common import FormatOpt, MsgPathOpt, output_format, type_store
-from rostools.cli.lookup import Kind, matches, md5_text, md5sums, read_type
+from rostools.cli.common import FormatOpt, MsgPathOpt, output_format, settings, type_store
+from rostools.cli.lookup import Kind, matches, read_type
 from rostools.cli.output import Format, emit
+from rostools.cli.quick import msg as quick
+from rostools.cli.quick import runs
 from rostools.errors import NotFoundError, RostoolsError, UsageError
 from rostools.msgs.store import TypeStore
 
@@ -92,6 +94,7 @@ app.command("info", help="The same as show (rosmsg info).")(show)
 
 
 @app.command()
+@runs(quick.md5)
 def md5(
     ctx: typer.Context,
     type_name: TypeArg = None,
@@ -99,14 +102,7 @@ def md5(
     msg_path: MsgPathOpt = None,
 ) -> None:
     """Print the md5sum of a message or service type (rosmsg/rossrv md5)."""
-    name = read_type(type_name)
-    found = md5sums(type_store(msg_path), name)
-    fmt = output_format(ctx, fmt)
-    if fmt is Format.text:
-        sys.stdout.write(md5_text(name, found))
-    else:
-        data = [{"type": t, "md5sum": m} for t, m in found]
-        emit(fmt, data[0] if "/" in name else data)
+    quick.md5(settings(ctx), type_name, fmt, msg_path)
 
 
 def _emit_names(ctx: typer.Context, fmt: Format | None, names: list[str], one_line: bool) -> None:

@@ -9,8 +9,10 @@ from typing import Annotated, Any
 import typer
 
 from rostools.cli import paramyaml
-from rostools.cli.common import FormatOpt, master, output_format
-from rostools.cli.output import Format, emit, render
+from rostools.cli.common import FormatOpt, master, output_format, settings
+from rostools.cli.output import Format, render
+from rostools.cli.quick import param as quick
+from rostools.cli.quick import runs
 from rostools.errors import NotFoundError, UsageError
 from rostools.names import GLOBAL_NS, join, make_global_ns, script_resolve
 
@@ -25,11 +27,6 @@ VerboseOpt = Annotated[bool, typer.Option("-v", "--verbose", help="Say what is d
 NameArg = Annotated[str, typer.Argument(help="Parameter name; relative names join ROS_NAMESPACE.")]
 
 
-def _say(verbose: bool, text: str) -> None:
-    if verbose:
-        sys.stderr.write(text + "\n")
-
-
 def _set_tree(proxy: Any, name: str, value: Any, verbose: bool) -> None:
     """Rosparam's set: a mapping updates key by key; anything else is set as it is."""
     if isinstance(value, dict):
@@ -39,22 +36,22 @@ def _set_tree(proxy: Any, name: str, value: Any, verbose: bool) -> None:
             _set_tree(proxy, join(name if name.endswith("/") else name + "/", key), item, verbose)
         return
     proxy.set_param(name, value)
-    _say(verbose, f"set parameter [{name}] to [{value}]")
+    quick.say(verbose, f"set parameter [{name}] to [{value}]")
 
 
 @app.command("list")
+@runs(quick.list_params)
 def list_params(
     ctx: typer.Context,
     namespace: Annotated[str, typer.Argument(help="Only names under this namespace.")] = "/",
     fmt: FormatOpt = None,
 ) -> None:
     """List parameter names, sorted."""
-    ns = make_global_ns(script_resolve(namespace, "rosparam"))
-    names = sorted(n for n in master(ctx, "rosparam").param_names() if n.startswith(ns))
-    emit(output_format(ctx, fmt), names, "\n".join)
+    quick.list_params(settings(ctx), namespace, fmt)
 
 
 @app.command()
+@runs(quick.get)
 def get(
     ctx: typer.Context,
     name: NameArg,
@@ -65,14 +62,7 @@ def get(
     fmt: FormatOpt = None,
 ) -> None:
     """Print a parameter, or a whole namespace, as YAML."""
-    key = script_resolve(name, "rosparam")
-    _say(verbose, f"getting parameter [{key}]")
-    value = master(ctx, "rosparam").get_param(key)
-    fmt = output_format(ctx, fmt)
-    if fmt is Format.text:
-        sys.stdout.write(paramyaml.dump(value, pretty=pretty) + "\n")  # rosparam's blank line
-    else:
-        emit(fmt, paramyaml.to_plain(value))
+    quick.get(settings(ctx), name, pretty, verbose, fmt)
 
 
 @app.command(context_settings={"ignore_unknown_options": True})
@@ -129,7 +119,7 @@ def delete(ctx: typer.Context, name: NameArg, verbose: VerboseOpt = False) -> No
         proxy.set_param(GLOBAL_NS, {})
     else:
         proxy.delete_param(key)
-    _say(verbose, f"deleted parameter [{key}]")
+    quick.say(verbose, f"deleted parameter [{key}]")
 
 
 @app.command()
@@ -152,7 +142,7 @@ def load(
         if ns == GLOBAL_NS and not isinstance(doc, dict):
             raise UsageError("a document loaded into / must be a mapping")
         paramyaml.check_value(doc, ns)
-        _say(verbose, f"reading parameters into namespace [{ns}]")
+        quick.say(verbose, f"reading parameters into namespace [{ns}]")
         _set_tree(proxy, ns, doc, verbose)
 
 
@@ -169,7 +159,7 @@ def dump(
     """Write parameters as YAML, to a file or stdout."""
     key = script_resolve(namespace, "rosparam")
     value = master(ctx, "rosparam").get_param(key)
-    _say(verbose, f"dumping namespace [{key}] to file [{file or 'stdout'}]")
+    quick.say(verbose, f"dumping namespace [{key}] to file [{file or 'stdout'}]")
     fmt = output_format(ctx, fmt)
     if fmt is Format.text:
         text = paramyaml.dump(value)

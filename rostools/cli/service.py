@@ -2,24 +2,32 @@
 
 from __future__ import annotations
 
-import os
 import sys
 import time
 from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
-from rostools.cli.common import FINITE, FormatOpt, MsgPathOpt, master, output_format, type_store
+from rostools.cli.common import (
+    FINITE,
+    FormatOpt,
+    MsgPathOpt,
+    master,
+    output_format,
+    settings,
+    type_store,
+)
 from rostools.cli.output import Format, emit
+from rostools.cli.quick import runs
+from rostools.cli.quick import service as quick
 from rostools.errors import NotFoundError, TimeoutExpired, UsageError
-from rostools.names import make_global_ns, ros_namespace, script_resolve
+from rostools.names import script_resolve
 from rostools.rosgraph.masterapi import SERVICE_TIMEOUT
 
 if TYPE_CHECKING:
     from rostools.msgs.store import TypeStore
     from rostools.msgs.text import TextOptions
     from rostools.rosgraph.masterapi import MasterProxy
-    from rostools.rosgraph.serviceclient import BlockingServiceClient
 
 app = typer.Typer(
     name="service",
@@ -34,27 +42,6 @@ TimeoutOpt = Annotated[
 ]
 
 
-def _caller() -> str:
-    return f"{ros_namespace()}rosservice_{os.getpid()}"
-
-
-def _client(proxy: MasterProxy, name: str, timeout: float) -> BlockingServiceClient:
-    from rostools.rosgraph.serviceclient import BlockingServiceClient
-
-    return BlockingServiceClient(proxy, name, timeout)
-
-
-def _services(proxy: MasterProxy) -> dict[str, list[str]]:
-    _, _, services = proxy.system_state()
-    return {name: list(nodes) for name, nodes in sorted(services)}
-
-
-def _type_of(proxy: MasterProxy, name: str, timeout: float) -> tuple[str, str]:
-    """(type, md5sum) of a service, from a probe of its server."""
-    fields = _client(proxy, name, timeout).probe(_caller())
-    return fields.get("type", ""), fields.get("md5sum", "")
-
-
 def _srv(store: TypeStore, type_name: str, name: str) -> Any:
     try:
         return store.srv(type_name)
@@ -66,6 +53,7 @@ def _srv(store: TypeStore, type_name: str, name: str) -> Any:
 
 
 @app.command("list")
+@runs(quick.list_services)
 def list_services(
     ctx: typer.Context,
     namespace: Annotated[
@@ -77,40 +65,25 @@ def list_services(
     fmt: FormatOpt = None,
 ) -> None:
     """List services (rosservice list)."""
-    services = _services(master(ctx, "rosservice"))
-    if namespace:
-        ns = script_resolve(namespace, "rosservice")
-        services = {
-            s: n for s, n in services.items() if s == ns or s.startswith(make_global_ns(ns))
-        }
-    fmt = output_format(ctx, fmt)
-    if fmt is not Format.text:
-        emit(fmt, [{"service": s, "nodes": n} for s, n in services.items()])
-    elif nodes:
-        sys.stdout.write("".join(f"{s} {','.join(n)}\n" for s, n in services.items()))
-    else:
-        sys.stdout.write("".join(f"{s}\n" for s in services))
+    quick.list_services(settings(ctx), namespace, nodes, fmt)
 
 
 @app.command()
+@runs(quick.uri)
 def uri(ctx: typer.Context, service: ServiceArg, fmt: FormatOpt = None) -> None:
     """The rosrpc URI of a service."""
-    name = script_resolve(service, "rosservice")
-    found = master(ctx, "rosservice").lookup_service(name)
-    emit(output_format(ctx, fmt), {"service": name, "uri": found}, lambda d: d["uri"])
+    quick.uri(settings(ctx), service, fmt)
 
 
 @app.command()
+@runs(quick.node)
 def node(ctx: typer.Context, service: ServiceArg, fmt: FormatOpt = None) -> None:
     """The node that provides a service (rosservice node)."""
-    name = script_resolve(service, "rosservice")
-    providers = _services(master(ctx, "rosservice")).get(name)
-    if not providers:
-        raise NotFoundError(f"unknown service {name}")
-    emit(output_format(ctx, fmt), {"service": name, "node": providers[0]}, lambda d: d["node"])
+    quick.node(settings(ctx), service, fmt)
 
 
 @app.command("type")
+@runs(quick.type_)
 def type_(
     ctx: typer.Context,
     service: ServiceArg,
@@ -118,11 +91,7 @@ def type_(
     fmt: FormatOpt = None,
 ) -> None:
     """A service's type, asked of its server (rosservice type)."""
-    name = script_resolve(service, "rosservice")
-    kind, md5 = _type_of(master(ctx, "rosservice"), name, timeout)
-    emit(
-        output_format(ctx, fmt), {"service": name, "type": kind, "md5sum": md5}, lambda d: d["type"]
-    )
+    quick.type_(settings(ctx), service, timeout, fmt)
 
 
 @app.command()
@@ -135,7 +104,7 @@ def args(
 ) -> None:
     """The request fields of a service (rosservice args)."""
     name = script_resolve(service, "rosservice")
-    kind, _ = _type_of(master(ctx, "rosservice"), name, timeout)
+    kind, _ = quick.type_of(master(ctx, "rosservice"), name, timeout)
     fields = [f.name for f in _srv(type_store(msg_path), kind, name).request.fields]
     emit(output_format(ctx, fmt), fields, " ".join)
 
@@ -151,11 +120,11 @@ def info(
     """Node, URI, type and request fields of a service (rosservice info)."""
     name = script_resolve(service, "rosservice")
     proxy = master(ctx, "rosservice")
-    providers = _services(proxy).get(name)
+    providers = quick.services(proxy).get(name)
     if not providers:
         raise NotFoundError(f"unknown service {name}")
     found_uri = proxy.lookup_service(name)
-    kind, md5 = _type_of(proxy, name, timeout)
+    kind, md5 = quick.type_of(proxy, name, timeout)
     store = type_store(msg_path)
     request = [f.name for f in store.srv(kind).request.fields] if _has_srv(store, kind) else None
     data = {
@@ -190,9 +159,9 @@ def find(
 
     proxy = master(ctx, "rosservice")
     found = []
-    for name in _services(proxy):
+    for name in quick.services(proxy):
         try:
-            if _type_of(proxy, name, timeout)[0] == srv_type:
+            if quick.type_of(proxy, name, timeout)[0] == srv_type:
                 found.append(name)
         except RostoolsError:
             continue  # a dead or slow server is simply not a match
@@ -228,7 +197,7 @@ def call(
     proxy = master(ctx, "rosservice")
     if wait:
         _wait_for(proxy, name, timeout)
-    kind, md5 = _type_of(proxy, name, timeout)
+    kind, md5 = quick.type_of(proxy, name, timeout)
     store = type_store(msg_path)
     spec = _srv(store, kind, name)
     codec = Codec.of(store)
@@ -243,21 +212,21 @@ def call(
     else:
         requests = [[]]
     fmt = output_format(ctx, fmt)
-    client = _client(proxy, name, timeout)
+    client = quick.client(proxy, name, timeout)
     for arguments in requests:
         try:
             request = filler.message(spec.request.name, arguments)
         except UsageError as err:
             fields = " ".join(f.name for f in spec.request.fields) or "(none)"
             raise UsageError(f"{err}", hint=f"{name} takes: {fields}") from err
-        answer = client.call(_caller(), md5, request.serialize())
+        answer = client.call(quick.caller(), md5, request.serialize())
         response = codec.decode(spec.response.name, answer)
         _print(codec, spec, request, response, verbose, fmt, TextOptions(nostr, noarr))
 
 
 def _wait_for(proxy: MasterProxy, name: str, timeout: float) -> None:
     deadline = time.monotonic() + timeout
-    while name not in _services(proxy):
+    while name not in quick.services(proxy):
         if time.monotonic() > deadline:
             raise TimeoutExpired(f"service {name} did not appear within {timeout:g} s")
         time.sleep(0.1)

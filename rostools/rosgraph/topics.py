@@ -3,13 +3,14 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Any
-from urllib.parse import urlsplit
+from typing import TYPE_CHECKING, Any
 
 from rostools.errors import RostoolsError
-from rostools.msgs.store import TypeStore
 from rostools.names import ANYTYPE, make_global_ns
-from rostools.rosgraph.masterapi import MasterProxy
+
+if TYPE_CHECKING:
+    from rostools.msgs.store import TypeStore
+    from rostools.rosgraph.masterapi import MasterProxy
 
 
 @dataclass
@@ -48,6 +49,8 @@ def topic_table(master: MasterProxy, namespace: str | None = None) -> dict[str, 
 
 def host_of(uri: str) -> str:
     """The host part of a node's XML-RPC URI."""
+    from urllib.parse import urlsplit
+
     return urlsplit(uri).hostname or "unknown"
 
 

@@ -247,16 +247,30 @@ def test_echo_stops_cleanly_when_its_node_is_shut_down(
         pub.stop()
 
 
-def test_topic_list_fast_path_matches_typer_path(
-    rostools_master: str, cli_env: dict[str, str]
-) -> None:
+def test_quick_commands_match_the_typer_path(rostools_master: str, cli_env: dict[str, str]) -> None:
+    """Every command the launcher runs without Typer prints what the Typer path prints."""
     pub = rostools("topic", "pub", "/ns/a", "std_msgs/Empty", env=cli_env)
+    typer_env = cli_env | {"ROSTOOLS_NO_QUICK": "1"}
     try:
         wait_listed("/ns/a", cli_env)
-        for args in ([], ["/ns"], ["ns"]):
-            fast = run_cli("topic", "list", *args, env=cli_env)
-            slow = run_cli("--format", "text", "topic", "list", *args, env=cli_env)
-            assert (fast.returncode, fast.stdout) == (slow.returncode, slow.stdout)
+        assert run_cli("param", "set", "/p", "{a: [1, 2], b: hi}", env=cli_env).returncode == 0
+        lines = [
+            ["topic", "list"], ["topic", "list", "/ns"], ["topic", "list", "ns", "-v"],
+            ["--format", "json", "topic", "list"], ["topic", "info", "/ns/a"],
+            ["topic", "find", "std_msgs/Empty"], ["topic", "info", "/nope"],
+            ["param", "get", "/p"], ["param", "get", "/p", "-p"], ["param", "get", "/nope"],
+            ["param", "list"], ["param", "get", "/p", "-F", "json"],
+            ["service", "list", "-n"], ["service", "uri", "/rosout/get_loggers"],
+            ["service", "node", "/rosout/get_loggers"], ["service", "type", "/rosout/get_loggers"],
+            ["node", "list", "-a"], ["node", "list", "-u"], ["msg", "md5", "std_msgs/String"],
+            ["param", "get"], ["param", "get", "/p", "--bogus"], ["topic", "list", "-vp"],
+        ]  # fmt: skip
+        for args in lines:
+            quick = run_cli(*args, env=cli_env)
+            slow = run_cli(*args, env=typer_env)
+            assert (quick.returncode, quick.stdout, quick.stderr) == (
+                slow.returncode, slow.stdout, slow.stderr,
+            ), args  # fmt: skip
         assert run_cli("topic", "list", "/ns", env=cli_env).stdout == "/ns/a\n"
     finally:
         pub.stop()

@@ -11,7 +11,8 @@ from pathlib import Path
 import pytest
 
 from rostools.cli.completer import TREE
-from rostools.cli.completion import SCRIPT_NAMES, script, tree_text
+from rostools.cli.completion import SCRIPT_NAMES, quick_text, script, tree_text
+from rostools.cli.launch import QUICK
 from tests.support.procs import Proc, wait_for
 from tests.support.shells import ROOT, Shell, shell_missing
 
@@ -26,6 +27,7 @@ SHELLS = [
 def test_checked_in_scripts_and_tree_are_fresh() -> None:
     hint = "stale: run python -m rostools.cli.completion"
     assert TREE.read_text() == tree_text(), hint
+    assert Path(QUICK).read_text() == quick_text(), hint
     for shell, name in SCRIPT_NAMES.items():
         assert (ROOT / "completions" / name).read_text() == script(shell), hint
 

@@ -10,8 +10,10 @@ from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
-from rostools.cli.common import FormatOpt, output_format
+from rostools.cli.common import FormatOpt, output_format, settings
 from rostools.cli.output import Format, emit
+from rostools.cli.quick import node as quick
+from rostools.cli.quick import runs
 from rostools.errors import (
     NotFoundError,
     RostoolsError,
@@ -26,6 +28,7 @@ from rostools.rosgraph.masterapi import NODE_TIMEOUT
 
 
 @app.command("list")
+@runs(quick.list_nodes)
 def list_nodes(
     ctx: typer.Context,
     namespace: Annotated[
@@ -36,22 +39,7 @@ def list_nodes(
     fmt: FormatOpt = None,
 ) -> None:
     """List the nodes registered on the master, sorted."""
-    graph = node_graph(ctx)
-    ns = resolve_node(namespace) if namespace else None
-    nodes = graph.state().nodes(ns)
-    fmt = output_format(ctx, fmt)
-    if all_:
-        rows = [{"name": n, "uri": graph.uri(n)} for n in nodes]
-        emit(
-            fmt,
-            rows,
-            lambda rs: "\n".join(f"{r['uri'] or 'unknown address'} \t{r['name']}" for r in rs),
-        )
-    elif uris:
-        found = [graph.uri(n) for n in nodes]
-        emit(fmt, found, lambda us: "\n".join(u or "unknown address" for u in us))
-    else:
-        emit(fmt, nodes, "\n".join)
+    quick.list_nodes(settings(ctx), namespace, uris, all_, fmt)
 
 
 def _section(title: str, items: list[str]) -> str:

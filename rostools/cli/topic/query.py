@@ -5,22 +5,23 @@ echo, the rate meters (hz, bw, delay) and pub live beside this module.
 
 from __future__ import annotations
 
-import sys
 from pathlib import Path
-from typing import Annotated, Any
+from typing import Annotated
 
 import typer
 
-from rostools.cli.common import FormatOpt, MsgPathOpt, master, output_format, type_store
-from rostools.cli.output import Format, emit
+from rostools.cli.common import FormatOpt, MsgPathOpt, master, output_format, settings, type_store
+from rostools.cli.output import emit
+from rostools.cli.quick import runs
+from rostools.cli.quick import topic as quick
 from rostools.cli.topic.group import app
 from rostools.cli.topic.live import TopicArg
-from rostools.cli.topiclist import list_text
-from rostools.errors import NotFoundError, UsageError
+from rostools.errors import NotFoundError
 from rostools.names import script_resolve
 
 
 @app.command("list")
+@runs(quick.list_topics)
 def list_topics(
     ctx: typer.Context,
     namespace: Annotated[
@@ -36,89 +37,25 @@ def list_topics(
     fmt: FormatOpt = None,
 ) -> None:
     """List topics (rostopic list)."""
-    fmt = output_format(ctx, fmt)
-    if pubs_only and subs_only:
-        raise UsageError("-p and -s cannot be combined")
-    if bag is not None:
-        if pubs_only or subs_only or host:
-            raise UsageError("-p, -s and --host do not apply to a bag")
-        from rostools.cli.topic.bagtopics import list_bag_topics
-
-        list_bag_topics(bag, namespace, fmt)
-        return
-    from rostools.rosgraph.topics import host_of, topic_table
-
-    proxy = master(ctx, "rostopic")
-    ns = script_resolve(namespace, "rostopic") if namespace else None
-    table = topic_table(proxy, ns)
-    if fmt is not Format.text:
-        rows = [i.as_dict() for i in table.values()]
-        if pubs_only:
-            rows = [r for r in rows if r["publishers"]]
-        if subs_only:
-            rows = [r for r in rows if r["subscribers"]]
-        emit(fmt, rows)
-        return
-    if not host:
-        sys.stdout.write(list_text(table, verbose, pubs_only, subs_only) + "\n")
-        return
-    uris: dict[str, str] = {}
-    by_host: dict[str, dict[str, Any]] = {}
-    for info in table.values():
-        for attr in ("publishers", "subscribers"):
-            for node in getattr(info, attr):
-                if node not in uris:
-                    uris[node] = proxy.lookup_node(node)
-                entry = by_host.setdefault(host_of(uris[node]), {})
-                from rostools.rosgraph.topics import TopicInfo
-
-                item = entry.setdefault(info.name, TopicInfo(info.name, info.type))
-                getattr(item, attr).append(node)
-    for hostname in sorted(by_host):
-        sys.stdout.write(f"Host [{hostname}]:\n")
-        sys.stdout.write(list_text(by_host[hostname], verbose, pubs_only, subs_only, "  ") + "\n")
+    quick.list_topics(settings(ctx), namespace, verbose, pubs_only, subs_only, host, bag, fmt)
 
 
 @app.command()
+@runs(quick.info)
 def info(ctx: typer.Context, topic: TopicArg, fmt: FormatOpt = None) -> None:
     """Type, publishers and subscribers of a topic (rostopic info)."""
-    from rostools.rosgraph.topics import topic_table
-
-    name = script_resolve(topic, "rostopic")
-    proxy = master(ctx, "rostopic")
-    table = topic_table(proxy)
-    entry = table.get(name)
-    if entry is None:
-        raise NotFoundError(f"unknown topic {name}")
-    apis = {n: proxy.lookup_node(n) for n in {*entry.publishers, *entry.subscribers}}
-    fmt = output_format(ctx, fmt)
-    if fmt is not Format.text:
-        data = entry.as_dict()
-        data["publishers"] = [{"node": n, "uri": apis[n]} for n in entry.publishers]
-        data["subscribers"] = [{"node": n, "uri": apis[n]} for n in entry.subscribers]
-        emit(fmt, data)
-        return
-    out = [f"Type: {entry.type}", ""]
-    for label, nodes in (("Publishers", entry.publishers), ("Subscribers", entry.subscribers)):
-        if nodes:
-            out.append(f"{label}: ")
-            out += [f" * {n} ({apis[n]})" for n in nodes]
-        else:
-            out.append(f"{label}: None")
-        out.append("")
-    sys.stdout.write("\n".join(out) + "\n\n")
+    quick.info(settings(ctx), topic, fmt)
 
 
 @app.command()
+@runs(quick.find)
 def find(
     ctx: typer.Context,
     msg_type: Annotated[str, typer.Argument(help="A message type, pkg/Type.")],
     fmt: FormatOpt = None,
 ) -> None:
     """Topics of a given type (rostopic find)."""
-    types = master(ctx, "rostopic").topic_types()
-    found = sorted(t for t, ty in types.items() if ty == msg_type)
-    emit(output_format(ctx, fmt), found, "\n".join)
+    quick.find(settings(ctx), msg_type, fmt)
 
 
 @app.command("type")

@@ -1,0 +1,30 @@
+"""``msg md5`` without Typer (see ``rostools.cli.quick``)."""
+
+from __future__ import annotations
+
+import sys
+from typing import TYPE_CHECKING
+
+from rostools.cli.lookup import md5_text, md5sums, read_type
+from rostools.cli.output import Format, emit
+
+if TYPE_CHECKING:
+    from pathlib import Path
+
+    from rostools.cli.settings import Settings
+
+
+def md5(
+    s: Settings, type_name: str | None, fmt: Format | str | None, msg_path: list[Path] | None
+) -> None:
+    """Print the md5sum of a message or service type (rosmsg/rossrv md5)."""
+    from rostools.msgs.store import TypeStore
+
+    name = read_type(type_name)
+    found = md5sums(TypeStore.default(msg_path or []), name)
+    out = s.output_format(fmt)
+    if out is Format.text:
+        sys.stdout.write(md5_text(name, found))
+    else:
+        data = [{"type": t, "md5sum": m} for t, m in found]
+        emit(out, data[0] if "/" in name else data)

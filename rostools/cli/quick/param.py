@@ -1,0 +1,39 @@
+"""``param get|list`` without Typer (see ``rostools.cli.quick``)."""
+
+from __future__ import annotations
+
+import sys
+from typing import TYPE_CHECKING
+
+from rostools.cli.output import Format, emit
+from rostools.names import make_global_ns, script_resolve
+
+if TYPE_CHECKING:
+    from rostools.cli.settings import Settings
+
+
+def say(verbose: bool, text: str) -> None:
+    """rosparam's -v: a line on stderr."""
+    if verbose:
+        sys.stderr.write(text + "\n")
+
+
+def list_params(s: Settings, namespace: str, fmt: Format | str | None) -> None:
+    """List parameter names, sorted."""
+    ns = make_global_ns(script_resolve(namespace, "rosparam"))
+    names = sorted(n for n in s.master("rosparam").param_names() if n.startswith(ns))
+    emit(s.output_format(fmt), names, "\n".join)
+
+
+def get(s: Settings, name: str, pretty: bool, verbose: bool, fmt: Format | str | None) -> None:
+    """Print a parameter, or a whole namespace, as YAML."""
+    from rostools.cli import paramyaml
+
+    key = script_resolve(name, "rosparam")
+    say(verbose, f"getting parameter [{key}]")
+    value = s.master("rosparam").get_param(key)
+    out = s.output_format(fmt)
+    if out is Format.text:
+        sys.stdout.write(paramyaml.dump(value, pretty=pretty) + "\n")  # rosparam's blank line
+    else:
+        emit(out, paramyaml.to_plain(value))

@@ -14,6 +14,7 @@ from benchmarks.common import ROOT, Result, merge_latest, write_report
 
 MODULES = [
     "benchmarks.bench_msg",
+    "benchmarks.bench_startup",
     "benchmarks.bench_master",
     "benchmarks.bench_topic",
     "benchmarks.bench_topic_cpp",

@@ -1,0 +1,97 @@
+"""Cold start of every command that only asks the master, beside its ROS 1 tool (issue 14).
+
+Set-up, as the independent harness had it: the real rosmaster as a neutral master, a few
+parameters, 50 publishers registered (fake nodes, registered over XML-RPC), and one rospy
+talker (a real node, for ``node info`` and ``service type``, which ask it). Each command is a
+whole process, timed wall to wall; ours and theirs alternate, median of ``RUNS``.
+"""
+
+from __future__ import annotations
+
+import subprocess
+import time
+import xmlrpc.client
+
+from benchmarks.common import (
+    ROOT,
+    SYSTEM_PYTHON,
+    Result,
+    have,
+    master,
+    ros_env,
+    rostools_cmd,
+    start,
+    stop,
+    time_commands,
+)
+
+RUNS = 15
+PUBLISHERS = 50
+GOAL = 0.5
+
+#: (our arguments, the ROS 1 command): every command that only asks the master or a node.
+COMMANDS: list[tuple[list[str], list[str]]] = [
+    (["param", "get", "/a"], ["rosparam", "get", "/a"]),
+    (["param", "list"], ["rosparam", "list"]),
+    (["topic", "list"], ["rostopic", "list"]),
+    (["topic", "info", "/chatter"], ["rostopic", "info", "/chatter"]),
+    (["topic", "type", "/chatter"], ["rostopic", "type", "/chatter"]),
+    (["topic", "find", "std_msgs/String"], ["rostopic", "find", "std_msgs/String"]),
+    (["service", "list"], ["rosservice", "list"]),
+    (["service", "type", "/talker/get_loggers"], ["rosservice", "type", "/talker/get_loggers"]),
+    (["service", "uri", "/talker/get_loggers"], ["rosservice", "uri", "/talker/get_loggers"]),
+    (["node", "list"], ["rosnode", "list"]),
+    (["node", "info", "/talker", "-q"], ["rosnode", "info", "/talker", "-q"]),
+]
+
+
+def _populate(uri: str) -> None:
+    """A few parameters and PUBLISHERS publishers, one fake node each."""
+    master_proxy = xmlrpc.client.ServerProxy(uri)
+    for name, value in (("/a", 1), ("/b", "text"), ("/c/d", [1.5, 2.5]), ("/c/e", True)):
+        master_proxy.setParam("/bench", name, value)
+    for i in range(PUBLISHERS):
+        node = f"/fake_{i}"
+        master_proxy.registerPublisher(
+            node, f"/fake/topic_{i}", "std_msgs/String", f"http://127.0.0.1:{40000 + i}/"
+        )
+
+
+def bench_startup() -> list[Result]:
+    """Median whole-process wall time of each command, ours and the ROS 1 tool's."""
+    rostools = rostools_cmd()
+    results: list[Result] = []
+    with master() as uri:
+        env = ros_env(uri)
+        _populate(uri)
+        talker = start(
+            [SYSTEM_PYTHON, str(ROOT / "tests/support/ros1_nodes/talker.py"), "/chatter", "5"],
+            env,
+            stdout=subprocess.DEVNULL,
+            stderr=subprocess.DEVNULL,
+        )
+        try:
+            time.sleep(2.0)  # the talker registers
+            for ours, theirs in COMMANDS:
+                commands = {"ours": [*rostools, *ours]}
+                if have(theirs[0]):
+                    commands["theirs"] = theirs
+                t = time_commands(commands, runs=RUNS, warmup=2, env=env)
+                mine, ros1 = t["ours"] * 1e3, t.get("theirs")
+                results.append(
+                    Result(
+                        f"{' '.join(ours[:2])} cold start (wall, whole process)",
+                        "ms",
+                        mine,
+                        None if ros1 is None else ros1 * 1e3,
+                        f"<= {GOAL}x {theirs[0]}",
+                        None if ros1 is None else mine <= GOAL * ros1 * 1e3,
+                        f"{' '.join(theirs)}; rosmaster, {PUBLISHERS} publishers, median of {RUNS}",
+                    )
+                )
+        finally:
+            stop(talker)
+    return results
+
+
+BENCHMARKS = {"startup": bench_startup}

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import itertools
 import json
 import os
 import re
@@ -227,6 +228,69 @@ def bench_pub_rate() -> Result:
     )
 
 
+PACE_RATE = 10_000
+PACE_COUNT = 30_000  # 3 s at PACE_RATE
+PACE_RUNS = 3
+
+
+def _arrival_gaps(pub_argv: list[str], env: dict[str, str]) -> list[float]:
+    """Inter-arrival times in ms at a roscpp subscriber (sub_stamps) of PACE_COUNT messages."""
+    sub = start(
+        [cpp_peer("sub_stamps", PEERS), "/pace", "--count", str(PACE_COUNT), "--idle", "3"],
+        env,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.DEVNULL,
+    )
+    assert sub.stdout is not None
+    if sub.stdout.readline().strip() != b"ready":
+        stop(sub)
+        raise RuntimeError("sub_stamps did not start")
+    time.sleep(0.5)
+    pub = start(pub_argv, env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    try:
+        out, _ = sub.communicate(timeout=PACE_COUNT / PACE_RATE + 60)
+    finally:
+        stop(pub)
+        stop(sub)
+    times = [int(line.split()[1]) for line in out.decode().splitlines() if line[:1].isdigit()]
+    times = times[PACE_RATE // 2 :]  # from half a second in: the connection is up
+    return [(b - a) / 1e6 for a, b in itertools.pairwise(times)]
+
+
+def bench_pub_pacing() -> list[Result]:
+    """``pub -r 10000``: how evenly the messages arrive (p99 of inter-arrival times).
+
+    Ours and rostopic alternate, PACE_RUNS each; the median of each one's p99s is reported.
+    """
+    argv = ["/pace", "std_msgs/String", "data: '1'", "-r", str(PACE_RATE)]
+    tools = {"ours": [*rostools_cmd(), "topic", "pub", *argv]}
+    if have("rostopic"):
+        tools["theirs"] = ["rostopic", "pub", *argv]
+    p99: dict[str, list[float]] = {k: [] for k in tools}
+    rate: dict[str, list[float]] = {k: [] for k in tools}
+    with master() as uri:
+        env = ros_env(uri)
+        for _ in range(PACE_RUNS):
+            for key, cmd in tools.items():
+                gaps = sorted(_arrival_gaps(cmd, env))
+                p99[key].append(gaps[int(0.99 * (len(gaps) - 1))])
+                rate[key].append(1e3 / statistics.mean(gaps))
+    ours = statistics.median(p99["ours"])
+    theirs = statistics.median(p99["theirs"]) if "theirs" in p99 else None
+    note = ", ".join(f"{k} receives {statistics.median(v):,.0f} msg/s" for k, v in rate.items())
+    return [
+        Result(
+            f"topic pub -r {PACE_RATE}, p99 inter-arrival at a roscpp subscriber",
+            "ms",
+            ours,
+            theirs,
+            "<= rostopic's",
+            None if theirs is None else ours <= theirs,
+            f"median of {PACE_RUNS} runs each; {note}",
+        )
+    ]
+
+
 def bench_big_messages() -> list[Result]:
     """1 MB messages into three subscribers from one source that is never the bottleneck.
 
@@ -285,5 +349,6 @@ BENCHMARKS = {
     "hz": bench_hz,
     "echo": bench_echo,
     "pub_rate": bench_pub_rate,
+    "pub_pacing": bench_pub_pacing,
     "big_messages": bench_big_messages,
 }

@@ -63,7 +63,7 @@ def test_a_batch_being_written_counts_too(tmp_path: Path, monkeypatch: pytest.Mo
         # Resetting the count when the writer took its batch let the queue fill again: 2x.
         assert rec.queued_bytes + rec.writing_bytes <= BUFFER + 500 * record.ENTRY_OVERHEAD
         held = sum(len(e[4]) + record.ENTRY_OVERHEAD for e in rec.queue)
-        assert held == rec.queued_bytes < BUFFER // 2
+        assert held == rec.queued_bytes  # how much the writer took depends on when it woke
     finally:
         release.set()
         with rec.cond:

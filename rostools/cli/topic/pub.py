@@ -30,6 +30,12 @@ STREAM_RATE = 10.0
 SUBSCRIBER_WAIT = 5.0
 #: How long ``--use-rostime`` waits for a first ``/clock`` under sim time.
 CLOCK_WAIT = 2.0
+#: Waits shorter than this are slept with ``time.sleep``; asyncio wakes a millisecond late.
+FINE_SLEEP = 0.002
+#: Waits shorter than this are not slept at all: the next message is as good as due.
+SPIN = 0.00005
+#: The longest the event loop goes unserved between paced messages.
+YIELD_PERIOD = 0.001
 #: At most this many messages per event-loop turn, so that sockets keep being served.
 MAX_BURST = 5000
 
@@ -234,6 +240,7 @@ def pub(
         cached: bytes | None = None
         said = ""  # -v: what each message sent prints, as rostopic prints it every time
         start, sent = time.monotonic(), 0
+        served = start
         while not stop.is_set():
             due = int((time.monotonic() - start) * rate) + 1 - sent
             for _ in range(min(due, MAX_BURST)):
@@ -254,9 +261,17 @@ def pub(
                 if limit <= 0:
                     return
                 wait = min(wait, limit)
-            if wait > 0:
-                await first(stop.wait(), timeout=wait)
-            else:
-                await asyncio.sleep(0)
+            if wait >= SPIN:
+                publisher.flush()  # paced: each message leaves when due, not with later ones
+            if wait > FINE_SLEEP:
+                await first(stop.wait(), timeout=wait - FINE_SLEEP)
+                served = time.monotonic()
+            elif wait >= SPIN:
+                time.sleep(
+                    wait
+                )  # the event loop wakes in whole milliseconds: 10 kHz came in bursts
+            if time.monotonic() - served > YIELD_PERIOD:
+                await asyncio.sleep(0)  # new subscribers, Ctrl-C and coalesced writes
+                served = time.monotonic()
 
     node_session(ctx, main, "rostools_pub")

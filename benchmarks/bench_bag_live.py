@@ -29,6 +29,7 @@ from benchmarks.common import (
     master,
     ros_env,
     rostools_cmd,
+    stamped_arrivals,
     start,
     stop,
 )
@@ -346,35 +347,8 @@ def _play_bag() -> Path:
 
 def _play_errors(player: list[str], env: dict[str, str], bag: Path) -> tuple[list[float], int]:
     """|timing error| in ms of every message the subscriber got from one play, and the count."""
-    sub = start(
-        [cpp_peer("sub_stamps", PEERS), TOPIC, "--count", str(PLAY_MESSAGES), "--idle", "2"],
-        env,
-        stdout=subprocess.PIPE,
-        stderr=subprocess.DEVNULL,
-    )
-    assert sub.stdout is not None
-    if sub.stdout.readline().strip() != b"ready":
-        stop(sub)
-        raise RuntimeError("sub_stamps did not start")
-    # Let the subscription reach the master before the player advertises.
-    time.sleep(0.5)
-    play = start(
-        [*player, str(bag)],
-        env,
-        stdin=subprocess.DEVNULL,
-        stdout=subprocess.DEVNULL,
-        stderr=subprocess.DEVNULL,
-    )
-    try:
-        out, _ = sub.communicate(timeout=PLAY_MESSAGES * PLAY_PERIOD_NS / 1e9 + 60)
-        play.wait(20)
-    finally:
-        stop(sub)
-        stop(play)
-    arrivals = [
-        (int(k), int(t))
-        for k, t in (line.split() for line in out.decode().splitlines() if line[:1].isdigit())
-    ]
+    timeout = PLAY_MESSAGES * PLAY_PERIOD_NS / 1e9 + 60
+    arrivals = stamped_arrivals([*player, str(bag)], TOPIC, PLAY_MESSAGES, 2, env, timeout)
     if len(arrivals) < 2:
         raise RuntimeError(f"{player[0]} play: the subscriber got {len(arrivals)} messages")
     k0, a0 = arrivals[0]

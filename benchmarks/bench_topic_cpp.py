@@ -22,6 +22,7 @@ from benchmarks.common import (
     master,
     ros_env,
     rostools_cmd,
+    stamped_arrivals,
     start,
     stop,
 )
@@ -235,25 +236,8 @@ PACE_RUNS = 3
 
 def _arrival_gaps(pub_argv: list[str], env: dict[str, str]) -> list[float]:
     """Inter-arrival times in ms at a roscpp subscriber (sub_stamps) of PACE_COUNT messages."""
-    sub = start(
-        [cpp_peer("sub_stamps", PEERS), "/pace", "--count", str(PACE_COUNT), "--idle", "3"],
-        env,
-        stdout=subprocess.PIPE,
-        stderr=subprocess.DEVNULL,
-    )
-    assert sub.stdout is not None
-    if sub.stdout.readline().strip() != b"ready":
-        stop(sub)
-        raise RuntimeError("sub_stamps did not start")
-    time.sleep(0.5)
-    pub = start(pub_argv, env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-    try:
-        out, _ = sub.communicate(timeout=PACE_COUNT / PACE_RATE + 60)
-    finally:
-        stop(pub)
-        stop(sub)
-    times = [int(line.split()[1]) for line in out.decode().splitlines() if line[:1].isdigit()]
-    times = times[PACE_RATE // 2 :]  # from half a second in: the connection is up
+    arrivals = stamped_arrivals(pub_argv, "/pace", PACE_COUNT, 3, env, PACE_COUNT / PACE_RATE + 60)
+    times = [t for _, t in arrivals[PACE_RATE // 2 :]]  # from half a second in: connected
     return [(b - a) / 1e6 for a, b in itertools.pairwise(times)]
 
 

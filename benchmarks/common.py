@@ -222,6 +222,36 @@ def cpp_peer(name: str, folder: Path | None = None) -> str:
     return str(build(name, folder))
 
 
+def stamped_arrivals(
+    source: Sequence[str], topic: str, count: int, idle: float, env: dict[str, str], timeout: float
+) -> list[tuple[int, int]]:
+    """(index, steady-clock ns) of each message a roscpp ``sub_stamps`` got from ``source``.
+
+    The subscriber is up, and its subscription with the master, before ``source`` starts;
+    both are stopped once it has ``count`` messages or none came for ``idle`` seconds.
+    """
+    sub = start(
+        [cpp_peer("sub_stamps", ROOT / "benchmarks" / "peers"), topic, "--count", str(count),
+         "--idle", str(idle)],
+        env, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL,
+    )  # fmt: skip
+    assert sub.stdout is not None
+    if sub.stdout.readline().strip() != b"ready":
+        stop(sub)
+        raise RuntimeError("sub_stamps did not start")
+    time.sleep(0.5)
+    src = start(
+        source, env, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL
+    )
+    try:
+        out, _ = sub.communicate(timeout=timeout)
+    finally:
+        stop(sub)
+        stop(src)
+    lines = (line.split() for line in out.decode().splitlines() if line[:1].isdigit())
+    return [(int(k), int(t)) for k, t in lines]
+
+
 def status_kb(pid: int, field: str = "VmRSS") -> int:
     """A ``/proc/PID/status`` figure in kB (VmRSS, VmHWM); 0 once the process is gone."""
     try:

@@ -17,7 +17,6 @@ T = TypeVar("T")
 if TYPE_CHECKING:
     from collections.abc import Awaitable, Callable
 
-    from rostools.msgs.store import TypeStore
     from rostools.node.notice import Notice
     from rostools.rosgraph.masterapi import MasterProxy
 
@@ -83,13 +82,6 @@ def node_session(
 
     s = settings(ctx)
     return run_node(main, s.resolved_master_uri(), name, remappings=s.remappings, notify=notify)
-
-
-def type_store(msg_paths: list[Path] | None = None) -> TypeStore:
-    """The type store for this invocation, over ``--msg-path`` folders and the environment."""
-    from rostools.msgs.store import TypeStore
-
-    return TypeStore.default(msg_paths or [])
 
 
 FormatOpt = Annotated[

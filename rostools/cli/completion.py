@@ -305,9 +305,10 @@ def write_all() -> list[Path]:
     from rostools.cli.completer import TREE
     from rostools.cli.launch import QUICK
 
+    quick = Path(QUICK)
     TREE.write_text(tree_text())
-    Path(QUICK).write_text(quick_text())
-    written = [TREE, Path(QUICK)]
+    quick.write_text(quick_text())
+    written = [TREE, quick]
     folder = ROOT / "completions"
     folder.mkdir(exist_ok=True)
     for shell, name in SCRIPT_NAMES.items():

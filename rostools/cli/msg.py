@@ -8,11 +8,12 @@ from typing import Annotated, Any
 
 import typer
 
-from rostools.cli.common import FormatOpt, MsgPathOpt, output_format, settings, type_store
+from rostools.cli.common import FormatOpt, MsgPathOpt, output_format, settings
 from rostools.cli.lookup import Kind, matches, read_type
 from rostools.cli.output import Format, emit
 from rostools.cli.quick import msg as quick
 from rostools.cli.quick import runs
+from rostools.cli.settings import type_store
 from rostools.errors import NotFoundError, RostoolsError, UsageError
 from rostools.msgs.store import TypeStore
 

@@ -8,18 +8,11 @@ from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
-from rostools.cli.common import (
-    FINITE,
-    FormatOpt,
-    MsgPathOpt,
-    master,
-    output_format,
-    settings,
-    type_store,
-)
+from rostools.cli.common import FINITE, FormatOpt, MsgPathOpt, master, output_format, settings
 from rostools.cli.output import Format, emit
 from rostools.cli.quick import runs
 from rostools.cli.quick import service as quick
+from rostools.cli.settings import caller_id, type_store
 from rostools.errors import NotFoundError, TimeoutExpired, UsageError
 from rostools.names import script_resolve
 from rostools.rosgraph.masterapi import SERVICE_TIMEOUT
@@ -219,7 +212,7 @@ def call(
         except UsageError as err:
             fields = " ".join(f.name for f in spec.request.fields) or "(none)"
             raise UsageError(f"{err}", hint=f"{name} takes: {fields}") from err
-        answer = client.call(quick.caller(), md5, request.serialize())
+        answer = client.call(caller_id("rosservice"), md5, request.serialize())
         response = codec.decode(spec.response.name, answer)
         _print(codec, spec, request, response, verbose, fmt, TextOptions(nostr, noarr))
 

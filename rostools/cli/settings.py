@@ -8,6 +8,9 @@ from typing import TYPE_CHECKING
 from rostools.cli.output import Format
 
 if TYPE_CHECKING:
+    from pathlib import Path
+
+    from rostools.msgs.store import TypeStore
     from rostools.rosgraph.masterapi import MasterProxy
 
 DEFAULT_MASTER_URI = "http://localhost:11311"
@@ -42,7 +45,20 @@ class Settings:
 
     def master(self, tool: str) -> MasterProxy:
         """A master client for this invocation, named like rospy tools name themselves."""
-        from rostools.names import ros_namespace
         from rostools.rosgraph.masterapi import MasterProxy
 
-        return MasterProxy(self.resolved_master_uri(), f"{ros_namespace()}{tool}_{os.getpid()}")
+        return MasterProxy(self.resolved_master_uri(), caller_id(tool))
+
+
+def caller_id(tool: str) -> str:
+    """The caller id a rospy tool gives itself: ``/rosparam_1234``, in ROS_NAMESPACE."""
+    from rostools.names import ros_namespace
+
+    return f"{ros_namespace()}{tool}_{os.getpid()}"
+
+
+def type_store(msg_paths: list[Path] | None = None) -> TypeStore:
+    """The type store for this invocation, over ``--msg-path`` folders and the environment."""
+    from rostools.msgs.store import TypeStore
+
+    return TypeStore.default(msg_paths or [])

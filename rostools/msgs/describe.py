@@ -45,10 +45,6 @@ def structure(store: TypeStore, spec: MsgSpec) -> dict[str, Any]:
     }
 
 
-def _scalar_default(base: str) -> str:
-    return _SCALAR_DEFAULTS.get(base, "0")
-
-
 # A template value: a scalar's YAML text, a mapping of (name, value) pairs, or a sequence.
 # The flag says whether the default style writes it inline, in brackets.
 _Node = tuple[str, list[Any], bool]
@@ -79,7 +75,7 @@ class _Proto:
         if base in ("time", "duration"):
             return ("map", [("secs", "0"), ("nsecs", "0")], True)
         if base in BUILTIN_TYPES:
-            return _scalar_default(base)
+            return _SCALAR_DEFAULTS.get(base, "0")
         return self.message(self.store.msg(base))
 
 

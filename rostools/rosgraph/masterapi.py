@@ -14,8 +14,8 @@ from typing import Any
 
 from rostools.errors import NotFoundError, RostoolsError, TimeoutExpired, UnreachableError
 from rostools.wire import codes
-from rostools.wire.xmlrpc import HttpError, HttpParser, Message, format_request
-from rostools.wire.xmlvalues import BadAnswer, Fault, loads_response
+from rostools.wire.xmlrpc import HttpError, HttpParser, Message, decode_response, format_request
+from rostools.wire.xmlvalues import BadAnswer, Fault
 
 #: Seconds to wait for the master before giving up; ``ROSTOOLS_MASTER_TIMEOUT`` changes it.
 DEFAULT_TIMEOUT = 3.0
@@ -159,7 +159,7 @@ class XmlRpcNode:
             status = message.start_line.split(" ", 2)
             if len(status) < 2 or status[1] != "200":
                 raise BadAnswer(f"HTTP {' '.join(status[1:]) or 'answer without a status'}")
-            return loads_response(message.body)
+            return decode_response(message.body)
         except TimeoutError as err:
             self.http.close()
             raise no_answer(self.uri, self.what, method, self.timeout) from err

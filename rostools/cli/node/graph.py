@@ -15,7 +15,8 @@ if TYPE_CHECKING:
     from rostools.rosgraph.snapshot import RosGraph
 
 
-from rostools.cli.node.group import TOOL, app, warn
+from rostools.cli.node.group import app, warn
+from rostools.cli.quick.node import TOOL
 
 
 class GraphFormat(str, enum.Enum):

@@ -7,14 +7,14 @@ from typing import TYPE_CHECKING, Annotated
 
 import typer
 
-from rostools.cli.common import FiniteFloat, master
+from rostools.cli.common import FiniteFloat, settings
+from rostools.cli.quick import node as quick
 from rostools.errors import (
     NotFoundError,
     RostoolsError,
     TimeoutExpired,
     UnreachableError,
 )
-from rostools.names import script_resolve
 from rostools.rosgraph.masterapi import NODE_TIMEOUT
 
 if TYPE_CHECKING:
@@ -27,10 +27,6 @@ app = typer.Typer(
     no_args_is_help=True,
     add_completion=False,
 )
-
-
-TOOL = "rosnode"
-
 
 #: Seconds between two pings of one node, as rosnode.
 PING_INTERVAL = 1.0
@@ -49,14 +45,7 @@ TimeoutOpt = Annotated[
 
 def node_graph(ctx: typer.Context, timeout: float = NODE_TIMEOUT) -> Graph:
     """The graph as this command sees it: the master, and nodes asked with ``timeout``."""
-    from rostools.rosgraph.nodeapi import Graph
-
-    return Graph(master(ctx, TOOL), timeout)
-
-
-def resolve_node(name: str) -> str:
-    """A node name from the command line, resolved as rosnode does."""
-    return script_resolve(name, TOOL)
+    return quick.graph(settings(ctx), timeout)
 
 
 def warn(text: str) -> None:

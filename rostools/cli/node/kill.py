@@ -22,10 +22,10 @@ from rostools.cli.node.group import (
     TimeoutOpt,
     app,
     node_graph,
-    resolve_node,
     warn,
     worst,
 )
+from rostools.cli.quick.node import resolve_node
 from rostools.rosgraph.masterapi import NODE_TIMEOUT
 
 

@@ -28,9 +28,9 @@ from rostools.cli.node.group import (
     app,
     failure_class,
     node_graph,
-    resolve_node,
     warn,
 )
+from rostools.cli.quick.node import resolve_node
 from rostools.rosgraph.masterapi import NODE_TIMEOUT
 
 

@@ -23,7 +23,8 @@ if TYPE_CHECKING:
     from rostools.rosgraph.nodeapi import BusConnection, NodeInfo
 
 
-from rostools.cli.node.group import TimeoutOpt, app, node_graph, resolve_node, worst
+from rostools.cli.node.group import TimeoutOpt, app, node_graph, worst
+from rostools.cli.quick.node import resolve_node
 from rostools.rosgraph.masterapi import NODE_TIMEOUT
 
 

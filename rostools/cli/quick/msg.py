@@ -7,6 +7,7 @@ from typing import TYPE_CHECKING
 
 from rostools.cli.lookup import md5_text, md5sums, read_type
 from rostools.cli.output import Format, emit
+from rostools.cli.settings import type_store
 
 if TYPE_CHECKING:
     from pathlib import Path
@@ -18,10 +19,8 @@ def md5(
     s: Settings, type_name: str | None, fmt: Format | str | None, msg_path: list[Path] | None
 ) -> None:
     """Print the md5sum of a message or service type (rosmsg/rossrv md5)."""
-    from rostools.msgs.store import TypeStore
-
     name = read_type(type_name)
-    found = md5sums(TypeStore.default(msg_path or []), name)
+    found = md5sums(type_store(msg_path), name)
     out = s.output_format(fmt)
     if out is Format.text:
         sys.stdout.write(md5_text(name, found))

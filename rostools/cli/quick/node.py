@@ -9,6 +9,21 @@ from rostools.names import script_resolve
 
 if TYPE_CHECKING:
     from rostools.cli.settings import Settings
+    from rostools.rosgraph.nodeapi import Graph
+
+TOOL = "rosnode"
+
+
+def graph(s: Settings, timeout: float) -> Graph:
+    """The graph as a node command sees it: the master, and nodes asked with ``timeout``."""
+    from rostools.rosgraph.nodeapi import Graph
+
+    return Graph(s.master(TOOL), timeout)
+
+
+def resolve_node(name: str) -> str:
+    """A node name from the command line, resolved as rosnode does."""
+    return script_resolve(name, TOOL)
 
 
 def list_nodes(
@@ -16,21 +31,20 @@ def list_nodes(
 ) -> None:
     """List the nodes registered on the master, sorted."""
     from rostools.rosgraph.masterapi import NODE_TIMEOUT
-    from rostools.rosgraph.nodeapi import Graph
 
-    graph = Graph(s.master("rosnode"), NODE_TIMEOUT)
-    ns = script_resolve(namespace, "rosnode") if namespace else None
-    nodes = graph.state().nodes(ns)
+    known = graph(s, NODE_TIMEOUT)
+    ns = resolve_node(namespace) if namespace else None
+    nodes = known.state().nodes(ns)
     out = s.output_format(fmt)
     if all_:
-        rows = [{"name": n, "uri": graph.uri(n)} for n in nodes]
+        rows = [{"name": n, "uri": known.uri(n)} for n in nodes]
         emit(
             out,
             rows,
             lambda rs: "\n".join(f"{r['uri'] or 'unknown address'} \t{r['name']}" for r in rs),
         )
     elif uris:
-        found = [graph.uri(n) for n in nodes]
-        emit(out, found, lambda us: "\n".join(u or "unknown address" for u in us))
+        addresses = [known.uri(n) for n in nodes]
+        emit(out, addresses, lambda us: "\n".join(u or "unknown address" for u in us))
     else:
         emit(out, nodes, "\n".join)

@@ -2,23 +2,18 @@
 
 from __future__ import annotations
 
-import os
 import sys
 from typing import TYPE_CHECKING
 
 from rostools.cli.output import Format, emit
+from rostools.cli.settings import caller_id
 from rostools.errors import NotFoundError
-from rostools.names import make_global_ns, ros_namespace, script_resolve
+from rostools.names import make_global_ns, script_resolve
 
 if TYPE_CHECKING:
     from rostools.cli.settings import Settings
     from rostools.rosgraph.masterapi import MasterProxy
     from rostools.rosgraph.serviceclient import BlockingServiceClient
-
-
-def caller() -> str:
-    """The caller id rosservice gives itself."""
-    return f"{ros_namespace()}rosservice_{os.getpid()}"
 
 
 def client(proxy: MasterProxy, name: str, timeout: float) -> BlockingServiceClient:
@@ -36,7 +31,7 @@ def services(proxy: MasterProxy) -> dict[str, list[str]]:
 
 def type_of(proxy: MasterProxy, name: str, timeout: float) -> tuple[str, str]:
     """(type, md5sum) of a service, from a probe of its server."""
-    fields = client(proxy, name, timeout).probe(caller())
+    fields = client(proxy, name, timeout).probe(caller_id("rosservice"))
     return fields.get("type", ""), fields.get("md5sum", "")
 
 

@@ -8,13 +8,8 @@ from typing import TYPE_CHECKING, Annotated
 
 import typer
 
-from rostools.cli.common import (
-    FormatOpt,
-    MsgPathOpt,
-    node_session,
-    output_format,
-    type_store,
-)
+from rostools.cli.common import FormatOpt, MsgPathOpt, node_session, output_format
+from rostools.cli.settings import type_store
 from rostools.cli.topic.group import app
 from rostools.cli.topic.live import CountOpt, FilterOpt, TimeoutOpt, wait_for_topic
 from rostools.cli.topic.printing import Echo, EchoOptions, echo_options

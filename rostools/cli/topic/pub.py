@@ -11,7 +11,8 @@ from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
-from rostools.cli.common import FINITE, MsgPathOpt, node_session, type_store
+from rostools.cli.common import FINITE, MsgPathOpt, node_session
+from rostools.cli.settings import type_store
 from rostools.cli.topic.group import app
 from rostools.cli.topic.live import TimeoutOpt, TopicArg
 from rostools.errors import NotFoundError, UsageError
@@ -266,10 +267,8 @@ def pub(
             if wait > FINE_SLEEP:
                 await first(stop.wait(), timeout=wait - FINE_SLEEP)
                 served = time.monotonic()
-            elif wait >= SPIN:
-                time.sleep(
-                    wait
-                )  # the event loop wakes in whole milliseconds: 10 kHz came in bursts
+            elif wait >= SPIN:  # asyncio wakes in whole ms: 10 kHz came in bursts
+                time.sleep(wait)
             if time.monotonic() - served > YIELD_PERIOD:
                 await asyncio.sleep(0)  # new subscribers, Ctrl-C and coalesced writes
                 served = time.monotonic()

@@ -10,10 +10,11 @@ from typing import Annotated
 
 import typer
 
-from rostools.cli.common import FormatOpt, MsgPathOpt, master, output_format, settings, type_store
+from rostools.cli.common import FormatOpt, MsgPathOpt, master, output_format, settings
 from rostools.cli.output import emit
 from rostools.cli.quick import runs
 from rostools.cli.quick import topic as quick
+from rostools.cli.settings import type_store
 from rostools.cli.topic.group import app
 from rostools.cli.topic.live import TopicArg
 from rostools.errors import NotFoundError

@@ -37,6 +37,9 @@ Frame = bytes | memoryview
 #: Outgoing bytes buffered per connection before we stop writing and queue messages instead.
 WRITE_HIGH_WATER = 4 * 1024 * 1024
 WRITE_LOW_WATER = 1024 * 1024
+#: Reads smaller than this may wait for company (``Receiver.coalesce``); a busy socket fills
+#: bigger reads than this and is never held back.
+COALESCE_BELOW = 64 * 1024
 
 
 def set_nodelay(transport: asyncio.BaseTransport) -> None:
@@ -229,6 +232,8 @@ class Receiver(Protocol):
     topic: str
     #: The largest frame it accepts.
     max_frame: int
+    #: Seconds a small read waits for company before the next (0: none).
+    coalesce: float
 
     def header_received(self, conn: InboundConnection) -> None:
         """The publisher's header arrived and passed the checks."""
@@ -279,6 +284,12 @@ class InboundConnection(asyncio.BufferedProtocol):
     def buffer_updated(self, nbytes: int) -> None:
         """Asyncio: bytes arrived."""
         now = time.monotonic()
+        wait = self.subscriber.coalesce
+        if wait and nbytes < COALESCE_BELOW and self.transport is not None:
+            # A small read: pause, so that what comes next arrives as one read, not as one
+            # wake-up per message. Big reads mean the socket is busy; they never wait.
+            self.transport.pause_reading()
+            asyncio.get_running_loop().call_later(wait, self._resume)
         for event in self.session.buffer_updated(nbytes):
             if isinstance(event, Messages):
                 self.messages_received += len(event.frames)
@@ -289,6 +300,10 @@ class InboundConnection(asyncio.BufferedProtocol):
                 self.subscriber.header_received(self)
             else:
                 self._drop(event.reason)
+
+    def _resume(self) -> None:
+        if self.transport is not None and not self.transport.is_closing():
+            self.transport.resume_reading()
 
     def _drop(self, reason: str) -> None:
         # the subscriber reports it once (a publisher that keeps refusing is not a flood)

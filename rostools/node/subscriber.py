@@ -56,6 +56,9 @@ class Subscriber:
         self.callback = callback
         self.tcp_nodelay = tcp_nodelay
         self.max_frame = max_frame
+        #: Seconds to let small reads gather before the next wake-up (0: read at once); for
+        #: consumers that only count, where one wake-up per message would cost the CPU.
+        self.coalesce = 0.0
         self.publishers: set[str] = set()
         self.connections: dict[str, InboundConnection] = {}
         self.tasks: dict[str, asyncio.Task[None]] = {}

@@ -26,10 +26,19 @@ if TYPE_CHECKING:
 
 _STAMP = struct.Struct("<II")
 WindowOpt = Annotated[int | None, typer.Option("--window", "-w", help="Messages to average over.")]
+HzWindowOpt = Annotated[
+    int | None,
+    typer.Option(
+        "--window", "-w", help="Messages to average over [default: 50,000, and at least 5 s]."
+    ),
+]
 NodelayOpt = Annotated[
     bool, typer.Option("--tcpnodelay", help="Ask publishers for TCP_NODELAY (rostopic's flag).")
 ]
 REPORT_PERIOD = 1.0
+#: How long hz and bw let small reads gather: at most ~1,000 wake-ups a second at any rate,
+#: where one per message would cost more CPU than the counting itself.
+COALESCE = 0.001
 
 
 class Meter:
@@ -47,6 +56,7 @@ class Meter:
         fmt: Format,
         tcp_nodelay: bool = False,
         wall_time: bool = False,
+        coalesce: float = 0.0,
     ) -> None:
         from rostools.node.clock import RosClock
 
@@ -55,6 +65,7 @@ class Meter:
         self.fmt = fmt
         self.tcp_nodelay = tcp_nodelay
         self.wall_time = wall_time
+        self.coalesce = coalesce
         self.clock = RosClock()
         self.received = 0
         self.error: BaseException | None = None
@@ -102,7 +113,8 @@ class Meter:
             if ref.topic == "/clock" and self.clock.sim:
                 self.clock.forward = on_frames  # the clock's subscription is this node's one
             else:
-                await node.subscribe(ref.topic, on_frames, tcp_nodelay=self.tcp_nodelay)
+                sub = await node.subscribe(ref.topic, on_frames, tcp_nodelay=self.tcp_nodelay)
+                sub.coalesce = self.coalesce
             sys.stderr.write(f"subscribed to [{ref.topic}]\n")
         next_report = time.monotonic() + REPORT_PERIOD
         while True:
@@ -134,7 +146,7 @@ def _run(ctx: typer.Context, meter: Meter, sink: Any, report: Any) -> None:
 def hz(
     ctx: typer.Context,
     topics: Annotated[list[str], typer.Argument(help="One or more topics.")],
-    window: WindowOpt = None,
+    window: HzWindowOpt = None,
     filter_expr: FilterOpt = None,
     wall_time: Annotated[
         bool,
@@ -147,11 +159,12 @@ def hz(
     fmt: FormatOpt = None,
 ) -> None:
     """The publishing rate of topics (rostopic hz); counts raw frames, decodes only for --filter."""
-    from rostools.rates import DEFAULT_WINDOW, RateMeter, format_rate, rate_table
+    from rostools.rates import DEFAULT_SPAN, DEFAULT_WINDOW, RateMeter, format_rate, rate_table
 
     fmt = output_format(ctx, fmt)
     names = [script_resolve(t, "rostopic") for t in topics]
-    meters = {n: RateMeter(window or DEFAULT_WINDOW) for n in names}
+    span = 0.0 if window else DEFAULT_SPAN  # an explicit window is rostopic's, exactly
+    meters = {n: RateMeter(window or DEFAULT_WINDOW, span) for n in names}
     check = _filter(filter_expr)
 
     def sink(topic: str, frames: list[Frame], conn: InboundConnection, now: float) -> None:
@@ -173,7 +186,7 @@ def hz(
         else:
             sys.stdout.write(rate_table(rows))
 
-    _run(ctx, Meter(names, timeout, fmt, tcp_nodelay, wall_time), sink, report)
+    _run(ctx, Meter(names, timeout, fmt, tcp_nodelay, wall_time, COALESCE), sink, report)
 
 
 def _filter(
@@ -216,7 +229,7 @@ def bw(
     fmt = output_format(ctx, fmt)
     name = script_resolve(topic, "rostopic")
     meter = BandwidthMeter(window or 100)
-    runner = Meter([name], timeout, fmt)
+    runner = Meter([name], timeout, fmt, coalesce=COALESCE)
 
     def sink(t: str, frames: list[Frame], conn: InboundConnection, now: float) -> None:
         meter.add([len(f) for f in frames], now)

@@ -4,8 +4,11 @@ from __future__ import annotations
 
 import os
 import sys
-from collections.abc import Sequence
-from typing import Any
+
+TYPE_CHECKING = False  # ``typing`` is 5-10 ms of start-up; only annotations use it
+if TYPE_CHECKING:
+    from collections.abc import Sequence
+    from typing import Any
 
 # Names and values quoted in a message may carry control characters or Unicode line
 # breaks (NEL, U+2028); escape them so every error stays one line, on a terminal and in logs.

@@ -15,10 +15,12 @@ made them:
 from __future__ import annotations
 
 import enum
-import json
 import sys
-from collections.abc import Callable
-from typing import Any
+
+TYPE_CHECKING = False  # ``typing`` is 5-10 ms of start-up; only annotations use it
+if TYPE_CHECKING:
+    from collections.abc import Callable
+    from typing import Any
 
 
 class Format(str, enum.Enum):
@@ -32,6 +34,8 @@ class Format(str, enum.Enum):
 def render(fmt: Format, data: Any, text: Callable[[Any], str] | None = None) -> str:
     """One result as text (``text(data)``), or as one JSON or YAML document."""
     if fmt is Format.json:
+        import json  # json and yaml load when asked for: text is the common case
+
         return json.dumps(data, indent=2, ensure_ascii=False)
     if fmt is Format.yaml:
         import yaml

@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
-from typing import Any
+TYPE_CHECKING = False  # ``typing`` is 5-10 ms of start-up; only annotations use it
+if TYPE_CHECKING:
+    from typing import Any
 
 
 def list_text(

@@ -8,9 +8,11 @@ of ``xmlrpc.client`` (it pulls in ``http.client``, ``email`` and ``ssl``).
 
 from __future__ import annotations
 
-from typing import Any
-
 from rostools.wire import xmlvalues
+
+TYPE_CHECKING = False  # ``typing`` is 5-10 ms of start-up; only annotations use it
+if TYPE_CHECKING:
+    from typing import Any
 
 #: The largest request or response body we buffer. rosmaster has no limit; a parameter tree
 #: with a big URDF is a few MB, so 64 MiB leaves room and still bounds a hostile peer.

@@ -9,8 +9,9 @@ as ``xmlrpc.client``'s ``Binary`` and ``DateTime`` (imported only when one arriv
 
 from __future__ import annotations
 
-import base64
-from typing import Any
+TYPE_CHECKING = False  # ``typing`` is 5-10 ms of start-up; only annotations use it
+if TYPE_CHECKING:
+    from typing import Any
 
 #: XML-RPC integers are 32-bit; ``xmlrpc.client`` refuses larger ones the same way.
 _INT_MAX = 2**31 - 1
@@ -57,8 +58,12 @@ def _value(out: list[str], value: Any) -> None:
             out.append("</member>\n")
         out.append("</struct></value>")
     elif isinstance(value, bytes | bytearray):
+        import base64  # binaries are rare in ROS: commands do not pay for base64 otherwise
+
         out.append(f"<value><base64>{base64.b64encode(value).decode()}</base64></value>")
     elif type(value).__name__ == "Binary" and hasattr(value, "data"):  # xmlrpc.client's
+        import base64
+
         out.append(f"<value><base64>{base64.b64encode(value.data).decode()}</base64></value>")
     elif type(value).__name__ == "DateTime" and hasattr(value, "value"):
         out.append(f"<value><dateTime.iso8601>{value.value}</dateTime.iso8601></value>")
@@ -95,6 +100,7 @@ def _scalar(tag: str, text: str) -> Any:
         return float(text)
     if tag == "nil":
         return None
+    import base64
     import xmlrpc.client  # rare in ROS: only then pay for the module
 
     if tag == "base64":

@@ -60,3 +60,16 @@ def test_a_quick_command_starts_without_typer(tmp_path: Path) -> None:
     )
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert done.stdout.splitlines()[-1] == "[]", done.stdout
+
+
+def test_the_quick_path_imports_little() -> None:
+    """What a quick command imports leaves out typing, yaml, socket and json (5-20 ms each)."""
+    code = (
+        "import sys\n"
+        "import rostools.cli.launch, rostools.cli.quick.param, rostools.cli.paramdump\n"
+        "import rostools.cli.settings, rostools.rosgraph.masterapi\n"
+        "heavy = ('typing', 'yaml', 'socket', 'json', 'encodings.idna', 'base64', 'ast')\n"
+        "print(sorted(m for m in heavy if m in sys.modules))"
+    )
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert done.stdout.splitlines()[-1] == "[]", done.stdout

@@ -347,8 +347,14 @@ class ResponseReader:
         self.max_frame = max_frame
         self.header: dict[str, str] | None = None
 
-    def feed(self, data: bytes) -> list[tuple[bool, bytes]]:
+    def feed(self, data: bytes | memoryview) -> list[tuple[bool, bytes]]:
         """Add received bytes; the responses now complete, as (ok, payload)."""
+        if not self.buffer and self.header is not None and len(data) >= 5:
+            # The usual read: exactly one whole response, parsed without buffering it.
+            ok = data[0]
+            (length,) = _U32.unpack_from(data, 1)
+            if ok in (0, 1) and len(data) == 5 + length:
+                return [(ok == 1, bytes(data[5:]))]
         self.buffer += data
         out: list[tuple[bool, bytes]] = []
         while True:

@@ -341,10 +341,77 @@ def bench_big_messages() -> list[Result]:
     ]
 
 
+BW_SIZE = 1_000_000
+
+
+def _bw(tool_argv: list[str], pattern: str, env: dict[str, str]) -> float:
+    """MB/s a bandwidth meter prints last while an unpaced roscpp source sends 1 MB images.
+
+    ``pattern`` finds each printed figure in its output, in bytes/s, or in MB/s for rostopic.
+    """
+    tool = start(tool_argv, env, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL)
+    pub = _publisher(0, BW_SIZE, "sensor_msgs/Image", env)
+    _wait_json(pub, RUN + 60)
+    os.killpg(tool.pid, signal.SIGINT)
+    out, _ = _reap(tool, 20)
+    values = [float(x) for x in re.findall(pattern, out.decode())]
+    # The report printed as the run ends may cover its last, idle moments: the one before.
+    last = values[-2] if len(values) > 1 else (values[-1] if values else 0.0)
+    return last if "MB" in pattern else last / 1e6
+
+
+def _bw_ceiling(env: dict[str, str]) -> float:
+    """MB/s a bare roscpp subscriber receives from the same source."""
+    sub = start(
+        [cpp_peer("sub_count"), "/bench", "--duration", str(RUN - 1), "--timeout", "60"],
+        env, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL,
+    )  # fmt: skip
+    assert sub.stdout is not None
+    sub.stdout.readline()  # ready
+    pub = _publisher(0, BW_SIZE, "sensor_msgs/Image", env)
+    try:
+        data = _wait_json(sub, RUN + 60)
+    finally:
+        stop(pub)
+    return float(data["bytes_per_second"]) / 1e6
+
+
+def bench_bw() -> list[Result]:
+    """The issue's set-up: an unpaced roscpp publisher of 1 MB images; what ``bw`` prints, beside
+    rostopic bw and a bare roscpp subscriber (the ceiling); median of 3 alternating runs."""
+    ours: list[float] = []
+    theirs: list[float] = []
+    ceiling: list[float] = []
+    with master() as uri:
+        env = ros_env(uri)
+        for _ in range(3):
+            argv = [*rostools_cmd(), "topic", "bw", "/bench", "-F", "json"]
+            ours.append(_bw(argv, r'"bytes_per_s": ?([0-9.e+]+)', env))
+            if have("rostopic"):
+                theirs.append(_bw(["rostopic", "bw", "/bench"], r"average: ([0-9.]+)MB/s", env))
+            ceiling.append(_bw_ceiling(env))
+    mine, top = statistics.median(ours), statistics.median(ceiling)
+    other = statistics.median(theirs) if theirs else None
+    runs = ", ".join(f"{x:,.0f}" for x in ours)
+    return [
+        Result(
+            "topic bw, 1 MB images, unpaced roscpp source",
+            "MB/s",
+            mine,
+            other,
+            ">= 1600 MB/s",
+            mine >= 1600,
+            f"median of 3 (ours {runs}); {mine / top:.0%} of the ceiling",
+        ),
+        Result("topic bw ceiling: bare roscpp subscriber", "MB/s", top, None, "report", None),
+    ]
+
+
 BENCHMARKS = {
     "hz": bench_hz,
     "echo": bench_echo,
     "pub_rate": bench_pub_rate,
     "pub_pacing": bench_pub_pacing,
     "big_messages": bench_big_messages,
+    "bw": bench_bw,
 }

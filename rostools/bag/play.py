@@ -23,7 +23,7 @@ from rostools.bag.model import NS_PER_SEC, Connection
 from rostools.bag.play_control import SET_BOOL, RateControl, set_bool_reply
 from rostools.errors import UsageError
 from rostools.msgs.topictype import TopicType
-from rostools.node.clock import CLOCK, TIME
+from rostools.node.clock import CLOCK, TIME, tighten_timer_slack
 from rostools.node.connection import Frame
 from rostools.node.node import Node
 from rostools.node.publisher import Publisher
@@ -184,6 +184,7 @@ class Player:
 
     async def run(self, stop: asyncio.Event, show: Callable[[Status], None] | None = None) -> int:
         """Advertise, wait ``-d``, play (looping if asked); the number of messages sent."""
+        tighten_timer_slack()
         await self.advertise()
         advertised = time.monotonic()
         await self._until_connected(stop, advertised + CONNECT_GRACE)

@@ -284,22 +284,31 @@ class InboundConnection(asyncio.BufferedProtocol):
     def buffer_updated(self, nbytes: int) -> None:
         """Asyncio: bytes arrived."""
         now = time.monotonic()
-        wait = self.subscriber.coalesce
-        if wait and nbytes < COALESCE_BELOW and self.transport is not None:
-            # A small read: pause, so that what comes next arrives as one read, not as one
-            # wake-up per message. Big reads mean the socket is busy; they never wait.
-            self.transport.pause_reading()
-            asyncio.get_running_loop().call_later(wait, self._resume)
+        small = False
         for event in self.session.buffer_updated(nbytes):
             if isinstance(event, Messages):
                 self.messages_received += len(event.frames)
                 self.bytes_received += nbytes  # what arrived on the wire, prefixes included
+                small = len(event.frames[0]) < BIG_FRAME  # a big frame comes alone
                 self.subscriber.frames_received(event.frames, self, now)
             elif isinstance(event, Accepted):
                 self.header = event.header
                 self.subscriber.header_received(self)
             else:
                 self._drop(event.reason)
+        wait = self.subscriber.coalesce
+        if (
+            wait
+            and small
+            and nbytes < COALESCE_BELOW
+            and not self.session.reader.mid_big_frame
+            and self.transport is not None
+            and not self.transport.is_closing()
+        ):
+            # Small messages, a few at a time: pause, so that what comes next arrives as one
+            # read, not as a wake-up per message. Big frames and busy sockets never wait.
+            self.transport.pause_reading()
+            asyncio.get_running_loop().call_later(wait, self._resume)
 
     def _resume(self) -> None:
         if self.transport is not None and not self.transport.is_closing():

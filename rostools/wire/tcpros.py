@@ -99,6 +99,11 @@ class FrameReader:
             self._start, self._end = 0, pending
         return self._view[self._end :]
 
+    @property
+    def mid_big_frame(self) -> bool:
+        """Whether a big frame has begun and not yet ended."""
+        return self._big is not None
+
     def buffer_updated(self, nbytes: int) -> list[bytes | memoryview]:
         """Account for ``nbytes`` received; every frame now complete, in order.
 

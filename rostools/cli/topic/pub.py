@@ -173,6 +173,7 @@ def pub(
     from rostools.msgs.fill import Filler
     from rostools.msgs.message import Time
     from rostools.msgs.topictype import TopicType
+    from rostools.node.clock import tighten_timer_slack
 
     if rate is not None and not 0 < rate < math.inf:  # nan compares false both ways
         raise UsageError("--rate must be a number above 0")
@@ -240,6 +241,7 @@ def pub(
                     return
         cached: bytes | None = None
         said = ""  # -v: what each message sent prints, as rostopic prints it every time
+        tighten_timer_slack()
         start, sent = time.monotonic(), 0
         served = start
         while not stop.is_set():

@@ -234,6 +234,8 @@ class Receiver(Protocol):
     max_frame: int
     #: Seconds a small read waits for company before the next (0: none).
     coalesce: float
+    #: Whether it is done with each frame when ``frames_received`` returns (``FrameReader.reuse``).
+    reuse_frames: bool
 
     def header_received(self, conn: InboundConnection) -> None:
         """The publisher's header arrived and passed the checks."""
@@ -285,6 +287,7 @@ class InboundConnection(asyncio.BufferedProtocol):
         """Asyncio: bytes arrived."""
         now = time.monotonic()
         small = False
+        self.session.reader.reuse = self.subscriber.reuse_frames
         for event in self.session.buffer_updated(nbytes):
             if isinstance(event, Messages):
                 self.messages_received += len(event.frames)

@@ -186,11 +186,19 @@ class Node:
         topic_type: TopicType = ANY,
         tcp_nodelay: bool = False,
         on_header: Callable[[Any], None] | None = None,
+        *,
+        coalesce: float = 0.0,
+        reuse_frames: bool = False,
     ) -> Subscriber:
-        """Subscribe to ``topic``; ``topic_type`` ``ANY`` learns it from the publisher."""
+        """Subscribe to ``topic``; ``topic_type`` ``ANY`` learns it from the publisher.
+
+        ``coalesce`` and ``reuse_frames`` are for callbacks that only count or measure
+        (``Subscriber``'s attributes of those names).
+        """
         topic = self.resolve(topic)
         sub = Subscriber(self, topic, topic_type, callback, tcp_nodelay)
         sub.on_header = on_header
+        sub.coalesce, sub.reuse_frames = coalesce, reuse_frames
         self.subscribers[topic] = sub
         uris = await self.master_call("registerSubscriber", topic, topic_type.type, self.uri)
         sub.update(list(uris))

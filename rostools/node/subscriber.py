@@ -59,6 +59,8 @@ class Subscriber:
         #: Seconds to let small reads gather before the next wake-up (0: read at once); for
         #: consumers that only count, where one wake-up per message would cost the CPU.
         self.coalesce = 0.0
+        #: The callback is done with each frame when it returns: big frames share one buffer.
+        self.reuse_frames = False
         self.publishers: set[str] = set()
         self.connections: dict[str, InboundConnection] = {}
         self.tasks: dict[str, asyncio.Task[None]] = {}

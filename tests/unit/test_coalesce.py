@@ -16,6 +16,7 @@ class Counter:
     topic = "/t"
     max_frame = 10**9
     coalesce = 0.001
+    reuse_frames = False
 
     def __init__(self) -> None:
         self.frames: list[Any] = []

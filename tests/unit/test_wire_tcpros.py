@@ -237,3 +237,24 @@ def test_an_oversized_frame_fails_after_the_messages_before_it() -> None:
     assert [type(e) for e in events] == [Accepted, Messages, Failed]
     assert "exceeds the limit" in events[2].reason  # type: ignore[union-attr]
     assert _session_events(data + framed([b"late"]), 4096)[3:] == []  # nothing after Failed
+
+
+def test_reused_big_buffer_holds_each_frame_and_no_more() -> None:
+    """``reuse``: a shorter big frame in the longer spare buffer must not swallow the next."""
+    payloads = [b"a" * (3 * BIG_FRAME), b"b" * (2 * BIG_FRAME), b"c" * 10, b"d" * (2 * BIG_FRAME)]
+    reader = FrameReader()
+    reader.reuse = True
+    seen: list[int] = []
+    out: list[bytes] = []
+    data, pos = framed(payloads), 0
+    while pos < len(data):
+        buf = reader.get_buffer()
+        n = min(48 * 1024, len(buf), len(data) - pos)  # a loopback read's size
+        buf[:n] = data[pos : pos + n]
+        pos += n
+        for f in reader.buffer_updated(n):
+            if isinstance(f, memoryview):
+                seen.append(id(f.obj))
+            out.append(bytes(f))  # copied during the call, as a reusing consumer must
+    assert out == payloads
+    assert len(seen) == 3 and len(set(seen)) == 1  # one buffer for all three big frames

@@ -113,8 +113,10 @@ class Meter:
             if ref.topic == "/clock" and self.clock.sim:
                 self.clock.forward = on_frames  # the clock's subscription is this node's one
             else:
-                sub = await node.subscribe(ref.topic, on_frames, tcp_nodelay=self.tcp_nodelay)
-                sub.coalesce = self.coalesce
+                await node.subscribe(
+                    ref.topic, on_frames, tcp_nodelay=self.tcp_nodelay, coalesce=self.coalesce,
+                    reuse_frames=True,  # the sinks only look at a frame during the call
+                )  # fmt: skip
             sys.stderr.write(f"subscribed to [{ref.topic}]\n")
         next_report = time.monotonic() + REPORT_PERIOD
         while True:

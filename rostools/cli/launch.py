@@ -89,6 +89,8 @@ def parse(spec: dict[str, Any], argv: list[str]) -> dict[str, Any]:
             at += 1
     for arg in spec["args"]:
         if arg["many"]:
+            if arg["required"] and not positional:
+                raise _NotQuick  # ``node info`` alone: Typer says the argument is missing
             values[arg["dest"]], positional = [_convert(arg, v) for v in positional], []
         elif positional:
             values[arg["dest"]] = _convert(arg, positional.pop(0))

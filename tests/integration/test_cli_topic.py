@@ -264,6 +264,9 @@ def test_quick_commands_match_the_typer_path(rostools_master: str, cli_env: dict
             ["service", "node", "/rosout/get_loggers"], ["service", "type", "/rosout/get_loggers"],
             ["node", "list", "-a"], ["node", "list", "-u"], ["msg", "md5", "std_msgs/String"],
             ["param", "get"], ["param", "get", "/p", "--bogus"], ["topic", "list", "-vp"],
+            ["topic", "type", "/ns/a"], ["topic", "type", "/ns/a/x"], ["topic", "type", "/no"],
+            ["node", "info", "/rosout", "-q"], ["node", "info", "/rosout", "-F", "json"],
+            ["node", "info", "/nope"], ["param", "get", "/p/a"],
         ]  # fmt: skip
         for args in lines:
             quick = run_cli(*args, env=cli_env)

@@ -49,6 +49,13 @@ def test_anything_unusual_goes_to_typer(argv: list[str]) -> None:
         parse(SPECS["service type"], ["/s", "--timeout", "nan"])
 
 
+def test_a_missing_list_argument_goes_to_typer() -> None:
+    """``node info`` needs at least one node: with none, Typer says so."""
+    with pytest.raises(_NotQuick):
+        parse(SPECS["node info"], ["-q"])
+    assert parse(SPECS["node info"], ["/a", "/b", "-q"])["nodes"] == ["/a", "/b"]
+
+
 def test_a_quick_command_starts_without_typer(tmp_path: Path) -> None:
     """The point of the launcher: no Typer, no xmlrpc.client, no dataclasses at start-up."""
     code = (

@@ -1,4 +1,7 @@
-"""The ``rostools node`` group and what its commands share: timeouts, names, errors."""
+"""The ``rostools node`` group and what its commands share: the timeout option, warnings.
+
+Names and the summary of several failures are in ``rostools.cli.quick.node``.
+"""
 
 from __future__ import annotations
 
@@ -9,12 +12,6 @@ import typer
 
 from rostools.cli.common import FiniteFloat, settings
 from rostools.cli.quick import node as quick
-from rostools.errors import (
-    NotFoundError,
-    RostoolsError,
-    TimeoutExpired,
-    UnreachableError,
-)
 from rostools.rosgraph.masterapi import NODE_TIMEOUT
 
 if TYPE_CHECKING:
@@ -51,24 +48,3 @@ def node_graph(ctx: typer.Context, timeout: float = NODE_TIMEOUT) -> Graph:
 def warn(text: str) -> None:
     """One line on stderr that does not stop the command."""
     sys.stderr.write(f"rostools: {text}\n")
-
-
-def failure_class(errors: list[RostoolsError]) -> type[RostoolsError]:
-    """The error class (so the exit code) for several nodes' failures.
-
-    Each kind alone keeps its own code (not found 3, timeout 5); a mix is "unreachable" (4),
-    the code for a node that cannot be talked to.
-    """
-    for kind in (NotFoundError, TimeoutExpired):
-        if all(isinstance(e, kind) for e in errors):
-            return kind
-    return UnreachableError
-
-
-def worst(errors: list[RostoolsError], what: str) -> RostoolsError:
-    """One error for several failures: the first's, or a summary with the right exit code."""
-    if len(errors) == 1:
-        return errors[0]
-    return failure_class(errors)(
-        f"{what} {len(errors)} nodes: " + "; ".join(str(e) for e in errors)
-    )

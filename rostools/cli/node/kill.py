@@ -23,9 +23,8 @@ from rostools.cli.node.group import (
     app,
     node_graph,
     warn,
-    worst,
 )
-from rostools.cli.quick.node import resolve_node
+from rostools.cli.quick.node import resolve_node, worst
 from rostools.rosgraph.masterapi import NODE_TIMEOUT
 
 

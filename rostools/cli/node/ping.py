@@ -26,11 +26,10 @@ from rostools.cli.node.group import (
     PING_INTERVAL,
     TimeoutOpt,
     app,
-    failure_class,
     node_graph,
     warn,
 )
-from rostools.cli.quick.node import resolve_node
+from rostools.cli.quick.node import failure_class, resolve_node
 from rostools.rosgraph.masterapi import NODE_TIMEOUT
 
 

@@ -1,4 +1,4 @@
-"""``topic list|info|find`` without Typer (see ``rostools.cli.quick``)."""
+"""``topic list|info|find|type`` without Typer (see ``rostools.cli.quick``)."""
 
 from __future__ import annotations
 
@@ -11,10 +11,17 @@ from rostools.names import script_resolve
 
 TYPE_CHECKING = False  # ``typing`` is 5-10 ms of start-up; only annotations use it
 if TYPE_CHECKING:
+    import asyncio
     from pathlib import Path
     from typing import Any
 
     from rostools.cli.settings import Settings
+    from rostools.msgs.store import TypeStore
+    from rostools.msgs.topictype import TopicType
+    from rostools.node.node import Node
+
+#: Seconds to wait for a publisher's connection header when a type has to be learnt.
+PROBE_TIMEOUT = 5.0
 
 
 def list_topics(
@@ -105,3 +112,49 @@ def find(s: Settings, msg_type: str, fmt: Format | str | None) -> None:
     types = s.master("rostopic").topic_types()
     found = sorted(t for t, ty in types.items() if ty == msg_type)
     emit(s.output_format(fmt), found, "\n".join)
+
+
+def type_(s: Settings, topic: str, fmt: Format | str | None, msg_path: list[Path] | None) -> None:
+    """A topic's type, or the type of a field: ``/odom/pose/pose`` (rostopic type)."""
+    from rostools.cli.settings import type_store
+    from rostools.rosgraph.topics import split_field
+
+    name = script_resolve(topic, "rostopic", field_path=True)
+    types = s.master("rostopic").topic_types()
+    # A topic named exactly needs no types; only a field path does.
+    store = None if (name.rstrip("/") or "/") in types else type_store(msg_path)
+    ref = split_field(name, types, store)
+    if ref is None or ref.type is None:
+        raise NotFoundError(f"unknown topic type [{name}]")
+    out = s.output_format(fmt)
+    if not ref.field:
+        emit(out, {"topic": ref.topic, "type": ref.type}, lambda d: d["type"])
+        return
+    from rostools.msgs import fieldpath
+
+    assert store is not None  # a field path was split off, so the name was no topic
+    if not store.has_msg(ref.type):
+        store = learn_type(s, ref.topic, store)
+    path = fieldpath.resolve(store, ref.type, ref.field)
+    data = {
+        "topic": ref.topic,
+        "type": ref.type,
+        "field": ref.field,
+        "field_type": path.result.type,
+    }
+    emit(out, data, lambda d: f"{d['type']} {d['field']} {d['field_type']}")
+
+
+def learn_type(s: Settings, topic: str, store: TypeStore) -> TypeStore:
+    """``store`` plus the definition a publisher of ``topic`` sends, asked as a short node."""
+    from rostools.node.learntype import learn_topic_type
+    from rostools.node.notice import to_stderr
+    from rostools.node.session import run_node
+
+    async def main(node: Node, stop: asyncio.Event) -> TopicType:
+        return await learn_topic_type(node, topic, PROBE_TIMEOUT)
+
+    learnt = run_node(
+        main, s.resolved_master_uri(), "rostools_probe", remappings=s.remappings, notify=to_stderr
+    )
+    return store.with_definition(learnt.type, learnt.definition)

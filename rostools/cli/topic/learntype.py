@@ -2,20 +2,17 @@
 
 from __future__ import annotations
 
-import typer
+from typing import TYPE_CHECKING
 
-from rostools.cli.common import node_session
-from rostools.msgs.store import TypeStore
+from rostools.cli.common import settings
+from rostools.cli.quick import topic as quick
 
-PROBE_TIMEOUT = 5.0
+if TYPE_CHECKING:
+    import typer
+
+    from rostools.msgs.store import TypeStore
 
 
 def learn_type(ctx: typer.Context, topic: str, store: TypeStore) -> TypeStore:
     """``store`` plus the definition a publisher of ``topic`` sends."""
-    from rostools.node.learntype import learn_topic_type
-
-    async def main(node, stop):  # type: ignore[no-untyped-def]
-        return await learn_topic_type(node, topic, PROBE_TIMEOUT)
-
-    learnt = node_session(ctx, main, "rostools_probe")
-    return store.with_definition(learnt.type, learnt.definition)
+    return quick.learn_type(settings(ctx), topic, store)

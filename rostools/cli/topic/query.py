@@ -10,15 +10,11 @@ from typing import Annotated
 
 import typer
 
-from rostools.cli.common import FormatOpt, MsgPathOpt, master, output_format, settings
-from rostools.cli.output import emit
+from rostools.cli.common import FormatOpt, MsgPathOpt, settings
 from rostools.cli.quick import runs
 from rostools.cli.quick import topic as quick
-from rostools.cli.settings import type_store
 from rostools.cli.topic.group import app
 from rostools.cli.topic.live import TopicArg
-from rostools.errors import NotFoundError
-from rostools.names import script_resolve
 
 
 @app.command("list")
@@ -60,32 +56,9 @@ def find(
 
 
 @app.command("type")
+@runs(quick.type_)
 def type_(
     ctx: typer.Context, topic: TopicArg, fmt: FormatOpt = None, msg_path: MsgPathOpt = None
 ) -> None:
     """A topic's type, or the type of a field: ``/odom/pose/pose`` (rostopic type)."""
-    from rostools.rosgraph.topics import split_field
-
-    name = script_resolve(topic, "rostopic", field_path=True)
-    store = type_store(msg_path)
-    ref = split_field(name, master(ctx, "rostopic").topic_types(), store)
-    if ref is None or ref.type is None:
-        raise NotFoundError(f"unknown topic type [{name}]")
-    fmt = output_format(ctx, fmt)
-    if not ref.field:
-        emit(fmt, {"topic": ref.topic, "type": ref.type}, lambda d: d["type"])
-        return
-    from rostools.msgs import fieldpath
-
-    if not store.has_msg(ref.type):
-        from rostools.cli.topic.learntype import learn_type
-
-        store = learn_type(ctx, ref.topic, store)
-    path = fieldpath.resolve(store, ref.type, ref.field)
-    data = {
-        "topic": ref.topic,
-        "type": ref.type,
-        "field": ref.field,
-        "field_type": path.result.type,
-    }
-    emit(fmt, data, lambda d: f"{d['type']} {d['field']} {d['field_type']}")
+    quick.type_(settings(ctx), topic, fmt, msg_path)

@@ -43,15 +43,28 @@ class TextOptions:
     offset: bool = False
 
 
+#: Quoted strings by value: frame ids and enum-like strings repeat in every message. Bounded:
+#: once full, new strings are quoted each time (a lookup that misses costs little).
+_QUOTED: dict[str, str] = {}
+QUOTE_CACHE = 4096
+
+
 def quote(value: str) -> str:
     """A string as genpy prints it: ``''`` when empty, else YAML double-quoted."""
+    done = _QUOTED.get(value)
+    if done is not None:
+        return done
     if _PLAIN(value):
-        return f'"{value}"'
-    if not value:
-        return "''"
-    import yaml
+        done = f'"{value}"'
+    elif not value:
+        done = "''"
+    else:
+        import yaml
 
-    return str(yaml.dump(value, default_style='"')).rstrip("\n")
+        done = str(yaml.dump(value, default_style='"')).rstrip("\n")
+    if len(_QUOTED) < QUOTE_CACHE and len(value) <= 256:
+        _QUOTED[value] = done
+    return done
 
 
 def _string_list(values: Sequence[str], indent: str) -> str:

@@ -132,32 +132,35 @@ class FrameReader:
         # One copy of everything received, then each frame is a slice of it: slicing bytes is
         # one allocation, where slicing the buffer costs a memoryview and a bytes.
         data = bytes(view[start:end])
-        base = start
+        size, pos = end - start, 0  # ``pos`` is where the next frame starts in ``data``
         unpack = _U32.unpack_from
-        while end - start >= 4:
-            (length,) = unpack(data, start - base)
-            limit = self.max_frame if self.first_max is None else self.first_max
+        append = frames.append
+        limit = self.max_frame if self.first_max is None else self.first_max
+        while size - pos >= 4:
+            (length,) = unpack(data, pos)
             if length > limit:
                 raise FrameError(f"frame of {length} bytes exceeds the limit of {limit}", frames)
-            if end - start - 4 >= length:
-                offset = start - base + 4
-                frames.append(data[offset : offset + length])
-                start += 4 + length
-                self.first_max = None
+            after = pos + 4 + length
+            if after <= size:
+                append(data[pos + 4 : after])
+                pos = after
+                limit = self.max_frame
             elif length >= BIG_FRAME:
-                have = end - start - 4
+                have = size - pos - 4
                 spare = self._spare
                 if self.reuse and spare is not None and len(spare) >= length:
                     self._big = spare
                 else:
                     self._big = bytearray(min(length, max(GROW_FIRST, have)))
-                self._big[:have] = view[start + 4 : end]
+                self._big[:have] = view[start + pos + 4 : end]
                 self._big_filled, self._big_length = have, length
-                self.first_max = None
-                start = end
+                pos = size
                 break
             else:
                 break
+        if pos:
+            self.first_max = None  # the first frame is done, or is a big one under way
+        start += pos
         if start == end:
             start = end = 0
         self._start, self._end = start, end

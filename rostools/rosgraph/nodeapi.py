@@ -10,20 +10,16 @@ from __future__ import annotations
 
 import re
 import time
-from collections.abc import Sequence
-from concurrent.futures import ThreadPoolExecutor
-from dataclasses import dataclass
-from typing import Any
 
 from rostools.errors import NotFoundError, RostoolsError, TimeoutExpired, UnreachableError
-from rostools.rosgraph.masterapi import (
-    NODE_TIMEOUT,
-    MasterProxy,
-    XmlRpcNode,
-)
-
-#: The reason rosnode gives in ``shutdown`` calls (observed on the wire).
+from rostools.rosgraph.masterapi import NODE_TIMEOUT, MasterProxy, XmlRpcNode
+from rostools.rosgraph.record import Record
 from rostools.rosgraph.snapshot import SystemState, system_state
+
+TYPE_CHECKING = False  # ``typing`` is 5-10 ms of start-up; only annotations use it
+if TYPE_CHECKING:
+    from collections.abc import Sequence
+    from typing import Any
 
 #: The reason rosnode gives in ``shutdown`` calls (observed on the wire).
 KILL_REASON = "user request"
@@ -38,22 +34,48 @@ PROBE_WORKERS = 16
 CONNECTION_INFO = re.compile(r"\w+ connection on port (\d+) to \[(.*) on socket (\d+)\]")
 
 
-@dataclass(frozen=True)
-class BusConnection:
+class BusConnection(Record):
     """One entry of a node's ``getBusInfo``: a live topic connection."""
 
-    id: int
-    peer: str  # outbound: the subscriber's caller id; inbound: the publisher's XML-RPC URI
-    direction: str  # "inbound", "outbound" or "unknown"
-    transport: str
-    topic: str
-    connected: bool
-    info: str
-    #: Parsed from ``info`` when it has rospy/roscpp's form: our port, the peer's address and
-    #: our socket number (None when the node gave something else, e.g. ``socket None``).
-    local_port: int | None = None
-    remote: str | None = None
-    socket: int | None = None
+    __slots__ = (
+        "connected",
+        "direction",
+        "id",
+        "info",
+        "local_port",
+        "peer",
+        "remote",
+        "socket",
+        "topic",
+        "transport",
+    )
+
+    def __init__(
+        self,
+        id: int,
+        peer: str,
+        direction: str,
+        transport: str,
+        topic: str,
+        connected: bool,
+        info: str,
+        local_port: int | None = None,
+        remote: str | None = None,
+        socket: int | None = None,
+    ) -> None:
+        self.id = id
+        #: outbound: the subscriber's caller id; inbound: the publisher's XML-RPC URI
+        self.peer = peer
+        self.direction = direction  # "inbound", "outbound" or "unknown"
+        self.transport = transport
+        self.topic = topic
+        self.connected = connected
+        self.info = info
+        #: Parsed from ``info`` when it has rospy/roscpp's form: our port, the peer's address
+        #: and our socket number (None when the node gave something else, e.g. ``socket None``).
+        self.local_port = local_port
+        self.remote = remote
+        self.socket = socket
 
     @classmethod
     def from_bus_info(cls, entry: Sequence[Any]) -> BusConnection:
@@ -175,18 +197,39 @@ class Graph:
         return None
 
 
-@dataclass
-class NodeInfo:
+class NodeInfo(Record):
     """What ``node info`` shows: registrations with types, and (when contacted) the bus."""
 
-    name: str
-    uri: str
-    publications: list[tuple[str, str]]
-    subscriptions: list[tuple[str, str]]
-    services: list[str]
-    pid: int | None = None
-    connections: list[tuple[BusConnection, str | None]] | None = None  # with the peer's name
-    error: RostoolsError | None = None  # why the node could not be contacted
+    __slots__ = (
+        "connections",
+        "error",
+        "name",
+        "pid",
+        "publications",
+        "services",
+        "subscriptions",
+        "uri",
+    )
+
+    def __init__(
+        self,
+        name: str,
+        uri: str,
+        publications: list[tuple[str, str]],
+        subscriptions: list[tuple[str, str]],
+        services: list[str],
+        pid: int | None = None,
+        connections: list[tuple[BusConnection, str | None]] | None = None,
+        error: RostoolsError | None = None,
+    ) -> None:
+        self.name = name
+        self.uri = uri
+        self.publications = publications
+        self.subscriptions = subscriptions
+        self.services = services
+        self.pid = pid
+        self.connections = connections  # with the peer's name
+        self.error = error  # why the node could not be contacted
 
     def to_data(self) -> dict[str, Any]:
         """Plain data for JSON and YAML."""
@@ -249,14 +292,22 @@ def node_info(graph: Graph, node: str, contact: bool = True) -> NodeInfo:
     return info
 
 
-@dataclass(frozen=True)
-class Probe:
+class Probe(Record):
     """One node's answer to a ``getPid`` probe, or why there was none."""
 
-    node: str
-    uri: str | None
-    pid: int | None = None
-    error: RostoolsError | None = None
+    __slots__ = ("error", "node", "pid", "uri")
+
+    def __init__(
+        self,
+        node: str,
+        uri: str | None,
+        pid: int | None = None,
+        error: RostoolsError | None = None,
+    ) -> None:
+        self.node = node
+        self.uri = uri
+        self.pid = pid
+        self.error = error
 
     @property
     def alive(self) -> bool:
@@ -285,17 +336,22 @@ def probe_nodes(graph: Graph, nodes: Sequence[str]) -> list[Probe]:
 
     if not nodes:
         return []
+    # Here, not at the top: concurrent.futures brings logging (18 ms), and only ping needs it.
+    from concurrent.futures import ThreadPoolExecutor
+
     with ThreadPoolExecutor(max_workers=min(PROBE_WORKERS, len(nodes))) as pool:
         results = list(pool.map(one, nodes))
     return [r for r in results if r is not None]
 
 
-@dataclass(frozen=True)
-class KillResult:
+class KillResult(Record):
     """The nodes ``shutdown`` was sent to, and those it could not reach."""
 
-    killed: list[str]
-    failed: list[tuple[str, RostoolsError]]
+    __slots__ = ("failed", "killed")
+
+    def __init__(self, killed: list[str], failed: list[tuple[str, RostoolsError]]) -> None:
+        self.killed = killed
+        self.failed = failed
 
 
 def kill_nodes(graph: Graph, nodes: Sequence[str], reason: str = KILL_REASON) -> KillResult:

@@ -6,16 +6,15 @@ Pure data from ``getSystemState`` (``SystemState``) and the tree of nodes and to
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Mapping, Sequence
-from dataclasses import dataclass, field
-from typing import Any
-
 from rostools.names import make_global_ns
-from rostools.rosgraph.masterapi import (
-    MasterProxy,
-)
+from rostools.rosgraph.record import Record
 
-#: The reason rosnode gives in ``shutdown`` calls (observed on the wire).
+TYPE_CHECKING = False  # ``typing`` is 5-10 ms of start-up; only annotations use it
+if TYPE_CHECKING:
+    from collections.abc import Iterable, Mapping, Sequence
+    from typing import Any
+
+    from rostools.rosgraph.masterapi import MasterProxy
 
 
 #: Topics and nodes ``build_graph`` leaves out unless asked, as rqt_graph hides "debug" ones:
@@ -26,13 +25,20 @@ DEBUG_TOPICS = frozenset({"/rosout", "/rosout_agg", "/statistics"})
 DEBUG_NODES = frozenset({"/rosout"})
 
 
-@dataclass(frozen=True)
-class SystemState:
+class SystemState(Record):
     """The master's ``getSystemState``: topic or service name -> node names."""
 
-    publishers: dict[str, list[str]]
-    subscribers: dict[str, list[str]]
-    services: dict[str, list[str]]
+    __slots__ = ("publishers", "services", "subscribers")
+
+    def __init__(
+        self,
+        publishers: dict[str, list[str]],
+        subscribers: dict[str, list[str]],
+        services: dict[str, list[str]],
+    ) -> None:
+        self.publishers = publishers
+        self.subscribers = subscribers
+        self.services = services
 
     @classmethod
     def from_master(cls, raw: Sequence[Any]) -> SystemState:
@@ -76,13 +82,17 @@ class SystemState:
         return self.publishers.get(topic, []) + self.subscribers.get(topic, [])
 
 
-@dataclass(frozen=True)
-class Registrations:
+class Registrations(Record):
     """One node's registrations on the master."""
 
-    publications: list[str]
-    subscriptions: list[str]
-    services: list[str]
+    __slots__ = ("publications", "services", "subscriptions")
+
+    def __init__(
+        self, publications: list[str], subscriptions: list[str], services: list[str]
+    ) -> None:
+        self.publications = publications
+        self.subscriptions = subscriptions
+        self.services = services
 
 
 def system_state(master: MasterProxy) -> SystemState:
@@ -90,43 +100,59 @@ def system_state(master: MasterProxy) -> SystemState:
     return SystemState.from_master(master.system_state())
 
 
-@dataclass
-class GraphNode:
+class GraphNode(Record):
     """A node of the graph and the topics it is on."""
 
-    name: str
-    publishes: list[str] = field(default_factory=list)
-    subscribes: list[str] = field(default_factory=list)
-    services: list[str] = field(default_factory=list)
+    __slots__ = ("name", "publishes", "services", "subscribes")
+
+    def __init__(self, name: str) -> None:
+        self.name = name
+        self.publishes: list[str] = []
+        self.subscribes: list[str] = []
+        self.services: list[str] = []
 
 
-@dataclass
-class GraphTopic:
+class GraphTopic(Record):
     """A topic with its type and the nodes at each end."""
 
-    name: str
-    type: str
-    publishers: list[str]
-    subscribers: list[str]
+    __slots__ = ("name", "publishers", "subscribers", "type")
+
+    def __init__(
+        self,
+        name: str,
+        type: str,
+        publishers: list[str],
+        subscribers: list[str],
+    ) -> None:
+        self.name = name
+        self.type = type
+        self.publishers = publishers
+        self.subscribers = subscribers
 
 
-@dataclass(frozen=True)
-class GraphEdge:
+class GraphEdge(Record):
     """Data flows from ``source`` to ``target`` on ``topic``."""
 
-    source: str
-    target: str
-    topic: str
-    type: str
+    __slots__ = ("source", "target", "topic", "type")
+
+    def __init__(self, source: str, target: str, topic: str, type: str) -> None:
+        self.source = source
+        self.target = target
+        self.topic = topic
+        self.type = type
 
 
-@dataclass
-class RosGraph:
+class RosGraph(Record):
     """Nodes, topics and node-to-node edges, all sorted by name."""
 
-    nodes: list[GraphNode]
-    topics: list[GraphTopic]
-    edges: list[GraphEdge]
+    __slots__ = ("edges", "nodes", "topics")
+
+    def __init__(
+        self, nodes: list[GraphNode], topics: list[GraphTopic], edges: list[GraphEdge]
+    ) -> None:
+        self.nodes = nodes
+        self.topics = topics
+        self.edges = edges
 
     def node(self, name: str) -> GraphNode:
         """A node by name."""

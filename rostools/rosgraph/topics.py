@@ -2,25 +2,34 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any
-
 from rostools.errors import RostoolsError
 from rostools.names import ANYTYPE, make_global_ns
+from rostools.rosgraph.record import Record
 
+TYPE_CHECKING = False  # ``typing`` is 5-10 ms of start-up; only annotations use it
 if TYPE_CHECKING:
+    from typing import Any
+
     from rostools.msgs.store import TypeStore
     from rostools.rosgraph.masterapi import MasterProxy
 
 
-@dataclass
-class TopicInfo:
+class TopicInfo(Record):
     """A topic: its type and the nodes on each end."""
 
-    name: str
-    type: str
-    publishers: list[str] = field(default_factory=list)
-    subscribers: list[str] = field(default_factory=list)
+    __slots__ = ("name", "publishers", "subscribers", "type")
+
+    def __init__(
+        self,
+        name: str,
+        type: str,
+        publishers: list[str] | None = None,
+        subscribers: list[str] | None = None,
+    ) -> None:
+        self.name = name
+        self.type = type
+        self.publishers: list[str] = [] if publishers is None else publishers
+        self.subscribers: list[str] = [] if subscribers is None else subscribers
 
     def as_dict(self) -> dict[str, Any]:
         """As plain data."""
@@ -54,13 +63,15 @@ def host_of(uri: str) -> str:
     return urlsplit(uri).hostname or "unknown"
 
 
-@dataclass(frozen=True)
-class TopicRef:
+class TopicRef(Record):
     """A topic as the user named it: the real topic, its type, and a field path after it."""
 
-    topic: str
-    type: str | None
-    field: str
+    __slots__ = ("field", "topic", "type")
+
+    def __init__(self, topic: str, type: str | None, field: str) -> None:
+        self.topic = topic
+        self.type = type
+        self.field = field
 
 
 def split_field(name: str, types: dict[str, str], store: TypeStore | None) -> TopicRef | None:

@@ -368,3 +368,31 @@ def test_ros2_cdr_mcap_is_refused_in_one_line_not_misdecoded(
     assert "holds ROS 2 CDR messages" in done.stderr
     assert f"{command} does not support ROS 2 CDR" in done.stderr
     assert not list(tmp_path.iterdir())
+
+
+@needs_corpus
+def test_attachments_and_metadata_commands(tmp_path: Path) -> None:
+    """``bag attachments`` lists and extracts what the suite says the file holds; ``bag
+    metadata`` prints its records; a .bag has neither."""
+    folder = CORPUS / "mcap" / "conformance"
+    attached = folder / "OneAttachment" / "OneAttachment-ax-pad-st-sum.mcap"
+    described = folder / "OneMetadata" / "OneMetadata-mdx-pad-st-sum.mcap"
+    listed = run_cli("bag", "attachments", str(attached), "-F", "json")
+    assert listed.returncode == 0, listed.stderr
+    assert json.loads(listed.stdout) == [
+        {"name": "myFile", "media_type": "application/octet-stream", "log_time": 2,
+         "create_time": 1, "size": 3}
+    ]  # fmt: skip
+    text = run_cli("bag", "attachments", str(attached)).stdout.splitlines()
+    assert text[0].split()[:2] == ["name", "media"] and text[1].split()[0] == "myFile"
+    out = tmp_path / "got.bin"
+    got = run_cli("bag", "attachments", str(attached), "--get", "myFile", "-o", str(out))
+    assert got.returncode == 0 and out.read_bytes() == b"\x01\x02\x03", got.stderr
+    missing = run_cli("bag", "attachments", str(attached), "--get", "nope")
+    assert missing.returncode == 3 and "no attachment named 'nope' (it has: myFile)" in (
+        missing.stderr
+    )
+    meta = run_cli("bag", "metadata", str(described))
+    assert json.loads(meta.stdout) == [{"name": "myMetadata", "metadata": {"foo": "bar"}}]
+    bag = CORPUS / "ros1" / "roswire" / "simple.bag"
+    assert json.loads(run_cli("bag", "metadata", str(bag)).stdout) == []

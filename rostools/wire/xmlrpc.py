@@ -2,8 +2,9 @@
 
 Both ends are here: a request parser and response formatter for servers (master, slave
 API), and a request formatter and response parser for clients. Servers marshal with the
-standard library; clients with ``xmlvalues``, which spares every command the 30 ms import
-of ``xmlrpc.client`` (it pulls in ``http.client``, ``email`` and ``ssl``).
+standard library, but read a call of scalars (most of what ROS sends) with one regular
+expression; clients use ``xmlvalues``, which spares every command the 30 ms import of
+``xmlrpc.client`` (it pulls in ``http.client``, ``email`` and ``ssl``).
 """
 
 from __future__ import annotations
@@ -57,7 +58,7 @@ class HttpParser:
         #: The declared body length of a message whose headers are in and whose body is not.
         self.pending = 0
 
-    def feed(self, data: bytes) -> None:
+    def feed(self, data: bytes | memoryview) -> None:
         """Add received bytes."""
         self.buffer += data
 
@@ -98,8 +99,99 @@ class HttpParser:
         return Message(start, headers, body, keep_alive)
 
 
+_WS = rb"[ \t\r\n]*"
+#: Character data that XML passes through as it is: no markup, no references, no characters
+#: XML forbids, and no carriage return (XML turns CR LF into LF).
+_TEXT = rb"([^<>&\r\x00-\x08\x0b\x0c\x0e-\x1f]*)"
+_CALL_HEAD = (
+    rb"(?:<\?xml[ \t\r\n]+version=(?:'1\.0'|\"1\.0\")"
+    rb"(?:[ \t\r\n]+encoding=(?:'(?i:utf-8)'|\"(?i:utf-8)\"))?[ \t\r\n]*\?>)?"
+    + _WS
+    + rb"<methodCall>"
+    + _WS
+    + rb"<methodName>([A-Za-z0-9_.:/-]+)</methodName>"
+    + _WS
+)
+#: Calls with up to this many scalar parameters are read without ``xmlrpc.client``.
+_SIMPLE_PARAMS = 8
+_BOOLEANS = {b"0": False, b"1": True}
+#: One pattern per number of parameters, compiled when a server first decodes a call.
+_simple_calls: list[Any] = []
+
+
+def _simple_call_pattern(count: int) -> Any:
+    """The whole of a call with ``count`` scalar parameters, as one pattern.
+
+    Three groups per parameter: an untyped value (XmlRpc++ writes strings so), or a type and
+    its text. One match is one pass in C, where a pattern per parameter cost twice as much.
+    """
+    import re
+
+    params = b"".join(
+        _WS
+        + rb"<param>"
+        + _WS
+        + rb"<value>(?:"
+        + _TEXT
+        + rb"</value>|"
+        + _WS
+        + rb"<(?P<t%d>string|int|i4|i8|boolean|double)>" % i
+        + _TEXT
+        + rb"</(?P=t%d)>" % i
+        + _WS
+        + rb"</value>)"
+        + _WS
+        + rb"</param>"
+        for i in range(count)
+    )
+    if count:
+        params = rb"<params>" + params + _WS + rb"</params>" + _WS
+    else:
+        params = rb"(?:<params>" + _WS + rb"</params>" + _WS + rb")?"
+    return re.compile(_CALL_HEAD + params + rb"</methodCall>" + _WS)
+
+
+def _decode_simple_call(body: bytes) -> tuple[str, tuple[Any, ...]] | None:
+    """A call whose parameters are plain scalars, as ROS nodes send them; None for others.
+
+    ``xmlrpc.client.loads`` runs a Python callback per element: 50 us of a register call's
+    70, against 6 us here. Every body this accepts, it reads as ``loads`` does (a property
+    test compares them); entities, containers, other encodings and anything malformed are
+    left to ``loads``.
+    """
+    count = body.count(b"<param>")
+    if count > _SIMPLE_PARAMS or b"\xef\xbf\xbe" in body or b"\xef\xbf\xbf" in body:
+        return None  # U+FFFE and U+FFFF are not XML characters: loads refuses them
+    if not _simple_calls:
+        _simple_calls.extend(_simple_call_pattern(n) for n in range(_SIMPLE_PARAMS + 1))
+    match = _simple_calls[count].fullmatch(body)
+    if match is None:
+        return None
+    groups = match.groups()
+    params: list[Any] = []
+    try:
+        for i in range(1, len(groups), 3):
+            untyped, tag, text = groups[i : i + 3]
+            if untyped is not None:
+                params.append(untyped.decode())
+            elif tag == b"string":
+                params.append(text.decode())
+            elif tag == b"boolean":
+                params.append(_BOOLEANS[text])
+            elif tag == b"double":
+                params.append(float(text))
+            else:
+                params.append(int(text))
+    except (ValueError, KeyError):  # not UTF-8, not a number: loads says what is wrong
+        return None
+    return groups[0].decode(), tuple(params)
+
+
 def decode_call(body: bytes) -> tuple[str, tuple[Any, ...]]:
     """The method name and parameters of an XML-RPC request body."""
+    simple = _decode_simple_call(body)
+    if simple is not None:
+        return simple
     import xmlrpc.client  # servers only: commands never pay for it
 
     try:

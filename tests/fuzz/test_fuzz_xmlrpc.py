@@ -135,3 +135,65 @@ def test_mangled_xml_is_a_400(method: str, params: Any, at: int, junk: bytes) ->
         decode_call(mangled)
     except HttpError as err:
         assert err.status == 400
+
+
+#: Scalars as they reach the master: text with markup, control characters, CR, non-ASCII.
+CALL_SCALARS = (
+    st.booleans()
+    | st.integers(-(2**31), 2**31 - 1)
+    | st.floats()
+    | st.text(max_size=12)
+    | st.text("ab <>&\r\n\t\x01\ufffe\u00e9", max_size=8)
+    | NAMES
+)
+#: How a value is written: as xmlrpc.client does, untyped as XmlRpc++ does, or hand-made.
+STYLES = st.sampled_from(["dumps", "untyped", "int", "double", "boolean", "spaced"])
+
+
+def _write(value: Any, style: str) -> bytes:
+    text = str(value).encode("utf-8", "surrogatepass")
+    if style == "untyped":
+        return b"<value>" + text + b"</value>"
+    if style in ("int", "double", "boolean"):
+        return b"<value><%s>%s</%s></value>" % (style.encode(), text, style.encode())
+    if style == "spaced":
+        return b"<value>\n <string>" + text + b"</string> \r\n</value>"
+    return xmlrpc.client.dumps((value,)).encode().split(b"<param>\n", 1)[1].split(b"\n</param>")[0]
+
+
+@seed(SEED)
+@FUZZ
+@given(
+    st.sampled_from(["getPid", "registerPublisher", "a.b", "x y", ""]),
+    st.lists(st.tuples(CALL_SCALARS, STYLES), max_size=9),
+    st.sampled_from(["<?xml version='1.0'?>\n", '<?xml version="1.0" encoding="UTF-8"?>', "", " "]),
+    st.integers(0, 600),
+    st.binary(max_size=3),
+)
+def test_calls_read_as_xmlrpc_client_reads_them(
+    method: str, values: list[tuple[Any, str]], prolog: str, at: int, junk: bytes
+) -> None:
+    # The fast reader of scalar calls must agree with xmlrpc.client on every body: the same
+    # method and parameters, or a 400 where xmlrpc.client fails.
+    params = b"".join(b"<param>" + _write(v, style) + b"</param>\n" for v, style in values)
+    body = (
+        f"{prolog}<methodCall>\n<methodName>{method}</methodName>\n<params>\n".encode()
+        + params
+        + b"</params>\n</methodCall>\n"
+    )
+    for candidate in (body, body[:at] + junk + body[at + len(junk) :]):
+        try:
+            expected: Any = xmlrpc.client.loads(candidate, use_builtin_types=False)
+        except Exception:  # noqa: BLE001 - whatever loads refuses must be a 400
+            expected = None
+        try:
+            got: Any = decode_call(candidate)
+        except HttpError as err:
+            assert err.status == 400
+            got = None
+        if expected is not None and not expected[1]:
+            expected = None  # no methodName: a 400 here
+        if expected is None:
+            assert got is None
+        else:
+            assert repr(got) == repr((expected[1], expected[0]))

@@ -267,3 +267,24 @@ def test_absurdly_deep_parameters_are_refused(master: MasterThread, capsys: Any)
     for _ in range(3):
         assert proxy.getParam("/c", "/")[0] == 1
     assert "Traceback" not in capsys.readouterr().err
+
+
+def test_small_requests_allocate_no_big_read_buffers(master: MasterThread) -> None:
+    import tracemalloc
+
+    port = master.master.port  # type: ignore[union-attr]
+    body = xmlrpc.client.dumps(("/c",), "getPid").encode()
+    request = f"POST / HTTP/1.1\r\nContent-Length: {len(body)}\r\n\r\n".encode() + body
+    with socket.create_connection(("127.0.0.1", port), timeout=5) as s:
+        s.sendall(request)
+        s.recv(65536)
+        tracemalloc.start()
+        try:
+            for _ in range(10):
+                s.sendall(request)
+                assert b"</methodResponse>" in s.recv(65536)
+            _, peak = tracemalloc.get_traced_memory()
+        finally:
+            tracemalloc.stop()
+    # asyncio's plain recv allocated 256 KiB per read (mmap, mremap and munmap per request).
+    assert peak < 128 * 1024

@@ -124,7 +124,7 @@ def test_timeout_refusal_and_reconnect() -> None:
         assert await client.call(b"b") == b"b"  # a refusal keeps the connection
         assert len(connections) == 1
         start = asyncio.get_running_loop().time()
-        with pytest.raises(TimeoutExpired, match="within 0.2 s"):
+        with pytest.raises(TimeoutExpired, match=r"within 0\.2 s"):
             await client.call(b"silent", timeout=0.2)
         assert asyncio.get_running_loop().time() - start < 1.0
         # The silent connection was dropped; the next call connects anew.
@@ -171,7 +171,7 @@ def test_back_to_back_calls_let_other_tasks_run() -> None:
         await asyncio.sleep(0)
         # Responses read as soon as the request is sent never wait for the loop; every
         # EAGER_READS-th call does, so other tasks still run.
-        for i in range(4 * EAGER_READS):
+        for _ in range(4 * EAGER_READS):
             await client.call(b"x")
         assert ticks >= 4
         task.cancel()

@@ -137,15 +137,23 @@ def anonymous(base: str) -> str:
     return f"{base}_{os.getpid()}_{int(time.time() * 1000)}"
 
 
+#: Options whose value is itself ``old:=new`` (``bag convert --rename /a:=/b``): the argument
+#: after one of these is the option's, never a remapping of the command's own node.
+REMAP_VALUED = frozenset(("--rename", "--rename-type"))
+
+
 def split_remappings(argv: list[str]) -> tuple[list[str], dict[str, str]]:
     """Separate ``name:=value`` arguments (remappings, ``__ns:=``, ``_param:=``) from the rest.
 
     Returns the remaining arguments and the raw ``{name: value}`` mapping, as rospy's
-    ``myargv`` does for tools.
+    ``myargv`` does for tools. The value of a ``REMAP_VALUED`` option stays in the arguments.
     """
     rest: list[str] = []
     mapping: dict[str, str] = {}
-    for arg in argv:
+    for i, arg in enumerate(argv):
+        if i and argv[i - 1] in REMAP_VALUED:
+            rest.append(arg)
+            continue
         name, sep, value = arg.partition(":=")
         if sep and name and (name[0] in "/~_" or name[0].isalpha()):
             mapping[name] = value

@@ -10,6 +10,7 @@ from collections.abc import Collection, Iterable, Iterator, Mapping
 from functools import partial
 from pathlib import Path
 from types import TracebackType
+from typing import TYPE_CHECKING
 
 from rostools.bag.model import (
     BagFormatError,
@@ -22,6 +23,9 @@ from rostools.bag.model import (
 from rostools.bag.ordering import Block, Entry, RawMessage, ordered
 from rostools.bag.sink import Sink
 from rostools.errors import InvalidDataError
+
+if TYPE_CHECKING:
+    from rostools.bag.rename import Renames
 
 #: Times are u32 seconds in a ``.bag`` and u64 ns in MCAP; this bound covers both.
 MAX_TIME_NS = (1 << 64) - 1
@@ -327,18 +331,22 @@ class Targets(dict[int, Connection]):
     """Source connection id -> a writer's copy of that connection.
 
     ``resolve`` copies a connection on first use, so a stream whose reader meets a connection
-    only while reading is still copied whole.
+    only while reading is still copied whole. ``renames`` renames topics and types on the way.
     """
 
-    def __init__(self, writer: BagWriter, sources: Iterable[Connection] = ()) -> None:
+    def __init__(
+        self, writer: BagWriter, sources: Iterable[Connection] = (), renames: Renames | None = None
+    ) -> None:
         super().__init__()
         self.writer = writer
+        self.renames = renames
         for conn in sources:
-            self[conn.id] = writer.copy_connection(conn)
+            self.resolve(conn)
 
     def resolve(self, conn: Connection) -> Connection:
         """The writer's connection for a source connection, copied if new."""
         target = self.get(conn.id)
         if target is None:
-            target = self[conn.id] = self.writer.copy_connection(conn)
+            named = self.renames.connection(conn) if self.renames else conn
+            target = self[conn.id] = self.writer.copy_connection(named)
         return target

@@ -485,7 +485,9 @@ def channel_connection(channel: fmt.Channel, schemas: Mapping[int, fmt.Schema]) 
     name = schema.name if schema else ""
     definition = schema.data.decode("utf-8", "replace") if schema else ""
     if not md5sum and schema is not None and schema.encoding == "ros1msg":
-        md5sum = _md5_of(name, definition)
+        from rostools.msgs.store import md5_of
+
+        md5sum = md5_of(name, definition)
     return Connection(
         id=channel.id,
         topic=channel.topic,
@@ -497,15 +499,3 @@ def channel_connection(channel: fmt.Channel, schemas: Mapping[int, fmt.Schema]) 
         extra=meta,
         absent=frozenset() if latching is not None else frozenset({"latching"}),
     )
-
-
-def _md5_of(name: str, definition: str) -> str:
-    """The md5sum of a type from its full definition text, or "" if it does not resolve."""
-    from rostools.errors import RostoolsError
-    from rostools.msgs.spec import DefinitionError
-    from rostools.msgs.store import TypeStore
-
-    try:
-        return TypeStore([]).with_definition(name, definition).md5(name)
-    except (RostoolsError, DefinitionError, ValueError, KeyError):
-        return ""

@@ -11,7 +11,7 @@ import itertools
 from collections.abc import Callable, Collection, Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Final
+from typing import TYPE_CHECKING, Any, Final
 
 from rostools.bag.access import (
     copy_extras,
@@ -26,6 +26,9 @@ from rostools.bag.model import BagUsageError, Connection, UnsupportedBagError
 from rostools.bag.ordering import RawMessage
 from rostools.errors import RostoolsError
 from rostools.msgs.expr import Expression, compile_expression
+
+if TYPE_CHECKING:
+    from rostools.bag.rename import Renames
 
 #: ``progress(done, total)`` is called about every this many messages (and at the end).
 PROGRESS_EVERY: Final = 4096
@@ -58,13 +61,18 @@ def convert(
     format: str | None = None,
     progress: Progress | None = None,
     overwrite: bool = False,
+    renames: Renames | None = None,
 ) -> CopyReport:
     """Copy every connection and message of ``src`` into ``dst`` (``.bag`` <-> MCAP).
 
     Lossless in connection headers (callerid, latching, definitions, extra fields), message
     bytes and times. The output format follows ``dst``'s name unless ``format`` is given.
+    ``renames`` renames topics and types on the way.
     """
-    return _copy(src, dst, compression, chunk_size, format, progress, overwrite, eager=True)
+    return _copy(
+        src, dst, compression, chunk_size, format, progress, overwrite, eager=True,
+        renames=renames,
+    )  # fmt: skip
 
 
 def compress(
@@ -114,6 +122,7 @@ def filter_bag(
     overwrite: bool = False,
     show: tuple[str, Callable[[bool, Any], None]] | None = None,
     latched: bool = False,
+    renames: Renames | None = None,
 ) -> CopyReport:
     """Copy the messages of ``src`` that pass the filters into ``dst``.
 
@@ -125,6 +134,8 @@ def filter_bag(
     ``latched`` also copies, stamped at ``start``, the last message before ``start`` of every
     latched connection, so the cut file starts with what a late subscriber would have had.
     Only connections that keep a message are written. The output format follows ``dst``.
+    ``renames`` renames topics and types as they are written: ``topics`` and ``expression``
+    see the names in ``src``.
     """
     keep = compile_filter(expression or "True", show) if expression or show else None
     return _copy(
@@ -141,6 +152,7 @@ def filter_bag(
         end=end,
         keep=keep,
         latched=latched,
+        renames=renames,
     )
 
 
@@ -222,6 +234,7 @@ def _copy(
     end: int | None = None,
     keep: Callable[[Connection, int, memoryview], bool] | None = None,
     latched: bool = False,
+    renames: Renames | None = None,
 ) -> CopyReport:
     src, dst = Path(src), Path(dst)
     if dst.exists() and src.resolve() == dst.resolve():
@@ -236,10 +249,9 @@ def _copy(
             if latched and start is not None:
                 kept = [(c, start, d) for c, _, d in latched_before([reader], topics, start)]
                 stream = itertools.chain(kept, stream)
-            everything = topics is None and start is None and end is None
-            read, written, conns = _pump(
-                reader, writer, stream, everything, eager, keep, progress, total
-            )
+            whole = eager and not renames and topics is None and start is None and end is None
+            out = Targets(writer, reader.connections if eager else (), renames)
+            read, written, conns = _pump(reader, writer, out, stream, whole, keep, progress, total)
             extras = copy_extras(reader, writer, start, end)
         except BaseException:
             writer.abort()
@@ -261,18 +273,20 @@ def _copy(
 def _pump(
     reader: BagReader,
     writer: BagWriter,
+    out: Targets,
     stream: Iterator[RawMessage],
-    everything: bool,
-    eager: bool,
+    whole: bool,
     keep: Callable[[Connection, int, memoryview], bool] | None,
     progress: Progress | None,
     total: int,
 ) -> tuple[int, int, int]:
-    """Copy a message stream; (messages read, messages written, connections written)."""
-    out = Targets(writer, reader.connections if eager else ())
+    """Copy a message stream; (messages read, messages written, connections written).
+
+    ``whole``: every message, with its connection as it is, so chunks may be copied whole.
+    """
     if keep is None:
         written = None
-        if eager and everything:
+        if whole:
             written = _chunk_for_chunk(reader, writer, out, progress, total)
         if written is None:
             counted = stream if progress is None else _counting(stream, progress, total)

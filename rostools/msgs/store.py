@@ -395,3 +395,13 @@ class TypeStore:
         """``pkg/Type`` names of this kind, in one package or all, sorted by package."""
         packages = [package] if package else self.packages(kind)
         return [f"{p}/{t}" for p in packages for t in sorted(self._types_of(kind, p))]
+
+
+def md5_of(name: str, definition: str) -> str:
+    """The md5sum of type ``name`` from its full definition text, or "" if it does not resolve."""
+    from rostools.errors import RostoolsError
+
+    try:
+        return TypeStore([]).with_definition(name, definition).md5(name)
+    except (RostoolsError, DefinitionError, ValueError, KeyError):
+        return ""

@@ -23,6 +23,7 @@ from rostools.errors import DataLossError, UsageError
 if TYPE_CHECKING:
     from rostools.bag.ops import CopyReport
     from rostools.bag.recover import RecoverReport
+    from rostools.bag.rename import Renames
 
 
 BagArg = Annotated[Path, typer.Argument(help="A .bag or .mcap file.")]
@@ -37,6 +38,24 @@ CompressionOpt = Annotated[
         help="Chunk compression: none, bz2 or lz4 (.bag); zstd, lz4 or none (MCAP).",
     ),
 ]
+RenameOpt = Annotated[
+    list[str] | None,
+    typer.Option("--rename", help="Write topic OLD as NEW (/old:=/new, as play); repeatable."),
+]
+RenameTypeOpt = Annotated[
+    list[str] | None,
+    typer.Option(
+        "--rename-type",
+        help="Rename a type (pkg/Old:=pkg/New) where its md5sum stays the same; repeatable.",
+    ),
+]
+
+
+def renames(topics: list[str] | None, types: list[str] | None) -> Renames | None:
+    """The rules of ``--rename`` and ``--rename-type``, or None when there are none."""
+    from rostools.bag.rename import Renames
+
+    return Renames.parse(topics or [], types or []) or None
 
 
 @app.command()
@@ -189,12 +208,17 @@ def filter_(
             "--latched", help="With --start: keep each latched topic's last earlier message."
         ),
     ] = False,
+    rename: RenameOpt = None,
+    rename_type: RenameTypeOpt = None,
     compression: CompressionOpt = None,
     force: ForceOpt = False,
     quiet: QuietOpt = False,
     fmt: FormatOpt = None,
 ) -> None:
-    """Copy the messages that pass topic, time and expression filters (rosbag filter)."""
+    """Copy the messages that pass topic, time and expression filters (rosbag filter).
+
+    Filters see the topic names in the input; --rename applies as they are written.
+    """
     from rostools.bag.access import bag_info
     from rostools.bag.ops import filter_bag
 
@@ -202,9 +226,11 @@ def filter_(
     lo = None if start is None else begin + (_time(start) or 0)
     hi = None if end is None else begin + (_time(end) or 0)
     show = None if print_ is None else (print_, partial(_say, output_format(ctx, fmt)))
+    rules = renames(rename, rename_type)
     _copy_command(ctx, fmt, quiet or show is not None, "filter", lambda progress: filter_bag(
         src, dst, topics=topics or None, start=lo, end=hi, expression=expression,
         compression=compression, progress=progress, overwrite=force, show=show, latched=latched,
+        renames=rules,
     ))  # fmt: skip
 
 
@@ -221,16 +247,20 @@ def convert(
     dst: OutArg,
     compression: CompressionOpt = None,
     chunk_size: Annotated[int | None, typer.Option("--chunksize", help="Chunk size in KB.")] = None,
+    rename: RenameOpt = None,
+    rename_type: RenameTypeOpt = None,
     force: ForceOpt = False,
     quiet: QuietOpt = False,
     fmt: FormatOpt = None,
 ) -> None:
-    """Convert .bag to MCAP or back, losslessly."""
+    """Convert .bag to MCAP or back, losslessly (renaming topics or types if asked)."""
     from rostools.bag.ops import convert as run_convert
 
     size = chunk_size * 1024 if chunk_size else None
+    rules = renames(rename, rename_type)
     _copy_command(ctx, fmt, quiet, "convert", lambda progress: run_convert(
         src, dst, compression=compression, chunk_size=size, progress=progress, overwrite=force,
+        renames=rules,
     ))  # fmt: skip
 
 

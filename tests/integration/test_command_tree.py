@@ -68,6 +68,7 @@ RECIPES: dict[str, list[str]] = {
     "bag reindex": ["{tmp}/copy.bag", "-f"],
     "bag play": ["{bag}", "-i", "-d", "0"],
     "bag record": ["/chatter_demo", "-l", "2", "-O", "{tmp}/rec.bag"],
+    "bag merge": ["{tmp}/merged.mcap", "{bag}", "{bag}"],
     "bag attachments": ["{bag}"],
     "bag metadata": ["{bag}"],
     "completion install": ["fish"],

@@ -155,13 +155,14 @@ def _report(fmt: Format, report: CopyReport) -> None:
         emit(fmt, data)
 
 
-def _copy_command(
+def copy_command(
     ctx: typer.Context,
     fmt: Format | None,
     quiet: bool,
     label: str,
     run: Callable[[Any], CopyReport],
 ) -> None:
+    """Run a copying command with a progress bar, then report what it wrote."""
     fmt = output_format(ctx, fmt)
     progress = Progress(label, fmt, quiet)
     try:
@@ -171,7 +172,8 @@ def _copy_command(
     _report(fmt, report)
 
 
-def _time(value: float | None) -> int | None:
+def seconds_to_ns(value: float | None) -> int | None:
+    """Seconds as ns, rounded (None stays None)."""
     return None if value is None else round(value * 1e9)
 
 
@@ -223,11 +225,11 @@ def filter_(
     from rostools.bag.ops import filter_bag
 
     begin = bag_info(src).start_ns or 0 if (start is not None or end is not None) else 0
-    lo = None if start is None else begin + (_time(start) or 0)
-    hi = None if end is None else begin + (_time(end) or 0)
+    lo = None if start is None else begin + (seconds_to_ns(start) or 0)
+    hi = None if end is None else begin + (seconds_to_ns(end) or 0)
     show = None if print_ is None else (print_, partial(_say, output_format(ctx, fmt)))
     rules = renames(rename, rename_type)
-    _copy_command(ctx, fmt, quiet or show is not None, "filter", lambda progress: filter_bag(
+    copy_command(ctx, fmt, quiet or show is not None, "filter", lambda progress: filter_bag(
         src, dst, topics=topics or None, start=lo, end=hi, expression=expression,
         compression=compression, progress=progress, overwrite=force, show=show, latched=latched,
         renames=rules,
@@ -258,7 +260,7 @@ def convert(
 
     size = chunk_size * 1024 if chunk_size else None
     rules = renames(rename, rename_type)
-    _copy_command(ctx, fmt, quiet, "convert", lambda progress: run_convert(
+    copy_command(ctx, fmt, quiet, "convert", lambda progress: run_convert(
         src, dst, compression=compression, chunk_size=size, progress=progress, overwrite=force,
         renames=rules,
     ))  # fmt: skip
@@ -282,7 +284,7 @@ def _in_place(
         ) -> CopyReport:
             return dataclasses.replace(run(src, dst, progress), output=out)
 
-        _copy_command(ctx, fmt, quiet, label, step)
+        copy_command(ctx, fmt, quiet, label, step)
         _swap(path, dst, keep)
 
 

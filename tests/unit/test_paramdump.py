@@ -101,7 +101,7 @@ layouts = st.recursive(
 
 
 @settings(
-    max_examples=300, derandomize=True, deadline=None, suppress_health_check=[HealthCheck.too_slow]
+    max_examples=150, derandomize=True, deadline=None, suppress_health_check=[HealthCheck.too_slow]
 )
 @given(layouts | values)
 def test_random_values(value: Any) -> None:

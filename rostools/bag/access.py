@@ -78,6 +78,13 @@ def format_for_name(path: str | Path) -> str:
     return "mcap" if Path(path).suffix.lower() == ".mcap" else "bag"
 
 
+def file_name(base: Path, split: bool, index: int) -> Path:
+    """``base`` itself, or ``base`` with ``_N`` before its suffix when splitting."""
+    if not split:
+        return base
+    return base.with_name(f"{base.stem}_{index}{base.suffix}")
+
+
 def open_writer(
     path: str | Path,
     format: str | None = None,

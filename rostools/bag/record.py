@@ -23,7 +23,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from rostools.bag.access import open_writer
+from rostools.bag.access import file_name, open_writer
 from rostools.bag.base import BagWriter
 from rostools.bag.model import Connection
 from rostools.errors import RostoolsError, UsageError
@@ -109,13 +109,6 @@ def free_bytes(folder: Path) -> int:
 def active_name(path: Path) -> Path:
     """Where ``path`` is written until it is closed (rosbag's ``.active``)."""
     return path.with_name(path.name + ".active")
-
-
-def file_name(base: Path, split: bool, index: int) -> Path:
-    """``base`` itself, or ``base`` with ``_N`` before its suffix when splitting."""
-    if not split:
-        return base
-    return base.with_name(f"{base.stem}_{index}{base.suffix}")
 
 
 class Selection:

@@ -1,7 +1,7 @@
 """``rostools bag``: rosbag for ``.bag`` and MCAP.
 
 The group is ``group.app``; each module adds its commands: ``files`` (info, filter, convert,
-recover/reindex, compress, decompress), ``workbench`` (merge), ``record``, ``play`` and
+recover/reindex, compress, decompress), ``workbench`` (merge, split), ``record``, ``play`` and
 ``extras`` (attachments, metadata).
 """
 

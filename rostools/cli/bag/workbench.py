@@ -1,19 +1,22 @@
-"""``rostools bag merge``: the workbench commands that make new bags out of several or parts.
+"""``rostools bag merge|split``: the workbench commands that make new bags out of several or parts.
 
 They share the options of ``filter`` and ``convert`` (``files.py``).
 """
 
 from __future__ import annotations
 
+import sys
 from pathlib import Path
-from typing import Annotated
+from typing import TYPE_CHECKING, Annotated
 
 import typer
 
+from rostools.cli import output
 from rostools.cli.bag.files import (
     CompressionOpt,
     ForceOpt,
     OutArg,
+    Progress,
     QuietOpt,
     RenameOpt,
     RenameTypeOpt,
@@ -22,7 +25,12 @@ from rostools.cli.bag.files import (
     seconds_to_ns,
 )
 from rostools.cli.bag.group import app
-from rostools.cli.common import FINITE, FormatOpt
+from rostools.cli.common import FINITE, FormatOpt, output_format
+from rostools.cli.output import Format, emit
+from rostools.errors import UsageError
+
+if TYPE_CHECKING:
+    from rostools.bag.split import SplitReport
 
 
 @app.command()
@@ -66,3 +74,83 @@ def merge(
         sources, dst, topics=topics or None, start=lo, end=hi, expression=expression,
         compression=compression, progress=progress, overwrite=force, renames=rules,
     ))  # fmt: skip
+
+
+def _split_report(fmt: Format, report: SplitReport) -> None:
+    data = {
+        "source": str(report.source),
+        "parts": [
+            {"path": str(p.path), "messages": p.messages, "start": p.start_ns, "end": p.end_ns}
+            for p in report.parts
+        ],
+    }
+    if fmt is Format.text:
+        for p in report.parts:
+            sys.stderr.write(f"wrote {p.messages} messages to {p.path}\n")
+    elif fmt is Format.json:
+        output.write(fmt, data)  # the last record of the NDJSON progress stream
+    else:
+        emit(fmt, data)
+
+
+@app.command()
+def split(
+    ctx: typer.Context,
+    src: Annotated[Path, typer.Argument(help="The .bag or .mcap file to split.")],
+    out: Annotated[
+        Path | None,
+        typer.Option(
+            "--output", "-o", help="Name the parts after this (NAME_0.bag, ...); default: SRC."
+        ),
+    ] = None,
+    duration: Annotated[
+        str | None, typer.Option("--duration", help="Parts of 30, 30s, 5m or 2h of bag time.")
+    ] = None,
+    size: Annotated[int | None, typer.Option("--size", help="Parts of about this many MB.")] = None,
+    count: Annotated[int | None, typer.Option("--count", help="Parts of N messages.")] = None,
+    at: Annotated[
+        str | None,
+        typer.Option("--at", help="Cut at these times, in seconds from the start: T1,T2,..."),
+    ] = None,
+    repeat_latched: Annotated[
+        bool,
+        typer.Option("--repeat-latched", help="Start each part with the latched messages so far."),
+    ] = False,
+    rename: RenameOpt = None,
+    rename_type: RenameTypeOpt = None,
+    compression: CompressionOpt = None,
+    force: ForceOpt = False,
+    quiet: QuietOpt = False,
+    fmt: FormatOpt = None,
+) -> None:
+    """Split a bag into parts by duration, size, message count or times (record --split's names)."""
+    from rostools.bag.access import bag_info
+    from rostools.bag.split import Cut
+    from rostools.bag.split import split as run_split
+    from rostools.cli.bag.record import parse_duration
+
+    times: list[int] = []
+    if at is not None:
+        begin = bag_info(src).start_ns or 0
+        try:
+            times = [begin + round(float(x) * 1e9) for x in at.split(",") if x.strip()]
+        except ValueError:
+            raise UsageError(
+                f"--at takes seconds from the start, e.g. 10,20.5; not {at!r}"
+            ) from None
+    cut = Cut(
+        duration_ns=round(parse_duration(duration) * 1e9) if duration else None,
+        size=size * 1_000_000 if size is not None else None,
+        count=count,
+        at_ns=times,
+    )
+    chosen = output_format(ctx, fmt)
+    progress = Progress("split", chosen, quiet)
+    try:
+        report = run_split(
+            src, out or src, cut, repeat_latched=repeat_latched, compression=compression,
+            progress=progress, overwrite=force, renames=renames(rename, rename_type),
+        )  # fmt: skip
+    finally:
+        progress.done()
+    _split_report(chosen, report)

@@ -1,0 +1,161 @@
+"""``bag split``: one bag into parts by duration, size, message count or given times.
+
+Parts are named as ``record --split`` names its files (``NAME_0.bag``, ``NAME_1.bag``, ...),
+and streamed: one part is open at a time. Without ``repeat_latched`` every message goes to
+exactly one part, so merging the parts gives the bag back, message for message. Library code:
+no printing.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+from rostools.bag.access import file_name, format_for_name, open_bag, open_writer, require_ros1
+from rostools.bag.base import BagWriter, Targets
+from rostools.bag.model import BagUsageError, Connection
+from rostools.bag.ops import PROGRESS_EVERY, Progress
+
+if TYPE_CHECKING:
+    from rostools.bag.rename import Renames
+
+
+@dataclass
+class Part:
+    """One written part: its file, message count and first and last times (ns)."""
+
+    path: Path
+    messages: int = 0
+    start_ns: int = 0
+    end_ns: int = 0
+
+
+@dataclass
+class SplitReport:
+    """What a split wrote."""
+
+    source: Path
+    parts: list[Part] = field(default_factory=list)
+
+
+@dataclass(frozen=True)
+class Cut:
+    """Where parts end: exactly one of the four is set (times in ns, sizes in bytes)."""
+
+    duration_ns: int | None = None
+    size: int | None = None
+    count: int | None = None
+    at_ns: Sequence[int] = ()
+
+    def check(self) -> None:
+        """One rule, and a sensible one."""
+        given = [self.duration_ns is not None, self.size is not None, self.count is not None,
+                 bool(self.at_ns)]  # fmt: skip
+        if sum(given) != 1:
+            raise BagUsageError("give one of --duration, --size, --count or --at")
+        for value, flag in ((self.duration_ns, "--duration"), (self.size, "--size"),
+                            (self.count, "--count")):  # fmt: skip
+            if value is not None and value <= 0:
+                raise BagUsageError(f"{flag} must be above 0")
+
+
+class _Splitter:
+    """Decides, message by message, whether a new part begins."""
+
+    def __init__(self, cut: Cut, bag_start: int) -> None:
+        self.cut = cut
+        self.bag_start = bag_start
+        self.bounds = sorted(cut.at_ns)
+        self.next_bound = 0  # index into bounds
+        self.slot = 0  # duration: the part's slot since the bag's start
+
+    def new_part(self, t: int, part: Part, part_bytes: int) -> bool:
+        """Whether the message at ``t`` starts a new part after ``part``."""
+        cut = self.cut
+        if cut.count is not None:
+            return part.messages >= cut.count
+        if cut.size is not None:
+            return part_bytes >= cut.size
+        if cut.duration_ns is not None:
+            slot = (t - self.bag_start) // cut.duration_ns
+            if slot != self.slot:
+                self.slot = slot
+                return True
+            return False
+        crossed = False
+        while self.next_bound < len(self.bounds) and t >= self.bounds[self.next_bound]:
+            self.next_bound += 1
+            crossed = True
+        return crossed
+
+
+def split(
+    src: str | Path,
+    base: str | Path,
+    cut: Cut,
+    *,
+    repeat_latched: bool = False,
+    compression: str | None = None,
+    chunk_size: int | None = None,
+    progress: Progress | None = None,
+    overwrite: bool = False,
+    renames: Renames | None = None,
+) -> SplitReport:
+    """Write ``src``'s messages into parts named after ``base`` (its suffix picks the format).
+
+    ``repeat_latched``: each part after the first starts with the last message so far of every
+    latched connection, stamped at the part's first message, as ``record --split`` does.
+    """
+    cut.check()
+    src, base = Path(src), Path(base)
+    kind = format_for_name(base)
+    first = file_name(base, True, 0)
+    if first.exists() and not overwrite:
+        raise BagUsageError(f"{first} exists (use -f to overwrite)")
+    report = SplitReport(src)
+    with open_bag(src) as reader:
+        require_ros1(reader, "bag split")
+        info = reader.info()
+        splitter = _Splitter(cut, info.start_ns or 0)
+        latched: dict[int, tuple[Connection, memoryview]] = {}
+        writer: BagWriter | None = None
+        targets: Targets | None = None
+        part = Part(first)
+        part_bytes = read = 0
+        try:
+            for conn, t, data in reader.messages():
+                if writer is not None and splitter.new_part(t, part, part_bytes):
+                    writer.close()
+                    writer = None
+                if writer is None:
+                    part = Part(file_name(base, True, len(report.parts)), start_ns=t)
+                    report.parts.append(part)
+                    writer = open_writer(part.path, kind, compression, chunk_size,
+                                         overwrite=overwrite)  # fmt: skip
+                    targets = Targets(writer, (), renames)
+                    part_bytes = 0
+                    if repeat_latched and len(report.parts) > 1:
+                        for old, payload in latched.values():
+                            writer.write(targets.resolve(old), t, payload)
+                            part.messages += 1
+                assert targets is not None
+                writer.write(targets.resolve(conn), t, data)
+                part.messages += 1
+                part.end_ns = t
+                part_bytes += len(data)
+                if repeat_latched and conn.latching:
+                    latched[conn.id] = (conn, data)
+                read += 1
+                if progress is not None and read % PROGRESS_EVERY == 0:
+                    progress(read, info.message_count)
+        except BaseException:
+            if writer is not None:
+                writer.abort()
+            raise
+        if writer is not None:
+            writer.close()
+    if progress is not None:
+        progress(read, info.message_count)
+    return report

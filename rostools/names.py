@@ -24,6 +24,8 @@ def canonicalize(name: str) -> str:
     """Drop duplicate and trailing slashes: ``//a//b/`` -> ``/a/b``; ``/`` stays ``/``."""
     if not name or name == SEP:
         return name
+    if "//" not in name and name[-1] != SEP:
+        return name  # already canonical: the master resolves a name or two per call
     if name[0] == SEP:
         return SEP + SEP.join(p for p in name.split(SEP) if p)
     return SEP.join(p for p in name.split(SEP) if p)

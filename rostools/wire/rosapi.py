@@ -175,7 +175,7 @@ def checked(methods: Methods, method: str, params: tuple[Any, ...]) -> list[Any]
     if not isinstance(caller_id, str):
         return (ERROR, "caller_id must be a string", error_value)
     try:
-        return [caller_id, *(c(v, caller_id) for c, v in zip(checks, params[1:], strict=True))]
+        return [caller_id, *[c(v, caller_id) for c, v in zip(checks, params[1:], strict=True)]]
     except ArgumentError as err:
         return (ERROR, str(err), error_value)
 

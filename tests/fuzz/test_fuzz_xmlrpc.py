@@ -16,7 +16,7 @@ from hypothesis import strategies as st
 from rostools.master.master_api import MasterAPI
 from rostools.node.node import Node
 from rostools.node.xmlrpc import encode_answer, run_call
-from rostools.wire.xmlrpc import HttpError, HttpParser, decode_call
+from rostools.wire.xmlrpc import HttpError, HttpParser, decode_call, encode_result
 from tests.fuzz.conftest import FUZZ, SEED
 
 #: Names as peers send them: good, relative, private, empty, illegal, huge.
@@ -197,3 +197,18 @@ def test_calls_read_as_xmlrpc_client_reads_them(
             assert got is None
         else:
             assert repr(got) == repr((expected[1], expected[0]))
+
+
+@seed(SEED)
+@FUZZ
+@given(VALUES | DEEP | st.integers() | st.recursive(st.integers(), lambda v: st.lists(v)))
+def test_answers_are_written_as_xmlrpc_client_writes_them(value: Any) -> None:
+    try:
+        expected: Any = xmlrpc.client.dumps((value,), methodresponse=True).encode()
+    except Exception as err:  # noqa: BLE001 - encode_result must refuse it the same way
+        expected = type(err)
+    try:
+        got: Any = encode_result(value)
+    except Exception as err:  # noqa: BLE001
+        got = type(err)
+    assert got == expected

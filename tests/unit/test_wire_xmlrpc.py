@@ -104,3 +104,12 @@ def test_scalar_calls_are_read_without_xmlrpc_client(monkeypatch: pytest.MonkeyP
         "registerPublisher",
         ("/rosout", "/rosout_agg", "rosgraph_msgs/Log", 7, ""),
     )
+
+
+def test_plain_answers_are_written_without_xmlrpc_client(monkeypatch: pytest.MonkeyPatch) -> None:
+    import xmlrpc.client
+
+    answer = [1, "Registered [/a] as <publisher> & more", [["/t", ["/n"]], {"k": 1.5, "b": True}]]
+    expected = xmlrpc.client.dumps((answer,), methodresponse=True).encode()
+    monkeypatch.setattr(xmlrpc.client, "dumps", None)  # a third of encoding was its Marshaller
+    assert encode_result(answer) == expected

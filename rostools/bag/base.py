@@ -112,6 +112,19 @@ class BagReader(ABC):
         everything = topics is None and connections is None
         return ordered(self.guarded(self.blocks(wanted, lo, hi, everything)))
 
+    def entries(
+        self,
+        topics: Collection[str] | None = None,
+        start: int | None = None,
+        end: int | None = None,
+    ) -> Iterator[Entry]:
+        """Like ``messages``, as whole entries: MCAP's carry sequence and publish time too."""
+        wanted = self.wanted(topics, None)
+        lo = 0 if start is None else start
+        hi = MAX_TIME_NS if end is None else end
+        blocks = self.guarded(self.blocks(wanted, lo, hi, topics is None))
+        return ordered(blocks, whole=True)
+
     @abstractmethod
     def blocks(
         self, wanted: Mapping[int, tuple[int, Connection]], lo: int, hi: int, everything: bool

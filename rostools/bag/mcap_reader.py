@@ -351,11 +351,11 @@ class McapReader(BagReader):
         loose: list[Entry] = []
         for rec, op, start, stop, complete in self._top(self._data_start, self._data_end):
             if op == fmt.OP_MESSAGE:
-                _, _, channel_id, _, log, _ = _MSG.unpack_from(mm, rec)
+                _, _, channel_id, seq, log, pub = _MSG.unpack_from(mm, rec)
                 if lo <= log <= hi and self._selects(channel_id, wanted, everything):
                     rank, conn = wanted[channel_id]
                     data = memoryview(mm)[start + 22 : stop]
-                    loose.append((log, rank, rec, conn, data))
+                    loose.append((log, rank, rec, conn, data, seq, pub))
                 continue
             if loose:
                 blocks.append(_loose_block(loose, len(blocks)))
@@ -439,7 +439,7 @@ class McapReader(BagReader):
                         raise fmt.McapFormatError(f"record at {pos} in chunk {rec} is cut short")
                     pos += 9 + length
                     continue
-                op, length, channel_id, _, log, _ = unpack(buf, pos)
+                op, length, channel_id, seq, log, pub = unpack(buf, pos)
                 nxt = pos + 9 + length
                 if nxt > end:
                     raise fmt.McapFormatError(f"record at {pos} in chunk {rec} is cut short")
@@ -448,7 +448,7 @@ class McapReader(BagReader):
                         raise fmt.McapFormatError(f"message at {pos} in chunk {rec} is too short")
                     if lo <= log <= hi and self._selects(channel_id, wanted, everything):
                         rank, conn = wanted[channel_id]
-                        append((log, rank, pos, conn, view[pos + 31 : nxt]))
+                        append((log, rank, pos, conn, view[pos + 31 : nxt], seq, pub))
                 elif op in (fmt.OP_SCHEMA, fmt.OP_CHANNEL):
                     self._register(fmt.parse(op, buf, pos + 9, nxt))
                 pos = nxt

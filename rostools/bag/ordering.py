@@ -14,15 +14,19 @@ from bisect import bisect_left
 from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass
 from operator import itemgetter
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any, Literal, overload
 
 if TYPE_CHECKING:
     from rostools.bag.model import Connection
 
-#: One message of a block: (time ns, rank, position in the block, connection, data). The
-#: three ints are unique within a block, so sorting never compares the last two. Rank breaks
-#: ties between connections the way rosbag does (order of the connection records).
-Entry = tuple[int, int, int, "Connection", memoryview]
+#: One message of a block: (time ns, rank, position in the block, connection, data), and for
+#: MCAP also (sequence, publish time ns). The three ints are unique within a block, so sorting
+#: never compares the rest. Rank breaks ties between connections the way rosbag does (order of
+#: the connection records).
+Entry = (
+    tuple[int, int, int, "Connection", memoryview]
+    | tuple[int, int, int, "Connection", memoryview, int, int]
+)
 #: What readers yield: the connection, the receive time in ns, the raw serialized message.
 RawMessage = tuple["Connection", int, memoryview]
 
@@ -40,8 +44,17 @@ class Block:
     load: Callable[[], list[Entry]]
 
 
-def ordered(blocks: Iterable[Block]) -> Iterator[RawMessage]:
-    """Every entry of every block, in time order (ties: rank, block order, position)."""
+@overload
+def ordered(blocks: Iterable[Block], whole: Literal[False] = False) -> Iterator[RawMessage]: ...
+@overload
+def ordered(blocks: Iterable[Block], whole: Literal[True]) -> Iterator[Entry]: ...
+
+
+def ordered(blocks: Iterable[Block], whole: bool = False) -> Iterator[Any]:
+    """Every entry of every block, in time order (ties: rank, block order, position).
+
+    Each as (connection, time, data), or with ``whole`` the entry itself.
+    """
     todo = sorted(blocks, key=lambda b: (b.start_ns, b.order))
     count = len(todo)
     # Heap items: (time, rank, block order, position, index in entries, entries).
@@ -62,8 +75,12 @@ def ordered(blocks: Iterable[Block]) -> Iterator[RawMessage]:
             # One block open: stream it up to where the next block starts.
             _, _, order, _, k, entries = heap[0]
             cut = len(entries) if i >= count else bisect_left(entries, (todo[i].start_ns,), lo=k)
-            for e in entries[k:cut] if k or cut < len(entries) else entries:
-                yield e[3], e[0], e[4]
+            run = entries[k:cut] if k or cut < len(entries) else entries
+            if whole:
+                yield from run
+            else:
+                for e in run:
+                    yield e[3], e[0], e[4]
             if cut >= len(entries):
                 heap.clear()
             else:
@@ -72,7 +89,7 @@ def ordered(blocks: Iterable[Block]) -> Iterator[RawMessage]:
             continue
         _, _, order, _, k, entries = heapq.heappop(heap)
         e = entries[k]
-        yield e[3], e[0], e[4]
+        yield e if whole else (e[3], e[0], e[4])
         k += 1
         if k < len(entries):
             e = entries[k]

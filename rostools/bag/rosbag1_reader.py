@@ -380,8 +380,8 @@ class Bag1Reader(BagReader):
         self, chunk: Chunk, wanted: Mapping[int, tuple[int, Connection]]
     ) -> Iterator[RawMessage]:
         """The wanted messages of one chunk, in time order."""
-        for t, _, _, conn, data in self._entries(chunk, wanted, 0, MAX_TIME_NS):
-            yield conn, t, data
+        for e in self._entries(chunk, wanted, 0, MAX_TIME_NS):
+            yield e[3], e[0], e[4]
 
     def times(self, topics: Collection[str] | None = None) -> Iterator[RawMessage]:
         """(connection, time, empty data) of each message in time order, from the index alone.

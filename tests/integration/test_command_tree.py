@@ -70,6 +70,7 @@ RECIPES: dict[str, list[str]] = {
     "bag record": ["/chatter_demo", "-l", "2", "-O", "{tmp}/rec.bag"],
     "bag merge": ["{tmp}/merged.mcap", "{bag}", "{bag}"],
     "bag split": ["{bag}", "--count", "100", "-o", "{tmp}/part.bag", "-f"],
+    "bag cat": ["{bag}", "-n", "3"],
     "bag attachments": ["{bag}"],
     "bag metadata": ["{bag}"],
     "completion install": ["fish"],

@@ -1,14 +1,15 @@
 """``rostools bag``: rosbag for ``.bag`` and MCAP.
 
 The group is ``group.app``; each module adds its commands: ``files`` (info, filter, convert,
-recover/reindex, compress, decompress), ``workbench`` (merge, split), ``record``, ``play`` and
-``extras`` (attachments, metadata).
+recover/reindex, compress, decompress), ``workbench`` (merge, split), ``cat``, ``record``,
+``play`` and ``extras`` (attachments, metadata).
 """
 
 # isort: off
 # The order of these imports is the order of the commands in --help.
 from rostools.cli.bag import files  # noqa: F401 - each module adds its commands to app
 from rostools.cli.bag import workbench  # noqa: F401
+from rostools.cli.bag import cat  # noqa: F401
 from rostools.cli.bag import play, record  # noqa: F401
 from rostools.cli.bag import extras  # noqa: F401
 

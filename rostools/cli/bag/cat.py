@@ -1,0 +1,189 @@
+"""``rostools bag cat``: the messages of bags as NDJSON (or CSV), in time order across files.
+
+One JSON object per message: ``topic``, ``type``, ``log_time`` (ns), ``publish_time`` and
+``sequence`` where the file has them (MCAP), ``stamp`` (``header.stamp`` in ns) where the
+message has one, and ``msg``, the decoded message (``data``, base64 bytes, with ``--raw``).
+The field names are those of ``mcap cat --json`` where they overlap.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import enum
+import heapq
+import sys
+from collections.abc import Callable, Iterator
+from operator import itemgetter
+from pathlib import Path
+from typing import TYPE_CHECKING, Annotated, Any
+
+import typer
+
+from rostools.cli.bag.group import app
+from rostools.cli.common import FINITE
+from rostools.errors import UsageError
+
+if TYPE_CHECKING:
+    from rostools.bag.base import BagReader
+    from rostools.bag.model import Connection
+    from rostools.bag.ordering import Entry
+
+
+class CatFormat(str, enum.Enum):
+    """What ``bag cat`` prints."""
+
+    json = "json"
+    csv = "csv"
+
+
+class _Lines:
+    """Renders one connection's messages; built once per connection."""
+
+    def __init__(self, conn: Connection, fmt: CatFormat, raw: bool) -> None:
+        from rostools.msgs import plain
+        from rostools.msgs.codec import Codec
+        from rostools.msgs.store import TypeStore
+        from rostools.msgs.text import message_type
+
+        self.raw = raw
+        self.head = plain.dumps({"topic": conn.topic, "type": conn.type})[:-1]
+        store = TypeStore([]).with_definition(conn.type, conn.definition)
+        codec = Codec.of(store)
+        self.decode = codec.decoder(conn.type)
+        value_type = message_type(conn.type)
+        self.plain = plain.to_plain(codec, value_type)
+        self.dumps = plain.dumps
+        self.stamp = plain.stamp_ns
+        self.row = (
+            plain.csv_row(codec, value_type, plain.CsvOptions()) if fmt is CatFormat.csv else None
+        )
+        self.header: Callable[[Any], str] = lambda value: plain.csv_header(
+            codec, value_type, value, plain.CsvOptions()
+        )
+
+    def json(self, entry: Entry) -> str:
+        """One NDJSON line."""
+        t, data = entry[0], entry[4]
+        parts = [self.head, f',"log_time":{t}']
+        if len(entry) == 7:
+            parts.append(f',"publish_time":{entry[6]},"sequence":{entry[5]}')
+        if self.raw:
+            import base64
+
+            parts.append(f',"data":"{base64.b64encode(data).decode()}"}}\n')
+            return "".join(parts)
+        msg = self.decode(data, 0)[0]
+        stamp = self.stamp(msg)
+        if stamp is not None:
+            parts.append(f',"stamp":{stamp}')
+        parts.append(f',"msg":{self.dumps(self.plain(msg))}}}\n')
+        return "".join(parts)
+
+
+def _entries(
+    readers: list[BagReader], topics: list[str] | None, lo: int | None, hi: int | None
+) -> Iterator[tuple[int, int, Entry]]:
+    """(time, input index, entry) of every message, in time order (ties: argument order)."""
+
+    def tagged(i: int, reader: BagReader) -> Iterator[tuple[int, int, Entry]]:
+        for e in reader.entries(topics=topics, start=lo, end=hi):
+            yield e[0], i, e
+
+    return heapq.merge(*(tagged(i, r) for i, r in enumerate(readers)), key=itemgetter(0, 1))
+
+
+@app.command()
+def cat(
+    args: Annotated[
+        list[str], typer.Argument(help="Bags (.bag, .mcap), then topics (default: all).")
+    ],
+    fmt: Annotated[
+        CatFormat, typer.Option("--format", "-F", help="json (NDJSON) or csv (one topic).")
+    ] = CatFormat.json,
+    raw: Annotated[bool, typer.Option("--raw", help="Base64 bytes instead of decoding.")] = False,
+    count: Annotated[int | None, typer.Option("-n", help="Stop after N messages.")] = None,
+    start: Annotated[
+        float | None,
+        typer.Option("--start", click_type=FINITE, help="Seconds from the earliest start."),
+    ] = None,
+    end: Annotated[
+        float | None,
+        typer.Option("--end", click_type=FINITE, help="Seconds from the earliest start."),
+    ] = None,
+    expression: Annotated[
+        str | None,
+        typer.Option("--filter", help="Only messages for which this is true (as bag filter)."),
+    ] = None,
+) -> None:
+    """Print the messages of bags, one JSON object per line, in time order across files."""
+    from rostools.bag.access import open_bag, require_ros1
+    from rostools.bag.ops import compile_filter
+
+    paths = [Path(a) for a in args if not (a.startswith("/") and not Path(a).is_file())]
+    topics = [a for a in args if a.startswith("/") and not Path(a).is_file()] or None
+    if not paths:
+        raise UsageError("give at least one bag")
+    if count is not None and count < 0:
+        raise UsageError("-n cannot be negative")
+    if raw and fmt is CatFormat.csv:
+        raise UsageError("--raw goes with JSON, not CSV")
+    with contextlib.ExitStack() as stack:
+        readers = [stack.enter_context(open_bag(p)) for p in paths]
+        for reader in readers:
+            require_ros1(reader, "bag cat", topics)
+        if fmt is CatFormat.csv:
+            found = {
+                c.topic for r in readers for c in r.connections if not topics or c.topic in topics
+            }
+            if len(found) != 1:
+                raise UsageError(
+                    f"--format csv prints one topic; give one of: {', '.join(sorted(found))}"
+                )
+        lo = hi = None
+        if start is not None or end is not None:
+            begin = min(r.info().start_ns or 0 for r in readers)
+            lo = None if start is None else begin + round(start * 1e9)
+            hi = None if end is None else begin + round(end * 1e9)
+        keeps = [compile_filter(expression) if expression else None for _ in readers]
+        _print(readers, topics, lo, hi, keeps, fmt, raw, count)
+
+
+def _print(
+    readers: list[BagReader],
+    topics: list[str] | None,
+    lo: int | None,
+    hi: int | None,
+    keeps: list[Callable[[Connection, int, memoryview], bool] | None],
+    fmt: CatFormat,
+    raw: bool,
+    count: int | None,
+) -> None:
+    lines: dict[tuple[int, int], _Lines] = {}
+    out: list[str] = []
+    write = sys.stdout.write
+    printed = 0
+    header_done = False
+    for t, i, e in _entries(readers, topics, lo, hi):
+        if count is not None and printed >= count:
+            break
+        conn = e[3]
+        keep = keeps[i]
+        if keep is not None and not keep(conn, t, e[4]):
+            continue
+        render = lines.get((i, conn.id))
+        if render is None:
+            render = lines[(i, conn.id)] = _Lines(conn, fmt, raw)
+        if fmt is CatFormat.json:
+            out.append(render.json(e))
+        else:
+            assert render.row is not None
+            msg = render.decode(e[4], 0)[0]
+            if not header_done:
+                out.append(render.header(msg) + "\n")
+                header_done = True
+            out.append(f"{t},{render.row(msg, 0)}\n")
+        printed += 1
+        if len(out) >= 512:
+            write("".join(out))
+            out.clear()
+    write("".join(out))

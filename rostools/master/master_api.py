@@ -75,8 +75,11 @@ class MasterAPI:
         return check.cache_key(self.methods, method, params)
 
     def _notify_publishers(self, topic: str) -> None:
+        subscribers = self.registry.apis("sub", topic)
+        if not subscribers:
+            return
         pub_uris = self.registry.apis("pub", topic)
-        for api in self.registry.apis("sub", topic):
+        for api in subscribers:
             self.outgoing.append(Outgoing(api, "publisherUpdate", ("/master", topic, pub_uris)))
 
     def _notify_params(self, updates: list[tuple[str, str, str, Any]]) -> None:

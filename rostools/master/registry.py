@@ -49,9 +49,13 @@ class Registry:
         self.topic_types: dict[str, str] = {}
 
     def _multimap(self, kind: Kind) -> dict[str, Providers]:
-        return {"pub": self.publishers, "sub": self.subscribers, "param": self.param_subscribers}[
-            kind
-        ]
+        if kind == "pub":  # no table of tables: a register call looks up three or four
+            return self.publishers
+        if kind == "sub":
+            return self.subscribers
+        if kind == "param":
+            return self.param_subscribers
+        raise KeyError(kind)
 
     def _node(self, caller_id: str, caller_api: str) -> tuple[NodeRef, list[Outgoing]]:
         node = self.nodes.get(caller_id)

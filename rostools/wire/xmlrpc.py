@@ -69,7 +69,7 @@ class HttpParser:
             if len(self.buffer) > MAX_HEADERS:
                 raise HttpError(431, "Request Header Fields Too Large")
             return None
-        head = bytes(self.buffer[:end]).decode("latin-1")
+        head = self.buffer[:end].decode("latin-1")
         lines = head.split("\r\n")
         headers: dict[str, str] = {}
         for line in lines[1:]:
@@ -160,8 +160,8 @@ def _decode_simple_call(body: bytes) -> tuple[str, tuple[Any, ...]] | None:
     left to ``loads``.
     """
     count = body.count(b"<param>")
-    if count > _SIMPLE_PARAMS or b"\xef\xbf\xbe" in body or b"\xef\xbf\xbf" in body:
-        return None  # U+FFFE and U+FFFF are not XML characters: loads refuses them
+    if count > _SIMPLE_PARAMS or b"\xef\xbf" in body:
+        return None  # U+FFFE and U+FFFF are not XML characters: loads says so
     if not _simple_calls:
         _simple_calls.extend(_simple_call_pattern(n) for n in range(_SIMPLE_PARAMS + 1))
     match = _simple_calls[count].fullmatch(body)

@@ -61,6 +61,87 @@ def to_plain(codec: Codec, value_type: Field) -> Plain:
     return fn  # type: ignore[no-any-return]
 
 
+def _json_float(v: float) -> str:
+    """A float as ``dumps`` writes it: its repr, or "nan"/"inf"/"-inf" as strings."""
+    if math.isfinite(v):
+        return repr(v)
+    return '"nan"' if math.isnan(v) else ('"inf"' if v > 0 else '"-inf"')
+
+
+def _json_bool(v: bool) -> str:
+    return "true" if v else "false"
+
+
+def _json_floats(values: Any) -> str:
+    return "[" + ",".join(map(_json_float, values)) + "]"
+
+
+def _json_ints(values: Any) -> str:
+    return "[" + ",".join(map(str, values)) + "]"
+
+
+def _json_bools(values: Any) -> str:
+    return "[" + ",".join("true" if v else "false" for v in values) + "]"
+
+
+def _json_each(item: Callable[[Any], str], values: Any) -> str:
+    return "[" + ",".join(map(item, values)) + "]"
+
+
+class _JsonGen(_PlainGen):
+    """Writes the JSON text ``dumps(plain(value))`` would, without the dicts in between."""
+
+    def __init__(self, codec: Codec) -> None:
+        super().__init__(codec)
+        from json.encoder import encode_basestring  # the C escaper json uses, not ASCII-only
+
+        self.env.update(
+            _s=encode_basestring, _f=_json_float, _fs=_json_floats, _is=_json_ints,
+            _bs=_json_bools, _each=_json_each, _b=_json_bool,
+        )  # fmt: skip
+
+    def value(self, f: Field, expr: str) -> str:
+        """An f-string fragment (inside ``f'...'``) that writes ``expr`` as JSON."""
+        if f.is_array:
+            if f.base == "bool":
+                return f"{{_bs({expr})}}"
+            if f.base in ("float32", "float64"):
+                return f"{{_fs({expr})}}"
+            if f.base in STRUCT_CODES:  # integers, and uint8[]/char[] bytes as numbers
+                return f"{{_is({expr})}}"
+            if f.base == "string":
+                return f"{{_each(_s, {expr})}}"
+            item = to_json(self.codec, Field("_", f.base, f.base, False, None))
+            return f"{{_each({self.ref(item)}, {expr})}}"
+        if f.base in ("time", "duration"):
+            return f'{{{{"secs":{{{expr}.secs}},"nsecs":{{{expr}.nsecs}}}}}}'
+        if f.base == "bool":
+            return f"{{_b({expr})}}"
+        if f.base in ("float32", "float64"):
+            return f"{{_f({expr})}}"
+        if f.base in STRUCT_CODES:
+            return f"{{{expr}}}"
+        if f.base == "string":
+            return f"{{_s({expr})}}"
+        spec = self.codec.store.msg(f.base)
+        items = ",".join(
+            f'"{f2.name}":{self.value(f2, f"{expr}.{attr_name(f2.name)}")}' for f2 in spec.fields
+        )
+        return "{{" + items + "}}"
+
+
+def to_json(codec: Codec, value_type: Field) -> Callable[[Any], str]:
+    """``text(value)``: the same text as ``dumps(to_plain(...)(value))``, generated per type."""
+    key = ("json", value_type.type, value_type.is_array)
+    fn = codec.store.cache.get(key)
+    if fn is None:
+        gen = _JsonGen(codec)
+        source = f"def text(m):\n    return f'{gen.value(value_type, 'm')}'\n"
+        exec(compile(source, f"<rostools json {value_type.type}>", "exec"), gen.env)  # noqa: S102
+        fn = codec.store.cache[key] = gen.env["text"]
+    return fn  # type: ignore[no-any-return]
+
+
 def _finite(value: Any) -> Any:
     """Non-finite floats as the strings "nan", "inf", "-inf": JSON has no other spelling."""
     if isinstance(value, float) and not math.isfinite(value):
@@ -72,12 +153,16 @@ def _finite(value: Any) -> Any:
     return value
 
 
+#: One encoder for every call: ``json.dumps`` with options builds a new one each time.
+_ENCODE = json.JSONEncoder(
+    separators=(",", ":"), ensure_ascii=False, allow_nan=False, default=str
+).encode
+
+
 def dumps(value: Any) -> str:
     """Compact JSON text of plain data, always valid JSON (anything else as its ``str``)."""
     try:
-        return json.dumps(
-            value, separators=(",", ":"), ensure_ascii=False, allow_nan=False, default=str
-        )
+        return _ENCODE(value)
     except ValueError:
         return json.dumps(_finite(value), separators=(",", ":"), ensure_ascii=False, default=str)
 

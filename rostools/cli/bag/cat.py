@@ -51,8 +51,7 @@ class _Lines:
         codec = Codec.of(store)
         self.decode = codec.decoder(conn.type)
         value_type = message_type(conn.type)
-        self.plain = plain.to_plain(codec, value_type)
-        self.dumps = plain.dumps
+        self.as_json = plain.to_json(codec, value_type)
         self.stamp = plain.stamp_ns
         self.row = (
             plain.csv_row(codec, value_type, plain.CsvOptions()) if fmt is CatFormat.csv else None
@@ -63,21 +62,18 @@ class _Lines:
 
     def json(self, entry: Entry) -> str:
         """One NDJSON line."""
-        t, data = entry[0], entry[4]
-        parts = [self.head, f',"log_time":{t}']
+        times = f',"log_time":{entry[0]}'
         if len(entry) == 7:
-            parts.append(f',"publish_time":{entry[6]},"sequence":{entry[5]}')
+            times += f',"publish_time":{entry[6]},"sequence":{entry[5]}'
         if self.raw:
             import base64
 
-            parts.append(f',"data":"{base64.b64encode(data).decode()}"}}\n')
-            return "".join(parts)
-        msg = self.decode(data, 0)[0]
+            return f'{self.head}{times},"data":"{base64.b64encode(entry[4]).decode()}"}}\n'
+        msg = self.decode(entry[4], 0)[0]
         stamp = self.stamp(msg)
         if stamp is not None:
-            parts.append(f',"stamp":{stamp}')
-        parts.append(f',"msg":{self.dumps(self.plain(msg))}}}\n')
-        return "".join(parts)
+            times += f',"stamp":{stamp}'
+        return f'{self.head}{times},"msg":{self.as_json(msg)}}}\n'
 
 
 def _entries(
@@ -89,6 +85,8 @@ def _entries(
         for e in reader.entries(topics=topics, start=lo, end=hi):
             yield e[0], i, e
 
+    if len(readers) == 1:
+        return tagged(0, readers[0])
     return heapq.merge(*(tagged(i, r) for i, r in enumerate(readers)), key=itemgetter(0, 1))
 
 

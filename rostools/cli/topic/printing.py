@@ -69,8 +69,8 @@ class Printer:
         else:
             self.plain = plain.to_plain(self.codec, self.value_type)
             if opts.fmt is Format.json and not (opts.filter or opts.field):
-                to_plain, decode, dumps = self.plain, self.decode, plain.dumps
-                self.fast = lambda frames: [dumps(to_plain(decode(f, 0)[0])) + "\n" for f in frames]
+                as_json, decode = plain.to_json(self.codec, self.value_type), self.decode
+                self.fast = lambda frames: [as_json(decode(f, 0)[0]) + "\n" for f in frames]
 
     def render(self, data: Any, stamp_ns: int | None, header_needed: bool) -> str | None:
         """The output for one message, or None when the filter rejects it."""

@@ -1,0 +1,153 @@
+"""The bag workbench (issue 15): cat, merge and split, beside the rosbag Python API.
+
+No ROS 1 tool cats, merges or splits; the closest is a short script over rosbag's Python API,
+which is what people write. ``mcap cat``/``merge`` (the MCAP CLI) are not installable here.
+Inputs are benchmarks/bench_bag.py's: the 1M-message bag (4 topics of std_msgs/String, about
+80 MB) and the 10 s robot-like mix (about 330 MB of images and clouds).
+"""
+
+from __future__ import annotations
+
+import shutil
+import statistics
+import subprocess
+import time
+
+from benchmarks.bench_bag import BUILD, _mixed_bag, _small_bag
+from benchmarks.common import SYSTEM_PYTHON, Result, have, rostools_cmd
+
+RUNS = 3
+OUT = BUILD / "workbench"
+
+#: rosbag's nearest to ``bag cat``: decode each message and print it as one JSON line.
+ROSBAG_CAT = r"""
+import json, sys, rosbag
+def plain(v):
+    if hasattr(v, "__slots__"):
+        return {k: plain(getattr(v, k)) for k in v.__slots__}
+    if isinstance(v, (list, tuple)):
+        return [plain(x) for x in v]
+    if hasattr(v, "to_nsec"):
+        return {"secs": v.secs, "nsecs": v.nsecs}
+    return v
+out = sys.stdout
+for topic, msg, t in rosbag.Bag(sys.argv[1]).read_messages():
+    out.write(json.dumps({"topic": topic, "type": msg._type, "log_time": t.to_nsec(),
+                          "msg": plain(msg)}) + "\n")
+"""
+#: ... to ``bag merge``: read several bags raw, in time order, into one.
+ROSBAG_MERGE = r"""
+import heapq, sys, rosbag
+bags = [rosbag.Bag(p) for p in sys.argv[2:]]
+streams = [b.read_messages(raw=True, return_connection_header=True) for b in bags]
+with rosbag.Bag(sys.argv[1], "w") as out:
+    for topic, raw, t, header in heapq.merge(*streams, key=lambda m: m[2]):
+        out.write(topic, raw, t, raw=True, connection_header=header)
+"""
+#: ... to ``bag split --duration``: a new bag every N seconds of bag time.
+ROSBAG_SPLIT = r"""
+import sys, rosbag
+src, base, every = sys.argv[1], sys.argv[2], float(sys.argv[3])
+inp = rosbag.Bag(src)
+start = inp.get_start_time()
+out, part = None, -1
+for topic, raw, t, header in inp.read_messages(raw=True, return_connection_header=True):
+    k = int((t.to_sec() - start) // every)
+    if k != part:
+        if out is not None:
+            out.close()
+        part = k
+        out = rosbag.Bag("%s_%d.bag" % (base, part), "w")
+    out.write(topic, raw, t, raw=True, connection_header=header)
+out.close()
+"""
+
+
+def _clean() -> None:
+    shutil.rmtree(OUT, ignore_errors=True)
+    OUT.mkdir(parents=True)
+
+
+def _seconds(argv: list[str], to_pipe: bool = False) -> tuple[float, int]:
+    """Wall seconds of a whole process, and the lines it wrote to its stdout pipe."""
+    start = time.perf_counter()
+    proc = subprocess.Popen(argv, stdout=subprocess.PIPE if to_pipe else subprocess.DEVNULL,
+                            stderr=subprocess.PIPE)  # fmt: skip
+    lines = 0
+    if to_pipe:
+        assert proc.stdout is not None
+        while chunk := proc.stdout.read1(1 << 20):
+            lines += chunk.count(b"\n")
+    _, err = proc.communicate()
+    elapsed = time.perf_counter() - start
+    if proc.returncode != 0:
+        raise RuntimeError(f"{' '.join(argv[:4])} failed: {err.decode()[-400:]}")
+    return elapsed, lines
+
+
+def _pair(ours: list[str], theirs: list[str] | None, to_pipe: bool = False) -> tuple[
+    list[tuple[float, int]], list[tuple[float, int]]
+]:  # fmt: skip
+    """RUNS runs of each, alternating; the output folder is emptied before each."""
+    mine: list[tuple[float, int]] = []
+    other: list[tuple[float, int]] = []
+    for _ in range(RUNS):
+        _clean()
+        mine.append(_seconds(ours, to_pipe))
+        if theirs is not None:
+            _clean()
+            other.append(_seconds(theirs, to_pipe))
+    _clean()
+    return mine, other
+
+
+def bench_workbench() -> list[Result]:
+    """cat of 1M small messages into a pipe; merge and split of the two bench bags."""
+    small, mixed = _small_bag(), _mixed_bag()
+    ros = have("rosbag")
+    results: list[Result] = []
+
+    mine, other = _pair(
+        [*rostools_cmd(), "bag", "cat", str(small)],
+        [SYSTEM_PYTHON, "-c", ROSBAG_CAT, str(small)] if ros else None,
+        to_pipe=True,
+    )
+    rate = statistics.median(n / s for s, n in mine)
+    their_rate = statistics.median(n / s for s, n in other) if other else None
+    results.append(Result(
+        "bag cat | pipe, 1M small messages (whole process)", "msgs/s", rate, their_rate,
+        ">= 200000 msgs/s", rate >= 200_000,
+        f"median of {RUNS}; theirs: rosbag Python API, read_messages + json.dumps per message",
+    ))  # fmt: skip
+
+    size = (small.stat().st_size + mixed.stat().st_size) / 1e6
+    mine, other = _pair(
+        [*rostools_cmd(), "bag", "merge", str(OUT / "m.bag"), str(small), str(mixed), "-q"],
+        [SYSTEM_PYTHON, "-c", ROSBAG_MERGE, str(OUT / "t.bag"), str(small), str(mixed)]
+        if ros else None,
+    )  # fmt: skip
+    results.append(_rate_row("bag merge, 1M-message bag + robot mix -> .bag", size, mine, other))
+
+    size = mixed.stat().st_size / 1e6
+    mine, other = _pair(
+        [*rostools_cmd(), "bag", "split", str(mixed), "--duration", "1", "-o",
+         str(OUT / "p.bag"), "-q"],
+        [SYSTEM_PYTHON, "-c", ROSBAG_SPLIT, str(mixed), str(OUT / "t"), "1"] if ros else None,
+    )  # fmt: skip
+    results.append(_rate_row("bag split --duration 1, robot mix (10 parts)", size, mine, other))
+    return results
+
+
+def _rate_row(
+    name: str, size_mb: float, mine: list[tuple[float, int]], other: list[tuple[float, int]]
+) -> Result:
+    rate = size_mb / statistics.median(s for s, _ in mine)
+    their_rate = size_mb / statistics.median(s for s, _ in other) if other else None
+    return Result(
+        name, "MB/s", rate, their_rate, "report (more is better)", None,
+        f"input {size_mb:.0f} MB, whole process, median of {RUNS}; theirs: a rosbag Python API "
+        "script doing the same (no ROS 1 tool does)",
+    )  # fmt: skip
+
+
+BENCHMARKS = {"workbench": bench_workbench}

@@ -230,6 +230,30 @@ class McapReader(BagReader):
                 break
         return found
 
+    def crc_problems(self) -> list[str]:
+        """Chunks whose records, and a data section whose bytes, fail their CRC (0: none)."""
+        import zlib
+
+        found: list[str] = []
+        mm = self._mm
+        for rec, op, start, stop, complete in self._top(self._data_start, self._data_end):
+            if op == fmt.OP_CHUNK and complete:
+                try:
+                    crc = _CHUNK_HEAD.unpack_from(mm, start)[3]
+                    compression, size, data_start, dlen = self._chunk_fields(rec, start, stop)
+                    buf, pos, end = self._chunk_data(compression, size, data_start, dlen, True)
+                except fmt.McapFormatError as err:
+                    found.append(f"chunk at {rec}: {err}")
+                    continue
+                if crc and zlib.crc32(memoryview(buf)[pos:end]) != crc:
+                    found.append(f"chunk at {rec}: its CRC does not match its records")
+            elif op == fmt.OP_DATA_END:
+                (crc,) = _U32.unpack_from(mm, start)
+                if crc and zlib.crc32(memoryview(mm)[:rec]) != crc:
+                    found.append("the data section's CRC does not match its bytes")
+                break
+        return found
+
     def _chunk_fields(
         self, rec: int, start: int, stop: int, complete: bool = True
     ) -> tuple[str, int, int, int]:

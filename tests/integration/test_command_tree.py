@@ -71,6 +71,7 @@ RECIPES: dict[str, list[str]] = {
     "bag merge": ["{tmp}/merged.mcap", "{bag}", "{bag}"],
     "bag split": ["{bag}", "--count", "100", "-o", "{tmp}/part.bag", "-f"],
     "bag cat": ["{bag}", "-n", "3"],
+    "bag doctor": ["{bag}"],
     "bag attachments": ["{bag}"],
     "bag metadata": ["{bag}"],
     "completion install": ["fish"],

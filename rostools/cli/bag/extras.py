@@ -1,6 +1,6 @@
-"""``rostools bag attachments|metadata``: what an MCAP file carries besides messages.
+"""``rostools bag attachments|metadata|doctor``: what a file holds besides messages; its health.
 
-A ``.bag`` has neither: its lists are empty.
+A ``.bag`` has no attachments or metadata: its lists are empty.
 """
 
 from __future__ import annotations
@@ -104,3 +104,31 @@ def metadata(ctx: typer.Context, bag: BagArg, fmt: FormatOpt = None) -> None:
     ]
     chosen = output_format(ctx, fmt)
     emit(Format.json if chosen is Format.text else chosen, records)
+
+
+@app.command()
+def doctor(
+    ctx: typer.Context,
+    bags: Annotated[list[Path], typer.Argument(help="One or more .bag or .mcap files.")],
+    fmt: FormatOpt = None,
+) -> None:
+    """Check bags without changing them: one line per finding; exit 1 if there is any."""
+    from rostools.bag.doctor import doctor as check
+
+    out = output_format(ctx, fmt)
+    reports = [check(path) for path in bags]
+    if out is Format.text:
+        for r in reports:
+            if r.clean:
+                sys.stdout.write(f"{r.path}: clean ({r.messages} messages)\n")
+            for finding in r.findings:
+                sys.stdout.write(f"{r.path}: {finding}\n")
+    else:
+        data = [
+            {"path": str(r.path), "clean": r.clean, "messages": r.messages,
+             "findings": r.findings, "recover_helps": r.recover_helps}
+            for r in reports
+        ]  # fmt: skip
+        emit(out, data[0] if len(data) == 1 else data)
+    if not all(r.clean for r in reports):
+        raise typer.Exit(1)

@@ -1,0 +1,151 @@
+"""``bag doctor``: checks a ``.bag`` or MCAP file without changing it, one finding per line.
+
+What it checks: that the file opens and reads to the end (record lengths, index entries
+against the chunks they point into, cut-short or unindexed tails, and whether ``bag
+recover`` would help); the index's message count against the messages read; MCAP chunk CRCs
+and the data section CRC; each ROS 1 connection's md5sum against its definition text, and
+that the text parses; and every message against its type (shorter or longer than it).
+Library code: no printing.
+"""
+
+from __future__ import annotations
+
+from collections import Counter
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from rostools.errors import RostoolsError
+
+if TYPE_CHECKING:
+    from rostools.bag.base import BagReader
+    from rostools.bag.model import Connection
+
+
+@dataclass
+class Checkup:
+    """What ``doctor`` found in one file."""
+
+    path: Path
+    messages: int = 0
+    findings: list[str] = field(default_factory=list)
+    #: Whether ``bag recover`` would give a better file (a damaged or unindexed tail).
+    recover_helps: bool = False
+
+    @property
+    def clean(self) -> bool:
+        """No findings."""
+        return not self.findings
+
+
+def doctor(path: str | Path) -> Checkup:
+    """Check ``path``; never raises for what is in the file, only reports it."""
+    from rostools.bag.access import open_bag
+
+    report = Checkup(Path(path))
+    try:
+        reader = open_bag(path)
+    except RostoolsError as err:
+        report.findings.append(f"does not open: {err}")
+        return report
+    with reader:
+        _connections(reader, report)
+        _messages(reader, report)
+        for note in reader.notes:
+            report.findings.append(note)
+            report.recover_helps = True
+        for damage in reader.damage:
+            report.findings.append(damage)
+            report.recover_helps = True
+        from rostools.bag.mcap_reader import McapReader
+
+        if isinstance(reader, McapReader):
+            report.findings += reader.crc_problems()
+    if report.recover_helps:
+        report.findings.append("bag recover would rebuild what can be read into a new file")
+    return report
+
+
+def _ros1(reader: BagReader) -> set[int]:
+    """The connections whose messages are ROS 1 serialised, with a definition to check.
+
+    A blank definition (std_msgs/Empty, or a writer that left it out) has nothing to check.
+    """
+    from rostools.bag.mcap_reader import McapReader
+
+    if isinstance(reader, McapReader):
+        ros1 = {c.id for c in reader.channels.values() if c.message_encoding == "ros1"}
+    else:
+        ros1 = {c.id for c in reader.connections}
+    return {c.id for c in reader.connections if c.id in ros1 and c.definition.strip()}
+
+
+def _connections(reader: BagReader, report: Checkup) -> None:
+    from rostools.msgs.store import md5_of
+
+    ros1 = _ros1(reader)
+    for conn in reader.connections:
+        if conn.id not in ros1:
+            continue
+        got = md5_of(conn.type, conn.definition)
+        where = f"connection {conn.id} ({conn.topic}, {conn.type})"
+        if not got:
+            report.findings.append(f"{where}: its definition text does not parse")
+        elif conn.md5sum not in ("*", got):
+            report.findings.append(
+                f"{where}: md5sum {conn.md5sum} does not match its definition ({got})"
+            )
+
+
+def _decoder(conn: Connection, ros1: set[int]) -> Any:
+    from rostools.msgs.codec import Codec
+    from rostools.msgs.store import TypeStore, md5_of
+
+    if conn.id not in ros1 or not md5_of(conn.type, conn.definition):
+        return None
+    return Codec.of(TypeStore([]).with_definition(conn.type, conn.definition)).decoder(conn.type)
+
+
+def _messages(reader: BagReader, report: Checkup) -> None:
+    """Read every message; decode those of ROS 1 types; count what does not fit its type."""
+    ros1 = _ros1(reader)
+    decoders: dict[int, Any] = {}
+    counts: Counter[int] = Counter()
+    short: Counter[int] = Counter()
+    long: Counter[int] = Counter()
+    conns: dict[int, Connection] = {}
+    try:
+        for conn, _, data in reader.messages():
+            counts[conn.id] += 1
+            decode = decoders.get(conn.id, False)
+            if decode is False:
+                decode = decoders[conn.id] = _decoder(conn, ros1)
+                conns[conn.id] = conn
+            if decode is None:
+                continue
+            try:
+                _, end = decode(data, 0)
+            except RostoolsError:
+                short[conn.id] += 1
+                continue
+            if end != len(data):
+                long[conn.id] += 1
+    except RostoolsError as err:
+        report.findings.append(f"reading stops: {err}")
+        report.recover_helps = True
+    report.messages = sum(counts.values())
+    for cid, n in short.items():
+        c = conns[cid]
+        report.findings.append(f"{n} message(s) on {c.topic} are shorter than {c.type} says")
+    for cid, n in long.items():
+        c = conns[cid]
+        report.findings.append(f"{n} message(s) on {c.topic} are longer than {c.type} says")
+    try:
+        indexed = reader.info().message_count
+    except RostoolsError as err:
+        report.findings.append(f"no summary: {err}")
+        return
+    if indexed != report.messages and not reader.notes:
+        report.findings.append(
+            f"the index counts {indexed} messages but {report.messages} were read"
+        )

@@ -1,0 +1,95 @@
+"""``bag doctor`` (issue 15) on the whole corpus and on mutated copies (fixed seed)."""
+
+from __future__ import annotations
+
+import json
+import random
+from pathlib import Path
+
+import pytest
+
+from rostools.bag.access import open_bag
+from rostools.bag.doctor import doctor
+from rostools.bag.mcap_reader import McapReader
+from tests.support.env import CORPUS, needs_corpus, run_cli
+
+#: The corpus files that are damaged, or not bags at all: each must have findings.
+DAMAGED = {
+    "ros1/rosbag-rs/dummy.bag", "ros1/rosbag.js/empty-file.bag", "ros1/rosbag2/test.bag",
+    "ros1/webviz/invalid.bag", "ros1-derived/embag_test_cut_at_index_pos.bag",
+    "ros1-derived/example_cut_at_index_pos.bag", "ros1-derived/test1_cut_at_60pct.bag",
+}  # fmt: skip
+
+
+@needs_corpus
+def test_the_corpus_is_clean_but_for_its_damaged_files() -> None:
+    files = sorted([*CORPUS.rglob("*.bag"), *CORPUS.rglob("*.mcap")])
+    dirty = {str(p.relative_to(CORPUS)) for p in files if not doctor(p).clean}
+    assert dirty == DAMAGED
+    cut = doctor(CORPUS / "ros1-derived" / "test1_cut_at_60pct.bag")
+    assert cut.recover_helps and any("cut short" in f for f in cut.findings)
+
+
+@needs_corpus
+def test_cli_lines_and_exit_codes() -> None:
+    good = CORPUS / "ros1" / "roswire" / "example.bag"
+    bad = CORPUS / "ros1-derived" / "example_cut_at_index_pos.bag"
+    clean = run_cli("bag", "doctor", str(good))
+    assert clean.returncode == 0 and clean.stdout == f"{good}: clean (1038 messages)\n"
+    both = run_cli("bag", "doctor", str(good), str(bad), "-F", "json")
+    assert both.returncode == 1 and "Traceback" not in both.stderr
+    data = json.loads(both.stdout)
+    assert [d["clean"] for d in data] == [True, False] and data[1]["recover_helps"]
+
+
+def _mutants(data: bytes, rng: random.Random, lo: int, hi: int) -> list[tuple[str, bytes]]:
+    """Truncated copies, and copies with a flipped byte or two swapped blocks in [lo, hi)."""
+    out = [(f"cut at {n}", data[:n]) for n in sorted(rng.sample(range(64, len(data)), 6))]
+    for _ in range(6):
+        i = rng.randrange(lo, hi)
+        out.append((f"flip at {i}", data[:i] + bytes([data[i] ^ 0x5A]) + data[i + 1 :]))
+    for _ in range(3):
+        i, j = sorted(rng.sample(range(lo, hi - 64), 2))
+        if j - i >= 64:
+            swapped = (
+                data[:i] + data[j : j + 64] + data[i + 64 : j] + data[i : i + 64] + data[j + 64 :]
+            )
+            out.append((f"swap {i}<->{j}", swapped))
+    return out
+
+
+def _mcap_with_crcs(src: Path, dst: Path) -> Path:
+    from mcap.writer import CompressionType, Writer
+
+    with open_bag(src) as bag, dst.open("wb") as f:
+        writer = Writer(f, chunk_size=64 * 1024, compression=CompressionType.ZSTD)
+        writer.start("ros1", "doctor test")
+        ids: dict[int, int] = {}
+        for c in bag.connections:
+            schema = writer.register_schema(c.type, "ros1msg", c.definition.encode())
+            ids[c.id] = writer.register_channel(c.topic, "ros1", schema, {"md5sum": c.md5sum})
+        for seq, (c, t, data) in enumerate(bag.messages()):
+            writer.add_message(ids[c.id], t, bytes(data), t, seq)
+        writer.finish()
+    return dst
+
+
+@needs_corpus
+@pytest.mark.parametrize("suffix", ["bag", "mcap"])
+def test_mutated_copies_never_crash_it(tmp_path: Path, suffix: str) -> None:
+    """A cut file is always named; in MCAP, any change to a chunk's bytes is (its CRC)."""
+    src = CORPUS / "ros1" / "roswire" / "example.bag"
+    if suffix == "mcap":  # written by the mcap library, which writes CRCs (ours leaves them 0)
+        src = _mcap_with_crcs(src, tmp_path / "x.mcap")
+        with McapReader(src) as reader:
+            first = min(reader.chunk_indexes, key=lambda c: c.chunk_start_offset)
+        lo, hi = first.chunk_start_offset + 80, first.chunk_start_offset + first.chunk_length
+    data = src.read_bytes()
+    if suffix == "bag":
+        lo, hi = 13, len(data)
+    for i, (what, mutant) in enumerate(_mutants(data, random.Random(1500), lo, hi)):
+        path = tmp_path / f"m{i}.{suffix}"
+        path.write_bytes(mutant)
+        report = doctor(path)  # raises nothing, whatever the bytes
+        if what.startswith("cut") or suffix == "mcap":
+            assert not report.clean, what

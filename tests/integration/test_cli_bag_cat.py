@@ -64,3 +64,20 @@ def test_cat_options_and_files_in_time_order(tmp_path: Path) -> None:
     assert csv[0] == "%time,field.x,field.y,field.z" and csv[1].startswith("3000009,3.0,-3.0,")
     many = run_cli("bag", "cat", str(a.path), "-F", "csv")
     assert many.returncode == 2 and "--format csv prints one topic" in many.stderr
+
+
+@needs_corpus
+def test_cat_decodes_ros2_cdr_through_rosbags() -> None:
+    """rosbag2's talker: /topic carries "Hello, world! N"; /rosout's log lines say the same."""
+    folder = CORPUS / "mcap" / "rosbag2"
+    lines = _lines(str(folder / "rosbag2_py" / "talker" / "talker.mcap"), "/topic")
+    assert [o["msg"] for o in lines] == [{"data": f"Hello, world! {i}"} for i in range(10)]
+    assert lines[0]["type"] == "std_msgs/msg/String"
+    log = _lines(str(folder / "rosbag2_py" / "talker" / "talker.mcap"), "/rosout", "-n", "1")
+    assert log[0]["msg"]["msg"] == "Publishing: 'Hello, world! 0'"  # type: ignore[index]
+    assert "INFO" not in log[0]["msg"]  # type: ignore[operator]  # a constant, not a field
+    events = run_cli("bag", "cat", str(folder / "rosbag2_cpp" / "only_services.mcap"))
+    assert events.returncode == 1 and "cannot read the ROS 2 type example_interfaces/srv/" in (
+        events.stderr
+    )
+    assert len(events.stderr.strip().splitlines()) == 1

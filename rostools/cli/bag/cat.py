@@ -27,6 +27,7 @@ if TYPE_CHECKING:
     from rostools.bag.base import BagReader
     from rostools.bag.model import Connection
     from rostools.bag.ordering import Entry
+    from rostools.bag.ros2 import Ros2Types
 
 
 class CatFormat(str, enum.Enum):
@@ -37,9 +38,14 @@ class CatFormat(str, enum.Enum):
 
 
 class _Lines:
-    """Renders one connection's messages; built once per connection."""
+    """Renders one connection's messages; built once per connection.
 
-    def __init__(self, conn: Connection, fmt: CatFormat, raw: bool) -> None:
+    ``ros2``: the connection's messages are CDR, decoded through these types.
+    """
+
+    def __init__(
+        self, conn: Connection, fmt: CatFormat, raw: bool, ros2: Ros2Types | None = None
+    ) -> None:
         from rostools.msgs import plain
         from rostools.msgs.codec import Codec
         from rostools.msgs.store import TypeStore
@@ -47,6 +53,9 @@ class _Lines:
 
         self.raw = raw
         self.head = plain.dumps({"topic": conn.topic, "type": conn.type})[:-1]
+        if ros2 is not None:
+            self._ros2(conn, ros2)
+            return
         store = TypeStore([]).with_definition(conn.type, conn.definition)
         codec = Codec.of(store)
         self.decode = codec.decoder(conn.type)
@@ -59,6 +68,18 @@ class _Lines:
         self.header: Callable[[Any], str] = lambda value: plain.csv_header(
             codec, value_type, value, plain.CsvOptions()
         )
+
+    def _ros2(self, conn: Connection, types: Ros2Types) -> None:
+        from rostools.bag import ros2
+        from rostools.msgs.plain import dumps
+
+        if not self.raw:
+            types.learn(conn.type, conn.definition)
+        kind = conn.type
+        self.decode = lambda data, _: (types.decode(kind, data), len(data))
+        self.as_json = lambda msg: dumps(ros2.plain(msg))
+        self.stamp = ros2.stamp_ns
+        self.row = None
 
     def json(self, entry: Entry) -> str:
         """One NDJSON line."""
@@ -114,7 +135,7 @@ def cat(
     ] = None,
 ) -> None:
     """Print the messages of bags, one JSON object per line, in time order across files."""
-    from rostools.bag.access import open_bag, require_ros1
+    from rostools.bag.access import open_bag
     from rostools.bag.ops import compile_filter
 
     paths = [Path(a) for a in args if not (a.startswith("/") and not Path(a).is_file())]
@@ -127,8 +148,7 @@ def cat(
         raise UsageError("--raw goes with JSON, not CSV")
     with contextlib.ExitStack() as stack:
         readers = [stack.enter_context(open_bag(p)) for p in paths]
-        for reader in readers:
-            require_ros1(reader, "bag cat", topics)
+        cdr = [_cdr_connections(r, topics, fmt, raw) for r in readers]
         if fmt is CatFormat.csv:
             found = {
                 c.topic for r in readers for c in r.connections if not topics or c.topic in topics
@@ -143,11 +163,41 @@ def cat(
             lo = None if start is None else begin + round(start * 1e9)
             hi = None if end is None else begin + round(end * 1e9)
         keeps = [compile_filter(expression) if expression else None for _ in readers]
-        _print(readers, topics, lo, hi, keeps, fmt, raw, count)
+        if expression and any(cdr):
+            raise UsageError("--filter reads ROS 1 messages only; this selection has ROS 2 ones")
+        _print(readers, cdr, topics, lo, hi, keeps, fmt, raw, count)
+
+
+def _cdr_connections(
+    reader: BagReader, topics: list[str] | None, fmt: CatFormat, raw: bool
+) -> set[int]:
+    """The connections of ``reader`` whose messages are ROS 2 CDR.
+
+    Encodings that are neither ROS 1 nor CDR are refused in one line (``--raw`` prints any).
+    """
+    from rostools.bag.mcap_reader import McapReader
+    from rostools.bag.model import UnsupportedBagError
+
+    if raw or not isinstance(reader, McapReader):
+        return set()
+    found: set[int] = set()
+    for c in reader.channels.values():
+        if (topics and c.topic not in topics) or c.message_encoding == "ros1":
+            continue
+        if c.message_encoding != "cdr":
+            raise UnsupportedBagError(
+                f"{reader.path}: {c.topic} holds {c.message_encoding!r} messages, which bag cat "
+                "does not decode (--raw prints them as bytes)"
+            )
+        found.add(c.id)
+    if found and fmt is CatFormat.csv:
+        raise UsageError("--format csv reads ROS 1 messages only; use JSON for ROS 2 ones")
+    return found
 
 
 def _print(
     readers: list[BagReader],
+    cdr: list[set[int]],
     topics: list[str] | None,
     lo: int | None,
     hi: int | None,
@@ -156,7 +206,10 @@ def _print(
     raw: bool,
     count: int | None,
 ) -> None:
+    from rostools.bag.ros2 import Ros2Types
+
     lines: dict[tuple[int, int], _Lines] = {}
+    ros2_types: dict[int, Ros2Types] = {}
     out: list[str] = []
     write = sys.stdout.write
     printed = 0
@@ -170,7 +223,8 @@ def _print(
             continue
         render = lines.get((i, conn.id))
         if render is None:
-            render = lines[(i, conn.id)] = _Lines(conn, fmt, raw)
+            types = ros2_types.setdefault(i, Ros2Types()) if conn.id in cdr[i] else None
+            render = lines[(i, conn.id)] = _Lines(conn, fmt, raw, types)
         if fmt is CatFormat.json:
             out.append(render.json(e))
         else:

@@ -1,0 +1,85 @@
+"""ROS 2 messages (CDR) in MCAP files, decoded through rosbags' type system.
+
+A rosbag2 MCAP carries each type's ``.msg`` text, with the types it uses appended after a line
+of 80 ``=`` and ``MSG: pkg/msg/Type``. rosbags parses those texts and deserialises CDR; what it
+cannot parse or decode is a one-line ``UnsupportedBagError`` naming the type, never a guess.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import re
+from typing import Any
+
+from rostools.bag.model import UnsupportedBagError
+
+_SECTION = re.compile(r"^={80}\n(?:MSG: )?(\S+)\n", re.M)
+
+
+def _full_name(name: str) -> str:
+    """``pkg/Type`` or ``pkg/msg/Type`` as rosbags names ROS 2 types (``pkg/msg/Type``)."""
+    parts = name.split("/")
+    return f"{parts[0]}/msg/{parts[1]}" if len(parts) == 2 else name
+
+
+class Ros2Types:
+    """The ROS 2 types of one file, learnt from its schemas."""
+
+    def __init__(self) -> None:
+        from rosbags.typesys import Stores, get_typestore
+
+        self.store = get_typestore(Stores.EMPTY)
+        self.known: set[str] = set()
+
+    def learn(self, name: str, text: str) -> None:
+        """Register type ``name`` and the types appended to its definition ``text``."""
+        from rosbags.typesys import get_types_from_msg
+
+        name = _full_name(name)
+        if name in self.known:
+            return
+        pieces = _SECTION.split(text)
+        sections = [(name, pieces[0])] + [
+            (_full_name(pieces[i]), pieces[i + 1]) for i in range(1, len(pieces) - 1, 2)
+        ]
+        types: dict[str, Any] = {}
+        try:
+            for typename, body in sections:
+                types.update(get_types_from_msg(body, typename))
+            self.store.register(types)
+        except Exception as err:  # noqa: BLE001 - rosbags raises several kinds; name the type
+            why = (str(err).strip().splitlines() or ["unknown"])[0]
+            raise UnsupportedBagError(f"cannot read the ROS 2 type {name}: {why}") from None
+        self.known.add(name)
+
+    def decode(self, name: str, data: bytes | memoryview) -> Any:
+        """A CDR message as rosbags' object."""
+        try:
+            return self.store.deserialize_cdr(bytes(data), _full_name(name))
+        except Exception as err:  # noqa: BLE001 - a short or corrupt message, as rosbags says
+            why = (str(err).strip().splitlines() or ["unknown"])[0]
+            raise UnsupportedBagError(f"a {name} message does not decode as CDR: {why}") from None
+
+
+def plain(value: Any) -> Any:
+    """A rosbags message as dicts, lists and scalars (the shape ``msgs.plain`` gives ROS 1)."""
+    if dataclasses.is_dataclass(value) and not isinstance(value, type):
+        # ROS 2 field names are lower case and constants upper case: keep the fields.
+        return {
+            f.name: plain(getattr(value, f.name))
+            for f in dataclasses.fields(value)
+            if f.name != "__msgtype__" and not f.name.isupper()
+        }
+    if hasattr(value, "tolist"):  # numpy arrays and scalars
+        return value.tolist()
+    if isinstance(value, list | tuple):
+        return [plain(v) for v in value]
+    return value
+
+
+def stamp_ns(value: Any) -> int | None:
+    """``header.stamp`` in ns, when the message has a ROS 2 header."""
+    stamp = getattr(getattr(value, "header", None), "stamp", None)
+    if stamp is None or not hasattr(stamp, "nanosec"):
+        return None
+    return int(stamp.sec) * 1_000_000_000 + int(stamp.nanosec)

@@ -29,6 +29,7 @@ from rostools.msgs.expr import Expression, compile_expression
 
 if TYPE_CHECKING:
     from rostools.bag.rename import Renames
+    from rostools.bag.ros2 import ToRos1
 
 #: ``progress(done, total)`` is called about every this many messages (and at the end).
 PROGRESS_EVERY: Final = 4096
@@ -241,7 +242,7 @@ def _copy(
         raise BagUsageError(f"cannot use the same file as input and output: {src}")
     kind = format or format_for_name(dst)
     with open_bag(src) as reader:
-        require_ros1(reader, f"writing to .{kind}", topics)
+        to_ros1 = _ros2_to_ros1(reader, kind, topics)
         total = reader.info().message_count
         writer = open_writer(dst, kind, compression, chunk_size, overwrite=overwrite)
         try:
@@ -249,8 +250,19 @@ def _copy(
             if latched and start is not None:
                 kept = [(c, start, d) for c, _, d in latched_before([reader], topics, start)]
                 stream = itertools.chain(kept, stream)
-            whole = eager and not renames and topics is None and start is None and end is None
-            out = Targets(writer, reader.connections if eager else (), renames)
+            sources = reader.connections if eager else []
+            if to_ros1 is not None:
+                stream = ((to_ros1.connection(c), t, to_ros1.message(c, d)) for c, t, d in stream)
+                sources = [to_ros1.connection(c) for c in sources]
+            whole = (
+                eager
+                and not renames
+                and not to_ros1
+                and topics is None
+                and start is None
+                and end is None
+            )
+            out = Targets(writer, sources, renames)
             read, written, conns = _pump(reader, writer, out, stream, whole, keep, progress, total)
             extras = copy_extras(reader, writer, start, end)
         except BaseException:
@@ -268,6 +280,22 @@ def _copy(
         extras_copied=extras[0],
         extras_left_out=extras[1],
     )
+
+
+def _ros2_to_ros1(reader: BagReader, kind: str, topics: Collection[str] | None) -> ToRos1 | None:
+    """ROS 2 CDR into a .bag: its ROS 1 twins; anything else not ROS 1 is refused in one line."""
+    from rostools.bag.ros2 import ToRos1, cdr_connections
+
+    cdr = cdr_connections(reader, topics) if kind == "bag" else set()
+    if not cdr:
+        require_ros1(reader, f"writing to .{kind}", topics)
+        return None
+    others = [c.topic for c in reader.connections if c.id not in cdr]
+    if topics is not None:
+        others = [t for t in others if t in topics]
+    if others:
+        require_ros1(reader, f"writing to .{kind}", others)
+    return ToRos1(cdr)
 
 
 def _pump(

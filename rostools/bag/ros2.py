@@ -11,7 +11,7 @@ import dataclasses
 import re
 from typing import Any
 
-from rostools.bag.model import UnsupportedBagError
+from rostools.bag.model import Connection, UnsupportedBagError
 
 _SECTION = re.compile(r"^={80}\n(?:MSG: )?(\S+)\n", re.M)
 
@@ -83,3 +83,86 @@ def stamp_ns(value: Any) -> int | None:
     if stamp is None or not hasattr(stamp, "nanosec"):
         return None
     return int(stamp.sec) * 1_000_000_000 + int(stamp.nanosec)
+
+
+def _ros1_shape(value: Any) -> Any:
+    """ROS 2 plain data in ROS 1's shape: ``{sec, nanosec}`` becomes ``{secs, nsecs}``."""
+    if isinstance(value, dict):
+        if value.keys() == {"sec", "nanosec"}:
+            return {"secs": value["sec"], "nsecs": value["nanosec"]}
+        return {k: _ros1_shape(v) for k, v in value.items()}
+    if isinstance(value, list):
+        return [_ros1_shape(v) for v in value]
+    return value
+
+
+class ToRos1:
+    """Rewrites a file's ROS 2 CDR connections and messages as their ROS 1 (Noetic) twins.
+
+    ``pkg/msg/T`` becomes ``pkg/T`` with the definition and md5sum of the built-in store, and
+    each message is filled field by field (a ROS 1 Header gets ``seq`` 0). A type the store
+    does not have, or whose fields do not match, is an ``UnsupportedBagError`` naming it.
+    """
+
+    def __init__(self, cdr: set[int]) -> None:
+        from rostools.msgs.codec import Codec
+        from rostools.msgs.fill import Filler
+        from rostools.msgs.store import TypeStore
+
+        self.cdr = cdr
+        self.types = Ros2Types()
+        self.codec = Codec.of(TypeStore.default())
+        self.filler = Filler(self.codec)
+        self.twins: dict[int, Connection] = {}
+
+    def connection(self, conn: Connection) -> Connection:
+        """The ROS 1 connection for ``conn`` (itself when it is not CDR)."""
+        if conn.id not in self.cdr:
+            return conn
+        twin = self.twins.get(conn.id)
+        if twin is None:
+            from rostools.errors import RostoolsError
+
+            name = conn.type.replace("/msg/", "/")
+            try:
+                store = self.codec.store
+                twin = dataclasses.replace(
+                    conn, type=name, md5sum=store.md5(name), definition=store.full_text(name),
+                    extra={}, absent=frozenset(),
+                )  # fmt: skip
+            except RostoolsError:
+                raise UnsupportedBagError(
+                    f"{conn.topic}: the ROS 2 type {conn.type} has no ROS 1 twin here "
+                    "(std_msgs, geometry_msgs, sensor_msgs, nav_msgs and other Noetic types do)"
+                ) from None
+            self.types.learn(conn.type, conn.definition)
+            self.twins[conn.id] = twin
+        return twin
+
+    def message(self, conn: Connection, data: memoryview) -> memoryview:
+        """``data`` as ROS 1 bytes (unchanged when ``conn`` is not CDR)."""
+        if conn.id not in self.cdr:
+            return data
+        from rostools.msgs.fill import FieldValueError
+
+        twin = self.connection(conn)
+        value = _ros1_shape(plain(self.types.decode(conn.type, data)))
+        try:
+            msg = self.filler.fill(self.codec.store.msg(twin.type), value, "")
+        except FieldValueError as err:
+            raise UnsupportedBagError(
+                f"{conn.topic}: {conn.type} does not map onto ROS 1's {twin.type} ({err})"
+            ) from None
+        return memoryview(msg.serialize())
+
+
+def cdr_connections(reader: Any, topics: Any = None) -> set[int]:
+    """The ids of a reader's connections that carry ROS 2 CDR (none outside MCAP)."""
+    from rostools.bag.mcap_reader import McapReader
+
+    if not isinstance(reader, McapReader):
+        return set()
+    return {
+        c.id for c in reader.channels.values()
+        if c.message_encoding == "cdr" and (not topics or c.topic in topics)
+    }  # fmt: skip

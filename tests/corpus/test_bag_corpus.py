@@ -350,7 +350,7 @@ TALKER = CORPUS / "mcap" / "rosbag2" / "rosbag2_py" / "talker" / "talker.mcap"
     ("args", "command"),
     [
         (["topic", "echo", "-b", "{bag}", "/topic", "-n", "1"], "topic echo -b"),
-        (["bag", "filter", "{bag}", "{tmp}/out.bag"], "writing to .bag"),
+        (["bag", "filter", "{bag}", "{tmp}/out.mcap"], "writing to .mcap"),
         (["bag", "convert", "{bag}", "{tmp}/out.mcap"], "writing to .mcap"),
         (["bag", "play", "{bag}", "-d", "0"], "bag play"),
         (["bag", "recover", "{bag}", "{tmp}/out.mcap"], "writing to .mcap"),

@@ -181,7 +181,10 @@ def require_ros1(reader: BagReader, what: str, topics: Collection[str] | None = 
         raise UnsupportedBagError(
             f"{reader.path}: {channel.topic} holds {kind} messages"
             f" ({schema.name if schema else 'no schema'}); {what} does not support {kind},"
-            " only ROS 1 messages"
+            " only ROS 1 messages",
+            hint="bag cat decodes ROS 2 messages; filter and convert write them into a .bag"
+            if channel.message_encoding == "cdr"
+            else None,
         )
 
 

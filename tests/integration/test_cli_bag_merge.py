@@ -38,6 +38,11 @@ def test_merge_interleaves_and_dedups(tmp_path: Path) -> None:
     # Time order; on equal times the inputs' order, so a.bag's copy comes before its twin.
     expected = sorted(sample.stream * 2 + other, key=lambda m: m[2])
     assert read_stream(out) == expected
+    from mcap.reader import make_reader
+
+    with out.open("rb") as f:  # the mcap library reads what we wrote, in the same order
+        theirs = [(c.topic, m.log_time) for _, c, m in make_reader(f).iter_messages()]
+    assert theirs == [(m[0], m[2]) for m in expected]
     with open_bag(out) as bag:
         assert sorted(c.callerid for c in bag.connections) == [
             "/counter", "/other_node", "/pointer", "/talker", "/talker2"

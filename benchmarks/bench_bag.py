@@ -71,10 +71,11 @@ def _small_bag() -> Path:
     return SMALL_BAG
 
 
-def _mixed_bag() -> Path:
+def _mixed_bag(seconds: int = MIXED_SECONDS) -> Path:
     """A robot-like recording: images and clouds carry the bytes, small messages the count."""
-    if MIXED_BAG.exists():
-        return MIXED_BAG
+    path = MIXED_BAG if seconds == MIXED_SECONDS else BUILD / f"mixed-{seconds}s.bag"
+    if path.exists():
+        return path
     import numpy as np
 
     from rostools.bag.access import open_writer
@@ -86,7 +87,7 @@ def _mixed_bag() -> Path:
     images = [(ramp + rng.integers(0, 24, ramp.shape, dtype=np.uint8)).tobytes() for _ in range(8)]
     clouds = [rng.normal(0, 20, 16384 * 8).astype(np.float32).tobytes() for _ in range(8)]
     small = {"imu": rng.bytes(324), "odom": rng.bytes(725), "tf": rng.bytes(140)}
-    tmp = MIXED_BAG.with_suffix(".tmp")
+    tmp = path.with_suffix(".tmp")
     tmp.unlink(missing_ok=True)
     writer = open_writer(tmp, format="bag")
 
@@ -118,14 +119,14 @@ def _mixed_bag() -> Path:
     ]
     events = []
     for k, (hz, c, payloads) in enumerate(streams):
-        for i in range(hz * MIXED_SECONDS):
+        for i in range(hz * seconds):
             events.append((i * 1_000_000_000 // hz + k, c, payloads[i % len(payloads)]))
     events.sort(key=lambda e: e[0])
     for t, c, data in events:
         writer.write(c, 1_700_000_000_000_000_000 + t, data)  # type: ignore[arg-type]
     writer.close()
-    tmp.rename(MIXED_BAG)
-    return MIXED_BAG
+    tmp.rename(path)
+    return path
 
 
 def bench_info() -> Result:

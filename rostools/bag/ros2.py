@@ -120,6 +120,8 @@ class ToRos1:
         if conn.id not in self.cdr:
             return conn
         twin = self.twins.get(conn.id)
+        if twin is None and not conn.type:
+            raise UnsupportedBagError(f"{conn.topic} holds cdr messages without a schema")
         if twin is None:
             from rostools.errors import RostoolsError
 

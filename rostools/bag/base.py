@@ -50,6 +50,33 @@ def map_file(path: Path) -> tuple[mmap.mmap | None, int]:
         raise InvalidDataError(f"cannot read {path}: {err.strerror or err}") from err
 
 
+#: A streaming read hands mapped pages back to the kernel in steps of this many bytes.
+FORGET_STEP = 16 << 20
+
+
+class Forgetting:
+    """Hands back the pages of a map that a streaming read has left behind.
+
+    A read-only map of a 50 GB bag would otherwise grow the process's RSS to 50 GB as it is
+    read. ``MADV_DONTNEED`` drops the pages from this process only: they stay in the page cache,
+    and touching one again (a payload still queued for writing) reads it back.
+    """
+
+    def __init__(self, mm: mmap.mmap | None) -> None:
+        self.mm = mm
+        self.below = 0  # pages before this offset have been handed back
+
+    def up_to(self, pos: int) -> None:
+        """The read has moved on to ``pos``: hand back what lies ``FORGET_STEP`` before it."""
+        if pos < self.below:  # a second pass starts again from the front
+            self.below = pos - pos % mmap.PAGESIZE
+        elif self.mm is not None and pos - self.below >= FORGET_STEP:
+            end = pos - pos % mmap.PAGESIZE
+            with contextlib.suppress(OSError, ValueError):
+                self.mm.madvise(mmap.MADV_DONTNEED, self.below, end - self.below)
+            self.below = end
+
+
 def release(mm: mmap.mmap | None) -> None:
     """Unmap, unless yielded messages still point into the map (then the GC unmaps it)."""
     if mm is not None:

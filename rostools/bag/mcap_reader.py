@@ -17,7 +17,7 @@ from functools import partial
 from pathlib import Path
 
 from rostools.bag import mcap_format as fmt
-from rostools.bag.base import BagReader, map_file, release
+from rostools.bag.base import BagReader, Forgetting, map_file, release
 from rostools.bag.model import (
     BagFormatError,
     BagInfo,
@@ -70,6 +70,7 @@ class McapReader(BagReader):
         if mm is None:
             raise BagFormatError(f"{self.path} is empty, not an MCAP file")
         self._mm = mm
+        self._forget = Forgetting(mm)
         try:
             self._open()
         except BaseException:
@@ -443,6 +444,7 @@ class McapReader(BagReader):
         complete: bool,
     ) -> list[Entry]:
         """The wanted messages of one chunk, sorted."""
+        self._forget.up_to(rec)
         try:
             compression, size, data_start, dlen = self._chunk_fields(rec, start, stop, complete)
             buf, pos, end = self._chunk_data(compression, size, data_start, dlen, complete)

@@ -18,7 +18,7 @@ from functools import partial
 from pathlib import Path
 
 from rostools.bag import rosbag1_format as fmt
-from rostools.bag.base import MAX_TIME_NS, BagReader, map_file, release
+from rostools.bag.base import MAX_TIME_NS, BagReader, Forgetting, map_file, release
 from rostools.bag.model import (
     BagFormatError,
     BagInfo,
@@ -78,6 +78,7 @@ class Bag1Reader(BagReader):
         if mm is None:
             raise BagFormatError(f"{self.path} is empty, not a bag")
         self._mm = mm
+        self._forget = Forgetting(mm)
         self._view = memoryview(mm)
         try:
             self._open()
@@ -315,6 +316,7 @@ class Bag1Reader(BagReader):
 
         Uncompressed chunks are read in place from the map; others are decompressed.
         """
+        self._forget.up_to(chunk.pos)
         if chunk.compression == "none":
             return self._mm, chunk.data_pos, chunk.data_pos + chunk.data_len
         raw = self._view[chunk.data_pos : chunk.data_pos + chunk.data_len]

@@ -150,7 +150,7 @@ def _record(
     return recording
 
 
-def _link_mb_s(env: dict[str, str], size: int) -> float:
+def _link_mb_s(env: dict[str, str], size: int, rate: float = 0.0) -> float:
     """MB/s a bare roscpp subscriber takes from one full-speed pub_rate run of ``size`` images.
 
     It only counts, so this is the most the publisher's link delivers: no recorder can write
@@ -167,7 +167,7 @@ def _link_mb_s(env: dict[str, str], size: int) -> float:
         if sub.stdout.readline().strip() != b"ready":
             raise RuntimeError("sub_count did not start")
         pub = start(
-            _publisher("sensor_msgs/Image", size, 0),
+            _publisher("sensor_msgs/Image", size, rate),
             env,
             stdout=subprocess.DEVNULL,
             stderr=subprocess.DEVNULL,
@@ -251,9 +251,13 @@ def bench_record_small() -> list[Result]:
 
 
 #: 1 MB image regimes: (publish rate, label, target). At full speed pub_rate's publishing thread
-#: takes a whole core and its link tops out near what any subscriber gets; at 1 kHz (1 GB/s
-#: offered) the link has room, so the recorders' own costs decide.
-BIG_REGIMES = ((0.0, "full speed", ">= 1400 MB/s"), (1000.0, "1 kHz", "report"))
+#: takes a whole core and its link tops out near what any subscriber gets; 2 kHz (2 GB/s
+#: offered) is the issue's set-up; at 1 kHz the link has room, so the recorders' costs decide.
+BIG_REGIMES = (
+    (0.0, "full speed", "report"),
+    (2000.0, "2 kHz", ">= 1400 MB/s"),
+    (1000.0, "1 kHz", "report"),
+)
 
 
 def bench_record_big() -> list[Result]:
@@ -267,8 +271,9 @@ def bench_record_big() -> list[Result]:
         got = _rounds(recorders, "sensor_msgs/Image", 1_000_000, rate, f"big{rate:.0f}_")
         theirs = got.get("rosbag")
         their_rate = None if theirs is None else statistics.median(r.written_mb_s for r in theirs)
+        if rate != 1000.0:
+            results.append(_link_ceiling(their_rate, rate, regime))
         if not rate:
-            results.append(_link_ceiling(their_rate))
             results.append(_disk_ceiling())
         for label in ("ours .bag", "ours .mcap"):
             recs = got[label]
@@ -282,7 +287,7 @@ def bench_record_big() -> list[Result]:
                     mb_s,
                     their_rate,
                     target,
-                    None if rate else mb_s >= 1400,
+                    mb_s >= 1400 if target.startswith(">=") else None,
                     f"median of {RECORD_ROUNDS} ({rounds}); message bytes in file / "
                     "first-to-last receive stamp",
                 )
@@ -302,12 +307,12 @@ def bench_record_big() -> list[Result]:
     return results
 
 
-def _link_ceiling(their_rate: float | None) -> Result:
-    """What a bare roscpp subscriber gets from a full-speed run, beside rosbag record."""
+def _link_ceiling(their_rate: float | None, rate: float, regime: str) -> Result:
+    """What a bare roscpp subscriber gets from the same source, beside rosbag record."""
     with master() as uri:
-        links = [_link_mb_s(ros_env(uri), 1_000_000) for _ in range(RECORD_ROUNDS)]
+        links = [_link_mb_s(ros_env(uri), 1_000_000, rate) for _ in range(RECORD_ROUNDS)]
     return Result(
-        "bag record 1 MB images, link ceiling (full speed, bare roscpp subscriber)",
+        f"bag record 1 MB images, link ceiling ({regime}, bare roscpp subscriber)",
         "MB/s",
         statistics.median(links),
         their_rate,

@@ -4,12 +4,11 @@ from __future__ import annotations
 
 import json
 import struct
-import subprocess
 from pathlib import Path
 
 from rostools.bag.access import open_bag, open_writer
 from tests.support.bagdata import STRING_MD5, read_stream, write_sample
-from tests.support.env import SYSTEM_PYTHON, needs_ros1, run_cli
+from tests.support.env import needs_ros1, run_cli, run_system_python
 
 
 def _other(path: Path, count: int) -> list[tuple[str, str, int, bytes]]:
@@ -90,9 +89,6 @@ def test_rosbag_reads_a_merged_bag_in_order(tmp_path: Path) -> None:
         "for topic, msg, t in rosbag.Bag(sys.argv[1]).read_messages(raw=True):\n"
         "    print(topic, t.to_nsec())\n"
     )
-    seen = subprocess.run(
-        [SYSTEM_PYTHON, "-c", script, str(out)], capture_output=True, text=True, timeout=60
-    )
-    assert seen.returncode == 0, seen.stderr
+    stdout = run_system_python(script, str(out))
     expected = sorted(other + sample.stream, key=lambda m: m[2])
-    assert [line.split()[1] for line in seen.stdout.splitlines()] == [str(m[2]) for m in expected]
+    assert [line.split()[1] for line in stdout.splitlines()] == [str(m[2]) for m in expected]

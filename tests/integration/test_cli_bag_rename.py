@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import subprocess
 from pathlib import Path
 
 import pytest
@@ -10,7 +9,7 @@ import pytest
 from rostools.bag.access import open_bag, open_writer
 from rostools.msgs.store import TypeStore
 from tests.support.bagdata import read_stream, write_sample
-from tests.support.env import SYSTEM_PYTHON, needs_ros1, run_cli
+from tests.support.env import needs_ros1, run_cli, run_system_python
 
 
 def _topics(path: Path) -> dict[str, str]:
@@ -78,9 +77,6 @@ def test_rosbag_reads_a_renamed_bag(tmp_path: Path) -> None:
         "for topic, msg, t in rosbag.Bag(sys.argv[1]).read_messages():\n"
         "    print(topic, msg._type)\n"
     )
-    seen = subprocess.run(
-        [SYSTEM_PYTHON, "-c", script, str(out)], capture_output=True, text=True, timeout=60
-    )
-    assert seen.returncode == 0, seen.stderr
-    lines = set(seen.stdout.splitlines())
+    stdout = run_system_python(script, str(out))
+    lines = set(stdout.splitlines())
     assert {"/talk std_msgs/String", "/count my_msgs/Count"} <= lines

@@ -2,10 +2,15 @@
 
 from __future__ import annotations
 
-import subprocess
 from pathlib import Path
 
-from tests.support.env import CORPUS, SYSTEM_PYTHON, needs_corpus, needs_ros1, run_cli
+from tests.support.env import (
+    CORPUS,
+    needs_corpus,
+    needs_ros1,
+    run_cli,
+    run_system_python,
+)
 
 
 def _ros2_mcap(path: Path, count: int) -> None:
@@ -46,11 +51,8 @@ def test_convert_ros2_posestamped_to_a_bag_rosbag_reads(tmp_path: Path) -> None:
         "    print(topic, m._type, m.header.stamp.secs, m.header.stamp.nsecs, m.header.frame_id,"
         " m.pose.position.x, m.pose.orientation.w, t.to_nsec())\n"
     )
-    seen = subprocess.run(
-        [SYSTEM_PYTHON, "-c", script, str(out)], capture_output=True, text=True, timeout=60
-    )
-    assert seen.returncode == 0, seen.stderr
-    assert seen.stdout.splitlines() == [
+    stdout = run_system_python(script, str(out))
+    assert stdout.splitlines() == [
         f"/pose geometry_msgs/PoseStamped {100 + i} 7 map {float(i)} 1.0 {(100 + i) * 10**9}"
         for i in range(3)
     ]

@@ -9,7 +9,7 @@ from pathlib import Path
 import pytest
 
 from tests.support.bagdata import STEP_NS, read_stream, write_sample
-from tests.support.env import SYSTEM_PYTHON, needs_ros1, run_cli
+from tests.support.env import needs_ros1, run_cli, run_system_python
 
 
 def _parts(done: subprocess.CompletedProcess[str]) -> list[dict[str, int | str]]:
@@ -66,11 +66,8 @@ def test_rosbag_reads_every_part(tmp_path: Path) -> None:
     script = (
         "import rosbag, sys\nprint(sum(rosbag.Bag(p).get_message_count() for p in sys.argv[1:]))\n"
     )
-    seen = subprocess.run(
-        [SYSTEM_PYTHON, "-c", script, *(str(p["path"]) for p in parts)],
-        capture_output=True, text=True, timeout=60,
-    )  # fmt: skip
-    assert seen.returncode == 0 and seen.stdout.strip() == "200", seen.stderr
+    stdout = run_system_python(script, *(str(p["path"]) for p in parts))
+    assert stdout.strip() == "200"
 
 
 def test_size_cuts_after_the_part_is_full(tmp_path: Path) -> None:

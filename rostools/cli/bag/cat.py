@@ -19,8 +19,8 @@ from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
+from rostools.cli.bag.files import EndOpt, FilterExprOpt, StartOpt, time_window
 from rostools.cli.bag.group import app
-from rostools.cli.common import FINITE
 from rostools.errors import UsageError
 
 if TYPE_CHECKING:
@@ -121,18 +121,9 @@ def cat(
     ] = CatFormat.json,
     raw: Annotated[bool, typer.Option("--raw", help="Base64 bytes instead of decoding.")] = False,
     count: Annotated[int | None, typer.Option("-n", help="Stop after N messages.")] = None,
-    start: Annotated[
-        float | None,
-        typer.Option("--start", click_type=FINITE, help="Seconds from the earliest start."),
-    ] = None,
-    end: Annotated[
-        float | None,
-        typer.Option("--end", click_type=FINITE, help="Seconds from the earliest start."),
-    ] = None,
-    expression: Annotated[
-        str | None,
-        typer.Option("--filter", help="Only messages for which this is true (as bag filter)."),
-    ] = None,
+    start: StartOpt = None,
+    end: EndOpt = None,
+    expression: FilterExprOpt = None,
 ) -> None:
     """Print the messages of bags, one JSON object per line, in time order across files."""
     from rostools.bag.access import open_bag
@@ -157,11 +148,7 @@ def cat(
                 raise UsageError(
                     f"--format csv prints one topic; give one of: {', '.join(sorted(found))}"
                 )
-        lo = hi = None
-        if start is not None or end is not None:
-            begin = min(r.info().start_ns or 0 for r in readers)
-            lo = None if start is None else begin + round(start * 1e9)
-            hi = None if end is None else begin + round(end * 1e9)
+        lo, hi = time_window(paths, start, end)
         keeps = [compile_filter(expression) if expression else None for _ in readers]
         if expression and any(cdr):
             raise UsageError("--filter reads ROS 1 messages only; this selection has ROS 2 ones")

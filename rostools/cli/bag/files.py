@@ -38,6 +38,35 @@ CompressionOpt = Annotated[
         help="Chunk compression: none, bz2 or lz4 (.bag); zstd, lz4 or none (MCAP).",
     ),
 ]
+TopicsOpt = Annotated[list[str] | None, typer.Option("--topics", "-t", help="Only these topics.")]
+StartOpt = Annotated[
+    float | None,
+    typer.Option("--start", click_type=FINITE, help="Seconds from the (earliest) bag's start."),
+]
+EndOpt = Annotated[
+    float | None,
+    typer.Option("--end", click_type=FINITE, help="Seconds from the (earliest) bag's start."),
+]
+FilterExprOpt = Annotated[
+    str | None,
+    typer.Option("--filter", help="Only messages for which this is true (as bag filter)."),
+]
+
+
+def time_window(
+    paths: list[Path], start: float | None, end: float | None
+) -> tuple[int | None, int | None]:
+    """``--start``/``--end`` as ns bounds, counted from the earliest start among ``paths``."""
+    if start is None and end is None:
+        return None, None
+    from rostools.bag.access import bag_info
+
+    begin = min(bag_info(p).start_ns or 0 for p in paths)
+    lo = None if start is None else begin + (seconds_to_ns(start) or 0)
+    hi = None if end is None else begin + (seconds_to_ns(end) or 0)
+    return lo, hi
+
+
 RenameOpt = Annotated[
     list[str] | None,
     typer.Option("--rename", help="Write topic OLD as NEW (/old:=/new, as play); repeatable."),
@@ -188,16 +217,9 @@ def filter_(
             help="Python over topic, m (the message) and t (its time), as rosbag filter."
         ),
     ] = None,
-    topics: Annotated[
-        list[str] | None, typer.Option("--topics", "-t", help="Only these topics.")
-    ] = None,
-    start: Annotated[
-        float | None,
-        typer.Option("--start", click_type=FINITE, help="Seconds from the bag's start."),
-    ] = None,
-    end: Annotated[
-        float | None, typer.Option("--end", click_type=FINITE, help="Seconds from the bag's start.")
-    ] = None,
+    topics: TopicsOpt = None,
+    start: StartOpt = None,
+    end: EndOpt = None,
     print_: Annotated[
         str | None,
         typer.Option(
@@ -221,12 +243,9 @@ def filter_(
 
     Filters see the topic names in the input; --rename applies as they are written.
     """
-    from rostools.bag.access import bag_info
     from rostools.bag.ops import filter_bag
 
-    begin = bag_info(src).start_ns or 0 if (start is not None or end is not None) else 0
-    lo = None if start is None else begin + (seconds_to_ns(start) or 0)
-    hi = None if end is None else begin + (seconds_to_ns(end) or 0)
+    lo, hi = time_window([src], start, end)
     show = None if print_ is None else (print_, partial(_say, output_format(ctx, fmt)))
     rules = renames(rename, rename_type)
     copy_command(ctx, fmt, quiet or show is not None, "filter", lambda progress: filter_bag(

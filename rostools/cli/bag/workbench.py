@@ -14,18 +14,22 @@ import typer
 from rostools.cli import output
 from rostools.cli.bag.files import (
     CompressionOpt,
+    EndOpt,
+    FilterExprOpt,
     ForceOpt,
     OutArg,
     Progress,
     QuietOpt,
     RenameOpt,
     RenameTypeOpt,
+    StartOpt,
+    TopicsOpt,
     copy_command,
     renames,
-    seconds_to_ns,
+    time_window,
 )
 from rostools.cli.bag.group import app
-from rostools.cli.common import FINITE, FormatOpt, output_format
+from rostools.cli.common import FormatOpt, output_format
 from rostools.cli.output import Format, emit
 from rostools.errors import UsageError
 
@@ -38,21 +42,10 @@ def merge(
     ctx: typer.Context,
     dst: OutArg,
     sources: Annotated[list[Path], typer.Argument(help="The .bag or .mcap files to merge.")],
-    topics: Annotated[
-        list[str] | None, typer.Option("--topics", "-t", help="Only these topics.")
-    ] = None,
-    start: Annotated[
-        float | None,
-        typer.Option("--start", click_type=FINITE, help="Seconds from the earliest start."),
-    ] = None,
-    end: Annotated[
-        float | None,
-        typer.Option("--end", click_type=FINITE, help="Seconds from the earliest start."),
-    ] = None,
-    expression: Annotated[
-        str | None,
-        typer.Option("--filter", help="Keep messages for which this is true (as bag filter)."),
-    ] = None,
+    topics: TopicsOpt = None,
+    start: StartOpt = None,
+    end: EndOpt = None,
+    expression: FilterExprOpt = None,
     rename: RenameOpt = None,
     rename_type: RenameTypeOpt = None,
     compression: CompressionOpt = None,
@@ -61,14 +54,9 @@ def merge(
     fmt: FormatOpt = None,
 ) -> None:
     """Merge bags into one, in time order; the same connection in several is written once."""
-    from rostools.bag.access import bag_info
     from rostools.bag.merge import merge as run_merge
 
-    lo = hi = None
-    if start is not None or end is not None:
-        begin = min(bag_info(s).start_ns or 0 for s in sources)
-        lo = None if start is None else begin + (seconds_to_ns(start) or 0)
-        hi = None if end is None else begin + (seconds_to_ns(end) or 0)
+    lo, hi = time_window(sources, start, end)
     rules = renames(rename, rename_type)
     copy_command(ctx, fmt, quiet, "merge", lambda progress: run_merge(
         sources, dst, topics=topics or None, start=lo, end=hi, expression=expression,

@@ -5,6 +5,7 @@ against the chunks they point into, cut-short or unindexed tails, and whether ``
 recover`` would help); the index's message count against the messages read; MCAP chunk CRCs
 and the data section CRC; each ROS 1 connection's md5sum against its definition text, and
 that the text parses; and every message against its type (shorter or longer than it).
+Messages out of time order within a chunk are a note, not a finding: the formats allow it.
 Library code: no printing.
 """
 
@@ -29,6 +30,8 @@ class Checkup:
     path: Path
     messages: int = 0
     findings: list[str] = field(default_factory=list)
+    #: What is legal but worth knowing (messages out of time order within a chunk).
+    notes: list[str] = field(default_factory=list)
     #: Whether ``bag recover`` would give a better file (a damaged or unindexed tail).
     recover_helps: bool = False
 
@@ -58,9 +61,13 @@ def doctor(path: str | Path) -> Checkup:
             report.findings.append(damage)
             report.recover_helps = True
         from rostools.bag.mcap_reader import McapReader
+        from rostools.bag.rosbag1_reader import Bag1Reader
 
         if isinstance(reader, McapReader):
-            report.findings += reader.crc_problems()
+            problems, report.notes = reader.chunk_checks()
+            report.findings += problems
+        elif isinstance(reader, Bag1Reader):
+            report.notes = reader.order_notes()
     if report.recover_helps:
         report.findings.append("bag recover would rebuild what can be read into a new file")
     return report

@@ -231,11 +231,16 @@ class McapReader(BagReader):
                 break
         return found
 
-    def crc_problems(self) -> list[str]:
-        """Chunks whose records, and a data section whose bytes, fail their CRC (0: none)."""
+    def chunk_checks(self) -> tuple[list[str], list[str]]:
+        """(problems, notes) of the chunks and the data section.
+
+        Problems: records or bytes that fail their CRC (0: none was written). Notes: chunks whose
+        messages are out of time order, which is legal (readers sort them).
+        """
         import zlib
 
         found: list[str] = []
+        notes: list[str] = []
         mm = self._mm
         for rec, op, start, stop, complete in self._top(self._data_start, self._data_end):
             if op == fmt.OP_CHUNK and complete:
@@ -248,12 +253,29 @@ class McapReader(BagReader):
                     continue
                 if crc and zlib.crc32(memoryview(buf)[pos:end]) != crc:
                     found.append(f"chunk at {rec}: its CRC does not match its records")
+                late = self._out_of_order(buf, pos, end)
+                if late:
+                    notes.append(f"chunk at {rec}: {late} message(s) out of time order")
             elif op == fmt.OP_DATA_END:
                 (crc,) = _U32.unpack_from(mm, start)
                 if crc and zlib.crc32(memoryview(mm)[:rec]) != crc:
                     found.append("the data section's CRC does not match its bytes")
                 break
-        return found
+        return found, notes
+
+    @staticmethod
+    def _out_of_order(buf: bytes | memoryview, pos: int, end: int) -> int:
+        """Message records of a chunk whose log time is before the one before them."""
+        late = last = 0
+        try:
+            for _, op, start, _ in fmt.records(buf, pos, end):
+                if op == fmt.OP_MESSAGE:
+                    (log,) = _U64.unpack_from(buf, start + 6)
+                    late += log < last
+                    last = max(last, log)
+        except fmt.McapFormatError:
+            pass  # a damaged record is reported by the read itself
+        return late
 
     def _chunk_fields(
         self, rec: int, start: int, stop: int, complete: bool = True

@@ -10,6 +10,7 @@ chunk that was never closed and the decompressible part of one that was cut shor
 
 from __future__ import annotations
 
+import itertools
 import mmap
 import struct
 from collections.abc import Collection, Iterator, Mapping
@@ -274,6 +275,21 @@ class Bag1Reader(BagReader):
                 chunk.start_ns = t
             elif t > chunk.end_ns:
                 chunk.end_ns = t
+
+    def order_notes(self) -> list[str]:
+        """Chunks whose message records are not in time order (legal: readers sort them)."""
+        found: list[str] = []
+        for chunk in self.chunks:
+            try:
+                buf, base, end = self.chunk_data(chunk)
+            except fmt.RecordError as err:
+                found.append(f"chunk at {chunk.pos}: {err}")
+                continue
+            times = [t for t, _, _ in self._walk(chunk, buf, base, end)]
+            late = sum(1 for a, b in itertools.pairwise(times) if b < a)
+            if late:
+                found.append(f"chunk at {chunk.pos}: {late} message(s) out of time order")
+        return found
 
     def _walk(
         self, chunk: Chunk, buf: Buffer, base: int, end: int

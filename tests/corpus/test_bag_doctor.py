@@ -28,6 +28,12 @@ def test_the_corpus_is_clean_but_for_its_damaged_files() -> None:
     assert dirty == DAMAGED
     cut = doctor(CORPUS / "ros1-derived" / "test1_cut_at_60pct.bag")
     assert cut.recover_helps and any("cut short" in f for f in cut.findings)
+    # Out of time order within a chunk is legal (rosbag.js's example.bag, MCAP's TenMessages):
+    # a note, and the file stays clean.
+    unsorted = doctor(CORPUS / "ros1" / "rosbag.js" / "example.bag")
+    assert unsorted.clean and unsorted.notes == ["chunk at 4117: 33 message(s) out of time order"]
+    ten = next((CORPUS / "mcap" / "conformance" / "TenMessages").glob("*-ch.mcap"))
+    assert doctor(ten).clean and "out of time order" in doctor(ten).notes[0]
 
 
 @needs_corpus

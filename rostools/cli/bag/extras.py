@@ -123,10 +123,12 @@ def doctor(
                 sys.stdout.write(f"{r.path}: clean ({r.messages} messages)\n")
             for finding in r.findings:
                 sys.stdout.write(f"{r.path}: {finding}\n")
+            for note in r.notes:
+                sys.stdout.write(f"{r.path}: note: {note}\n")
     else:
         data = [
             {"path": str(r.path), "clean": r.clean, "messages": r.messages,
-             "findings": r.findings, "recover_helps": r.recover_helps}
+             "findings": r.findings, "notes": r.notes, "recover_helps": r.recover_helps}
             for r in reports
         ]  # fmt: skip
         emit(out, data[0] if len(data) == 1 else data)

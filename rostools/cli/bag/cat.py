@@ -53,10 +53,13 @@ class _Lines:
 
         self.raw = raw
         self.head = plain.dumps({"topic": conn.topic, "type": conn.type})[:-1]
+        if raw:
+            return  # bytes as they are: no definition needed
         if ros2 is not None:
             self._ros2(conn, ros2)
             return
-        store = TypeStore([]).with_definition(conn.type, conn.definition)
+        # The bag's definition first; a bag that left it out falls back to the built-in types.
+        store = TypeStore.default().with_definition(conn.type, conn.definition)
         codec = Codec.of(store)
         self.decode = codec.decoder(conn.type)
         value_type = message_type(conn.type)
@@ -73,8 +76,7 @@ class _Lines:
         from rostools.bag import ros2
         from rostools.msgs.plain import dumps
 
-        if not self.raw:
-            types.learn(conn.type, conn.definition)
+        types.learn(conn.type, conn.definition)
         kind = conn.type
         self.decode = lambda data, _: (types.decode(kind, data), len(data))
         self.as_json = lambda msg: dumps(ros2.plain(msg))

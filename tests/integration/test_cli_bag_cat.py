@@ -81,3 +81,16 @@ def test_cat_decodes_ros2_cdr_through_rosbags() -> None:
         events.stderr
     )
     assert len(events.stderr.strip().splitlines()) == 1
+
+
+def test_a_message_that_does_not_decode_is_named(tmp_path: Path) -> None:
+    from rostools.bag.access import open_writer
+    from tests.support.bagdata import STRING_MD5
+
+    path = tmp_path / "bad.bag"
+    with open_writer(path) as writer:
+        conn = writer.add_connection("/bad", "std_msgs/String", STRING_MD5, "string data\n")
+        writer.write(conn, 1, b"\x05\x00\x00\x00ab")  # says 5 bytes, holds 2
+    done = run_cli("bag", "cat", str(path))
+    assert done.returncode == 1 and done.stderr.count("\n") == 1
+    assert f"{path}: /bad at 0.000000001 s: " in done.stderr

@@ -21,7 +21,7 @@ import typer
 
 from rostools.cli.bag.files import EndOpt, FilterExprOpt, StartOpt, time_window
 from rostools.cli.bag.group import app
-from rostools.errors import UsageError
+from rostools.errors import InvalidDataError, UsageError
 
 if TYPE_CHECKING:
     from rostools.bag.base import BagReader
@@ -214,15 +214,21 @@ def _print(
         if render is None:
             types = ros2_types.setdefault(i, Ros2Types()) if conn.id in cdr[i] else None
             render = lines[(i, conn.id)] = _Lines(conn, fmt, raw, types)
-        if fmt is CatFormat.json:
-            out.append(render.json(e))
-        else:
-            assert render.row is not None
-            msg = render.decode(e[4], 0)[0]
-            if not header_done:
-                out.append(render.header(msg) + "\n")
-                header_done = True
-            out.append(f"{t},{render.row(msg, 0)}\n")
+        try:
+            if fmt is CatFormat.json:
+                out.append(render.json(e))
+            else:
+                assert render.row is not None
+                msg = render.decode(e[4], 0)[0]
+                if not header_done:
+                    out.append(render.header(msg) + "\n")
+                    header_done = True
+                out.append(f"{t},{render.row(msg, 0)}\n")
+        except InvalidDataError as err:  # say where: the file, the topic and the time
+            write("".join(out))
+            raise InvalidDataError(
+                f"{readers[i].path}: {conn.topic} at {t / 1e9:.9f} s: {err}"
+            ) from err
         printed += 1
         if len(out) >= 512:
             write("".join(out))

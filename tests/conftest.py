@@ -11,6 +11,10 @@ import pytest
 # otherwise give out this machine's name and listen on every interface).
 os.environ.pop("ROS_HOSTNAME", None)
 os.environ["ROS_IP"] = "127.0.0.1"
+# The suite starts rostools as a child hundreds of times. Where the environment says not to
+# write bytecode (some sandboxes do), every child compiled every module it imported, up to
+# 0.7 s each: let the first child write it and the others read it.
+os.environ.pop("PYTHONDONTWRITEBYTECODE", None)
 
 
 @pytest.fixture

@@ -137,6 +137,8 @@ class _Subscriber:
 
     topic = "/t"
     max_frame = 1_000_000
+    coalesce = 0.0
+    reuse_frames = False
 
     def __init__(self) -> None:
         self.frames = 0

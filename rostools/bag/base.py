@@ -133,11 +133,7 @@ class BagReader(ABC):
 
         ``start`` and ``end`` are inclusive bounds in ns; None means unbounded (0 is a time).
         """
-        wanted = self.wanted(topics, connections)
-        lo = 0 if start is None else start
-        hi = MAX_TIME_NS if end is None else end
-        everything = topics is None and connections is None
-        return ordered(self.guarded(self.blocks(wanted, lo, hi, everything)))
+        return ordered(self._selected(topics, start, end, connections))
 
     def entries(
         self,
@@ -146,11 +142,20 @@ class BagReader(ABC):
         end: int | None = None,
     ) -> Iterator[Entry]:
         """Like ``messages``, as whole entries: MCAP's carry sequence and publish time too."""
-        wanted = self.wanted(topics, None)
+        return ordered(self._selected(topics, start, end, None), whole=True)
+
+    def _selected(
+        self,
+        topics: Collection[str] | None,
+        start: int | None,
+        end: int | None,
+        connections: Iterable[Connection] | None,
+    ) -> list[Block]:
+        wanted = self.wanted(topics, connections)
         lo = 0 if start is None else start
         hi = MAX_TIME_NS if end is None else end
-        blocks = self.guarded(self.blocks(wanted, lo, hi, topics is None))
-        return ordered(blocks, whole=True)
+        everything = topics is None and connections is None
+        return self.guarded(self.blocks(wanted, lo, hi, everything))
 
     @abstractmethod
     def blocks(

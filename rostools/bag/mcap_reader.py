@@ -25,7 +25,7 @@ from rostools.bag.model import (
     compression_rows,
     summarize,
 )
-from rostools.bag.ordering import Block, Entry
+from rostools.bag.ordering import Block, Entry, out_of_order
 
 _MSG = fmt.MESSAGE_PREFIX
 _PREFIX = fmt.PREFIX
@@ -265,17 +265,15 @@ class McapReader(BagReader):
 
     @staticmethod
     def _out_of_order(buf: bytes | memoryview, pos: int, end: int) -> int:
-        """Message records of a chunk whose log time is before the one before them."""
-        late = last = 0
+        """Message records of a chunk whose log time is before the one stored ahead of them."""
+        times: list[int] = []
         try:
             for _, op, start, _ in fmt.records(buf, pos, end):
                 if op == fmt.OP_MESSAGE:
-                    (log,) = _U64.unpack_from(buf, start + 6)
-                    late += log < last
-                    last = max(last, log)
+                    times.append(_U64.unpack_from(buf, start + 6)[0])
         except fmt.McapFormatError:
             pass  # a damaged record is reported by the read itself
-        return late
+        return out_of_order(times)
 
     def _chunk_fields(
         self, rec: int, start: int, stop: int, complete: bool = True

@@ -10,6 +10,7 @@ no heap at all.
 from __future__ import annotations
 
 import heapq
+import itertools
 from bisect import bisect_left
 from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass
@@ -94,6 +95,11 @@ def ordered(blocks: Iterable[Block], whole: bool = False) -> Iterator[Any]:
         if k < len(entries):
             e = entries[k]
             heapq.heappush(heap, (e[0], e[1], order, e[2], k, entries))
+
+
+def out_of_order(times: Iterable[int]) -> int:
+    """How many times in a block come before the one stored ahead of them."""
+    return sum(1 for a, b in itertools.pairwise(times) if b < a)
 
 
 def merge(streams: Iterable[Iterator[RawMessage]]) -> Iterator[RawMessage]:

@@ -10,7 +10,6 @@ chunk that was never closed and the decompressible part of one that was cut shor
 
 from __future__ import annotations
 
-import itertools
 import mmap
 import struct
 from collections.abc import Collection, Iterator, Mapping
@@ -29,7 +28,7 @@ from rostools.bag.model import (
     connection_from_header,
     summarize,
 )
-from rostools.bag.ordering import Block, Entry, RawMessage, ordered
+from rostools.bag.ordering import Block, Entry, RawMessage, ordered, out_of_order
 from rostools.wire.header import HeaderError, split_fields
 
 #: A chunk's records: the file map (uncompressed chunks) or the decompressed bytes.
@@ -285,8 +284,7 @@ class Bag1Reader(BagReader):
             except fmt.RecordError as err:
                 found.append(f"chunk at {chunk.pos}: {err}")
                 continue
-            times = [t for t, _, _ in self._walk(chunk, buf, base, end)]
-            late = sum(1 for a, b in itertools.pairwise(times) if b < a)
+            late = out_of_order(t for t, _, _ in self._walk(chunk, buf, base, end))
             if late:
                 found.append(f"chunk at {chunk.pos}: {late} message(s) out of time order")
         return found

@@ -51,14 +51,20 @@ class _PlainGen:
 
 def to_plain(codec: Codec, value_type: Field) -> Plain:
     """``plain(value)``: the value as dicts, lists and scalars (generated per type)."""
-    key = ("plain", value_type.type, value_type.is_array)
+    fn: Plain = _generated(codec, value_type, _PlainGen(codec), "plain", "{}")
+    return fn
+
+
+def _generated(codec: Codec, value_type: Field, gen: _PlainGen, kind: str, wrap: str) -> Any:
+    """``def <kind>(m): return <wrap around gen's expression>``, compiled once per type."""
+    key = (kind, value_type.type, value_type.is_array)
     fn = codec.store.cache.get(key)
     if fn is None:
-        gen = _PlainGen(codec)
-        source = f"def plain(m):\n    return {gen.value(value_type, 'm')}\n"
-        exec(compile(source, f"<rostools plain {value_type.type}>", "exec"), gen.env)  # noqa: S102
-        fn = codec.store.cache[key] = gen.env["plain"]
-    return fn  # type: ignore[no-any-return]
+        body = wrap.replace("{}", gen.value(value_type, "m"))
+        source = f"def {kind}(m):\n    return {body}\n"
+        exec(compile(source, f"<rostools {kind} {value_type.type}>", "exec"), gen.env)  # noqa: S102
+        fn = codec.store.cache[key] = gen.env[kind]
+    return fn
 
 
 def _json_float(v: float) -> str:
@@ -81,7 +87,7 @@ def _json_ints(values: Any) -> str:
 
 
 def _json_bools(values: Any) -> str:
-    return "[" + ",".join("true" if v else "false" for v in values) + "]"
+    return "[" + ",".join(map(_json_bool, values)) + "]"
 
 
 def _json_each(item: Callable[[Any], str], values: Any) -> str:
@@ -132,14 +138,8 @@ class _JsonGen(_PlainGen):
 
 def to_json(codec: Codec, value_type: Field) -> Callable[[Any], str]:
     """``text(value)``: the same text as ``dumps(to_plain(...)(value))``, generated per type."""
-    key = ("json", value_type.type, value_type.is_array)
-    fn = codec.store.cache.get(key)
-    if fn is None:
-        gen = _JsonGen(codec)
-        source = f"def text(m):\n    return f'{gen.value(value_type, 'm')}'\n"
-        exec(compile(source, f"<rostools json {value_type.type}>", "exec"), gen.env)  # noqa: S102
-        fn = codec.store.cache[key] = gen.env["text"]
-    return fn  # type: ignore[no-any-return]
+    fn: Callable[[Any], str] = _generated(codec, value_type, _JsonGen(codec), "json", "f'{}'")
+    return fn
 
 
 def _finite(value: Any) -> Any:

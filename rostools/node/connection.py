@@ -256,6 +256,7 @@ class InboundConnection(asyncio.BufferedProtocol):
         self.id = conn_id
         self.request = header
         self.session = Subscription(subscriber.max_frame)
+        self.session.reader.reuse = subscriber.reuse_frames
         self.transport: asyncio.Transport | None = None
         self.header: dict[str, str] | None = None
         self.closed: asyncio.Future[None] = asyncio.get_running_loop().create_future()
@@ -287,7 +288,6 @@ class InboundConnection(asyncio.BufferedProtocol):
         """Asyncio: bytes arrived."""
         now = time.monotonic()
         small = False
-        self.session.reader.reuse = self.subscriber.reuse_frames
         for event in self.session.buffer_updated(nbytes):
             if isinstance(event, Messages):
                 self.messages_received += len(event.frames)

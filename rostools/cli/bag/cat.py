@@ -166,19 +166,18 @@ def _cdr_connections(
     """
     from rostools.bag.mcap_reader import McapReader
     from rostools.bag.model import UnsupportedBagError
+    from rostools.bag.ros2 import cdr_connections
 
     if raw or not isinstance(reader, McapReader):
         return set()
-    found: set[int] = set()
+    found = cdr_connections(reader, topics)
     for c in reader.channels.values():
-        if (topics and c.topic not in topics) or c.message_encoding == "ros1":
+        if c.message_encoding in ("ros1", "cdr") or (topics and c.topic not in topics):
             continue
-        if c.message_encoding != "cdr":
-            raise UnsupportedBagError(
-                f"{reader.path}: {c.topic} holds {c.message_encoding!r} messages, which bag cat "
-                "does not decode (--raw prints them as bytes)"
-            )
-        found.add(c.id)
+        raise UnsupportedBagError(
+            f"{reader.path}: {c.topic} holds {c.message_encoding!r} messages, which bag cat "
+            "does not decode (--raw prints them as bytes)"
+        )
     if found and fmt is CatFormat.csv:
         raise UsageError("--format csv reads ROS 1 messages only; use JSON for ROS 2 ones")
     return found

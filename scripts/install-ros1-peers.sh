@@ -21,6 +21,10 @@ packages=(
   libnav-msgs-dev libdiagnostic-msgs-dev libactionlib-msgs-dev libshape-msgs-dev
   libstereo-msgs-dev libtrajectory-msgs-dev libvisualization-msgs-dev libtf2-msgs-dev
   libmap-msgs-dev libroscpp-msg-dev libros-rosgraph-msgs-dev
+  # actionlib: a real SimpleActionServer and SimpleActionClient for `rostools action`
+  python3-actionlib
+  # Graphviz's dot renders `node graph -o graph.svg|png`
+  graphviz
   g++ make
   # the shells the completion tests drive, and rosbash (rostopic's own completion) to compare
   zsh fish rosbash

@@ -1,4 +1,4 @@
-"""``rostools msg``: rosmsg, rossrv and rosmsg-proto in one group, for messages and services."""
+"""``rostools msg``: rosmsg, rossrv and rosmsg-proto in one group; actions too."""
 
 from __future__ import annotations
 
@@ -49,7 +49,7 @@ def show(
     fmt: FormatOpt = None,
     msg_path: MsgPathOpt = None,
 ) -> None:
-    """Show a message or service definition, nested types expanded (rosmsg/rossrv show)."""
+    """Show a message, service or action definition, nested types expanded (rosmsg show)."""
     from rostools.msgs import describe
 
     name = read_type(type_name)
@@ -65,6 +65,14 @@ def show(
             data: dict[str, Any] = {"type": full, "kind": kind, "md5sum": store.md5(full)}
             data |= describe.structure(store, spec)
             data["definition"] = store.full_text(full)
+        elif kind == "action":
+            action = store.action(full)
+            text = action.text if raw else describe.show_action_text(store, action)
+            data = {"type": full, "kind": kind, "md5sum": store.md5(full)}
+            for part in ("goal", "result", "feedback"):
+                data[part] = describe.structure(store, getattr(action, part))
+            data["messages"] = {m: store.md5(m) for m in action.messages}
+            data["text"] = action.text
         else:
             srv = store.srv(full)
             text = srv.text if raw else describe.show_srv_text(store, srv)
@@ -190,7 +198,7 @@ def proto(
     fmt: FormatOpt = None,
     msg_path: MsgPathOpt = None,
 ) -> None:
-    """Print a YAML template of a message, or of a service's request (rosmsg-proto)."""
+    """Print a YAML template of a message, a service's request or an action's goal."""
     try:
         text = _proto_text(type_name, msg_path, flow_style, empty_arrays, exclude)
     except RostoolsError as exc:
@@ -219,7 +227,10 @@ def _proto_text(
         choices = ", ".join(full for _, full in found)
         raise UsageError(f"{name} is ambiguous: {choices}", hint="give the package too")
     kind, full = found[0]
-    spec = store.msg(full) if kind == "msg" else store.srv(full).request
+    if kind == "action":
+        spec = store.action(full).goal
+    else:
+        spec = store.msg(full) if kind == "msg" else store.srv(full).request
     skip = frozenset(n.strip() for n in exclude.split(",") if n.strip())
     return describe.proto(
         store, spec, flow=None if flow is None else bool(flow), empty_arrays=empty, exclude=skip

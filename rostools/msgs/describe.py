@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from typing import Any
 
+from rostools.msgs.action import ActionSpec
 from rostools.msgs.spec import BUILTIN_TYPES, Field, MsgSpec, SrvSpec
 from rostools.msgs.store import TypeStore
 
@@ -25,6 +26,11 @@ def show_text(store: TypeStore, spec: MsgSpec, indent: str = "") -> str:
 def show_srv_text(store: TypeStore, spec: SrvSpec) -> str:
     """Rossrv's expanded form: request, ``---``, response."""
     return show_text(store, spec.request) + "---\n" + show_text(store, spec.response)
+
+
+def show_action_text(store: TypeStore, spec: ActionSpec) -> str:
+    """An action as rossrv shows a service: goal, ``---``, result, ``---``, feedback."""
+    return "---\n".join(show_text(store, s) for s in (spec.goal, spec.result, spec.feedback))
 
 
 def structure(store: TypeStore, spec: MsgSpec) -> dict[str, Any]:

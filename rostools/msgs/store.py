@@ -3,9 +3,10 @@
 A ``TypeStore`` looks a type up in layered sources, first hit wins:
 
 1. definitions learnt from a connection header or a bag (``with_definition``);
-2. ``.msg``/``.srv`` files in package folders: ``--msg-path`` folders, ``ROSTOOLS_MSG_PATH``,
-   then ``ROS_PACKAGE_PATH`` (unset: ``/usr/share`` when it holds ROS packages, as Debian's
-   rospkg does);
+2. ``.msg``/``.srv``/``.action`` files in package folders: ``--msg-path`` folders,
+   ``ROSTOOLS_MSG_PATH``, then ``ROS_PACKAGE_PATH`` (unset: ``/usr/share`` when it holds ROS
+   packages, as Debian's rospkg does); an ``.action`` file gives the seven messages genmsg
+   generates from it (``msgs/action.py``);
 3. the built-in table: rosbags' Noetic store plus the common Noetic services.
 """
 
@@ -21,6 +22,14 @@ from pathlib import Path
 from typing import Any, Literal
 
 from rostools.errors import NotFoundError
+from rostools.msgs.action import (
+    AUTOGEN,
+    SUFFIXES,
+    ActionSpec,
+    action_name,
+    generated_texts,
+    split_generated,
+)
 from rostools.msgs.spec import (
     SECTION_RULE,
     DefinitionError,
@@ -37,7 +46,7 @@ from rostools.msgs.spec import (
 #: packages nest 7 levels (nav_msgs/GetMapAction); each level costs a few recursive calls.
 MAX_NESTING = 64
 
-Kind = Literal["msg", "srv"]
+Kind = Literal["msg", "srv", "action"]
 MSG_PATH_ENV = "ROSTOOLS_MSG_PATH"
 # Debian installs ROS packages here and its rospkg searches it when ROS_PACKAGE_PATH is unset.
 DEBIAN_SHARE = "/usr/share"
@@ -50,7 +59,7 @@ class Source:
     """Something that holds the text of message and service types."""
 
     def text(self, kind: Kind, name: str) -> str | None:
-        """The ``.msg``/``.srv`` text of ``pkg/Type``, or None."""
+        """The ``.msg``/``.srv``/``.action`` text of ``pkg/Type``, or None."""
         raise NotImplementedError
 
     def packages(self, kind: Kind) -> Iterable[str]:
@@ -104,6 +113,7 @@ class PathSource(Source):
             (folder / "package.xml").is_file()
             or (folder / "msg").is_dir()
             or (folder / "srv").is_dir()
+            or (folder / "action").is_dir()
         )
 
     def _crawl(self) -> dict[str, list[Path]]:
@@ -141,7 +151,17 @@ class PathSource(Source):
         return self._crawl().get(package, [])
 
     def text(self, kind: Kind, name: str) -> str | None:
-        """Read ``<package>/<kind>/<Type>.<kind>``."""
+        """Read ``<package>/<kind>/<Type>.<kind>``; a message generated from an ``.action``."""
+        found = self._file_text(kind, name)
+        if found is None and kind == "msg" and (parts := split_generated(name)) is not None:
+            stem, suffix = parts
+            action = self._file_text("action", stem)
+            if action is not None:
+                short = name.partition("/")[2]
+                return generated_texts(short.removesuffix(suffix), action)[short]
+        return found
+
+    def _file_text(self, kind: Kind, name: str) -> str | None:
         package, _, short = name.partition("/")
         if not package or not short or "/" in short:
             return None
@@ -156,11 +176,19 @@ class PathSource(Source):
         return None
 
     def packages(self, kind: Kind) -> Iterable[str]:
-        """Packages with a ``msg/`` (or ``srv/``) folder."""
-        return [p for p, dirs in self._crawl().items() if any((d / kind).is_dir() for d in dirs)]
+        """Packages with a ``msg/`` (or ``srv/``, ``action/``) folder; actions give messages."""
+        kinds = ("msg", "action") if kind == "msg" else (kind,)
+        return [
+            p
+            for p, dirs in self._crawl().items()
+            if any((d / k).is_dir() for d in dirs for k in kinds)
+        ]
 
     def types(self, kind: Kind, package: str) -> list[str]:
-        """Type files in the package's ``msg/`` (or ``srv/``) folder."""
+        """Type files in the package's ``msg/`` (or ``srv/``, ``action/``) folder.
+
+        The messages of a package include those generated from its actions.
+        """
         found: set[str] = set()
         for folder in self._crawl().get(package, []):
             sub = folder / kind
@@ -168,6 +196,9 @@ class PathSource(Source):
                 found.update(
                     p.stem for p in sub.iterdir() if p.suffix == f".{kind}" and p.is_file()
                 )
+        if kind == "msg":
+            for stem in self.types("action", package):
+                found.update(stem + suffix for suffix in SUFFIXES)
         return sorted(found)
 
 
@@ -183,17 +214,18 @@ class BuiltinSource(Source):
     """The types rostools carries: rosbags' Noetic store and the common Noetic services."""
 
     def text(self, kind: Kind, name: str) -> str | None:
-        """The stored text of a type."""
-        return _builtin_table()[kind].get(name)
+        """The stored text of a type (actions are there as their seven messages)."""
+        return _builtin_table().get(kind, {}).get(name)
 
     def packages(self, kind: Kind) -> Iterable[str]:
         """Packages in the table."""
-        return sorted({n.partition("/")[0] for n in _builtin_table()[kind]})
+        return sorted({n.partition("/")[0] for n in _builtin_table().get(kind, {})})
 
     def types(self, kind: Kind, package: str) -> list[str]:
         """Types of a package in the table."""
         prefix = package + "/"
-        return sorted(n[len(prefix) :] for n in _builtin_table()[kind] if n.startswith(prefix))
+        table = _builtin_table().get(kind, {})
+        return sorted(n[len(prefix) :] for n in table if n.startswith(prefix))
 
 
 def _split_path(value: str | None) -> list[Path]:
@@ -312,6 +344,47 @@ class TypeStore:
             self._msgs[spec.request.name] = spec.request
             self._msgs[spec.response.name] = spec.response
         return spec
+
+    def action(self, name: str) -> ActionSpec:
+        """The action ``pkg/NameAction`` (also written ``pkg/Name``, ``pkg/action/Name``).
+
+        Its messages come from wherever messages come from: an ``.action`` file on the search
+        path, the built-in table, or definitions learnt from a peer.
+        """
+        full = action_name(name)
+        stem = full.removesuffix("Action")
+        if full.count("/") != 1 or not stem.partition("/")[2]:
+            raise NotFoundError(f"unknown action type {name}", hint="use the form pkg/NameAction")
+        try:
+            for suffix in SUFFIXES[1:4]:  # the wrappers on the wire must be there too
+                self.msg(stem + suffix)
+            goal, result, feedback = (self.msg(stem + s) for s in ("Goal", "Result", "Feedback"))
+        except NotFoundError:
+            raise NotFoundError(
+                f"unknown action type {full}",
+                hint="check the spelling, or add the folder of its package (with action/) "
+                "with --msg-path",
+            ) from None
+        text = self._file_text_or_none("action", stem)
+        if text is None:  # rejoined as the file would have been written
+            parts = [s.text.removeprefix(AUTOGEN) for s in (goal, result, feedback)]
+            text = "---\n".join(parts)
+        return ActionSpec(full, goal, result, feedback, text)
+
+    def has_action(self, name: str) -> bool:
+        """True when the action type can be found."""
+        try:
+            self.action(name)
+        except NotFoundError:
+            return False
+        return True
+
+    def _file_text_or_none(self, kind: Kind, name: str) -> str | None:
+        for source in self.sources:
+            text = source.text(kind, name)
+            if text is not None:
+                return text
+        return None
 
     def has_msg(self, name: str) -> bool:
         """True when the message type can be found."""

@@ -143,3 +143,24 @@ def test_show_from_mcap(cli_env: dict[str, str], tmp_path: Path) -> None:
     assert out.stdout == "int32 x\nstd_msgs/Header h\n  uint32 seq\n  time stamp\n\n"
     raw = run_cli("msg", "show", "-r", "-b", str(path), "Thing", env=cli_env)
     assert raw.stdout == "# c\nint32 x\nstd_msgs/Header h\n"
+
+
+def test_show_action_from_a_file_and_from_the_table(
+    cli_env: dict[str, str], tmp_path: Path
+) -> None:
+    folder = tmp_path / "ws" / "tut" / "action"
+    folder.mkdir(parents=True)
+    (folder / "Fib.action").write_text("int32 order\n---\nint32[] sequence\n---\nint32[] partial\n")
+    ws = str(tmp_path / "ws")
+    out = run_cli("msg", "show", "tut/action/Fib", "--msg-path", ws, env=cli_env)
+    assert out.stdout == "int32 order\n---\nint32[] sequence\n---\nint32[] partial\n\n", out.stderr
+    data = json.loads(run_cli("msg", "show", "tut/FibAction", "--msg-path", ws, "-F", "json",
+                              env=cli_env).stdout)  # fmt: skip
+    assert data["kind"] == "action" and data["feedback"]["fields"][0]["name"] == "partial"
+    assert len(data["messages"]) == 7 and data["md5sum"] == data["messages"]["tut/FibAction"]
+    # the wrapper message is still there by its msg/ name; the built-in table has actionlib's
+    wrapper = run_cli("msg", "show", "actionlib/msg/TestAction", env=cli_env).stdout
+    assert wrapper.startswith("actionlib/TestActionGoal action_goal\n")
+    test = run_cli("msg", "show", "actionlib/TestAction", env=cli_env).stdout
+    assert test == "int32 goal\n---\nint32 result\n---\nint32 feedback\n\n"
+    assert run_cli("msg", "proto", "actionlib/Test.action", env=cli_env).stdout == '"goal: 0"\n'

@@ -20,7 +20,8 @@ LAYERS: list[set[str]] = [
     {"rosgraph"},
     {"node"},
     {"master", "bag"},
-    {"cli"},
+    {"cli", "_api"},
+    {"testing"},
     {"__main__"},
 ]
 

@@ -1,0 +1,176 @@
+"""Bags for the API: ``record(topics, path)`` around a block, ``read_bag`` as typed messages.
+
+A recording is ``bag record``'s ``Recorder`` on a node of its own; its file is written as
+``NAME.active`` and renamed when the recording stops, as ``bag record`` does.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import time
+from collections.abc import Collection, Iterator, Sequence
+from pathlib import Path
+from types import TracebackType
+from typing import NamedTuple
+
+from rostools._api import loop, messages
+from rostools._api.asyncnode import default_master_uri
+from rostools.bag.access import format_for_name, open_bag, require_ros1
+from rostools.bag.record import Recorder, RecordOptions
+from rostools.errors import RostoolsError, TimeoutExpired, UsageError
+from rostools.msgs.message import Message, Time
+from rostools.node.node import Node as CoreNode
+
+#: How long a recording may take to subscribe and open its file before it gives up.
+START_TIMEOUT = 10.0
+
+
+class BagMessage(NamedTuple):
+    """One message read from a bag: topic, typed message, and the time it was recorded."""
+
+    topic: str
+    message: Message
+    time: Time
+
+
+def read_bag(path: str | Path, topics: Collection[str] | None = None) -> Iterator[BagMessage]:
+    """The messages of a ``.bag`` or MCAP file in time order, optionally of some topics."""
+    with open_bag(path) as reader:
+        require_ros1(reader, "read_bag", topics)
+        for conn, t_ns, data in reader.messages(topics=topics):
+            decode = messages.decoder(conn.type, conn.md5sum, conn.definition)
+            yield BagMessage(conn.topic, decode(data), Time.from_nsec(t_ns))
+
+
+class Recording:
+    """Records topics into a bag while it runs: ``with record(["/a"], "a.bag") as rec:``.
+
+    The bag is complete when the recording stops (the end of the ``with``, or ``stop()``).
+    """
+
+    def __init__(
+        self,
+        topics: Sequence[str],
+        path: str | Path,
+        master_uri: str | None = None,
+        *,
+        compression: str | None = None,
+    ) -> None:
+        if isinstance(topics, str):
+            topics = [topics]
+        if not topics:
+            raise UsageError("record needs at least one topic")
+        self.topics = list(topics)
+        self.path = Path(path)
+        self.master_uri = master_uri
+        self.compression = compression
+        self._node: CoreNode | None = None
+        self._recorder: Recorder | None = None
+        self._stop: asyncio.Event | None = None
+        self._task: asyncio.Task[None] | None = None
+        self._on_api_loop = False
+
+    @property
+    def running(self) -> bool:
+        """Whether it records."""
+        return self._task is not None and not self._task.done()
+
+    async def start_async(self) -> Recording:
+        """Subscribe and open the file, on the running loop."""
+        node = CoreNode("rostools_record", self.master_uri or default_master_uri(),
+                        anonymous_name=True)  # fmt: skip
+        await node.start()
+        opts = RecordOptions(
+            topics=list(self.topics),
+            base=self.path,
+            format=format_for_name(self.path),
+            compression=self.compression,
+            min_space=0,  # a test's bag is small; the disk check is for long recordings
+        )
+        try:
+            recorder = Recorder(node, opts)
+        except BaseException:
+            await node.close()
+            raise
+        self._node, self._recorder, self._stop = node, recorder, asyncio.Event()
+        self._task = asyncio.get_running_loop().create_task(recorder.run(self._stop))
+        deadline = time.monotonic() + START_TIMEOUT
+        wanted = set(recorder.opts.topics)
+        while recorder.current_file is None or not wanted <= set(node.subscribers):
+            if self._task.done():
+                await self._finish()
+                raise RostoolsError(f"the recording into {self.path} stopped at once")
+            if time.monotonic() > deadline:
+                await self._finish()
+                raise TimeoutExpired(f"the recording into {self.path} did not start")
+            await asyncio.sleep(0.005)
+        return self
+
+    async def stop_async(self) -> Path:
+        """Stop, close the file; its path."""
+        await self._finish()
+        return self.path
+
+    async def _finish(self) -> None:
+        if self._stop is not None:
+            self._stop.set()
+        try:
+            if self._task is not None:
+                await self._task
+        finally:
+            if self._node is not None:
+                await self._node.close()
+                self._node = None
+
+    def start(self) -> Recording:
+        """Start recording (on the API's background loop)."""
+        self._on_api_loop = True
+        return loop.run(self.start_async())
+
+    def stop(self) -> Path:
+        """Stop recording and close the bag; its path."""
+        if self._on_api_loop and self._node is not None:
+            loop.run(self._finish())
+        return self.path
+
+    @property
+    def counts(self) -> dict[str, int]:
+        """Messages received so far, per topic."""
+        rec = self._recorder
+        return {} if rec is None else {t: s.messages for t, s in rec.stats.items()}
+
+    def messages(self, topics: Collection[str] | None = None) -> list[BagMessage]:
+        """Every message of the bag, once it is stopped."""
+        if self.running:
+            raise UsageError("stop() the recording before reading it")
+        return list(read_bag(self.path, topics))
+
+    def __enter__(self) -> Recording:
+        return self.start()
+
+    def __exit__(
+        self, kind: type[BaseException] | None, err: BaseException | None, tb: TracebackType | None
+    ) -> None:
+        self.stop()
+
+    async def __aenter__(self) -> Recording:
+        return await self.start_async()
+
+    async def __aexit__(
+        self, kind: type[BaseException] | None, err: BaseException | None, tb: TracebackType | None
+    ) -> None:
+        await self.stop_async()
+
+
+def record(
+    topics: Sequence[str],
+    path: str | Path,
+    master_uri: str | None = None,
+    *,
+    compression: str | None = None,
+) -> Recording:
+    """A recording of ``topics`` into ``path`` (``.mcap``: MCAP, else ``.bag``).
+
+    Use it as a context manager (``with`` or ``async with``), or ``start()``/``stop()``.
+    """
+    return Recording(topics, path, master_uri, compression=compression)

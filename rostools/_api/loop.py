@@ -1,0 +1,99 @@
+"""One event loop on a daemon thread: where the blocking API runs the async one.
+
+Every blocking call of the API is a coroutine of the async API run here, so there is one
+implementation. The loop starts at the first call and lives as long as the process.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import atexit
+import concurrent.futures
+import contextlib
+import threading
+from collections.abc import Callable, Coroutine
+from typing import Any, TypeVar
+
+from rostools.errors import TimeoutExpired, UsageError
+
+T = TypeVar("T")
+
+_lock = threading.Lock()
+_loop: asyncio.AbstractEventLoop | None = None
+_thread: threading.Thread | None = None
+#: Called (on the loop) before the interpreter exits: nodes unregister, as rospy's do.
+_at_exit: list[Callable[[], Coroutine[Any, Any, None]]] = []
+#: How long the exit hooks may take in all before the process leaves anyway.
+EXIT_TIMEOUT = 2.0
+
+
+def loop() -> asyncio.AbstractEventLoop:
+    """The API's event loop, started on first use."""
+    global _loop, _thread
+    with _lock:
+        if _loop is None:
+            ready = threading.Event()
+            made: list[asyncio.AbstractEventLoop] = []
+
+            def serve() -> None:
+                new = asyncio.new_event_loop()
+                made.append(new)
+                ready.set()
+                new.run_forever()
+
+            _thread = threading.Thread(target=serve, name="rostools-api", daemon=True)
+            _thread.start()
+            ready.wait()
+            _loop = made[0]
+            atexit.register(_shutdown)
+        return _loop
+
+
+def on_loop_thread() -> bool:
+    """Whether the caller runs on the API's loop (a callback of the async API)."""
+    return _thread is not None and threading.current_thread() is _thread
+
+
+def run(coro: Coroutine[Any, Any, T], timeout: float | None = None) -> T:
+    """Run ``coro`` on the API's loop and wait for its result (its exception is raised here).
+
+    ``timeout`` bounds the wait: the coroutine is cancelled and ``TimeoutExpired`` raised.
+    """
+    if on_loop_thread():
+        coro.close()
+        raise UsageError(
+            "a blocking rostools call from the API's own event loop would wait forever",
+            hint="in async code use AsyncNode and await its methods",
+        )
+    future = asyncio.run_coroutine_threadsafe(coro, loop())
+    try:
+        return future.result(timeout)
+    except concurrent.futures.TimeoutError:
+        future.cancel()
+        raise TimeoutExpired(f"no result within {timeout:g} s") from None
+    except BaseException:
+        future.cancel()  # Ctrl-C in the caller: the work on the loop stops too
+        raise
+
+
+def at_exit(hook: Callable[[], Coroutine[Any, Any, None]]) -> None:
+    """Run ``hook()`` on the loop when the interpreter exits."""
+    _at_exit.append(hook)
+
+
+def forget_at_exit(hook: Callable[[], Coroutine[Any, Any, None]]) -> None:
+    """Undo ``at_exit``."""
+    if hook in _at_exit:
+        _at_exit.remove(hook)
+
+
+def _shutdown() -> None:
+    if _loop is None or not _at_exit:
+        return
+
+    async def everything() -> None:
+        await asyncio.gather(*(hook() for hook in list(_at_exit)), return_exceptions=True)
+
+    # leaving anyway: a master forgets a node it cannot reach
+    with contextlib.suppress(Exception):
+        asyncio.run_coroutine_threadsafe(everything(), _loop).result(EXIT_TIMEOUT)

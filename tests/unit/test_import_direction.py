@@ -16,7 +16,7 @@ LAYERS: list[set[str]] = [
     {"errors"},
     {"names", "yamlio"},
     {"wire"},
-    {"msgs", "rates"},
+    {"msgs", "rates", "series"},
     {"rosgraph"},
     {"node"},
     {"master", "bag"},

@@ -1,0 +1,179 @@
+"""Sampling for plots: from raw messages of one type to (label, x, y) samples.
+
+``topic plot`` and ``bag plot`` share this layer, and it shares echo's: paths are parsed and
+checked by ``fieldpath`` (the one parser), ``--filter`` is compiled by ``expr``, and the
+numbers are read by ``extract`` without decoding the rest of the message. Only a filter
+that reads ``m`` decodes a whole message.
+
+A sample's label is the topic and path as the user wrote them; a slice gives one label per
+element (``/scan/ranges[0:3]`` -> ``/scan/ranges[0]``, ``[1]``, ``[2]``).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from typing import Any, Final
+
+from rostools.errors import UsageError
+from rostools.msgs import extract, fieldpath
+from rostools.msgs.codec import DECODE_ERRORS, Codec, DecodeError
+from rostools.msgs.expr import Expression
+from rostools.msgs.fieldpath import Step
+from rostools.msgs.message import Time
+from rostools.msgs.store import TypeStore
+
+#: Elements one sliced path may plot: each is a line of its own.
+MAX_SLICE: Final = 64
+
+#: Where samples go: ``add(label, x, y)``.
+Sink = Callable[[str, float, float], None]
+
+
+def _step_text(step: Step, index: int | None = None) -> str:
+    if index is not None:
+        return f"{step.name}[{index}]"
+    if step.index is None:
+        return step.name
+    if isinstance(step.index, int):
+        return f"{step.name}[{step.index}]"
+    s = step.index
+    parts = ["" if v is None else str(v) for v in (s.start, s.stop)]
+    if s.step is not None:
+        parts.append(str(s.step))
+    return f"{step.name}[{':'.join(parts)}]"
+
+
+class _Column:
+    """One field path of a topic: its extractor and its labels."""
+
+    def __init__(self, codec: Codec, type_name: str, topic: str, path: str) -> None:
+        resolved = fieldpath.resolve(codec.store, type_name, path)
+        self.extract = extract.extractor(codec, type_name, resolved)
+        steps = resolved.steps
+        slices = [i for i, s in enumerate(steps) if isinstance(s.index, slice)]
+        if len(slices) > 1:
+            raise UsageError(f"{topic}/{path}: plot one slice per field path")
+        self.label = topic.rstrip("/") + "/" + "/".join(_step_text(s) for s in steps)
+        self.sliced = bool(slices)
+        self.labels: list[str] = []
+        if slices:
+            at = slices[0]
+            self.sliced_step = steps[at]
+            self.head = "/".join([topic.rstrip("/"), *(_step_text(s) for s in steps[:at])])
+            self.tail = "".join("/" + _step_text(s) for s in steps[at + 1 :])
+            sl = steps[at].index
+            assert isinstance(sl, slice)
+            #: The elements' own indices when they do not depend on the array's length.
+            self.absolute = (sl.start is None or sl.start >= 0) and (sl.step or 1) > 0
+            if self.absolute and sl.stop is not None and sl.stop >= 0:
+                count = len(range(sl.start or 0, sl.stop, sl.step or 1))
+                if count > MAX_SLICE:
+                    raise UsageError(
+                        f"{self.label} plots {count} elements, more than {MAX_SLICE}",
+                        hint="take a smaller slice, or a step: ranges[0:360:30]",
+                    )
+
+    def label_of(self, i: int) -> str:
+        """The label of the ``i``-th element a slice yields."""
+        while len(self.labels) <= i:
+            k = len(self.labels)
+            sl = self.sliced_step.index
+            assert isinstance(sl, slice)
+            if self.absolute:
+                name = _step_text(self.sliced_step, (sl.start or 0) + k * (sl.step or 1))
+            else:
+                name = f"{_step_text(self.sliced_step)}[{k}]"
+            self.labels.append(f"{self.head}/{name}{self.tail}")
+        return self.labels[i]
+
+
+class Sampler:
+    """Samples the messages of one topic, of one type as one publisher or bag defines it.
+
+    ``paths``: field paths after the topic. ``stamp``: x is ``header.stamp`` instead of the
+    time the caller gives. ``keep``: a compiled ``--filter``, which sees ``topic``, ``m`` and
+    ``t`` as echo's and ``bag filter``'s do.
+    """
+
+    def __init__(
+        self,
+        store: TypeStore,
+        type_name: str,
+        topic: str,
+        paths: Sequence[str],
+        stamp: bool = False,
+        keep: Expression | None = None,
+    ) -> None:
+        self.codec = Codec.of(store)
+        self.type_name = type_name
+        self.topic = topic
+        empty = [p for p in paths if not p.strip("/")]
+        if empty:
+            raise UsageError(
+                f"give a field of {topic} to plot ({type_name})",
+                hint=f"for example {topic}/{_first_number(store, type_name)}",
+            )
+        self.columns = [_Column(self.codec, type_name, topic, p) for p in paths]
+        self.stamp: extract.Extractor | None = None
+        if stamp:
+            if not store.msg(type_name).has_header:
+                raise UsageError(
+                    f"--stamp: {topic} ({type_name}) has no header.stamp",
+                    hint="leave out --stamp to plot against receive (or bag) time",
+                )
+            self.stamp = extract.extractor(
+                self.codec, type_name, fieldpath.resolve(store, type_name, "header/stamp")
+            )
+        self.keep = keep
+        self.decode = self.codec.decoder(type_name) if keep and keep.needs_message else None
+        #: Messages whose array was too short for an index, so gave no sample.
+        self.missed = 0
+
+    def feed(self, frames: Sequence[Any], t: float, add: Sink) -> int:
+        """Sample messages that arrived at ``t`` (seconds); how many passed the filter.
+
+        Bytes that do not decode as the type says are a ``DecodeError`` naming both.
+        """
+        try:
+            return self._feed(frames, t, add)
+        except (DecodeError, *DECODE_ERRORS) as err:
+            raise DecodeError(
+                f"a message on {self.topic} does not decode as {self.type_name}: {err}"
+            ) from err
+
+    def _feed(self, frames: Sequence[Any], t: float, add: Sink) -> int:
+        stamp, keep, columns = self.stamp, self.keep, self.columns
+        fed = 0
+        for data in frames:
+            if keep is not None:
+                msg = self.decode(data, 0)[0] if self.decode is not None else None
+                if not keep(self.topic, msg, Time.from_sec(t)):
+                    continue
+            fed += 1
+            x = stamp(data) if stamp is not None else t
+            for col in columns:
+                try:
+                    value = col.extract(data)
+                except IndexError:
+                    self.missed += 1
+                    continue
+                if col.sliced:
+                    for i, v in enumerate(value[:MAX_SLICE]):
+                        add(col.label_of(i), x, v)
+                else:
+                    add(col.label, x, value)
+        return fed
+
+
+def _first_number(store: TypeStore, type_name: str, depth: int = 0) -> str:
+    """A path to the first numeric field of a type, for hints."""
+    for f in store.msg(type_name).fields:
+        if f.is_array or f.base == "std_msgs/Header":
+            continue
+        if f.base in extract.NUMERIC_TYPES:
+            return f.name
+        if depth < 8 and f.base not in ("string",) and store.has_msg(f.base):
+            inner = _first_number(store, f.base, depth + 1)
+            if inner:
+                return f"{f.name}/{inner}"
+    return ""

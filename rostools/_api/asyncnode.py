@@ -13,7 +13,7 @@ import inspect
 import logging
 import os
 import time
-from collections.abc import AsyncIterator, Awaitable, Callable
+from collections.abc import AsyncIterator, Awaitable, Callable, Coroutine
 from types import TracebackType
 from typing import Any
 
@@ -395,7 +395,9 @@ class AsyncNode:
         shared.listeners.append(sub)
         return sub
 
-    async def listen_raw(self, topic: str, callback: RawCallback) -> Callable[[], Awaitable[None]]:
+    async def listen_raw(
+        self, topic: str, callback: RawCallback
+    ) -> Callable[[], Coroutine[Any, Any, None]]:
         """Bytes, header and arrival time of each message, undecoded; returns the undo."""
         self._check_open()
         shared = await self._topic(topic)

@@ -18,7 +18,8 @@ from rostools.master.server import Master as CoreMaster
 class Master:
     """A ROS master and parameter server in this process.
 
-    ``port=0`` (the default) takes a free port. The parameters roscore sets (``/run_id``,
+    ``port=0`` (the default) takes a free port; ``host`` is where it listens and the
+    address its URI gives out. The parameters roscore sets (``/run_id``,
     ``/rosdistro``, ``/rosversion``) are set; no ``/rosout`` node is started.
     """
 
@@ -47,7 +48,7 @@ class Master:
 
     async def start_async(self) -> Master:
         """Start serving on the running event loop."""
-        core = CoreMaster(self.host, self._port)
+        core = CoreMaster(self.host, self._port, advertise=self.host)
         try:
             await core.start()
         except OSError as err:

@@ -1,0 +1,166 @@
+"""External processes under a test's master: rospy or roscpp nodes, or any command.
+
+Each runs in a session of its own and is stopped through its process group, whose id is
+its PID: SIGINT, then SIGTERM, then SIGKILL. Nothing is ever stopped by name, and what a
+launcher started (roslaunch, a shell) goes with it. Output goes to a file, so a child
+that writes a lot never blocks on a full pipe, and a failed test can show its tail.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import signal
+import subprocess
+import tempfile
+import time
+from collections.abc import Callable, Mapping, Sequence
+from pathlib import Path
+
+from rostools.errors import NotFoundError
+from rostools.rosgraph.masterapi import MasterProxy
+
+#: How long ``stop`` waits after SIGINT (rospy usually exits in a fraction of a second).
+STOP_WAIT = 3.0
+#: Lines of output a report shows.
+TAIL_LINES = 20
+
+
+class RosProcess:
+    """A child process in its own process group, its output in a file."""
+
+    def __init__(
+        self,
+        argv: Sequence[str],
+        env: Mapping[str, str] | None = None,
+        cwd: str | Path | None = None,
+        log: str | Path | None = None,
+    ) -> None:
+        self.argv = [str(a) for a in argv]
+        if log is None:
+            handle, name = tempfile.mkstemp(prefix="rostools-proc-", suffix=".log")
+            os.close(handle)
+            log = name
+        self.log = Path(log)
+        child_env = dict(os.environ if env is None else env)
+        child_env.setdefault("PYTHONUNBUFFERED", "1")  # a Python node's output reaches the log
+        with self.log.open("wb") as out:
+            self.popen = subprocess.Popen(
+                self.argv,
+                env=child_env,
+                cwd=cwd,
+                stdin=subprocess.DEVNULL,
+                stdout=out,
+                stderr=subprocess.STDOUT,
+                start_new_session=True,
+            )
+        self.pid = self.popen.pid
+        self.master_uri = child_env.get("ROS_MASTER_URI", "")
+
+    @property
+    def running(self) -> bool:
+        """Whether it has not exited."""
+        return self.popen.poll() is None
+
+    @property
+    def returncode(self) -> int | None:
+        """Its exit code, once it has exited (negative: the signal that ended it)."""
+        return self.popen.poll()
+
+    def output(self) -> str:
+        """Everything it has written so far (stdout and stderr together)."""
+        try:
+            return self.log.read_bytes().decode(errors="replace")
+        except OSError:
+            return ""
+
+    def tail(self, lines: int = TAIL_LINES) -> str:
+        """The last lines of its output."""
+        return "\n".join(self.output().splitlines()[-lines:])
+
+    def _signal(self, sig: int) -> None:
+        with contextlib.suppress(ProcessLookupError, PermissionError):
+            os.killpg(self.pid, sig)
+
+    def stop(self, timeout: float = STOP_WAIT) -> int:
+        """SIGINT, then SIGTERM, then SIGKILL to its process group, until it exits."""
+        for sig, wait in ((signal.SIGINT, timeout), (signal.SIGTERM, 1.0)):
+            if self.popen.poll() is not None:
+                break
+            self._signal(sig)
+            with contextlib.suppress(subprocess.TimeoutExpired):
+                self.popen.wait(wait)
+        self._signal(signal.SIGKILL)  # whatever it left behind in its group
+        return self.popen.wait()
+
+    def _check_alive(self, waiting_for: str) -> None:
+        if self.popen.poll() is not None:
+            raise AssertionError(
+                f"{self.argv[0]} exited with {self.popen.returncode} before {waiting_for};"
+                f" its output:\n{self.tail()}"
+            )
+
+    def _wait(self, found: Callable[[MasterProxy], bool], what: str, timeout: float) -> None:
+        master = MasterProxy(self.master_uri, "/rostools_testing", timeout=2.0)
+        deadline = time.monotonic() + timeout
+        while True:
+            self._check_alive(what)
+            if found(master):
+                return
+            if time.monotonic() > deadline:
+                raise AssertionError(
+                    f"{what} did not appear within {timeout:g} s;"
+                    f" {self.argv[0]}'s output:\n{self.tail()}"
+                )
+            time.sleep(0.02)
+
+    def wait_for_node(self, name: str, timeout: float = 10.0) -> RosProcess:
+        """Until the master knows node ``name``; fails early if the process exits."""
+
+        def known(master: MasterProxy) -> bool:
+            try:
+                master.lookup_node(name)
+            except NotFoundError:
+                return False
+            return True
+
+        self._wait(known, f"node {name}", timeout)
+        return self
+
+    def wait_for_topic(self, topic: str, timeout: float = 10.0) -> RosProcess:
+        """Until ``topic`` has a publisher; fails early if the process exits."""
+
+        def published(master: MasterProxy) -> bool:
+            pubs, _, _ = master.system_state()
+            return any(t == topic and nodes for t, nodes in pubs)
+
+        self._wait(published, f"a publisher of {topic}", timeout)
+        return self
+
+    def __enter__(self) -> RosProcess:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.stop()
+
+
+def start_process(
+    argv: Sequence[str],
+    *,
+    env: Mapping[str, str] | None = None,
+    cwd: str | Path | None = None,
+    wait_for_node: str | None = None,
+    wait_for_topic: str | None = None,
+    timeout: float = 10.0,
+) -> RosProcess:
+    """Start ``argv`` under ``ROS_MASTER_URI``, and wait for its node or topic if asked."""
+    proc = RosProcess(argv, env, cwd)
+    try:
+        if wait_for_node is not None:
+            proc.wait_for_node(wait_for_node, timeout)
+        if wait_for_topic is not None:
+            proc.wait_for_topic(wait_for_topic, timeout)
+    except BaseException:
+        proc.stop()
+        raise
+    return proc

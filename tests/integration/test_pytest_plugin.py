@@ -1,0 +1,161 @@
+"""The pytest plugin, run by pytester: isolation between tests (in one process and under
+pytest-xdist), the module marker, the helpers, recordings, processes, and failure reports."""
+
+from __future__ import annotations
+
+import json
+import os
+
+import pytest
+
+# pytester's in-process runs forget the modules a run imported. asyncio's C half cannot be
+# imported twice (a second asyncio's CancelledError is not the one its tasks raise), and the
+# API's loop should be one per process: both are imported here, before any run.
+import rostools._api.functions
+import rostools.testing.helpers  # noqa: F401
+
+pytest_plugins = ["pytester"]
+
+#: Each test leaves a topic and a parameter behind, and checks it sees no one else's.
+ISOLATION = """
+import json, os, sys
+import pytest
+import rostools
+
+def _check_and_leave(name, ros_master, ros_node):
+    from rostools.rosgraph.masterapi import MasterProxy
+    proxy = MasterProxy(ros_master.uri, "/check")
+    topics = {t for t, _ in proxy.system_state()[0]}
+    params = set(proxy.param_names())
+    assert not {t for t in topics if t.startswith("/left_by_")}, topics
+    assert not {p for p in params if p.startswith("/left_by_")}, params
+    assert os.environ["ROS_MASTER_URI"] == ros_master.uri
+    ros_node.publish(f"/left_by_{name}", {"data": name}, "std_msgs/String")
+    rostools.set_param(f"/left_by_{name}", 1)
+    assert rostools.get_param(f"/left_by_{name}") == 1
+    row = [name, os.environ.get("PYTEST_XDIST_WORKER", "-"), ros_master.uri]
+    with open(os.environ["SEEN_FILE"], "a") as f:
+        f.write(json.dumps(row) + "\\n")
+
+@pytest.mark.parametrize("name", ["a", "b", "c", "d"])
+def test_isolated(name, ros_master, ros_node):
+    _check_and_leave(name, ros_master, ros_node)
+"""
+
+
+def _seen(path: str) -> list[list[str]]:
+    with open(path) as f:
+        return [json.loads(line) for line in f]
+
+
+def test_each_test_has_its_own_master(
+    pytester: pytest.Pytester, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    seen = pytester.path / "seen.jsonl"
+    monkeypatch.setenv("SEEN_FILE", str(seen))
+    before = os.environ.get("ROS_MASTER_URI")
+    pytester.makepyfile(test_isolation=ISOLATION)
+    pytester.runpytest_inprocess("-p", "no:cacheprovider").assert_outcomes(passed=4)
+    assert len({uri for _, _, uri in _seen(str(seen))}) == 4
+    assert os.environ.get("ROS_MASTER_URI") == before  # restored after each test
+
+
+def test_isolation_holds_under_xdist(
+    pytester: pytest.Pytester, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    seen = pytester.path / "seen.jsonl"
+    monkeypatch.setenv("SEEN_FILE", str(seen))
+    pytester.makepyfile(test_isolation=ISOLATION)
+    result = pytester.runpytest_subprocess("-p", "xdist", "-n", "2", "-p", "no:cacheprovider")
+    result.assert_outcomes(passed=4)
+    rows = _seen(str(seen))
+    assert {worker for _, worker, _ in rows} == {"gw0", "gw1"}
+    assert len({uri for _, _, uri in rows}) == 4
+
+
+def test_the_module_marker_shares_one_master_and_helpers_measure(
+    pytester: pytest.Pytester,
+) -> None:
+    pytester.makepyfile(
+        test_shared="""
+        import sys, threading, time
+        import pytest
+        import rostools
+        from rostools.testing import assert_message, assert_topic_rate
+
+        pytestmark = pytest.mark.ros_master(scope="module")
+        URIS = []
+
+        def test_first(ros_master):
+            URIS.append(ros_master.uri)
+            rostools.set_param("/shared", "yes")
+
+        def test_second_sees_the_first(ros_master, ros_node, ros_record, ros_process):
+            URIS.append(ros_master.uri)
+            assert URIS[0] == URIS[1] and rostools.get_param("/shared") == "yes"
+            recording = ros_record("/ticks")
+            pub = ros_node.advertise("/ticks", "std_msgs/Int32")
+            stop = threading.Event()
+
+            def tick():
+                i = 0
+                while not stop.is_set():
+                    pub.publish(data=i)
+                    i += 1
+                    time.sleep(0.02)
+
+            thread = threading.Thread(target=tick)
+            thread.start()
+            try:
+                assert 40 <= assert_topic_rate("/ticks", 50, tolerance=0.2, within=5) <= 60
+                with pytest.raises(AssertionError, match=r"published at .* Hz, expected 10 Hz"):
+                    assert_topic_rate("/ticks", 10, tolerance=0.1, within=1.2)
+                assert assert_message("/ticks", lambda m: m.data > 5, timeout=2).data > 5
+            finally:
+                stop.set()
+                thread.join()
+            bag = recording.stop()
+            assert bag.name == "recording1.bag" and len(recording.messages()) > 20
+            child = ros_process(
+                [sys.executable, "-m", "rostools", "topic", "pub", "/num", "std_msgs/Int32", "7"],
+                wait_for_topic="/num",
+            )
+            assert assert_message("/num", {"data": 7}, timeout=5).data == 7
+            assert child.stop() == 0 and not child.running
+        """
+    )
+    result = pytester.runpytest_inprocess("-p", "no:cacheprovider")
+    result.assert_outcomes(passed=2)
+
+
+def test_a_failure_report_shows_the_graph(pytester: pytest.Pytester) -> None:
+    pytester.makepyfile(
+        test_fails="""
+        import sys
+        from rostools.testing import assert_message
+
+        def test_wrong_value(ros_master, ros_node, ros_process):
+            ros_node.set_param("/gain", 2)
+            ros_node.publish("/status", {"data": "ok"}, "std_msgs/String")
+            ros_node.subscribe("/status")
+            ros_process([sys.executable, "-c", "print('child says hi', flush=True); input()"])
+            assert_message("/status", {"data": "ready"}, timeout=0.5)
+        """
+    )
+    result = pytester.runpytest_inprocess("-p", "no:cacheprovider")
+    result.assert_outcomes(failed=1)
+    result.stdout.fnmatch_lines(
+        [
+            "*AssertionError: no message on /status matching the predicate within 0.5 s:"
+            " 1 came, the last: std_msgs/String(data='ok'); publishers: [[]'/pytest_*'[]]",
+            "*- ROS graph -*",
+            "master: http://127.0.0.1:*/",
+            "  /status [[]std_msgs/String[]]",
+            "    publishers: /pytest_*",
+            "parameters (4): /gain, /rosdistro, /rosversion, /run_id",
+            "last message of each subscribed topic:",
+            "  /status: std_msgs/String(data='ok')",
+            "process * -c print('child says hi'*",
+            "  | child says hi",
+        ]
+    )

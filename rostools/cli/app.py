@@ -17,12 +17,12 @@ REMAPPINGS: dict[str, str] = {}
 
 #: name -> one-line help. Each group is the Typer app ``rostools.cli.<name>.app``.
 GROUPS: dict[str, str] = {
-    "topic": "Topics: list, info, type, find, echo, hz, bw, delay, pub.",
+    "topic": "Topics: list, info, type, find, echo, hz, bw, delay, pub, plot.",
     "service": "Services: list, info, type, find, uri, args, call.",
     "param": "The parameter server: list, get, set, delete, load, dump.",
     "msg": "Message and service types: show, md5, list, package, packages, proto.",
     "node": "ROS nodes: list, info, ping, kill, machine, cleanup, and graph.",
-    "bag": "Bags (.bag and MCAP): record, play, info, filter, convert, recover, compress.",
+    "bag": "Bags (.bag and MCAP): record, play, info, filter, convert, cat, plot, and more.",
     "core": "Run the bundled master and parameter server (roscore).",
     "doctor": "Check this host's view of the ROS graph: master, names, nodes, sim time, clocks.",
     "demo": "Try rostools in ten seconds: a master, a talker, a service, a recording.",

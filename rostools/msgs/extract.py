@@ -243,15 +243,16 @@ def _compile(codec: Codec, element: Field, steps: tuple[Step, ...]) -> Callable[
     return gen.compile(element.base)
 
 
-def extractor(codec: Codec, type_name: str, path: FieldPath) -> Extractor:
+def extractor(codec: Codec, type_name: str, path: FieldPath, name: str = "") -> Extractor:
     """``extract(buf)``: the number (or list, for a slice) at ``path`` in one raw message.
 
     ``path`` must be resolved against ``type_name`` in ``codec``'s store and end in a number
-    (``NUMERIC_TYPES``); anything else is a ``UsageError`` naming the path.
+    (``NUMERIC_TYPES``); anything else is a ``UsageError`` naming the path (as ``name``, if
+    given: the topic and path the user wrote).
     """
     if path.result.base not in NUMERIC_TYPES or (path.result.is_array and not _sliced(path)):
         raise UsageError(
-            f"{path.text} is a {path.result.type}, not a number",
+            f"{name or path.text} is a {path.result.type}, not a number",
             hint="plot a numeric field, or slice an array of numbers: ranges[0:5]",
         )
     if not path.steps:

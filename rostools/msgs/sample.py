@@ -48,7 +48,8 @@ class _Column:
 
     def __init__(self, codec: Codec, type_name: str, topic: str, path: str) -> None:
         resolved = fieldpath.resolve(codec.store, type_name, path)
-        self.extract = extract.extractor(codec, type_name, resolved)
+        name = topic.rstrip("/") + "/" + path.lstrip("/")
+        self.extract = extract.extractor(codec, type_name, resolved, name)
         steps = resolved.steps
         slices = [i for i, s in enumerate(steps) if isinstance(s.index, slice)]
         if len(slices) > 1:

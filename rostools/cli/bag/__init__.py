@@ -1,8 +1,8 @@
 """``rostools bag``: rosbag for ``.bag`` and MCAP.
 
 The group is ``group.app``; each module adds its commands: ``files`` (info, filter, convert,
-recover/reindex, compress, decompress), ``workbench`` (merge, split), ``cat``, ``record``,
-``play`` and ``extras`` (attachments, metadata).
+recover/reindex, compress, decompress), ``workbench`` (merge, split), ``cat``, ``plot``,
+``record``, ``play`` and ``extras`` (attachments, metadata).
 """
 
 # isort: off
@@ -10,6 +10,7 @@ recover/reindex, compress, decompress), ``workbench`` (merge, split), ``cat``, `
 from rostools.cli.bag import files  # noqa: F401 - each module adds its commands to app
 from rostools.cli.bag import workbench  # noqa: F401
 from rostools.cli.bag import cat  # noqa: F401
+from rostools.cli.bag import plot  # noqa: F401
 from rostools.cli.bag import play, record  # noqa: F401
 from rostools.cli.bag import extras  # noqa: F401
 

@@ -8,7 +8,7 @@ app = typer.Typer(
     name="bag",
     help=(
         "Bags (.bag and MCAP): record, play, info, filter, convert, recover, reindex, "
-        "compress, decompress, merge, split, cat, doctor, attachments, metadata."
+        "compress, decompress, merge, split, cat, plot, doctor, attachments, metadata."
     ),
     no_args_is_help=True,
     add_completion=False,

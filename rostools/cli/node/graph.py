@@ -1,15 +1,23 @@
-"""``rostools node graph``: the graph as a tree of nodes and topics, or as Graphviz."""
+"""``rostools node graph``: the graph as a tree of nodes and topics, as Graphviz, or a picture.
+
+``-o graph.svg`` (or .png, .pdf) draws the DOT through Graphviz's ``dot``, rqt_graph's
+picture without a GUI. Without ``dot`` on PATH the DOT is written beside the name asked for
+(``graph.dot``) and the command says so in one line, exit 3 (not found), so a script knows
+the picture is missing and a person has the graph to render elsewhere.
+"""
 
 from __future__ import annotations
 
 import enum
 import sys
-from typing import TYPE_CHECKING, Annotated
+from pathlib import Path
+from typing import TYPE_CHECKING, Annotated, Final
 
 import typer
 
 from rostools.cli.common import master, settings
 from rostools.cli.output import Format, emit
+from rostools.errors import NotFoundError, RostoolsError, TimeoutExpired, UsageError
 
 if TYPE_CHECKING:
     from rostools.rosgraph.snapshot import RosGraph
@@ -17,6 +25,12 @@ if TYPE_CHECKING:
 
 from rostools.cli.node.group import app, warn
 from rostools.cli.quick.node import TOOL
+
+#: Pictures ``-o`` asks ``dot`` for, by file suffix; ``.dot`` and ``.gv`` are written as DOT.
+DOT_FORMATS: Final = ("svg", "png", "pdf")
+DOT_SUFFIXES: Final = (".dot", ".gv")
+#: Seconds ``dot`` may take to lay out the graph.
+DOT_TIMEOUT: Final = 60.0
 
 
 class GraphFormat(str, enum.Enum):
@@ -92,12 +106,26 @@ def graph_cmd(
             show_default=False,
         ),
     ] = None,
+    out: Annotated[
+        Path | None,
+        typer.Option(
+            "--output",
+            "-o",
+            help="Draw into a file through Graphviz's dot: .svg, .png, .pdf (.dot: the DOT).",
+            show_default=False,
+        ),
+    ] = None,
 ) -> None:
     """Nodes and the topics between them, like rqt_graph, from the master's registrations."""
     from rostools.rosgraph.snapshot import build_graph, system_state
 
+    if out is not None:
+        _picture_kind(out)  # a bad name fails before the master is asked
     proxy = master(ctx, TOOL)
     graph = build_graph(system_state(proxy), proxy.topic_types(), include_debug=all_)
+    if out is not None:
+        draw(graph_dot(graph) + "\n", out)
+        return
     chosen = fmt if fmt is not None else GraphFormat(settings(ctx).format.value)
     if chosen is GraphFormat.dot:
         sys.stdout.write(graph_dot(graph) + "\n")
@@ -108,3 +136,54 @@ def graph_cmd(
             warn("no nodes are registered")
     else:
         emit(Format(chosen.value), graph.to_data())
+
+
+def _picture_kind(path: Path) -> str | None:
+    """The format ``dot`` is asked for (None: write the DOT itself)."""
+    suffix = path.suffix.lower()
+    if suffix in DOT_SUFFIXES:
+        return None
+    if suffix.lstrip(".") not in DOT_FORMATS:
+        raise UsageError(
+            f"-o {path}: cannot tell the format from the name",
+            hint="end it in " + ", ".join(["." + k for k in DOT_FORMATS] + list(DOT_SUFFIXES)),
+        )
+    return suffix.lstrip(".")
+
+
+def draw(dot: str, path: Path) -> None:
+    """Write ``dot`` to ``path`` as the picture its suffix names, through Graphviz's ``dot``.
+
+    Without ``dot``, the DOT goes to ``path`` with a ``.dot`` suffix and ``NotFoundError``
+    says where.
+    """
+    import shutil
+    import subprocess
+
+    kind = _picture_kind(path)
+    program = shutil.which("dot") if kind is not None else None
+    if kind is None or program is None:
+        target = path if kind is None else path.with_suffix(".dot")
+        try:
+            target.write_text(dot)
+        except OSError as err:
+            raise NotFoundError(f"cannot write {target}: {err.strerror or err}") from err
+        if kind is None:
+            return
+        raise NotFoundError(
+            f"Graphviz's dot is not on PATH, so {path} was not drawn; the graph is in {target}",
+            hint=f"install Graphviz (apt install graphviz), or: dot -T{kind} {target} -o {path}",
+        )
+    try:
+        done = subprocess.run(
+            [program, f"-T{kind}", "-o", str(path)],
+            input=dot.encode(),
+            capture_output=True,
+            timeout=DOT_TIMEOUT,
+            check=False,
+        )
+    except subprocess.TimeoutExpired as err:
+        raise TimeoutExpired(f"dot did not lay out the graph within {DOT_TIMEOUT:g} s") from err
+    if done.returncode != 0:
+        why = done.stderr.decode(errors="replace").strip().splitlines()
+        raise RostoolsError(f"dot could not draw {path}: {why[0] if why else done.returncode}")

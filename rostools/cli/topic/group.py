@@ -6,7 +6,7 @@ import typer
 
 app = typer.Typer(
     name="topic",
-    help="Topics: list, info, type, find, echo, hz, bw, delay, pub.",
+    help="Topics: list, info, type, find, echo, hz, bw, delay, pub, plot.",
     no_args_is_help=True,
     add_completion=False,
 )

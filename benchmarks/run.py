@@ -25,6 +25,7 @@ MODULES = [
     "benchmarks.bench_completion",
     "benchmarks.bench_network",
     "benchmarks.bench_load",
+    "benchmarks.bench_fixture",
 ]
 
 

@@ -59,6 +59,24 @@ class InvalidDataError(RostoolsError):
     exit_code = 1
 
 
+class GoalAborted(RostoolsError):  # noqa: N818 - named after the goal state, as actionlib's
+    """An action server aborted the goal (``action send-goal``)."""
+
+    exit_code = 7
+
+
+class GoalRejected(RostoolsError):  # noqa: N818
+    """An action server rejected the goal."""
+
+    exit_code = 8
+
+
+class GoalPreempted(RostoolsError):  # noqa: N818
+    """The goal was canceled by someone else (PREEMPTED or RECALLED), or replaced."""
+
+    exit_code = 9
+
+
 #: Exit code, name and meaning, in the order the README lists them.
 EXIT_CODES: tuple[tuple[int, str, str], ...] = (
     (0, "ok", "success; also Ctrl-C on a command that runs until stopped (echo, hz, pub, ...)"),
@@ -68,5 +86,8 @@ EXIT_CODES: tuple[tuple[int, str, str], ...] = (
     (4, "unreachable", "the master or a peer node could not be contacted"),
     (5, "timeout", "a wait ran past its --timeout"),
     (6, "data loss", "data was lost: recovery could not salvage everything, or records dropped"),
+    (7, "goal aborted", "action send-goal: the action server aborted the goal"),
+    (8, "goal rejected", "action send-goal: the action server rejected the goal"),
+    (9, "goal preempted", "action send-goal: the goal was canceled by another client, or replaced"),
     (130, "interrupted", "Ctrl-C during a command that was not meant to run until stopped"),
 )

@@ -19,6 +19,7 @@ REMAPPINGS: dict[str, str] = {}
 GROUPS: dict[str, str] = {
     "topic": "Topics: list, info, type, find, echo, hz, bw, delay, pub, plot.",
     "service": "Services: list, info, type, find, uri, args, call.",
+    "action": "Actions (actionlib): list, info, send-goal, cancel, status.",
     "param": "The parameter server: list, get, set, delete, load, dump.",
     "msg": "Message and service types: show, md5, list, package, packages, proto.",
     "node": "ROS nodes: list, info, ping, kill, machine, cleanup, and graph.",

@@ -286,6 +286,29 @@ class Completer:
             return []
         return self._template(lambda store: store.srv(srv_type).request)
 
+    def actions(self) -> Candidates:
+        """Actions in the graph, with their types."""
+        from rostools.action.graph import find_actions
+
+        pubs, subs, _ = self._state()
+        types = dict(self._ask("getTopicTypes") or [])
+        return [(a.name, a.type) for a in find_actions(types, pubs, subs)]
+
+    def goal_template(self) -> Candidates:
+        """``action send-goal /fib <TAB>``: the goal as one line of YAML, quoted."""
+        if not self.positionals or self.cur:
+            return []
+        from rostools.action.graph import action_type
+
+        name = self.positionals[0]
+        goal = dict(self._ask("getTopicTypes") or []).get(
+            (name if name.startswith("/") else "/" + name) + "/goal", ""
+        )
+        stem = action_type(goal).removesuffix("Action")
+        if not stem:
+            return []
+        return self._template(lambda store: store.msg(stem + "Goal"))
+
     def _template(self, spec_of: Callable[[Any], Any]) -> Candidates:
         from rostools.errors import RostoolsError
         from rostools.msgs.describe import proto
@@ -312,6 +335,8 @@ _KINDS: dict[str, Callable[[Completer], Candidates]] = {
     "topic_type": Completer.topic_type,
     "message": Completer.message_template,
     "request": Completer.request_template,
+    "action": Completer.actions,
+    "goal": Completer.goal_template,
 }
 
 

@@ -63,6 +63,8 @@ KINDS: dict[tuple[str, ...] | str, str] = {
     ("topic", "msg_type"): "topic_type",
     ("topic", "args"): "message",
     ("service", "values"): "request",
+    ("action", "action"): "action",
+    ("action", "goal"): "goal",
     ("bag", "topics"): "",
     ("bag", "record", "topics"): "topic",
 }

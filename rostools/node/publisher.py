@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import struct
-from collections.abc import Hashable
+from collections.abc import Callable, Hashable
 from typing import TYPE_CHECKING
 
 from rostools.msgs.topictype import TopicType
@@ -41,6 +41,9 @@ class Publisher:
         self.contacted: set[str] = set()
         #: The subscribers the master listed when we advertised (their XML-RPC URIs).
         self.reported: list[str] = []
+        #: Called with each subscriber's header before it is checked: a publisher advertised
+        #: with md5sum ``*`` may learn its type here (``self.type``) from what the peer wants.
+        self.on_subscriber: Callable[[dict[str, str]], None] | None = None
 
     @property
     def subscriber_count(self) -> int:
@@ -75,6 +78,8 @@ class Publisher:
 
     def accept(self, fields: dict[str, str], conn: ServerConnection) -> Outbound | None:
         """A subscriber's header arrived: check it, answer, and start sending."""
+        if self.on_subscriber is not None:
+            self.on_subscriber(fields)
         problem = check_subscription(fields, self.topic, self.type.md5sum, self.type.type)
         if problem is not None:
             conn.write(error_header(problem))

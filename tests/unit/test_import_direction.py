@@ -19,7 +19,7 @@ LAYERS: list[set[str]] = [
     {"msgs", "rates", "series"},
     {"rosgraph"},
     {"node"},
-    {"master", "bag"},
+    {"master", "bag", "action"},
     {"cli", "_api"},
     {"testing"},
     {"__main__"},

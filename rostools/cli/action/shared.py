@@ -1,0 +1,71 @@
+"""What the action commands share: the action argument, finding an action, its types."""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Annotated, Any
+
+import typer
+
+from rostools.cli.common import FINITE
+from rostools.errors import NotFoundError
+from rostools.names import script_resolve
+
+if TYPE_CHECKING:
+    from rostools.action.graph import ActionInfo
+    from rostools.action.types import ActionTypes
+    from rostools.msgs.store import TypeStore
+    from rostools.rosgraph.masterapi import MasterProxy
+
+ActionArg = Annotated[
+    str, typer.Argument(help="Action name (its topics are NAME/goal, NAME/status, ...).")
+]
+WaitOpt = Annotated[
+    float | None,
+    typer.Option(
+        "--timeout",
+        click_type=FINITE,
+        help="Give up after this many seconds (exit 5).",
+        show_default=False,
+    ),
+]
+#: How long a command waits for the server to connect when no --timeout is given (s).
+SERVER_WAIT = 10.0
+
+
+def find_action(proxy: MasterProxy, action: str, *, need_server: bool = True) -> ActionInfo:
+    """The action ``action`` as the master sees it; NotFoundError when it is not there."""
+    from rostools.action.graph import find_actions
+
+    name = script_resolve(action, "rostools")
+    pubs, subs, _ = proxy.system_state()
+    found = {a.name: a for a in find_actions(proxy.topic_types(), pubs, subs)}
+    info = found.get(name)
+    if info is None:
+        raise NotFoundError(f"unknown action {name}", hint="see 'rostools action list'")
+    if need_server and not info.servers:
+        raise NotFoundError(f"no action server for {name}", hint="only clients are registered")
+    if not info.type:
+        raise NotFoundError(f"the master knows no type for {name}/goal")
+    return info
+
+
+def action_types(store: TypeStore, info: ActionInfo) -> ActionTypes:
+    """The types of an action, as far as the store has them."""
+    from rostools.action.types import ActionTypes
+
+    return ActionTypes(store, info.type)
+
+
+def plain(types: ActionTypes, suffix: str, message: Any) -> Any:
+    """A message of the action as plain data (echo's JSON and YAML)."""
+    from rostools.msgs.plain import to_plain
+    from rostools.msgs.text import message_type
+
+    return to_plain(types.codec, message_type(types.stem + suffix))(message)
+
+
+def text(types: ActionTypes, suffix: str, message: Any) -> str:
+    """A message of the action as rostopic echo prints it."""
+    from rostools.msgs.text import formatter, message_type
+
+    return str(formatter(types.codec, message_type(types.stem + suffix))(message))

@@ -60,7 +60,7 @@ class Series:
 
 
 class SeriesSet:
-    """The series of one plot, by label, in the order they first appeared.
+    """The series of one plot, by label, in the order declared, then of first samples.
 
     ``window``: seconds of x to keep behind the newest sample (None keeps everything).
     """
@@ -72,6 +72,11 @@ class SeriesSet:
         #: The largest x seen: the right edge of a rolling window.
         self.newest = -math.inf
         self.added = 0
+
+    def declare(self, labels: list[str]) -> None:
+        """Series to list in this order, before any sample: the order the user named them."""
+        for label in labels:
+            self.series.setdefault(label, Series())
 
     def add(self, label: str, x: float, y: float) -> None:
         """One sample; NaN and infinities are not drawn, and not kept."""

@@ -43,36 +43,48 @@ def _step_text(step: Step, index: int | None = None) -> str:
     return f"{step.name}[{':'.join(parts)}]"
 
 
-class _Column:
-    """One field path of a topic: its extractor and its labels."""
+class Labels:
+    """The labels of one field path of a topic, from its text alone (no type needed).
 
-    def __init__(self, codec: Codec, type_name: str, topic: str, path: str) -> None:
-        resolved = fieldpath.resolve(codec.store, type_name, path)
-        name = topic.rstrip("/") + "/" + path.lstrip("/")
-        self.extract = extract.extractor(codec, type_name, resolved, name)
-        steps = resolved.steps
+    A path without a slice has one label; a sliced one a label per element, by the
+    element's own index where that does not depend on the array's length
+    (``ranges[2:4]`` -> ``ranges[2]``, ``ranges[3]``), else by its place in the slice
+    (``ranges[-2:]`` -> ``ranges[-2:][0]``, ``ranges[-2:][1]``).
+    """
+
+    def __init__(self, topic: str, path: str) -> None:
+        steps = fieldpath.parse(path)
         slices = [i for i, s in enumerate(steps) if isinstance(s.index, slice)]
+        root = topic.rstrip("/")
+        self.label = root + "/" + "/".join(_step_text(s) for s in steps)
         if len(slices) > 1:
-            raise UsageError(f"{topic}/{path}: plot one slice per field path")
-        self.label = topic.rstrip("/") + "/" + "/".join(_step_text(s) for s in steps)
+            raise UsageError(f"{self.label}: plot one slice per field path")
         self.sliced = bool(slices)
         self.labels: list[str] = []
-        if slices:
-            at = slices[0]
-            self.sliced_step = steps[at]
-            self.head = "/".join([topic.rstrip("/"), *(_step_text(s) for s in steps[:at])])
-            self.tail = "".join("/" + _step_text(s) for s in steps[at + 1 :])
-            sl = steps[at].index
-            assert isinstance(sl, slice)
-            #: The elements' own indices when they do not depend on the array's length.
-            self.absolute = (sl.start is None or sl.start >= 0) and (sl.step or 1) > 0
-            if self.absolute and sl.stop is not None and sl.stop >= 0:
-                count = len(range(sl.start or 0, sl.stop, sl.step or 1))
-                if count > MAX_SLICE:
-                    raise UsageError(
-                        f"{self.label} plots {count} elements, more than {MAX_SLICE}",
-                        hint="take a smaller slice, or a step: ranges[0:360:30]",
-                    )
+        #: How many elements the slice gives, when the path alone says (else None).
+        self.count: int | None = None
+        if not slices:
+            return
+        at = slices[0]
+        self.sliced_step = steps[at]
+        self.head = "/".join([root, *(_step_text(s) for s in steps[:at])])
+        self.tail = "".join("/" + _step_text(s) for s in steps[at + 1 :])
+        sl = steps[at].index
+        assert isinstance(sl, slice)
+        self.absolute = (sl.start is None or sl.start >= 0) and (sl.step or 1) > 0
+        if self.absolute and sl.stop is not None and sl.stop >= 0:
+            self.count = len(range(sl.start or 0, sl.stop, sl.step or 1))
+            if self.count > MAX_SLICE:
+                raise UsageError(
+                    f"{self.label} plots {self.count} elements, more than {MAX_SLICE}",
+                    hint="take a smaller slice, or a step: ranges[0:360:30]",
+                )
+
+    def known(self) -> list[str]:
+        """The labels the path alone gives, in order (a slice's, where its length is known)."""
+        if not self.sliced:
+            return [self.label]
+        return [self.label_of(i) for i in range(self.count or 0)]
 
     def label_of(self, i: int) -> str:
         """The label of the ``i``-th element a slice yields."""
@@ -86,6 +98,16 @@ class _Column:
                 name = f"{_step_text(self.sliced_step)}[{k}]"
             self.labels.append(f"{self.head}/{name}{self.tail}")
         return self.labels[i]
+
+
+class _Column(Labels):
+    """One field path of a topic: its extractor and its labels."""
+
+    def __init__(self, codec: Codec, type_name: str, topic: str, path: str) -> None:
+        super().__init__(topic, path)
+        resolved = fieldpath.resolve(codec.store, type_name, path)
+        name = topic.rstrip("/") + "/" + path.lstrip("/")
+        self.extract = extract.extractor(codec, type_name, resolved, name)
 
 
 class Sampler:

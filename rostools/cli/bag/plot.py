@@ -70,7 +70,7 @@ def plot_cmd(
         keep = compile_expression(filter_expr)
     plot = SeriesSet()
     with open_bag(bag) as reader:
-        paths = _topics(reader, fields)
+        paths = _topics(reader, fields, plot)
         require_ros1(reader, "bag plot", list(paths))
         samplers = _samplers(reader, paths, stamp, keep)
         lo, hi = time_window([bag], start, end)
@@ -97,9 +97,10 @@ def plot_cmd(
     sys.stdout.write(picture)
 
 
-def _topics(reader: BagReader, fields: list[str]) -> dict[str, list[str]]:
-    """The field paths asked for, by the bag topic each starts with."""
+def _topics(reader: BagReader, fields: list[str], plot: SeriesSet) -> dict[str, list[str]]:
+    """The field paths asked for, by the bag topic each starts with; their series declared."""
     from rostools.cli.settings import type_store
+    from rostools.msgs.sample import Labels
     from rostools.names import script_resolve
     from rostools.rosgraph.topics import split_field
 
@@ -115,6 +116,7 @@ def _topics(reader: BagReader, fields: list[str]) -> dict[str, list[str]]:
                 hint="its topics are: " + ", ".join(sorted(types)),
             )
         paths.setdefault(ref.topic, []).append(ref.field)
+        plot.declare(Labels(ref.topic, ref.field).known())
     return paths
 
 

@@ -158,7 +158,7 @@ def plot(
 
 async def _subscribe(node: Node, stop: asyncio.Event, live: _Live, deadline: float | None) -> bool:
     """Find each topic, check its paths where the type is known, subscribe; False if stopped."""
-    from rostools.msgs.sample import Sampler
+    from rostools.msgs.sample import Labels, Sampler
 
     refs = []
     for name in live.names:
@@ -166,6 +166,7 @@ async def _subscribe(node: Node, stop: asyncio.Event, live: _Live, deadline: flo
         if ref is None:
             return False
         live.paths.setdefault(ref.topic, []).append(ref.field)
+        live.plot.declare(Labels(ref.topic, ref.field).known())
         refs.append(ref)
     for ref in refs:  # a typo fails now, not at the first message
         if ref.type and live.store.has_msg(ref.type):

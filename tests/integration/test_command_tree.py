@@ -35,6 +35,11 @@ RECIPES: dict[str, list[str]] = {
     "topic bw": ["/chatter_demo", "--timeout", "1.5"],
     "topic delay": ["/stamped", "--timeout", "1.5"],
     "topic plot": ["/stamped/point/x", "-n", "2"],
+    "action list": ["-t"],
+    "action info": ["/fib"],
+    "action send-goal": ["/fib", "{goal: 2}", "--feedback"],
+    "action cancel": ["/fib", "--all"],
+    "action status": ["/fib", "--once"],
     "service list": ["-n"],
     "service info": ["/add_two_ints"],
     "service type": ["/add_two_ints"],
@@ -125,11 +130,13 @@ def graph(tmp_path_factory: pytest.TempPathFactory) -> Iterator[tuple[dict[str, 
         ),
         Proc([*pub, "/victim_topic", "std_msgs/Empty", "{}", "__name:=victim"], env=env),
         Proc([sys.executable, str(ROOT / "tests/support/rt_nodes/rt_services.py")], env=env),
+        Proc([sys.executable, str(ROOT / "tests/support/rt_nodes/rt_actions.py")], env=env),
     ]
     try:
         assert run_cli("param", "set", "/demo", "{a: 1, b: [x, y]}", env=env).returncode == 0
         wait_for(lambda: len(run_cli("topic", "list", env=env).stdout.split()) >= 5, 20, "graph")
         wait_for(lambda: "/add_two_ints" in run_cli("service", "list", env=env).stdout, 20, "srv")
+        wait_for(lambda: "/fib" in run_cli("action", "list", env=env).stdout, 20, "action")
         write_sample(tmp / "sample.bag", 400)
         yield env, tmp
     finally:

@@ -468,8 +468,10 @@ class AsyncNode:
                 if not srv_type:
                     raise RostoolsError(f"service {name} did not say its type")
             req, _, md5 = messages.service_types(srv_type)
+            # a connection per call, as rospy's ServiceProxy: a server restarted elsewhere
+            # is found again by the next call
             client = self._clients[name] = ServiceClient(
-                self.core, name, ServiceType(srv_type, md5), persistent=True
+                self.core, name, ServiceType(srv_type, md5)
             )
         assert client.type is not None
         req, resp, _ = messages.service_types(client.type.type)

@@ -55,19 +55,26 @@ class Subscription:
     A callback runs on the subscription's own thread, one message at a time, in order.
     """
 
-    def __init__(self, inner: AsyncSubscription, callback: Callback | None = None) -> None:
+    def __init__(
+        self,
+        inner: AsyncSubscription,
+        pending: queue.SimpleQueue[Any] | None = None,
+        callback: Callback | None = None,
+    ) -> None:
+        """``pending``: where the loop queues messages for ``callback``, which a thread calls."""
         self.inner = inner
         self.topic = inner.topic
         self._thread: threading.Thread | None = None
-        self._queue: queue.SimpleQueue[Any] = queue.SimpleQueue()
-        if callback is not None:
-            inner.callback = self._queue.put
+        self._queue = pending
+        if pending is not None and callback is not None:
             self._thread = threading.Thread(
-                target=self._dispatch, args=(callback,), name=f"rostools {self.topic}", daemon=True
-            )
+                target=self._dispatch, args=(callback,), name=f"rostools {self.topic}",
+                daemon=True,
+            )  # fmt: skip
             self._thread.start()
 
     def _dispatch(self, callback: Callback) -> None:
+        assert self._queue is not None
         while (msg := self._queue.get()) is not _STOP:
             try:
                 callback(msg)
@@ -101,7 +108,7 @@ class Subscription:
         """Stop receiving."""
         if not self.inner.closed:
             loop.run(self.inner.close())
-        if self._thread is not None:
+        if self._thread is not None and self._queue is not None:
             self._queue.put(_STOP)
             if threading.current_thread() is not self._thread:
                 self._thread.join(timeout=5)
@@ -195,8 +202,14 @@ class Node:
         queue_size: int = 1000,
     ) -> Subscription:
         """Receive ``topic``: with ``callback``, or iterate the returned subscription."""
-        inner = loop.run(self.aio.subscribe(topic, None, msg_type, queue_size=queue_size))
-        return Subscription(inner, callback)
+        if callback is None:
+            return Subscription(
+                loop.run(self.aio.subscribe(topic, None, msg_type, queue_size=queue_size))
+            )
+        # Messages are queued from the first one on; the thread that calls back starts after.
+        pending: queue.SimpleQueue[Any] = queue.SimpleQueue()
+        inner = loop.run(self.aio.subscribe(topic, pending.put, msg_type, queue_size=queue_size))
+        return Subscription(inner, pending, callback)
 
     def wait_for_message(
         self, topic: str, timeout: float | None = None, msg_type: str | None = None

@@ -92,11 +92,13 @@ def open_writer(
     chunk_size: int | None = None,
     *,
     overwrite: bool = False,
+    profile: str = "ros1",
 ) -> BagWriter:
     """Create a ``.bag`` or MCAP file (format from the name unless given).
 
     ``compression``: none, bz2 or lz4 for ``.bag`` (default none, as ``rosbag record``);
     zstd, lz4 or none for MCAP (default zstd). ``chunk_size`` in bytes (default 768 KiB).
+    ``profile``: the MCAP header's profile (see ``mcap_profile``).
     """
     kind = format or format_for_name(path)
     if kind not in FORMATS:
@@ -115,6 +117,7 @@ def open_writer(
             compression=compression,
             chunk_size=chunk_size or DEFAULT_CHUNK_SIZE,
             overwrite=overwrite,
+            profile=profile,
         )
     from rostools.bag.rosbag1_writer import Bag1Writer
 
@@ -162,6 +165,14 @@ def latched_before(
         if conn.latching:
             last[(conn.topic, conn.callerid)] = (conn, t, data)
     return sorted(last.values(), key=lambda m: m[1])
+
+
+def mcap_profile(readers: Iterable[BagReader], topics: Collection[str] | None = None) -> str:
+    """The profile of an MCAP copy of these readers' topics: ``ros2`` when all are CDR."""
+    encodings = {
+        c.encoding for r in readers for c in r.connections if topics is None or c.topic in topics
+    }
+    return "ros2" if encodings == {"cdr"} else "ros1"
 
 
 def require_ros1(reader: BagReader, what: str, topics: Collection[str] | None = None) -> None:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import mmap
 import os
 from abc import ABC, abstractmethod
@@ -251,21 +252,19 @@ class BagWriter(ABC):
         absent: frozenset[str] = frozenset(),
     ) -> Connection:
         """Declare a connection; messages are written against the returned one."""
-        self._check_open()
-        conn = Connection(
-            id=len(self._connections),
-            topic=topic,
-            type=type,
-            md5sum=md5sum,
-            definition=definition,
-            callerid=callerid,
-            latching=latching,
-            extra=dict(extra or {}),
-            absent=absent,
+        return self.copy_connection(
+            Connection(
+                id=0,
+                topic=topic,
+                type=type,
+                md5sum=md5sum,
+                definition=definition,
+                callerid=callerid,
+                latching=latching,
+                extra=extra or {},
+                absent=absent,
+            )
         )
-        self._declare(conn)
-        self._connections.append(conn)
-        return conn
 
     @abstractmethod
     def _declare(self, conn: Connection) -> None:
@@ -346,16 +345,11 @@ class BagWriter(ABC):
 
     def copy_connection(self, conn: Connection) -> Connection:
         """Declare a connection identical to ``conn`` (from another bag) in this file."""
-        return self.add_connection(
-            conn.topic,
-            conn.type,
-            conn.md5sum,
-            conn.definition,
-            callerid=conn.callerid,
-            latching=conn.latching,
-            extra=conn.extra,
-            absent=conn.absent,
-        )
+        self._check_open()
+        copy = dataclasses.replace(conn, id=len(self._connections), extra=dict(conn.extra))
+        self._declare(copy)
+        self._connections.append(copy)
+        return copy
 
     def __enter__(self) -> BagWriter:
         return self

@@ -12,6 +12,7 @@ Library code: no printing.
 from __future__ import annotations
 
 from collections import Counter
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -41,8 +42,15 @@ class Checkup:
         return not self.findings
 
 
-def doctor(path: str | Path) -> Checkup:
-    """Check ``path``; never raises for what is in the file, only reports it."""
+#: Messages read between two calls of ``doctor``'s progress callback.
+PROGRESS_STEP = 4096
+
+
+def doctor(path: str | Path, progress: Callable[[int, int], None] | None = None) -> Checkup:
+    """Check ``path``; never raises for what is in the file, only reports it.
+
+    ``progress(done, total)`` is called as messages are read (total: the index's count).
+    """
     from rostools.bag.access import open_bag
 
     report = Checkup(Path(path))
@@ -53,7 +61,7 @@ def doctor(path: str | Path) -> Checkup:
         return report
     with reader:
         _connections(reader, report)
-        _messages(reader, report)
+        _messages(reader, report, progress)
         for note in reader.notes:
             report.findings.append(note)
             report.recover_helps = True
@@ -113,9 +121,13 @@ def _decoder(conn: Connection, ros1: set[int]) -> Any:
     return Codec.of(TypeStore([]).with_definition(conn.type, conn.definition)).decoder(conn.type)
 
 
-def _messages(reader: BagReader, report: Checkup) -> None:
+def _messages(
+    reader: BagReader, report: Checkup, progress: Callable[[int, int], None] | None
+) -> None:
     """Read every message; decode those of ROS 1 types; count what does not fit its type."""
     ros1 = _ros1(reader)
+    total = _indexed(reader) or 0
+    done = 0
     decoders: dict[int, Any] = {}
     counts: Counter[int] = Counter()
     short: Counter[int] = Counter()
@@ -124,6 +136,9 @@ def _messages(reader: BagReader, report: Checkup) -> None:
     try:
         for conn, _, data in reader.messages():
             counts[conn.id] += 1
+            done += 1
+            if progress is not None and done % PROGRESS_STEP == 0:
+                progress(done, max(total, done))
             decode = decoders.get(conn.id, False)
             if decode is False:
                 decode = decoders[conn.id] = _decoder(conn, ros1)
@@ -147,6 +162,8 @@ def _messages(reader: BagReader, report: Checkup) -> None:
     for cid, n in long.items():
         c = conns[cid]
         report.findings.append(f"{n} message(s) on {c.topic} are longer than {c.type} says")
+    if progress is not None:
+        progress(done, done)
     try:
         indexed = reader.info().message_count
     except RostoolsError as err:
@@ -156,3 +173,11 @@ def _messages(reader: BagReader, report: Checkup) -> None:
         report.findings.append(
             f"the index counts {indexed} messages but {report.messages} were read"
         )
+
+
+def _indexed(reader: BagReader) -> int | None:
+    """The index's message count, or None when the file has no readable summary."""
+    try:
+        return reader.info().message_count
+    except RostoolsError:
+        return None

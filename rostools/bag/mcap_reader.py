@@ -544,4 +544,6 @@ def channel_connection(channel: fmt.Channel, schemas: Mapping[int, fmt.Schema]) 
         latching=latching in ("true", "1"),
         extra=meta,
         absent=frozenset() if latching is not None else frozenset({"latching"}),
+        encoding=channel.message_encoding,
+        schema_encoding=schema.encoding if schema else "",
     )

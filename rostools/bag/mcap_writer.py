@@ -62,7 +62,7 @@ class McapWriter(BagWriter):
         self.compression = compression
         self.chunk_size = chunk_size
         self._compress = compress
-        self._schema_ids: dict[tuple[str, str], int] = {}
+        self._schema_ids: dict[tuple[str, str, str], int] = {}
         self._schema_records: list[bytes] = []
         self._channel_records: list[bytes] = []
         self._counts: list[int] = []
@@ -89,15 +89,16 @@ class McapWriter(BagWriter):
         """A channel (and its schema, once per definition), written at once."""
         if len(self._connections) >= MAX_CHANNELS:
             raise BagUsageError(f"an MCAP file holds at most {MAX_CHANNELS} channels")
-        key = (conn.type, conn.definition)
-        schema_id = self._schema_ids.get(key)
+        key = (conn.type, conn.definition, conn.schema_encoding)
+        schema_id = 0 if not conn.schema_encoding else self._schema_ids.get(key)
         if schema_id is None:
             schema_id = self._schema_ids[key] = len(self._schema_records) + 1
-            record = fmt.encode_schema(schema_id, conn.type, "ros1msg", conn.definition.encode())
+            definition = conn.definition.encode()
+            record = fmt.encode_schema(schema_id, conn.type, conn.schema_encoding, definition)
             self._schema_records.append(record)
             self._sink.write(record)
         meta = channel_metadata(conn)
-        record = fmt.encode_channel(conn.id, schema_id, conn.topic, "ros1", meta)
+        record = fmt.encode_channel(conn.id, schema_id, conn.topic, conn.encoding, meta)
         self._channel_records.append(record)
         self._sink.write(record)
         self._counts.append(0)
@@ -295,8 +296,13 @@ class McapWriter(BagWriter):
 
 
 def channel_metadata(conn: Connection) -> dict[str, str]:
-    """The ROS 1 profile's channel metadata for a connection (plus its extra header fields)."""
+    """The ROS 1 profile's channel metadata for a connection (plus its extra header fields).
+
+    A channel that is not ROS 1 (ROS 2 CDR, copied as it is) keeps its own metadata alone.
+    """
     meta = dict(conn.extra)
+    if conn.encoding != "ros1":
+        return meta
     if conn.callerid:
         meta["callerid"] = conn.callerid
     if "latching" not in conn.absent:

@@ -14,7 +14,14 @@ from operator import itemgetter
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from rostools.bag.access import copy_extras, format_for_name, open_bag, open_writer, require_ros1
+from rostools.bag.access import (
+    copy_extras,
+    format_for_name,
+    mcap_profile,
+    open_bag,
+    open_writer,
+    require_ros1,
+)
 from rostools.bag.base import BagReader, BagWriter, Targets
 from rostools.bag.model import BagUsageError, Connection
 from rostools.bag.ops import PROGRESS_EVERY, CopyReport, Progress, compile_filter
@@ -95,12 +102,16 @@ def merge(
             raise BagUsageError(f"cannot use the same file as input and output: {path}")
     with contextlib.ExitStack() as stack:
         readers = [stack.enter_context(open_bag(p)) for p in paths]
-        for reader in readers:
-            require_ros1(reader, "bag merge", topics)
+        kind = format_for_name(dst)
+        if kind != "mcap" or expression:  # an MCAP output takes any encoding as it is
+            for reader in readers:
+                require_ros1(reader, "bag merge", topics)
         check_types(readers, renames, topics)
         total = sum(r.info().message_count for r in readers)
-        kind = format_for_name(dst)
-        writer = open_writer(dst, kind, compression, chunk_size, overwrite=overwrite)
+        profile = mcap_profile(readers, topics)
+        writer = open_writer(
+            dst, kind, compression, chunk_size, overwrite=overwrite, profile=profile
+        )
         try:
             seen: dict[Key, Connection] = {}
             streams = [

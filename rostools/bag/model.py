@@ -36,6 +36,10 @@ class Connection:
     latching: bool = False
     extra: Mapping[str, str] = field(default_factory=dict, hash=False)
     absent: frozenset[str] = frozenset()
+    #: How the messages are serialised (MCAP's message encoding: ``cdr`` for ROS 2) and how
+    #: the definition is written (its schema encoding; empty for a channel with no schema).
+    encoding: str = "ros1"
+    schema_encoding: str = "ros1msg"
 
     def header(self) -> dict[str, str]:
         """The connection header as ROS 1 writes it (``latching`` as "1"/"0")."""

@@ -17,6 +17,7 @@ from rostools.bag.access import (
     copy_extras,
     format_for_name,
     latched_before,
+    mcap_profile,
     open_bag,
     open_writer,
     require_ros1,
@@ -242,9 +243,12 @@ def _copy(
         raise BagUsageError(f"cannot use the same file as input and output: {src}")
     kind = format or format_for_name(dst)
     with open_bag(src) as reader:
-        to_ros1 = _ros2_to_ros1(reader, kind, topics)
+        to_ros1 = _ros2_to_ros1(reader, kind, topics, keep is not None)
         total = reader.info().message_count
-        writer = open_writer(dst, kind, compression, chunk_size, overwrite=overwrite)
+        profile = mcap_profile([reader], topics)
+        writer = open_writer(
+            dst, kind, compression, chunk_size, overwrite=overwrite, profile=profile
+        )
         try:
             stream = reader.messages(topics=topics, start=start, end=end)
             if latched and start is not None:
@@ -282,10 +286,19 @@ def _copy(
     )
 
 
-def _ros2_to_ros1(reader: BagReader, kind: str, topics: Collection[str] | None) -> ToRos1 | None:
-    """ROS 2 CDR into a .bag: its ROS 1 twins; anything else not ROS 1 is refused in one line."""
+def _ros2_to_ros1(
+    reader: BagReader, kind: str, topics: Collection[str] | None, decodes: bool
+) -> ToRos1 | None:
+    """ROS 2 CDR into a .bag: its ROS 1 twins; anything else not ROS 1 is refused in one line.
+
+    An MCAP output takes every encoding as it is, unless a filter expression ``decodes``.
+    """
     from rostools.bag.ros2 import ToRos1, cdr_connections
 
+    if kind == "mcap":
+        if decodes:
+            require_ros1(reader, "a filter expression", topics)
+        return None
     cdr = cdr_connections(reader, topics) if kind == "bag" else set()
     if not cdr:
         require_ros1(reader, f"writing to .{kind}", topics)

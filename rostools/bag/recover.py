@@ -11,7 +11,14 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
-from rostools.bag.access import copy_extras, format_for_name, open_bag, open_writer, require_ros1
+from rostools.bag.access import (
+    copy_extras,
+    format_for_name,
+    mcap_profile,
+    open_bag,
+    open_writer,
+    require_ros1,
+)
 from rostools.bag.base import Targets
 from rostools.bag.model import BagDataLossError, BagUsageError, CompressionStats
 
@@ -64,7 +71,9 @@ def recover(
     if dst.exists() and src.resolve() == dst.resolve():
         raise BagUsageError(f"cannot recover {src} into itself; give another output file")
     with open_bag(src) as reader:
-        require_ros1(reader, f"writing to .{format_for_name(dst)}")
+        kind = format_for_name(dst)
+        if kind != "mcap":  # an MCAP output takes any encoding as it is
+            require_ros1(reader, f"writing to .{kind}")
         reader.skip_damaged = True
         info = reader.info()
         writer = open_writer(
@@ -72,6 +81,7 @@ def recover(
             compression=compression or _same_compression(info.format, dst, info.compression),
             chunk_size=chunk_size,
             overwrite=overwrite,
+            profile=mcap_profile([reader]),
         )
         try:
             out = Targets(writer, reader.connections)

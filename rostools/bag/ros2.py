@@ -130,7 +130,7 @@ class ToRos1:
                 store = self.codec.store
                 twin = dataclasses.replace(
                     conn, type=name, md5sum=store.md5(name), definition=store.full_text(name),
-                    extra={}, absent=frozenset(),
+                    extra={}, absent=frozenset(), encoding="ros1", schema_encoding="ros1msg",
                 )  # fmt: skip
             except RostoolsError:
                 raise UnsupportedBagError(

@@ -77,6 +77,10 @@ class Bag1Writer(BagWriter):
 
     def _declare(self, conn: Connection) -> None:
         """Written into the chunk of its first message; here only its record prefix."""
+        if conn.encoding != "ros1":  # callers convert or refuse first; never write CDR bytes
+            raise UnsupportedBagError(
+                f"{conn.topic} holds {conn.encoding} messages; a .bag holds only ROS 1 ones"
+            )
         # Every message record header of this connection: conn, op, then time (sorted).
         self._prefixes.append(
             _U32.pack(38)

@@ -13,7 +13,14 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from rostools.bag.access import file_name, format_for_name, open_bag, open_writer, require_ros1
+from rostools.bag.access import (
+    file_name,
+    format_for_name,
+    mcap_profile,
+    open_bag,
+    open_writer,
+    require_ros1,
+)
 from rostools.bag.base import BagWriter, Targets
 from rostools.bag.model import BagUsageError, Connection
 from rostools.bag.ops import PROGRESS_EVERY, Progress
@@ -116,7 +123,9 @@ def split(
         raise BagUsageError(f"{first} exists (use -f to overwrite)")
     report = SplitReport(src)
     with open_bag(src) as reader:
-        require_ros1(reader, "bag split")
+        if kind != "mcap":  # an MCAP output takes any encoding as it is
+            require_ros1(reader, "bag split")
+        profile = mcap_profile([reader])
         info = reader.info()
         splitter = _Splitter(cut, info.start_ns or 0)
         latched: dict[int, tuple[Connection, memoryview]] = {}
@@ -133,7 +142,7 @@ def split(
                     part = Part(file_name(base, True, len(report.parts)), start_ns=t)
                     report.parts.append(part)
                     writer = open_writer(part.path, kind, compression, chunk_size,
-                                         overwrite=overwrite)  # fmt: skip
+                                         overwrite=overwrite, profile=profile)  # fmt: skip
                     targets = Targets(writer, (), renames)
                     part_bytes = 0
                     if repeat_latched and len(report.parts) > 1:

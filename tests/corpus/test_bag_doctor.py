@@ -48,6 +48,15 @@ def test_cli_lines_and_exit_codes() -> None:
     assert [d["clean"] for d in data] == [True, False] and data[1]["recover_helps"]
 
 
+@needs_corpus
+def test_progress_is_reported_as_messages_are_read(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setattr("rostools.bag.doctor.PROGRESS_STEP", 100)
+    calls: list[tuple[int, int]] = []
+    report = doctor(CORPUS / "ros1" / "roswire" / "example.bag", lambda *a: calls.append(a))
+    assert calls[0] == (100, 1038) and calls[-1] == (1038, 1038) and len(calls) == 11
+    assert report.messages == 1038
+
+
 def _mutants(data: bytes, rng: random.Random, lo: int, hi: int) -> list[tuple[str, bytes]]:
     """Truncated copies, and copies with a flipped byte or two swapped blocks in [lo, hi)."""
     out = [(f"cut at {n}", data[:n]) for n in sorted(rng.sample(range(64, len(data)), 6))]

@@ -11,7 +11,7 @@ from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
-from rostools.cli.bag.files import BagArg, ForceOpt
+from rostools.cli.bag.files import BagArg, ForceOpt, Progress, QuietOpt
 from rostools.cli.bag.group import app
 from rostools.cli.common import FormatOpt, output_format
 from rostools.cli.output import Format, emit
@@ -111,12 +111,18 @@ def doctor(
     ctx: typer.Context,
     bags: Annotated[list[Path], typer.Argument(help="One or more .bag or .mcap files.")],
     fmt: FormatOpt = None,
+    quiet: QuietOpt = False,
 ) -> None:
     """Check bags without changing them: one line per finding; exit 1 if there is any."""
     from rostools.bag.doctor import doctor as check
 
     out = output_format(ctx, fmt)
-    reports = [check(path) for path in bags]
+    reports = []
+    for path in bags:
+        # A bar on a terminal only: the report is one document, so no progress events in it.
+        bar = Progress(f"doctor {path.name}", Format.text, quiet)
+        reports.append(check(path, bar))
+        bar.done()
     if out is Format.text:
         for r in reports:
             if r.clean:

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import asyncio
 import os
+import sys
 import threading
 import time
 from collections.abc import Iterator
@@ -160,3 +161,13 @@ def test_a_blocking_call_on_the_api_loop_is_refused(master: Master) -> None:
 
     with pytest.raises(UsageError, match="would wait forever"):
         loop.run(inside())
+
+
+def test_a_process_that_exits_fails_the_wait_at_once(env_master: Master) -> None:
+    from rostools.testing import start_process
+
+    began = time.monotonic()
+    code = "import sys; print('no ROS here'); sys.exit(3)"
+    with pytest.raises(AssertionError, match=r"exited with 3 before node /x;.*\n.*no ROS here"):
+        start_process([sys.executable, "-c", code], wait_for_node="/x", timeout=30)
+    assert time.monotonic() - began < 10

@@ -1,6 +1,6 @@
-"""A rospy actionlib SimpleActionClient of /fib (actionlib/TestAction). Run with the system python.
+"""A rospy actionlib SimpleActionClient (actionlib/TestAction). Run with the system python.
 
-action_client.py N...: for each N, send the goal, count its feedback and print
+action_client.py NAME N...: for each N, send the goal to NAME, count its feedback and print
 ``result N <state name> <result> <feedback count> <text>``; a goal 1000 is canceled after
 its third feedback.
 """
@@ -15,12 +15,12 @@ from actionlib_msgs.msg import GoalStatus
 NAMES = {getattr(GoalStatus, n): n for n in dir(GoalStatus) if n.isupper()}
 
 rospy.init_node("fib_client")
-client = actionlib.SimpleActionClient("fib", TestAction)
+client = actionlib.SimpleActionClient(sys.argv[1], TestAction)
 if not client.wait_for_server(rospy.Duration(20)):
     print("no server", flush=True)
     sys.exit(1)
 print("ready", flush=True)
-for arg in sys.argv[1:]:
+for arg in sys.argv[2:]:
     n = int(arg)
     seen = []
 

@@ -1,4 +1,6 @@
-"""A rospy actionlib SimpleActionServer on /fib (actionlib/TestAction). Run with the system python.
+"""A rospy actionlib SimpleActionServer (actionlib/TestAction). Run with the system python.
+
+action_server.py [NAME]: serves NAME (default fib).
 
 The goal's number says what happens, as in rt_nodes/rt_actions.py: n > 0 publishes feedback
 1..n every 50 ms and succeeds with result n * 10; n < 0 aborts; 666 kills the process after
@@ -6,6 +8,7 @@ the first feedback; a cancel preempts the goal with the feedback count so far.
 """
 
 import os
+import sys
 
 import actionlib
 import rospy
@@ -30,8 +33,9 @@ def execute(goal):
     server.set_succeeded(TestResult(n * 10), "done")
 
 
-rospy.init_node("fib_server")
-server = actionlib.SimpleActionServer("fib", TestAction, execute_cb=execute, auto_start=False)
+NAME = sys.argv[1] if len(sys.argv) > 1 else "fib"
+rospy.init_node(NAME.strip("/").replace("/", "_") + "_server")
+server = actionlib.SimpleActionServer(NAME, TestAction, execute_cb=execute, auto_start=False)
 server.start()
 print("ready", flush=True)
 rospy.spin()

@@ -36,6 +36,14 @@ for topic, msg, t in rosbag.Bag(sys.argv[1]).read_messages():
     out.write(json.dumps({"topic": topic, "type": msg._type, "log_time": t.to_nsec(),
                           "msg": plain(msg)}) + "\n")
 """
+#: ... to ``bag cat --raw``: each message's bytes as base64 in one JSON line.
+ROSBAG_CAT_RAW = r"""
+import base64, json, sys, rosbag
+out = sys.stdout
+for topic, raw, t in rosbag.Bag(sys.argv[1]).read_messages(raw=True):
+    out.write(json.dumps({"topic": topic, "type": raw[0], "log_time": t.to_nsec(),
+                          "data": base64.b64encode(raw[1]).decode()}) + "\n")
+"""
 #: ... to ``bag merge``: read several bags raw, in time order, into one.
 ROSBAG_MERGE = r"""
 import heapq, sys, rosbag
@@ -120,11 +128,20 @@ def bench_workbench() -> list[Result]:
     )
     rate = statistics.median(n / s for s, n in mine)
     their_rate = statistics.median(n / s for s, n in other) if other else None
+    mb = small.stat().st_size / 1e6
     results.append(Result(
         "bag cat | pipe, 1M small messages (whole process)", "msgs/s", rate, their_rate,
         ">= 200000 msgs/s", rate >= 200_000,
-        f"median of {RUNS}; theirs: rosbag Python API, read_messages + json.dumps per message",
+        f"median of {RUNS}, {mb:.0f} MB: {mb * rate / 1e6:.1f} MB/s"
+        + (f" vs {mb * their_rate / 1e6:.1f}" if their_rate else "")
+        + "; theirs: rosbag Python API, read_messages + json.dumps per message",
     ))  # fmt: skip
+    mine, other = _pair(
+        [*rostools_cmd(), "bag", "split", str(small), "--duration", "100", "-o",
+         str(OUT / "p.bag"), "-q"],
+        [SYSTEM_PYTHON, "-c", ROSBAG_SPLIT, str(small), str(OUT / "t"), "100"] if ros else None,
+    )  # fmt: skip
+    results.append(_rate_row("bag split --duration 100, 1M small messages", mb, mine, other))
 
     size = (small.stat().st_size + mixed.stat().st_size) / 1e6
     mine, other = _pair(
@@ -164,10 +181,17 @@ def bench_workbench_2gb() -> list[Result]:
     big = _mixed_bag(BIG_SECONDS)
     size = big.stat().st_size / 1e6
     ros = have("rosbag")
-    times: dict[str, list[float]] = {"split": [], "merge": [], "their split": [], "their merge": []}
+    times: dict[str, list[float]] = {
+        key: [] for key in ("split", "merge", "cat", "their split", "their merge", "their cat")
+    }
     peaks: list[float] = []
     for _ in range(RUNS):
         _clean()
+        times["cat"].append(_seconds([*rostools_cmd(), "bag", "cat", "--raw", str(big)], True)[0])
+        peaks.append(PEAK[0])
+        if ros:
+            cat = [SYSTEM_PYTHON, "-c", ROSBAG_CAT_RAW, str(big)]
+            times["their cat"].append(_seconds(cat, True)[0])
         split = [*rostools_cmd(), "bag", "split", str(big), "--duration", "10", "-o",
                  str(OUT / "p.bag"), "-q"]  # fmt: skip
         times["split"].append(_seconds(split)[0])
@@ -195,6 +219,9 @@ def bench_workbench_2gb() -> list[Result]:
                rate("their split"), "report (memory flat)", None, note),
         Result("bag merge of its 6 parts back, 2 GB", "MB/s", rate("merge") or 0.0,
                rate("their merge"), "report (memory flat)", None, note),
+        Result("bag cat --raw | pipe, 2 GB bag", "MB/s", rate("cat") or 0.0,
+               rate("their cat"), "report (memory flat)", None,
+               note.replace("scripts", "read_messages(raw=True) + base64 + json.dumps")),
     ]  # fmt: skip
 
 

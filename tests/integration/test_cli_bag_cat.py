@@ -5,6 +5,9 @@ from __future__ import annotations
 import base64
 import json
 from pathlib import Path
+from types import SimpleNamespace
+
+import pytest
 
 from rostools.bag.ops import convert
 from tests.support.bagdata import read_stream, write_sample
@@ -94,3 +97,18 @@ def test_a_message_that_does_not_decode_is_named(tmp_path: Path) -> None:
     done = run_cli("bag", "cat", str(path))
     assert done.returncode == 1 and done.stderr.count("\n") == 1
     assert f"{path}: /bad at 0.000000001 s: " in done.stderr
+
+
+def test_lines_are_written_in_batches_bounded_by_size(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Big messages (images as base64) are written before 512 lines pile up in memory."""
+    from rostools.cli.bag import cat
+
+    a = write_sample(tmp_path / "a.bag", 40)
+    monkeypatch.setattr(cat, "FLUSH_BYTES", 200)
+    writes: list[str] = []
+    monkeypatch.setattr("sys.stdout", SimpleNamespace(write=writes.append))
+    cat.cat([str(a.path)], cat.CatFormat.json, True, None, None, None, None)
+    lines = "".join(writes).splitlines()
+    assert len(lines) == len(a.stream) and len(writes) >= len(lines) // 3

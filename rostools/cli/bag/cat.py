@@ -30,6 +30,11 @@ if TYPE_CHECKING:
     from rostools.bag.ros2 import Ros2Types
 
 
+#: Lines are written in batches of this many, or of this many characters, whichever is first.
+FLUSH_LINES = 512
+FLUSH_BYTES = 1 << 20
+
+
 class CatFormat(str, enum.Enum):
     """What ``bag cat`` prints."""
 
@@ -200,7 +205,7 @@ def _print(
     ros2_types: dict[int, Ros2Types] = {}
     out: list[str] = []
     write = sys.stdout.write
-    printed = 0
+    printed = pending = 0
     header_done = False
     for t, i, e in _entries(readers, topics, lo, hi):
         if count is not None and printed >= count:
@@ -215,21 +220,24 @@ def _print(
             render = lines[(i, conn.id)] = _Lines(conn, fmt, raw, types)
         try:
             if fmt is CatFormat.json:
-                out.append(render.json(e))
+                line = render.json(e)
             else:
                 assert render.row is not None
                 msg = render.decode(e[4], 0)[0]
                 if not header_done:
                     out.append(render.header(msg) + "\n")
                     header_done = True
-                out.append(f"{t},{render.row(msg, 0)}\n")
+                line = f"{t},{render.row(msg, 0)}\n"
         except InvalidDataError as err:  # say where: the file, the topic and the time
             write("".join(out))
             raise InvalidDataError(
                 f"{readers[i].path}: {conn.topic} at {t / 1e9:.9f} s: {err}"
             ) from err
+        out.append(line)
+        pending += len(line)
         printed += 1
-        if len(out) >= 512:
+        if len(out) >= FLUSH_LINES or pending >= FLUSH_BYTES:  # memory stays flat for images
             write("".join(out))
             out.clear()
+            pending = 0
     write("".join(out))

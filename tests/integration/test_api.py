@@ -171,3 +171,26 @@ def test_a_process_that_exits_fails_the_wait_at_once(env_master: Master) -> None
     with pytest.raises(AssertionError, match=r"exited with 3 before node /x;.*\n.*no ROS here"):
         start_process([sys.executable, "-c", code], wait_for_node="/x", timeout=30)
     assert time.monotonic() - began < 10
+
+
+def test_a_callback_gets_a_message_that_arrives_as_it_subscribes(
+    master: Master, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A latched message may arrive before ``subscribe`` returns: the callback still gets it."""
+    from rostools._api import loop
+
+    run = loop.run
+
+    def slow_run(coro: object, timeout: float | None = None) -> object:
+        result = run(coro, timeout)  # type: ignore[arg-type]
+        time.sleep(0.3)  # the latched message lands here, before subscribe returns
+        return result
+
+    with Node("latcher", master.uri) as talker, Node("late", master.uri) as listener:
+        pub = talker.advertise("/early", "std_msgs/Int32", latch=True)
+        pub.publish(message("std_msgs/Int32", data=3))
+        got = threading.Event()
+        monkeypatch.setattr(loop, "run", slow_run)
+        listener.subscribe("/early", lambda msg: got.set())
+        monkeypatch.setattr(loop, "run", run)
+        assert got.wait(5)

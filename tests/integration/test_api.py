@@ -118,6 +118,13 @@ def test_services_and_their_failures(env_master: Master) -> None:
             rostools.call_service("/switch", {"data": False}, "std_srvs/SetBool")
     with pytest.raises(NotFoundError, match="service /switch is not available"):
         rostools.call_service("/switch", data=True, timeout=2)
+    for reply in ("first", "restarted"):  # a server restarted elsewhere is found again
+        with Node(f"server_{reply}", env_master.uri) as again:
+            again.advertise_service(
+                "/switch", "std_srvs/SetBool", lambda r, m=reply: {"message": m}
+            )
+            answer = rostools.call_service("/switch", data=True, timeout=5)
+            assert answer.message == reply  # type: ignore[attr-defined]
 
 
 @pytest.mark.parametrize("name", ["run.bag", "run.mcap"])

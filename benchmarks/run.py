@@ -22,6 +22,7 @@ MODULES = [
     "benchmarks.bench_bag",
     "benchmarks.bench_bag_live",
     "benchmarks.bench_workbench",
+    "benchmarks.bench_plot",
     "benchmarks.bench_completion",
     "benchmarks.bench_network",
     "benchmarks.bench_load",

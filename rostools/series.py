@@ -11,6 +11,8 @@ from __future__ import annotations
 import math
 from array import array
 from bisect import bisect_left
+from collections.abc import Callable
+from math import isfinite
 from typing import Final
 
 #: Samples one series keeps before thinning its oldest half (about 3 MB). A 10 s window at
@@ -19,18 +21,37 @@ MAX_POINTS: Final = 200_000
 
 
 class Series:
-    """One line of a plot: x (seconds) and y, in arrival order."""
+    """One line of a plot: x (seconds) and y, in arrival order.
 
-    __slots__ = ("thinned", "xs", "ys")
+    ``window``: seconds of x to keep behind the newest sample (None keeps everything);
+    past ``max_points`` samples the window is applied, then the oldest half thinned.
+    """
 
-    def __init__(self) -> None:
+    __slots__ = ("max_points", "thinned", "window", "xs", "ys")
+
+    def __init__(self, window: float | None = None, max_points: int = MAX_POINTS) -> None:
         self.xs = array("d")
         self.ys = array("d")
+        self.window = window
+        self.max_points = max_points
         #: Whether some samples were merged away (``MAX_POINTS``).
         self.thinned = False
 
     def __len__(self) -> int:
         return len(self.xs)
+
+    def add(self, x: float, y: float) -> None:
+        """One sample; NaN and infinities are not drawn, and not kept."""
+        if not isfinite(y):
+            return
+        xs = self.xs
+        xs.append(x)
+        self.ys.append(y)
+        if len(xs) > self.max_points:
+            if self.window is not None:
+                self.trim(x - self.window)
+            if len(self.xs) > self.max_points:
+                self.thin()
 
     def trim(self, lo: float) -> None:
         """Forget samples before ``lo`` (x is assumed to grow, as arrival times do)."""
@@ -62,39 +83,32 @@ class Series:
 class SeriesSet:
     """The series of one plot, by label, in the order declared, then of first samples.
 
-    ``window``: seconds of x to keep behind the newest sample (None keeps everything).
+    ``window`` and ``max_points`` apply to each series (``Series``).
     """
 
     def __init__(self, window: float | None = None, max_points: int = MAX_POINTS) -> None:
         self.window = window
         self.max_points = max_points
         self.series: dict[str, Series] = {}
-        #: The largest x seen: the right edge of a rolling window.
-        self.newest = -math.inf
-        self.added = 0
 
     def declare(self, labels: list[str]) -> None:
         """Series to list in this order, before any sample: the order the user named them."""
         for label in labels:
-            self.series.setdefault(label, Series())
+            self.series.setdefault(label, Series(self.window, self.max_points))
+
+    def sink(self, label: str) -> Callable[[float, float], None]:
+        """Where the samples of ``label`` go: its series' ``add``, looked up once."""
+        self.declare([label])
+        return self.series[label].add
 
     def add(self, label: str, x: float, y: float) -> None:
-        """One sample; NaN and infinities are not drawn, and not kept."""
-        if not math.isfinite(y):
-            return
-        found = self.series.get(label)
-        if found is None:
-            found = self.series[label] = Series()
-        found.xs.append(x)
-        found.ys.append(y)
-        self.added += 1
-        if x > self.newest:
-            self.newest = x
-        if len(found.xs) > self.max_points:
-            if self.window is not None:
-                found.trim(self.newest - self.window)
-            if len(found.xs) > self.max_points:
-                found.thin()
+        """One sample of ``label`` (``sink`` is the fast way for many)."""
+        self.sink(label)(x, y)
+
+    @property
+    def newest(self) -> float:
+        """The largest x held (-inf when there is nothing): a rolling window's right edge."""
+        return max((s.xs[-1] for s in self.series.values() if len(s)), default=-math.inf)
 
     def trim(self, now: float | None = None) -> None:
         """Drop what has left the window that ends at ``now`` (default: the newest sample)."""

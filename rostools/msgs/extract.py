@@ -224,12 +224,12 @@ class _Gen:
         self.indent = self.indent[:-4]
         self.line(f"return [{sub}(buf, p) for p in {starts}[{picked}]]")
 
-    def compile(self, name: str) -> Callable[[Any, int], Any]:
+    def compile(self, name: str) -> Callable[..., Any]:
         params = "".join(f", {k}={k}" for k in self.env)
-        source = f"def extract(buf, pos{params}):\n" + "\n".join(self.lines) + "\n"
+        source = f"def extract(buf, pos=0{params}):\n" + "\n".join(self.lines) + "\n"
         namespace: dict[str, Any] = dict(self.env)
         exec(compile(source, f"<rostools extract {name}>", "exec"), namespace)  # noqa: S102
-        fn: Callable[[Any, int], Any] = namespace["extract"]
+        fn: Callable[..., Any] = namespace["extract"]
         return fn
 
 
@@ -259,8 +259,8 @@ def extractor(codec: Codec, type_name: str, path: FieldPath, name: str = "") -> 
         raise UsageError("give a field to plot after the topic")
     gen = _Gen(codec)
     gen.walk(type_name, path.steps)
-    fn = gen.compile(f"{type_name}/{path.text}")
-    return lambda buf: fn(buf, 0)
+    # ``pos`` defaults to 0: called with the message alone, with no wrapper in between
+    return gen.compile(f"{type_name}/{path.text}")
 
 
 def _sliced(path: FieldPath) -> bool:

@@ -25,8 +25,10 @@ from rostools.msgs.store import TypeStore
 #: Elements one sliced path may plot: each is a line of its own.
 MAX_SLICE: Final = 64
 
-#: Where samples go: ``add(label, x, y)``.
-Sink = Callable[[str, float, float], None]
+#: Where samples go: ``sink(label)`` gives the ``put(x, y)`` of that label's series, looked
+#: up once per label, not once per sample.
+Put = Callable[[float, float], None]
+Sink = Callable[[str], Put]
 
 
 def _step_text(step: Step, index: int | None = None) -> str:
@@ -101,21 +103,31 @@ class Labels:
 
 
 class _Column(Labels):
-    """One field path of a topic: its extractor and its labels."""
+    """One field path of a topic: its extractor, its labels and where their samples go."""
 
-    def __init__(self, codec: Codec, type_name: str, topic: str, path: str) -> None:
+    def __init__(self, codec: Codec, type_name: str, topic: str, path: str, sink: Sink) -> None:
         super().__init__(topic, path)
         resolved = fieldpath.resolve(codec.store, type_name, path)
         name = topic.rstrip("/") + "/" + path.lstrip("/")
         self.extract = extract.extractor(codec, type_name, resolved, name)
+        self.sink = sink
+        self.put = None if self.sliced else sink(self.label)
+        self.puts: list[Put] = []
+
+    def put_of(self, i: int) -> Put:
+        """Where the ``i``-th element of a slice goes."""
+        while len(self.puts) <= i:
+            self.puts.append(self.sink(self.label_of(len(self.puts))))
+        return self.puts[i]
 
 
 class Sampler:
     """Samples the messages of one topic, of one type as one publisher or bag defines it.
 
-    ``paths``: field paths after the topic. ``stamp``: x is ``header.stamp`` instead of the
-    time the caller gives. ``keep``: a compiled ``--filter``, which sees ``topic``, ``m`` and
-    ``t`` as echo's and ``bag filter``'s do.
+    ``paths``: field paths after the topic; ``sink``: where each label's samples go.
+    ``stamp``: x is ``header.stamp`` instead of the time the caller gives. ``keep``: a
+    compiled ``--filter``, which sees ``topic``, ``m`` and ``t`` as echo's and ``bag
+    filter``'s do.
     """
 
     def __init__(
@@ -124,6 +136,7 @@ class Sampler:
         type_name: str,
         topic: str,
         paths: Sequence[str],
+        sink: Sink,
         stamp: bool = False,
         keep: Expression | None = None,
     ) -> None:
@@ -136,7 +149,7 @@ class Sampler:
                 f"give a field of {topic} to plot ({type_name})",
                 hint=f"for example {topic}/{_first_number(store, type_name)}",
             )
-        self.columns = [_Column(self.codec, type_name, topic, p) for p in paths]
+        self.columns = [_Column(self.codec, type_name, topic, p, sink) for p in paths]
         self.stamp: extract.Extractor | None = None
         if stamp:
             if not store.msg(type_name).has_header:
@@ -152,39 +165,36 @@ class Sampler:
         #: Messages whose array was too short for an index, so gave no sample.
         self.missed = 0
 
-    def feed(self, frames: Sequence[Any], t: float, add: Sink) -> int:
+    def feed(self, frames: Sequence[Any], t: float) -> int:
         """Sample messages that arrived at ``t`` (seconds); how many passed the filter.
 
         Bytes that do not decode as the type says are a ``DecodeError`` naming both.
         """
+        stamp, keep, columns = self.stamp, self.keep, self.columns
+        fed = 0
         try:
-            return self._feed(frames, t, add)
+            for data in frames:
+                if keep is not None:
+                    msg = self.decode(data, 0)[0] if self.decode is not None else None
+                    if not keep(self.topic, msg, Time.from_sec(t)):
+                        continue
+                fed += 1
+                x = stamp(data) if stamp is not None else t
+                for col in columns:
+                    try:
+                        value = col.extract(data)
+                    except IndexError:
+                        self.missed += 1
+                        continue
+                    if col.put is not None:
+                        col.put(x, value)
+                    else:
+                        for i, v in enumerate(value[:MAX_SLICE]):
+                            col.put_of(i)(x, v)
         except (DecodeError, *DECODE_ERRORS) as err:
             raise DecodeError(
                 f"a message on {self.topic} does not decode as {self.type_name}: {err}"
             ) from err
-
-    def _feed(self, frames: Sequence[Any], t: float, add: Sink) -> int:
-        stamp, keep, columns = self.stamp, self.keep, self.columns
-        fed = 0
-        for data in frames:
-            if keep is not None:
-                msg = self.decode(data, 0)[0] if self.decode is not None else None
-                if not keep(self.topic, msg, Time.from_sec(t)):
-                    continue
-            fed += 1
-            x = stamp(data) if stamp is not None else t
-            for col in columns:
-                try:
-                    value = col.extract(data)
-                except IndexError:
-                    self.missed += 1
-                    continue
-                if col.sliced:
-                    for i, v in enumerate(value[:MAX_SLICE]):
-                        add(col.label_of(i), x, v)
-                else:
-                    add(col.label, x, value)
         return fed
 
 

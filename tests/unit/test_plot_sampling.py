@@ -13,7 +13,7 @@ from rostools.msgs import extract, fieldpath
 from rostools.msgs.codec import Codec, DecodeError, attr_name
 from rostools.msgs.expr import compile_expression
 from rostools.msgs.message import Message, Time
-from rostools.msgs.sample import MAX_SLICE, Sampler
+from rostools.msgs.sample import MAX_SLICE, Labels, Sampler
 from rostools.msgs.spec import Field
 from rostools.msgs.store import TypeStore
 from rostools.series import Series, SeriesSet, columns
@@ -142,10 +142,14 @@ def _odom(codec: Codec, x: float, stamp: float, frame: str = "odom") -> bytes:
 
 def test_sampler_labels_x_and_filter(codec: Codec) -> None:
     got: list[tuple[str, float, float]] = []
-    add = lambda label, x, y: got.append((label, x, y))  # noqa: E731
+
+    def sink(label: str) -> Any:
+        return lambda x, y: got.append((label, x, y))
+
     frames = [_odom(codec, 1.5, 100.25), _odom(codec, -2.0, 101.5, "x" * 40)]
-    plain = Sampler(codec.store, "nav_msgs/Odometry", "/odom", ["pose/pose/position/x"])
-    assert plain.feed(frames, 7.0, add) == 2
+    odom = "nav_msgs/Odometry"
+    plain = Sampler(codec.store, odom, "/odom", ["pose/pose/position/x"], sink)
+    assert plain.feed(frames, 7.0) == 2
     assert got == [
         ("/odom/pose/pose/position/x", 7.0, 1.5),
         ("/odom/pose/pose/position/x", 7.0, -2.0),
@@ -153,8 +157,8 @@ def test_sampler_labels_x_and_filter(codec: Codec) -> None:
     got.clear()
     keep = compile_expression("m.pose.pose.position.x < 0")
     paths = ["pose/covariance[0:3]", "/twist/twist/linear/z"]
-    stamped = Sampler(codec.store, "nav_msgs/Odometry", "/odom", paths, stamp=True, keep=keep)
-    assert stamped.feed(frames, 7.0, add) == 1
+    stamped = Sampler(codec.store, odom, "/odom", paths, sink, stamp=True, keep=keep)
+    assert stamped.feed(frames, 7.0) == 1
     assert got == [
         ("/odom/pose/covariance[0]", 101.5, 0.0),
         ("/odom/pose/covariance[1]", 101.5, 1.0),
@@ -162,28 +166,35 @@ def test_sampler_labels_x_and_filter(codec: Codec) -> None:
         ("/odom/twist/twist/linear/z", 101.5, 0.0),
     ]
     got.clear()
-    neg = Sampler(codec.store, "nav_msgs/Odometry", "/odom", ["pose/covariance[-2:]"])
-    neg.feed(frames[:1], 1.0, add)
+    neg = Sampler(codec.store, odom, "/odom", ["pose/covariance[-2:]"], sink)
+    neg.feed(frames[:1], 1.0)
     assert [g[0] for g in got] == ["/odom/pose/covariance[-2:][0]", "/odom/pose/covariance[-2:][1]"]
     assert [g[2] for g in got] == [34.0, 35.0]
+    assert Labels("/scan", "ranges[2:8:3]").known() == ["/scan/ranges[2]", "/scan/ranges[5]"]
+    assert Labels("/scan", "ranges[2:]").known() == []  # its length comes with each message
+    with pytest.raises(UsageError, match="one slice per field path"):
+        Labels("/a", "b[0:2]/c[0:2]")
 
 
 def test_sampler_refusals(codec: Codec) -> None:
+    def sink(label: str) -> Any:
+        return lambda x, y: None
+
     with pytest.raises(UsageError, match="give a field") as err:
-        Sampler(codec.store, "nav_msgs/Odometry", "/odom", [""])
+        Sampler(codec.store, "nav_msgs/Odometry", "/odom", [""], sink)
     assert err.value.hint == "for example /odom/pose/pose/position/x"
     with pytest.raises(UsageError, match="no header"):
-        Sampler(codec.store, "geometry_msgs/Twist", "/cmd_vel", ["linear/x"], stamp=True)
+        Sampler(codec.store, "geometry_msgs/Twist", "/cmd_vel", ["linear/x"], sink, stamp=True)
     with pytest.raises(UsageError, match="no field named z in float64"):
-        Sampler(codec.store, "geometry_msgs/Twist", "/cmd_vel", ["linear/y/z"])
+        Sampler(codec.store, "geometry_msgs/Twist", "/cmd_vel", ["linear/y/z"], sink)
     with pytest.raises(UsageError, match=f"more than {MAX_SLICE}"):
-        Sampler(codec.store, "sensor_msgs/LaserScan", "/scan", ["ranges[0:100]"])
-    scan = Sampler(codec.store, "sensor_msgs/LaserScan", "/scan", ["ranges[5]"])
+        Sampler(codec.store, "sensor_msgs/LaserScan", "/scan", ["ranges[0:100]"], sink)
+    scan = Sampler(codec.store, "sensor_msgs/LaserScan", "/scan", ["ranges[5]"], sink)
     short = codec.serialize(codec.message_class("sensor_msgs/LaserScan")(ranges=[1.0]))
-    assert scan.feed([short], 0.0, lambda *a: None) == 1
+    assert scan.feed([short], 0.0) == 1
     assert scan.missed == 1
     with pytest.raises(DecodeError, match="on /scan does not decode as sensor_msgs/LaserScan"):
-        scan.feed([short[:10]], 0.0, lambda *a: None)
+        scan.feed([short[:10]], 0.0)
 
 
 def test_series_window_thinning_and_columns() -> None:
@@ -196,6 +207,7 @@ def test_series_window_thinning_and_columns() -> None:
     assert a.xs[0] >= plot.newest - 10.0 and a.xs[-1] == pytest.approx(29.99)
     assert len(a) <= 1201 and not a.thinned  # the window, not thinning, bounds it
     whole = SeriesSet(max_points=1000)
+    assert whole.newest == float("-inf")
     for i in range(5000):
         whole.add("b", float(i), 1000.0 if i == 123 else float(i % 10))
     b = whole.series["b"]

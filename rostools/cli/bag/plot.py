@@ -72,9 +72,9 @@ def plot_cmd(
     with open_bag(bag) as reader:
         paths = _topics(reader, fields, plot)
         require_ros1(reader, "bag plot", list(paths))
-        samplers = _samplers(reader, paths, stamp, keep)
+        samplers = _samplers(reader, paths, plot, stamp, keep)
         lo, hi = time_window([bag], start, end)
-        count = _read(reader, samplers, lo, hi, plot)
+        count = _read(reader, samplers, lo, hi)
         begin = lo if lo is not None else (reader.info().start_ns or 0)
     kind = "stamp" if stamp else "bag"
     held = plot.bounds()
@@ -121,7 +121,11 @@ def _topics(reader: BagReader, fields: list[str], plot: SeriesSet) -> dict[str, 
 
 
 def _samplers(
-    reader: BagReader, paths: dict[str, list[str]], stamp: bool, keep: Expression | None
+    reader: BagReader,
+    paths: dict[str, list[str]],
+    plot: SeriesSet,
+    stamp: bool,
+    keep: Expression | None,
 ) -> dict[int, Sampler]:
     """A sampler per connection of the topics named, each checked before anything is read."""
     from rostools.cli.settings import type_store
@@ -132,19 +136,13 @@ def _samplers(
     for conn in reader.connections:
         if conn.topic in paths:
             own = store.with_definition(conn.type, conn.definition)
-            found[conn.id] = Sampler(own, conn.type, conn.topic, paths[conn.topic], stamp, keep)
+            topic = conn.topic
+            found[conn.id] = Sampler(own, conn.type, topic, paths[topic], plot.sink, stamp, keep)
     return found
 
 
-def _read(
-    reader: BagReader,
-    samplers: dict[int, Sampler],
-    lo: int | None,
-    hi: int | None,
-    plot: SeriesSet,
-) -> int:
+def _read(reader: BagReader, samplers: dict[int, Sampler], lo: int | None, hi: int | None) -> int:
     """Sample every message of the connections in ``samplers`` from ``lo`` to ``hi``."""
-    add = plot.add
     count = 0
     topics = sorted({s.topic for s in samplers.values()})
     for conn, t_ns, data in reader.messages(topics=topics, start=lo, end=hi):
@@ -152,7 +150,7 @@ def _read(
         if sampler is None:
             continue
         try:
-            count += sampler.feed((data,), t_ns / 1e9, add)
+            count += sampler.feed((data,), t_ns / 1e9)
         except InvalidDataError as err:  # a message that does not decode: say where
             raise InvalidDataError(f"{reader.path}: message at {t_ns / 1e9:.9f} s: {err}") from err
     return count

@@ -74,7 +74,8 @@ class _Live:
         found = self.samplers.get(key)
         if found is None:
             store = self.store.with_definition(kind, definition)
-            found = Sampler(store, kind, topic, self.paths[topic], self.stamp, self.keep)
+            paths = self.paths[topic]
+            found = Sampler(store, kind, topic, paths, self.plot.sink, self.stamp, self.keep)
             self.samplers[key] = found
         return found
 
@@ -86,10 +87,10 @@ class _Live:
             sampler = self.sampler(topic, conn.header or {})
             t = now + self.wall
             if self.count is None:
-                self.received += sampler.feed(frames, t, self.plot.add)
+                self.received += sampler.feed(frames, t)
                 return True
             for data in frames:  # one at a time: the count is exact, filter or not
-                self.received += sampler.feed([data], t, self.plot.add)
+                self.received += sampler.feed([data], t)
                 if self.received >= self.count:
                     self.done = True
                     return False
@@ -170,7 +171,8 @@ async def _subscribe(node: Node, stop: asyncio.Event, live: _Live, deadline: flo
         refs.append(ref)
     for ref in refs:  # a typo fails now, not at the first message
         if ref.type and live.store.has_msg(ref.type):
-            Sampler(live.store, ref.type, ref.topic, live.paths[ref.topic], live.stamp, live.keep)
+            paths = live.paths[ref.topic]
+            Sampler(live.store, ref.type, ref.topic, paths, live.plot.sink, live.stamp, live.keep)
     for topic in live.paths:
 
         def on_frames(

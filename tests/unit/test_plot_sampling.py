@@ -221,3 +221,17 @@ def test_series_window_thinning_and_columns() -> None:
     few.ys.extend([3.0, 4.0])
     assert columns(few, 0.0, 10.0, 80) == ([1.0, 2.0], [3.0, 4.0])
     assert whole.bounds() == (0.0, 4999.0) and SeriesSet().bounds() is None
+
+
+def test_only_the_plot_commands_import_the_plot_libraries() -> None:
+    """plotext and matplotlib load when a plot is drawn, not with the groups that hold it."""
+    import subprocess
+    import sys
+
+    code = (
+        "import sys\n"
+        "import rostools.cli.topic, rostools.cli.bag, rostools.cli.node, rostools.cli.app\n"
+        "print(sorted(m for m in ('plotext', 'matplotlib') if m in sys.modules))"
+    )
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert done.stdout.strip() == "[]"

@@ -74,6 +74,21 @@ class TopicRef(Record):
         self.field = field
 
 
+def field_problem(name: str, types: dict[str, str], store: TypeStore) -> str | None:
+    """Why ``/topic/field/path`` matched no topic when a prefix of it is one: its field error."""
+    name = name.rstrip("/") or "/"
+    for topic in sorted((t for t in types if name.startswith(t + "/")), key=len, reverse=True):
+        kind = types[topic]
+        if kind != ANYTYPE and store.has_msg(kind):
+            from rostools.msgs import fieldpath
+
+            try:
+                fieldpath.resolve(store, kind, name[len(topic) + 1 :])
+            except RostoolsError as err:
+                return f"{topic} is {kind}: {err}"
+    return None
+
+
 def split_field(name: str, types: dict[str, str], store: TypeStore | None) -> TopicRef | None:
     """Find the topic in ``/topic/field/path`` as rostopic does.
 

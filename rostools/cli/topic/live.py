@@ -42,7 +42,7 @@ async def wait_for_topic(
     """Wait until the topic is advertised; the topic and field path."""
     import asyncio
 
-    from rostools.rosgraph.topics import split_field
+    from rostools.rosgraph.topics import field_problem, split_field
 
     name = node.resolve(name)  # command-line remappings apply
     warned = False
@@ -51,8 +51,10 @@ async def wait_for_topic(
         ref = split_field(name, types, store)
         if ref is not None:
             return ref
-        if not warned:
-            sys.stderr.write(f"WARNING: topic [{name}] does not appear to be published yet\n")
+        if not warned:  # a typo in a field of a published topic is named
+            problem = field_problem(name, types, store)
+            why = f" ({problem})" if problem else ""
+            sys.stderr.write(f"WARNING: topic [{name}] does not appear to be published yet{why}\n")
             warned = True
         if stop.is_set() or (deadline is not None and time.monotonic() > deadline):
             return None

@@ -63,6 +63,25 @@ def image_format(path: Path) -> str:
     return kind
 
 
+def check_image_target(path: Path, command: str) -> None:
+    """Fail now, not after a whole bag was read, when ``-o PATH`` cannot be drawn or written."""
+    import importlib.util
+
+    image_format(path)
+    if importlib.util.find_spec("matplotlib") is None:
+        raise _no_matplotlib(command)
+    folder = path.parent if str(path.parent) else Path(".")
+    if not folder.is_dir() or not os.access(folder, os.W_OK):
+        raise NotFoundError(f"cannot write {path}: {folder} is not a folder this user can write")
+
+
+def _no_matplotlib(command: str) -> NotFoundError:
+    return NotFoundError(
+        f"{command} -o needs matplotlib, which is not installed",
+        hint="pip install 'rostools[plot]', or leave out -o to plot in the terminal",
+    )
+
+
 def axis_label(kind: str, origin: float, with_date: bool = False) -> str:
     """The x axis title: seconds since ``origin`` (epoch seconds), and which time it is."""
     when = time.strftime("%Y-%m-%d %H:%M:%S" if with_date else "%H:%M:%S", time.localtime(origin))
@@ -129,10 +148,7 @@ def write_image(
     try:
         from matplotlib.figure import Figure
     except ImportError as err:
-        raise NotFoundError(
-            f"{command} -o needs matplotlib, which is not installed",
-            hint="pip install 'rostools[plot]', or leave out -o to plot in the terminal",
-        ) from err
+        raise _no_matplotlib(command) from err
     fig = Figure(figsize=(10, 4.8), dpi=100, layout="constrained")
     ax = fig.add_subplot()
     held = plot.bounds()

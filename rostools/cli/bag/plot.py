@@ -62,7 +62,7 @@ def plot_cmd(
 
     fmt = output_format(ctx, fmt)
     if out is not None:
-        plotting.image_format(out)  # a bad name fails before the bag is read
+        plotting.check_image_target(out, "bag plot")  # before the bag is read
     keep = None
     if filter_expr:
         from rostools.msgs.expr import compile_expression

@@ -7,7 +7,6 @@ the goal's number picks the outcome. One master and one server serve the whole m
 from __future__ import annotations
 
 import json
-import os
 import sys
 from collections.abc import Iterator
 from pathlib import Path
@@ -16,7 +15,7 @@ from typing import Any
 import pytest
 
 from tests.support.env import run_cli
-from tests.support.procs import Proc, free_port, start_rostools_core, wait_for
+from tests.support.procs import Proc, core_and_env, wait_for
 
 ROOT = Path(__file__).resolve().parent.parent.parent
 SERVER = ROOT / "tests" / "support" / "rt_nodes" / "rt_actions.py"
@@ -25,11 +24,7 @@ SERVER = ROOT / "tests" / "support" / "rt_nodes" / "rt_actions.py"
 @pytest.fixture(scope="module")
 def env(tmp_path_factory: pytest.TempPathFactory) -> Iterator[dict[str, str]]:
     tmp = tmp_path_factory.mktemp("action")
-    env = {k: v for k, v in os.environ.items() if not k.startswith("ROS")}
-    env |= {"HOME": str(tmp / "home"), "ROS_PACKAGE_PATH": "", "ROS_IP": "127.0.0.1"}
-    port = free_port()
-    env["ROS_MASTER_URI"] = f"http://127.0.0.1:{port}"
-    core = start_rostools_core(port, env)
+    core, env = core_and_env(tmp)
     server = Proc([sys.executable, str(SERVER)], env=env)
     try:
         server.expect("ready", 20)

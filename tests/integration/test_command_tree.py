@@ -17,7 +17,7 @@ import pytest
 from rostools.cli.completer import load_tree
 from tests.support.bagdata import write_sample
 from tests.support.env import run_cli
-from tests.support.procs import Proc, free_port, start_rostools_core, wait_for
+from tests.support.procs import Proc, core_and_env, free_port, wait_for
 
 ROOT = Path(__file__).resolve().parent.parent.parent
 
@@ -113,14 +113,9 @@ def parse(text: str) -> list[Any]:
 @pytest.fixture(scope="module")
 def graph(tmp_path_factory: pytest.TempPathFactory) -> Iterator[tuple[dict[str, str], Path]]:
     """A master with a talker, a stamped topic, services, parameters and a node to kill."""
-    import os
 
     tmp = tmp_path_factory.mktemp("tree")
-    env = {k: v for k, v in os.environ.items() if not k.startswith("ROS")}
-    env |= {"HOME": str(tmp / "home"), "ROS_PACKAGE_PATH": "", "ROS_IP": "127.0.0.1"}
-    port = free_port()
-    env["ROS_MASTER_URI"] = f"http://127.0.0.1:{port}"
-    core = start_rostools_core(port, env)
+    core, env = core_and_env(tmp)
     rostools = [sys.executable, "-m", "rostools"]
     pub = [*rostools, "topic", "pub"]
     procs = [

@@ -10,7 +10,6 @@ against a server written with ``rostools.action``. The peers are
 from __future__ import annotations
 
 import json
-import os
 import signal
 import sys
 import time
@@ -23,10 +22,9 @@ import pytest
 from tests.support.env import needs_ros1, run_cli
 from tests.support.procs import (
     Proc,
-    free_port,
+    core_and_env,
     ros_env,
     start_ros1_node,
-    start_rostools_core,
     wait_for,
 )
 
@@ -53,11 +51,7 @@ def graph(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Graph]:
     if not ACTIONLIB.is_file():
         pytest.skip("python3-actionlib is not installed (scripts/install-ros1-peers.sh)")
     tmp = tmp_path_factory.mktemp("actions")
-    env = {k: v for k, v in os.environ.items() if not k.startswith("ROS")}
-    env |= {"HOME": str(tmp / "home"), "ROS_PACKAGE_PATH": "", "ROS_IP": "127.0.0.1"}
-    port = free_port()
-    env["ROS_MASTER_URI"] = f"http://127.0.0.1:{port}"
-    core = start_rostools_core(port, env)
+    core, env = core_and_env(tmp)
     try:
         yield Graph(env, ros_env(env["ROS_MASTER_URI"], tmp / "ros_home"))
     finally:

@@ -11,7 +11,7 @@ from collections.abc import Iterator
 import pytest
 
 from tests.support.env import needs_ros1, run_cli
-from tests.support.procs import free_port, ros_env, start_ros1_node, start_rostools_core, wait_for
+from tests.support.procs import core_and_env, ros_env, start_ros1_node, wait_for
 
 pytestmark = [pytest.mark.interop, needs_ros1]
 
@@ -21,15 +21,10 @@ ANSI = re.compile(r"\x1b\[[0-9;?]*[A-Za-z]")
 @pytest.fixture(scope="module")
 def publisher(tmp_path_factory: pytest.TempPathFactory) -> Iterator[dict[str, str]]:
     """Our master and plot_pub.py (rospy) publishing /odom and /scan at 50 Hz; the CLI's env."""
-    import os
 
     tmp = tmp_path_factory.mktemp("plot")
-    port = free_port()
-    uri = f"http://127.0.0.1:{port}"
-    env = {k: v for k, v in os.environ.items() if not k.startswith("ROS")}
-    env |= {"HOME": str(tmp / "home"), "ROS_PACKAGE_PATH": "", "ROS_IP": "127.0.0.1"}
-    env["ROS_MASTER_URI"] = uri
-    core = start_rostools_core(port, env)
+    core, env = core_and_env(tmp)
+    uri = env["ROS_MASTER_URI"]
     node = start_ros1_node("plot_pub.py", ["50"], ros_env(uri, tmp / "ros_home"))
     try:
         wait_for(lambda: "/scan" in run_cli("topic", "list", env=env).stdout, 20, "plot_pub")

@@ -166,6 +166,19 @@ def start_rostools_core(port: int, env: dict[str, str]) -> Proc:
     return proc
 
 
+def core_and_env(home: Path) -> tuple[Proc, dict[str, str]]:
+    """``rostools core`` on a free port, and an environment for rostools children on it.
+
+    The environment inherits no ROS settings: a private HOME under ``home``, the built-in
+    types only, and loopback addresses.
+    """
+    env = {k: v for k, v in os.environ.items() if not k.startswith("ROS")}
+    port = free_port()
+    env |= {"HOME": str(home / "home"), "ROS_PACKAGE_PATH": "", "ROS_IP": "127.0.0.1"}
+    env["ROS_MASTER_URI"] = f"http://127.0.0.1:{port}"
+    return start_rostools_core(port, env), env
+
+
 def start_roscore(port: int, env: dict[str, str]) -> Proc:
     """The real ``roscore -p PORT`` (master and rosout), once the master answers."""
     proc = Proc(["roscore", "-p", str(port)], env=env)

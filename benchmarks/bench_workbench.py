@@ -75,6 +75,8 @@ out.close()
 def _clean() -> None:
     shutil.rmtree(OUT, ignore_errors=True)
     OUT.mkdir(parents=True)
+    # The last run's writes are flushed now, not during the next run's timing.
+    os.sync()
 
 
 #: The peak RSS (MB) of the last process ``_seconds`` ran.

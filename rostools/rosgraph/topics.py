@@ -8,6 +8,7 @@ from rostools.rosgraph.record import Record
 
 TYPE_CHECKING = False  # ``typing`` is 5-10 ms of start-up; only annotations use it
 if TYPE_CHECKING:
+    from collections.abc import Iterator
     from typing import Any
 
     from rostools.msgs.store import TypeStore
@@ -74,18 +75,33 @@ class TopicRef(Record):
         self.field = field
 
 
-def field_problem(name: str, types: dict[str, str], store: TypeStore) -> str | None:
-    """Why ``/topic/field/path`` matched no topic when a prefix of it is one: its field error."""
+def _prefixes(
+    name: str, types: dict[str, str], store: TypeStore | None
+) -> Iterator[tuple[str, str, str, str | None]]:
+    """The advertised topics that ``name`` extends, longest first.
+
+    Each as (topic, type, the field path after it, why that path is not a field of the type):
+    the last is None when it is one, or when the type is unknown here.
+    """
     name = name.rstrip("/") or "/"
     for topic in sorted((t for t in types if name.startswith(t + "/")), key=len, reverse=True):
-        kind = types[topic]
-        if kind != ANYTYPE and store.has_msg(kind):
-            from rostools.msgs import fieldpath
+        kind, path = types[topic], name[len(topic) + 1 :]
+        error = None
+        if store is not None and kind != ANYTYPE and store.has_msg(kind):
+            from rostools.msgs import fieldpath  # only when a path has to be checked
 
             try:
-                fieldpath.resolve(store, kind, name[len(topic) + 1 :])
+                fieldpath.resolve(store, kind, path)
             except RostoolsError as err:
-                return f"{topic} is {kind}: {err}"
+                error = str(err)
+        yield topic, kind, path, error
+
+
+def field_problem(name: str, types: dict[str, str], store: TypeStore) -> str | None:
+    """Why ``/topic/field/path`` matched no topic when a prefix of it is one: its field error."""
+    for topic, kind, _, error in _prefixes(name, types, store):
+        if error is not None:
+            return f"{topic} is {kind}: {error}"
     return None
 
 
@@ -95,20 +111,11 @@ def split_field(name: str, types: dict[str, str], store: TypeStore | None) -> To
     An exact match first, else the longest advertised prefix whose type has the field (types
     unknown here are accepted).
     """
-    name = name.rstrip("/") or "/"
-    if name in types:
-        kind = types[name]
-        return TopicRef(name, None if kind == ANYTYPE else kind, "")
-    candidates = sorted((t for t in types if name.startswith(t + "/")), key=len, reverse=True)
-    for topic in candidates:
-        kind = types[topic]
-        path = name[len(topic) + 1 :]
-        if store is not None and kind != ANYTYPE and store.has_msg(kind):
-            from rostools.msgs import fieldpath  # only when a path has to be checked
-
-            try:
-                fieldpath.resolve(store, kind, path)
-            except RostoolsError:
-                continue
-        return TopicRef(topic, None if kind == ANYTYPE else kind, path)
+    exact = name.rstrip("/") or "/"
+    if exact in types:
+        kind = types[exact]
+        return TopicRef(exact, None if kind == ANYTYPE else kind, "")
+    for topic, kind, path, error in _prefixes(name, types, store):
+        if error is None:
+            return TopicRef(topic, None if kind == ANYTYPE else kind, path)
     return None

@@ -235,3 +235,21 @@ def test_only_the_plot_commands_import_the_plot_libraries() -> None:
     )
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert done.stdout.strip() == "[]"
+
+
+def test_n_is_exact_across_topics() -> None:
+    """Once -n messages are in, another topic's read that was already on its way is not sampled
+    (``topic plot -n 60`` of two topics sampled 61 now and then)."""
+    from types import SimpleNamespace
+
+    from rostools.cli.topic.plot import _Live
+
+    store = TypeStore.default()
+    live = _Live(["/a/data", "/b/data"], store, SeriesSet(10.0), False, None, 2)
+    live.paths = {"/a": ["data"], "/b": ["data"]}
+    header = {"type": "std_msgs/Float64", "md5sum": store.md5("std_msgs/Float64")}
+    conn: Any = SimpleNamespace(header=header)
+    one = struct.pack("<d", 1.0)
+    assert live.on_frames("/a", [one, one], conn, 0.0) is False and live.done
+    assert live.on_frames("/b", [one], conn, 0.0) is False
+    assert live.received == 2 and "/b/data" not in live.plot.series

@@ -83,6 +83,8 @@ class _Live:
         self, topic: str, frames: list[Frame], conn: InboundConnection, now: float
     ) -> bool:
         """Sample what arrived; False once ``-n`` messages are in or something failed."""
+        if self.done:  # another topic's reads may still come in: -n is exact across topics
+            return False
         try:
             sampler = self.sampler(topic, conn.header or {})
             t = now + self.wall

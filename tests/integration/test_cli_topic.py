@@ -351,7 +351,6 @@ def test_pub_rate_paces_each_message(rostools_master: str, cli_env: dict[str, st
     """
     import asyncio
     import itertools
-    import statistics
 
     from rostools.node.node import Node
 
@@ -373,4 +372,7 @@ def test_pub_rate_paces_each_message(rostools_master: str, cli_env: dict[str, st
     times = arrivals[len(arrivals) // 3 :]  # the last 2 s: connected and steady
     gaps = [b - a for a, b in itertools.pairwise(times)]
     assert len(gaps) > 3000, len(gaps)
-    assert statistics.median(gaps) > 0.1e-3, sorted(gaps)[len(gaps) // 2]  # bursts: about 0
+    # Paced, about 95% of the gaps are near 0.2 ms; bursts on each 1 ms wake-up gave about 15%.
+    # A third leaves room for a machine that stalls either process for a while (CI once did).
+    paced = sum(g > 0.1e-3 for g in gaps) / len(gaps)
+    assert paced > 1 / 3, f"{paced:.0%} of the gaps over 0.1 ms"

@@ -6,12 +6,11 @@ on the caller's own loop. Either way ``m.uri`` is what nodes are given.
 
 from __future__ import annotations
 
-import uuid
 from types import TracebackType
 
 from rostools._api import loop
-from rostools.errors import RostoolsError, UsageError
-from rostools.master.core import ROSDISTRO, ROSVERSION
+from rostools.errors import UsageError
+from rostools.master.core import start_master
 from rostools.master.server import Master as CoreMaster
 
 
@@ -48,19 +47,10 @@ class Master:
 
     async def start_async(self) -> Master:
         """Start serving on the running event loop."""
-        core = CoreMaster(self.host, self._port, advertise=self.host)
-        try:
-            await core.start()
-        except OSError as err:
-            raise RostoolsError(
-                f"cannot listen on {self.host}:{self._port}: {err.strerror or err}",
-                hint="another program holds the port; pick another, or 0 for a free one",
-            ) from err
-        assert core.api is not None
-        for key, value in (
-            ("/run_id", str(uuid.uuid1())), ("/rosdistro", ROSDISTRO), ("/rosversion", ROSVERSION)
-        ):  # fmt: skip
-            core.api.params.set(key, value)
+        core = await start_master(
+            self.host, self._port, self.host,
+            "another program holds the port; pick another, or 0 for a free one",
+        )  # fmt: skip
         self.core = core
         return self
 

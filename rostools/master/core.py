@@ -71,27 +71,39 @@ def choose_address(
     return Address(bind_address(name), port, name)
 
 
-async def run_core(address: Address, ready: Callable[[Master, str], None]) -> None:
-    """Serve until SIGINT, SIGTERM, SIGHUP or a ``shutdown`` call."""
-    master = Master(address.bind, address.port, address.advertise)
+async def start_master(bind: str, port: int, advertise: str, hint: str) -> Master:
+    """A master serving on ``bind:port``, with roscore's /run_id, /rosdistro and /rosversion.
+
+    A port it cannot listen on is one line, with ``hint``.
+    """
+    master = Master(bind, port, advertise)
     try:
         await master.start()
     except OSError as err:
         raise RostoolsError(
-            f"cannot listen on {address.bind}:{address.port}: {err.strerror or err}",
-            hint="another program holds the port; pick one with --port",
+            f"cannot listen on {bind}:{port}: {err.strerror or err}", hint=hint
         ) from err
     assert master.api is not None
     run_id = str(uuid.uuid1())
     for key, value in (("/run_id", run_id), ("/rosdistro", ROSDISTRO), ("/rosversion", ROSVERSION)):
         master.api.params.set(key, value)
+    return master
+
+
+async def run_core(address: Address, ready: Callable[[Master, str], None]) -> None:
+    """Serve until SIGINT, SIGTERM, SIGHUP or a ``shutdown`` call."""
+    master = await start_master(
+        address.bind, address.port, address.advertise,
+        "another program holds the port; pick one with --port",
+    )  # fmt: skip
     loop = asyncio.get_running_loop()
     for sig in STOP_SIGNALS:
         loop.add_signal_handler(sig, master.stopped.set)
     rosout = _Rosout(master, address.advertise)
     await rosout.start()
     try:
-        ready(master, run_id)
+        assert master.api is not None
+        ready(master, str(master.api.params.get("/run_id")))
         await master.wait()
     finally:
         await rosout.stop()

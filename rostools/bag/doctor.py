@@ -126,7 +126,7 @@ def _messages(
 ) -> None:
     """Read every message; decode those of ROS 1 types; count what does not fit its type."""
     ros1 = _ros1(reader)
-    total = _indexed(reader) or 0
+    total = (_indexed(reader) or 0) if progress is not None else 0
     done = 0
     decoders: dict[int, Any] = {}
     counts: Counter[int] = Counter()

@@ -121,7 +121,7 @@ def doctor(
     for path in bags:
         # A bar on a terminal only: the report is one document, so no progress events in it.
         bar = Progress(f"doctor {path.name}", Format.text, quiet)
-        reports.append(check(path, bar))
+        reports.append(check(path, bar if bar.bar else None))  # no bar: no count to read
         bar.done()
     if out is Format.text:
         for r in reports:

@@ -83,7 +83,7 @@ class Node:
         self.notify: Callable[[Notice], None] = to_stderr
         self._xmlrpc: XmlRpcServer | None = None
         self._tcpros: asyncio.base_events.Server | None = None
-        self._watch: asyncio.Task[None] | None = None
+        self._watch: MasterWatch | None = None
         #: Set while the master does not answer (see ``MasterWatch``).
         self.master_lost = False
         self._conn_ids = 0
@@ -106,7 +106,8 @@ class Node:
             for key, text in self.private_params.items():
                 value = yamlio.load(text, f"_{key}:=") if text else ""
                 await self.master_call("setParam", f"{self.name}/{key}", value)
-        self._watch = loop.create_task(MasterWatch(self).run())
+        self._watch = MasterWatch(self)
+        self._watch.start()
         return self
 
     @property
@@ -127,7 +128,7 @@ class Node:
     async def close(self) -> None:
         """Unregister everything, close every connection and server."""
         if self._watch is not None:
-            self._watch.cancel()
+            self._watch.stop()
         calls: list[tuple[str, tuple[Any, ...]]] = []
         for topic in self.publishers:
             calls.append(("unregisterPublisher", (self.name, topic, self.uri)))

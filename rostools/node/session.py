@@ -10,8 +10,8 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import signal
-from collections.abc import Awaitable, Callable
-from typing import TypeVar
+from collections.abc import Awaitable, Callable, Coroutine
+from typing import Any, TypeVar
 
 from rostools.errors import RostoolsError
 from rostools.node.node import Node
@@ -86,4 +86,35 @@ def run_node(
             for sig in STOP_SIGNALS:
                 loop.remove_signal_handler(sig)
 
-    return asyncio.run(runner())
+    return run_bounded(runner())
+
+
+#: How long the tasks left after a command's ``main`` get to end once cancelled (s).
+LEFTOVER_GRACE = 1.0
+
+
+def run_bounded(main: Coroutine[Any, Any, T]) -> T:
+    """``asyncio.run(main)``, except that the tasks left after it get ``LEFTOVER_GRACE``.
+
+    ``asyncio.run`` waits for them without a limit: a task that lost its cancellation
+    (Python 3.11's ``wait_for`` can) held a finished command until a SIGKILL, deaf to Ctrl-C.
+    """
+    loop = asyncio.new_event_loop()
+    asyncio.set_event_loop(loop)
+    try:
+        return loop.run_until_complete(main)
+    finally:
+        try:
+            rest = asyncio.all_tasks(loop)
+            for task in rest:
+                task.cancel()
+            if rest:
+                loop.run_until_complete(asyncio.wait(rest, timeout=LEFTOVER_GRACE))
+            for task in rest:
+                if not task.done():  # abandoned on purpose: no "destroyed but pending" at exit
+                    task._log_destroy_pending = False  # type: ignore[attr-defined]
+            loop.run_until_complete(loop.shutdown_asyncgens())
+            loop.run_until_complete(loop.shutdown_default_executor())
+        finally:
+            asyncio.set_event_loop(None)
+            loop.close()

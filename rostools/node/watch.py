@@ -54,21 +54,37 @@ SUBSCRIBER_CHECK_PERIOD = 1.0
 
 
 class MasterWatch:
-    """Runs beside a node until it closes (``asyncio.create_task(MasterWatch(node).run())``)."""
+    """Runs beside a node from ``start`` until ``stop`` (the node's close)."""
 
     def __init__(self, node: Registrations) -> None:
         self.node = node
+        self.stopped = False
+        self._task: asyncio.Task[None] | None = None
         self.next_check = time.monotonic() + SUBSCRIBER_CHECK_PERIOD
         #: (topic, subscriber) -> when we first saw it registered and silent
         self.silent: dict[tuple[str, str], float] = {}
         self.told: set[tuple[str, str]] = set()
 
+    def start(self) -> None:
+        """Watch in a task of the running loop."""
+        self._task = asyncio.get_running_loop().create_task(self.run())
+
+    def stop(self) -> None:
+        """Stop for good, before the node unregisters.
+
+        The flag, not only the cancellation: Python 3.11's ``wait_for`` drops a cancellation
+        that meets a finished call, and a watch going on would register the node again.
+        """
+        self.stopped = True
+        if self._task is not None:
+            self._task.cancel()
+
     async def run(self) -> None:
         """Check every ``WATCH_PERIOD`` while the node has anything registered."""
         node = self.node
-        while True:
+        while not self.stopped:
             await asyncio.sleep(WATCH_PERIOD)
-            if not (node.publishers or node.subscribers or node.services):
+            if self.stopped or not (node.publishers or node.subscribers or node.services):
                 continue
             try:
                 await self._check_master()
@@ -85,6 +101,8 @@ class MasterWatch:
         code, _, _ = await call(
             node.master_uri, "lookupNode", (node.name, node.name), WATCH_TIMEOUT
         )
+        if self.stopped:
+            return
         if code != SUCCESS:
             await self.register_again()
         elif node.master_lost:

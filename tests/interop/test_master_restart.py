@@ -126,3 +126,21 @@ def test_nodes_carry_on_through_a_master_restart(
         for proc in procs:
             proc.stop()
         master.stop()
+
+
+def test_a_roscore_stopped_the_hard_way_leaves_no_master_behind(tmp_path: Path) -> None:
+    # The fixtures' roscore: when it had to be SIGKILLed, its rosmaster (in a process group of
+    # its own) went on running, and a later run found a stray master.
+    port = free_port()
+    uri = f"http://127.0.0.1:{port}/"
+    core = start_roscore(port, ros_env(uri, tmp_path / "ros_home"))
+    master_pid = int(xmlrpc.client.ServerProxy(uri).getPid("/t")[2])
+    core.stop(timeout=0)  # no time to shut down: SIGKILL reaches roscore before its children
+
+    def gone() -> bool:  # a zombie counts as gone: this container's PID 1 may never reap it
+        try:
+            return Path(f"/proc/{master_pid}/stat").read_text().rsplit(")", 1)[1].split()[0] in "ZX"
+        except OSError:
+            return True
+
+    wait_for(gone, 10, "the master gone")

@@ -179,9 +179,33 @@ def core_and_env(home: Path) -> tuple[Proc, dict[str, str]]:
     return start_rostools_core(port, env), env
 
 
+class Roscore(Proc):
+    """``roscore``, whose rosmaster and rosout run in process groups of their own."""
+
+    def stop(self, timeout: float | None = None) -> int:
+        """As ``Proc.stop``; then its children too, which a roscore killed leaves running."""
+        children = child_pids(self.pid)
+        code = super().stop(timeout)
+        for pid in children:
+            with contextlib.suppress(ProcessLookupError):
+                os.kill(pid, signal.SIGKILL)
+        return code
+
+
+def child_pids(parent: int) -> list[int]:
+    """The PIDs of ``parent``'s children (Linux ``/proc``)."""
+    children = []
+    for stat in Path("/proc").glob("[0-9]*/stat"):
+        with contextlib.suppress(OSError, IndexError, ValueError):
+            # after "(command)": state, then the parent's PID
+            if int(stat.read_text().rsplit(")", 1)[1].split()[1]) == parent:
+                children.append(int(stat.parent.name))
+    return children
+
+
 def start_roscore(port: int, env: dict[str, str]) -> Proc:
     """The real ``roscore -p PORT`` (master and rosout), once the master answers."""
-    proc = Proc(["roscore", "-p", str(port)], env=env)
+    proc = Roscore(["roscore", "-p", str(port)], env=env)
     uri = f"http://127.0.0.1:{port}/"
     wait_for(lambda: master_answers(uri) or proc.popen.poll() is not None, 30, "roscore")
     if proc.popen.poll() is not None:

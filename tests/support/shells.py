@@ -73,13 +73,14 @@ class Shell:
         self.child.send(text)
         for _ in range(tabs):
             self.child.send("\t")
-            time.sleep(0.6)  # one completion round trip, with room for a loaded machine
+        # The line editor takes keys in order, so what follows waits for the completion; the
+        # quiet spell only lets a list it printed pass before the line is read back.
         self._drain()
         # Ctrl-A, to the start of the line; the quotes keep the echoed input from matching
         self.child.send("\x01echo LINE''X: \r")
         self.child.expect(r"LINEX: ([^\r\n]*)\r?\n")
         line: str = self.child.match.group(1)
-        self._drain()
+        self.child.expect("READY> ")
         return clean(line).strip()
 
     def offers(self, text: str) -> str:

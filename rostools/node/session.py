@@ -97,7 +97,8 @@ def run_bounded(main: Coroutine[Any, Any, T]) -> T:
     """``asyncio.run(main)``, except that the tasks left after it get ``LEFTOVER_GRACE``.
 
     ``asyncio.run`` waits for them without a limit: a task that lost its cancellation
-    (Python 3.11's ``wait_for`` can) held a finished command until a SIGKILL, deaf to Ctrl-C.
+    (Python 3.11's ``wait_for`` can) would hold a finished command, its stop signals no
+    longer caught, until something killed it.
     """
     loop = asyncio.new_event_loop()
     asyncio.set_event_loop(loop)

@@ -135,7 +135,7 @@ def test_a_roscore_stopped_the_hard_way_leaves_no_master_behind(tmp_path: Path) 
     uri = f"http://127.0.0.1:{port}/"
     core = start_roscore(port, ros_env(uri, tmp_path / "ros_home"))
     master_pid = int(xmlrpc.client.ServerProxy(uri).getPid("/t")[2])
-    core.stop(timeout=0)  # no time to shut down: SIGKILL reaches roscore before its children
+    core.stop()  # no time to shut down: SIGKILL reaches roscore before its children
 
     def gone() -> bool:  # a zombie counts as gone: this container's PID 1 may never reap it
         try:

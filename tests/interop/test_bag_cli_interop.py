@@ -128,13 +128,12 @@ def test_real_subscribers_get_what_we_play(
 ) -> None:
     bag = tmp_path / "p.bag"
     write_play_bag(bag)
-    if cpp:  # compile before the player's 4 s delay starts: a first build takes longer than that
-        cppbuild.build("listener")
-    # -s 0.5: /latched's only message is before the start, and must still be sent (latched)
-    player = rostools(any_master, "bag", "play", str(bag), "-s", "0.5", "-d", "4", "-k")
     chatter = listen(any_master, "/chatter", cpp)
+    chatter.expect("ready", 20)
+    # The player starts once the listener has subscribed, and waits for it to connect.
+    # -s 0.5: /latched's only message is before the start, and must still be sent (latched)
+    player = rostools(any_master, "bag", "play", str(bag), "-s", "0.5", "-d", "0", "-k")
     try:
-        chatter.expect("ready", 20)
         assert lines(chatter, 5) == [f"m{i}" for i in range(5, 10)]
         late = listen(any_master, "/latched", cpp)  # after the end: the latched copy is kept
         try:

@@ -114,8 +114,9 @@ def test_nodes_carry_on_through_a_master_restart(
         # and the echo that started before still hears the talker that did too
         for _ in range(5):
             assert json.loads(echo.expect("hello", 10))["data"].startswith("hello")
-        wait_for(lambda: listed("/later", cli_env), 20, "/later registered")
-        time.sleep(2.0)  # the recorder asks the master every second
+        # the recorder asks the master every second; then the talker has 20 messages a second
+        wait_for(lambda: any("record" in n for n in registered(uri, "/later", 1)), 20, "/later")
+        time.sleep(1.0)
         record.signal(signal.SIGINT)
         assert record.popen.wait(15) == 0
         info = json.loads(run_cli("bag", "info", str(bag), "-F", "json", env=cli_env).stdout)

@@ -7,6 +7,7 @@ the goal's number picks the outcome. One master and one server serve the whole m
 from __future__ import annotations
 
 import json
+import subprocess
 import sys
 from collections.abc import Iterator
 from pathlib import Path
@@ -145,3 +146,21 @@ def test_types_learnt_from_the_server(env: dict[str, str], tmp_path: Path) -> No
         assert got[-1]["result"] == {"result": 20}
     finally:
         server.stop()
+
+
+def test_list_runs_without_typer_and_prints_what_typer_prints(env: dict[str, str]) -> None:
+    for args in (
+        ["action", "list"],
+        ["action", "list", "-t"],
+        ["--format", "json", "action", "list"],
+    ):
+        quick = run_cli(*args, env=env)
+        slow = run_cli(*args, env=env | {"ROSTOOLS_NO_QUICK": "1"})
+        assert (quick.returncode, quick.stdout, quick.stderr) == (0, slow.stdout, slow.stderr)
+    listed = run_cli("action", "list", "-t", env=env).stdout.splitlines()
+    assert "/fib [actionlib/TestAction]" in listed
+    imports = subprocess.run(
+        [sys.executable, "-X", "importtime", "-m", "rostools", "action", "list"],
+        env=env, capture_output=True, text=True, check=True,
+    ).stderr  # fmt: skip
+    assert "| typer" not in imports  # Typer alone is 50 ms of start-up

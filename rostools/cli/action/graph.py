@@ -8,8 +8,10 @@ import typer
 
 from rostools.cli.action.group import app
 from rostools.cli.action.shared import ActionArg, find_action
-from rostools.cli.common import FormatOpt, MsgPathOpt, master, output_format
+from rostools.cli.common import FormatOpt, MsgPathOpt, master, output_format, settings
 from rostools.cli.output import emit
+from rostools.cli.quick import action as quick
+from rostools.cli.quick import runs
 from rostools.cli.settings import type_store
 from rostools.errors import RostoolsError
 
@@ -22,6 +24,7 @@ PARTS = (("goal", "Goal"), ("result", "Result"), ("feedback", "Feedback"))
 
 
 @app.command("list")
+@runs(quick.list_actions)
 def list_actions(
     ctx: typer.Context,
     show_types: Annotated[
@@ -30,16 +33,7 @@ def list_actions(
     fmt: FormatOpt = None,
 ) -> None:
     """List the actions in the graph: names with all five topics of an action."""
-    from rostools.action.graph import find_actions
-
-    proxy = master(ctx, "rostools")
-    pubs, subs, _ = proxy.system_state()
-    found = find_actions(proxy.topic_types(), pubs, subs)
-
-    def lines(_: Any) -> str:
-        return "\n".join(f"{a.name} [{a.type}]" if show_types else a.name for a in found)
-
-    emit(output_format(ctx, fmt), [a.as_dict() for a in found], lines)
+    quick.list_actions(settings(ctx), show_types, fmt)
 
 
 def _spec(

@@ -190,7 +190,9 @@ def test_a_huge_multicall_does_not_stall_other_clients(master: MasterThread) -> 
         waits.append(time.monotonic() - began)
     big.join()
     assert len(answer[0]) == 100_000 and answer[0][-1][0][0] == 1
-    assert len(waits) > 5 and max(waits) < 0.5, f"{len(waits)} calls, worst {max(waits):.2f} s"
+    # 1.5 s: master, both clients and pytest share one GIL, and a loaded CI stalls it (0.5 s
+    # failed there once); the defect's 4.5 s is still far above
+    assert len(waits) > 5 and max(waits) < 1.5, f"{len(waits)} calls, worst {max(waits):.2f} s"
 
 
 def test_a_bad_multicall_entry_is_a_fault(master: MasterThread, capsys: Any) -> None:

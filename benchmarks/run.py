@@ -16,6 +16,7 @@ MODULES = [
     "benchmarks.bench_msg",
     "benchmarks.bench_startup",
     "benchmarks.bench_master",
+    "benchmarks.bench_hostile",
     "benchmarks.bench_topic",
     "benchmarks.bench_topic_cpp",
     "benchmarks.bench_service",

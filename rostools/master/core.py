@@ -13,6 +13,7 @@ from rostools.errors import RostoolsError
 from rostools.master.server import Master
 from rostools.msgs.store import BuiltinSource, TypeStore
 from rostools.node.connection import Frame
+from rostools.node.listen import raise_descriptor_limit
 from rostools.node.node import Node
 from rostools.node.session import STOP_SIGNALS
 from rostools.rosgraph.network import (
@@ -92,6 +93,7 @@ async def start_master(bind: str, port: int, advertise: str, hint: str) -> Maste
 
 async def run_core(address: Address, ready: Callable[[Master, str], None]) -> None:
     """Serve until SIGINT, SIGTERM, SIGHUP or a ``shutdown`` call."""
+    raise_descriptor_limit()  # a socket per client, as every server needs
     master = await start_master(
         address.bind, address.port, address.advertise,
         "another program holds the port; pick one with --port",

@@ -16,6 +16,7 @@ from typing import Any
 from rostools.msgs.topictype import ANY, TopicType
 from rostools.names import anonymous, canonicalize, make_global_ns, resolve, ros_namespace
 from rostools.node.connection import ConnectionHandler, ServerConnection
+from rostools.node.listen import Listener, listen
 from rostools.node.notice import Notice, to_stderr
 from rostools.node.publisher import Publisher
 from rostools.node.service import ServiceHandler, ServiceServer, ServiceType
@@ -82,7 +83,7 @@ class Node:
         #: Where the node's notices go (a peer it cannot reach, a master restart).
         self.notify: Callable[[Notice], None] = to_stderr
         self._xmlrpc: XmlRpcServer | None = None
-        self._tcpros: asyncio.base_events.Server | None = None
+        self._tcpros: Listener | None = None
         self._watch: MasterWatch | None = None
         #: Set while the master does not answer (see ``MasterWatch``).
         self.master_lost = False
@@ -97,9 +98,8 @@ class Node:
         bind = bind_address(self.host)
         self._xmlrpc = XmlRpcServer(self._dispatch, bind, 0)
         await self._xmlrpc.start()
-        loop = asyncio.get_running_loop()
-        self._tcpros = await loop.create_server(lambda: ServerConnection(self._accept), bind, 0)
-        self.tcpros_port = self._tcpros.sockets[0].getsockname()[1]
+        self._tcpros = await listen(lambda: ServerConnection(self._accept), bind, 0)
+        self.tcpros_port = self._tcpros.port
         if self.private_params:
             from rostools import yamlio
 

@@ -14,6 +14,7 @@ from collections.abc import Awaitable, Callable, Coroutine
 from typing import Any, TypeVar
 
 from rostools.errors import RostoolsError
+from rostools.node.listen import raise_descriptor_limit
 from rostools.node.node import Node
 from rostools.node.notice import Notice
 
@@ -59,6 +60,7 @@ def run_node(
     The stop signals stay caught until the node has unregistered, so a second Ctrl-C during
     shutdown neither interrupts the unregistering nor prints a traceback.
     """
+    raise_descriptor_limit()  # record -a of a thousand topics holds a socket per topic
 
     async def runner() -> T:
         node = Node(name, master_uri, anonymous_name=anonymous_name, remappings=remappings)

@@ -18,8 +18,10 @@ from collections.abc import Callable
 from typing import Any
 from urllib.parse import urlsplit
 
+from rostools.node.listen import Listener, listen
 from rostools.wire.xmlrpc import (
     MAX_BODY,
+    BadCall,
     HttpError,
     HttpParser,
     Message,
@@ -88,9 +90,12 @@ def encode_answer(result: Any) -> bytes:
         return encode_fault(1, "<class 'RecursionError'>:value nested too deep to encode")
 
 
-def handle_body(dispatch: Dispatch, body: bytes) -> bytes:
+def handle_body(dispatch: Dispatch, body: bytes | bytearray) -> bytes:
     """Decode a call, run it, encode the answer; every failure becomes a fault."""
-    method, params = decode_call(body)
+    try:
+        method, params = decode_call(body)
+    except BadCall as err:
+        return encode_fault(1, str(err))
     return encode_answer(run_call(dispatch, method, params))
 
 
@@ -180,12 +185,11 @@ class _Connection(asyncio.BufferedProtocol):
         try:
             method, params = await loop.run_in_executor(None, decode_call, message.body)
             result = await self.server.run(method, params)
-            body = await loop.run_in_executor(None, encode_answer, result)
-        except HttpError as err:
-            self._refuse(err)
-            return
+        except BadCall as err:
+            result = Encoded(encode_fault(1, str(err)))
         finally:
             self._release()
+        body = await loop.run_in_executor(None, encode_answer, result)
         self._answer(body, message.keep_alive)
         self.busy = False
         if message.keep_alive and not transport.is_closing():
@@ -245,15 +249,12 @@ class XmlRpcServer:
         self.budget_used = 0
         #: Where every connection receives: each read is copied out before the next one.
         self.scratch = memoryview(bytearray(RECEIVE_CHUNK))
-        self._server: asyncio.base_events.Server | None = None
+        self._server: Listener | None = None
 
     async def start(self) -> None:
         """Bind and listen; ``port`` holds the bound port afterwards."""
-        loop = asyncio.get_running_loop()
-        self._server = await loop.create_server(
-            lambda: _Connection(self), self.host, self.port, reuse_address=True
-        )
-        self.port = self._server.sockets[0].getsockname()[1]
+        self._server = await listen(lambda: _Connection(self), self.host, self.port)
+        self.port = self._server.port
 
     async def run(self, method: str, params: tuple[Any, ...]) -> Any:
         """Run a call; a big ``system.multicall`` in slices, with turns for others between."""
@@ -278,7 +279,6 @@ class XmlRpcServer:
             for conn in list(self.connections):
                 if conn.transport is not None:
                     conn.transport.abort()
-            await self._server.wait_closed()
             self._server = None
 
 

@@ -13,7 +13,6 @@ import http.client
 import os
 import socket
 import time
-import xmlrpc.client
 from collections.abc import Mapping
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import asdict, dataclass, field
@@ -30,6 +29,7 @@ from rostools.rosgraph.network import (
     uri_host,
 )
 from rostools.wire.codes import SUCCESS
+from rostools.wire.xmlvalues import Fault, dumps_call, loads_response
 
 #: How far apart two clocks may be before we say so (s); HTTP dates have 1 s resolution.
 MAX_SKEW = 1.0
@@ -71,7 +71,7 @@ def ask(uri: str, method: str, params: tuple[Any, ...], timeout: float) -> Answe
     )
     try:
         sent = time.time()
-        body = xmlrpc.client.dumps(params, method)
+        body = dumps_call(method, params)
         conn.request("POST", parts.path or "/", body, {"Content-Type": "text/xml"})
         response = conn.getresponse()
         received = time.time()
@@ -79,7 +79,7 @@ def ask(uri: str, method: str, params: tuple[Any, ...], timeout: float) -> Answe
         date = response.getheader("Date")
     finally:
         conn.close()
-    (value,), _ = xmlrpc.client.loads(data)
+    value = loads_response(data)
     skew = None
     if date:
         with_tz = email.utils.parsedate_to_datetime(date)
@@ -88,7 +88,7 @@ def ask(uri: str, method: str, params: tuple[Any, ...], timeout: float) -> Answe
 
 
 def _failure(err: BaseException, host: str, peer: bool = True) -> Failure:
-    if isinstance(err, (xmlrpc.client.Error, http.client.HTTPException, ValueError)):
+    if isinstance(err, (Fault, http.client.HTTPException, ValueError)):
         return Failure(f"it does not speak the ROS XML-RPC API ({type(err).__name__})")
     return explain(err, host, peer)
 
@@ -150,7 +150,7 @@ class Doctor:
             self.master_addresses = _resolve(host)
             pid = self._master("getPid", uri)
             given = self._master("getUri", uri)
-        except (OSError, http.client.HTTPException, xmlrpc.client.Error, ValueError) as err:
+        except (OSError, http.client.HTTPException, Fault, ValueError) as err:
             failure = _failure(err, host, peer=False)
             reason, hint = failure.reason, failure.hint
             if isinstance(err, ConnectionRefusedError):
@@ -170,7 +170,7 @@ class Doctor:
         try:
             same = self._master("getPid", str(given)) == pid
             reason = "" if same else "another process answers there"
-        except (OSError, http.client.HTTPException, xmlrpc.client.Error, ValueError) as err:
+        except (OSError, http.client.HTTPException, Fault, ValueError) as err:
             same, reason = False, _failure(err, uri_host(str(given)), peer=False).reason
         if same:
             verdict = f"{uri} answers (pid {pid}); it gives out {given}, which reaches it too"

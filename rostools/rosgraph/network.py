@@ -174,5 +174,8 @@ def explain(err: BaseException, host: str, peer: bool = True) -> Failure:
         return Failure(f"{host} did not answer in time", "check the address and any firewall")
     if isinstance(err, OSError) and err.errno in (errno.EHOSTUNREACH, errno.ENETUNREACH):
         return Failure(f"no route to {host}", "check the address and the network")
-    reason = (err.strerror if isinstance(err, OSError) else None) or str(err) or type(err).__name__
+    if not isinstance(err, OSError):
+        # it was reached and answered: what it said is wrong, not where it is
+        return Failure(f"it does not speak the ROS XML-RPC API ({err or type(err).__name__})")
+    reason = err.strerror or str(err) or type(err).__name__
     return Failure(reason, SET_ADDRESS if loopback else "", False)

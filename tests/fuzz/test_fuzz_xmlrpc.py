@@ -1,7 +1,8 @@
 """Fuzz the XML-RPC side: the HTTP and XML parsers, every master and every slave method.
 
-The invariant: a bad request is an ``HttpError`` (a 4xx answer), a bad call is a ROS triple
-or a fault, and any answer encodes; nothing else is ever raised.
+The invariant: a bad request is an ``HttpError`` (a 4xx answer), a body that is no call is a
+``BadCall`` (rosmaster's fault), a bad call is a ROS triple or a fault, and any answer encodes;
+nothing else is ever raised. A DTD is never read.
 """
 
 from __future__ import annotations
@@ -10,13 +11,15 @@ import xmlrpc.client
 from types import SimpleNamespace
 from typing import Any
 
+import pytest
 from hypothesis import given, seed
 from hypothesis import strategies as st
 
 from rostools.master.master_api import MasterAPI
 from rostools.node.node import Node
 from rostools.node.xmlrpc import encode_answer, run_call
-from rostools.wire.xmlrpc import HttpError, HttpParser, decode_call, encode_result
+from rostools.wire.xmlrpc import BadCall, HttpError, HttpParser, decode_call, encode_result
+from rostools.wire.xmlvalues import BadAnswer, DoctypeRefused, loads_response
 from tests.fuzz.conftest import FUZZ, SEED
 
 #: Names as peers send them: good, relative, private, empty, illegal, huge.
@@ -117,7 +120,10 @@ def test_http_parser_takes_any_bytes(data: bytes, cuts: list[int]) -> None:
             parser.feed(data[pos : pos + cut])
             pos += cut
             while (message := parser.next_message()) is not None:
-                decode_call(message.body)
+                try:
+                    decode_call(message.body)
+                except BadCall as bad:
+                    assert str(bad).startswith("<class '")
     except HttpError as err:
         assert 400 <= err.status < 500
 
@@ -125,7 +131,7 @@ def test_http_parser_takes_any_bytes(data: bytes, cuts: list[int]) -> None:
 @seed(SEED)
 @FUZZ
 @given(st.sampled_from(MASTER_METHODS), PARAMS, st.integers(0, 400), st.binary(max_size=8))
-def test_mangled_xml_is_a_400(method: str, params: Any, at: int, junk: bytes) -> None:
+def test_mangled_xml_is_a_fault(method: str, params: Any, at: int, junk: bytes) -> None:
     try:
         body = xmlrpc.client.dumps(params, method, allow_none=True).encode()
     except (TypeError, OverflowError, RecursionError):
@@ -133,8 +139,8 @@ def test_mangled_xml_is_a_400(method: str, params: Any, at: int, junk: bytes) ->
     mangled = body[:at] + junk + body[at + len(junk) :]
     try:
         decode_call(mangled)
-    except HttpError as err:
-        assert err.status == 400
+    except BadCall as err:
+        assert str(err).startswith("<class '")
 
 
 #: Scalars as they reach the master: text with markup, control characters, CR, non-ASCII.
@@ -174,7 +180,7 @@ def test_calls_read_as_xmlrpc_client_reads_them(
     method: str, values: list[tuple[Any, str]], prolog: str, at: int, junk: bytes
 ) -> None:
     # The fast reader of scalar calls must agree with xmlrpc.client on every body: the same
-    # method and parameters, or a 400 where xmlrpc.client fails.
+    # method and parameters, or a fault where xmlrpc.client fails.
     params = b"".join(b"<param>" + _write(v, style) + b"</param>\n" for v, style in values)
     body = (
         f"{prolog}<methodCall>\n<methodName>{method}</methodName>\n<params>\n".encode()
@@ -184,15 +190,14 @@ def test_calls_read_as_xmlrpc_client_reads_them(
     for candidate in (body, body[:at] + junk + body[at + len(junk) :]):
         try:
             expected: Any = xmlrpc.client.loads(candidate, use_builtin_types=False)
-        except Exception:  # noqa: BLE001 - whatever loads refuses must be a 400
+        except Exception:  # noqa: BLE001 - whatever loads refuses must be a fault
             expected = None
         try:
             got: Any = decode_call(candidate)
-        except HttpError as err:
-            assert err.status == 400
+        except BadCall:
             got = None
-        if expected is not None and not expected[1]:
-            expected = None  # no methodName: a 400 here
+        if expected is not None and expected[1] is None:
+            expected = None  # no methodName: a fault, as rosmaster answers
         if expected is None:
             assert got is None
         else:
@@ -212,3 +217,57 @@ def test_answers_are_written_as_xmlrpc_client_writes_them(value: Any) -> None:
     except Exception as err:  # noqa: BLE001
         got = type(err)
     assert got == expected
+
+
+#: What a hostile DTD declares: entities of any name and text, parameter entities, external
+#: ones, and markup that is not a declaration at all.
+DECLARATIONS = st.lists(
+    st.builds(
+        lambda name, text, kind: {
+            "general": f"<!ENTITY {name} '{text}'>",
+            "parameter": f"<!ENTITY % {name} '{text}'>",
+            "external": f"<!ENTITY {name} SYSTEM 'file:///{text}'>",
+            "element": f"<!ELEMENT {name} ANY>",
+        }[kind],
+        st.from_regex(r"[a-z][a-z0-9]{0,6}", fullmatch=True),
+        st.text(st.characters(blacklist_characters="'%&<\x00", codec="utf-8"), max_size=20),
+        st.sampled_from(["general", "parameter", "external", "element"]),
+    ),
+    max_size=4,
+)
+
+
+@seed(SEED)
+@FUZZ
+@given(
+    st.sampled_from(MASTER_METHODS),
+    PARAMS,
+    DECLARATIONS,
+    st.sampled_from([("utf-8", "utf-8"), ("UTF-16", "utf-16"), ("UTF-16LE", "utf-16-le")]),
+    st.sampled_from(["methodCall", "lolz", "x"]),
+)
+def test_a_dtd_is_never_read(
+    method: str, params: Any, declarations: list[str], encoding: tuple[str, str], root: str
+) -> None:
+    # Any DOCTYPE, declaring anything, in any encoding expat reads, is refused as it starts:
+    # by a server reading a call and by a client reading an answer.
+    try:
+        call = xmlrpc.client.dumps(params, method, allow_none=True)
+        answer = xmlrpc.client.dumps((params,), methodresponse=True, allow_none=True)
+    except (TypeError, OverflowError, RecursionError):
+        return  # not a request a client could write
+    doctype = (
+        f"<!DOCTYPE {root} [{''.join(declarations)}]>\n"
+        if declarations
+        else (f"<!DOCTYPE {root}>\n")
+    )
+    declared, codec = encoding
+    prolog = f"<?xml version='1.0' encoding='{declared}'?>\n{doctype}"
+    for text, read, error in (
+        (call, decode_call, BadCall),
+        (answer, loads_response, BadAnswer),
+    ):
+        body = (prolog + text.split("?>", 1)[1]).encode(codec, "surrogatepass")
+        with pytest.raises(error) as err:
+            read(body)
+        assert isinstance(err.value.__cause__, DoctypeRefused), err.value

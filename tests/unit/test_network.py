@@ -113,3 +113,17 @@ def test_a_node_on_the_masters_host_gives_out_the_hostname(
         "n", "http://localhost:11311", remappings={"__hostname": "h", "__ip": "1.2.3.4"}
     )
     assert remapped.host == "h" and not remapped.remappings  # both consumed, neither a remap
+
+
+def test_a_malformed_answer_is_not_an_address_problem() -> None:
+    from rostools.rosgraph.network import SET_ADDRESS, explain
+    from rostools.wire.xmlvalues import BadAnswer
+
+    # the defect: a peer on loopback that answered garbage was told to set ROS_IP
+    failure = explain(BadAnswer("malformed XML-RPC answer: syntax error"), "127.0.0.1")
+    assert failure.hint == "" and failure.lasting
+    assert failure.reason == (
+        "it does not speak the ROS XML-RPC API (malformed XML-RPC answer: syntax error)"
+    )
+    # a refused connection there is still one
+    assert explain(ConnectionRefusedError(), "127.0.0.1").hint == SET_ADDRESS

@@ -6,6 +6,8 @@ import pytest
 
 from rostools.wire.xmlrpc import (
     MAX_BODY,
+    SIMPLE_CALL_MAX,
+    BadCall,
     HttpError,
     HttpParser,
     decode_call,
@@ -13,6 +15,7 @@ from rostools.wire.xmlrpc import (
     format_request,
     format_response,
 )
+from rostools.wire.xmlvalues import BadAnswer, DoctypeRefused, loads_response
 
 ROSCPP_CALL = (
     b'<?xml version="1.0"?>\r\n<methodCall><methodName>registerPublisher</methodName>\r\n'
@@ -61,6 +64,10 @@ def test_http10_closes_unless_asked() -> None:
         (b"POST / HTTP/1.1\r\nX: " + b"y" * 70000, 431),
         (b"POST / HTTP/1.1\r\nTransfer-Encoding: chunked\r\n\r\n", 411),
         (b"POST / HTTP/1.1\r\nContent-Length: x\r\n\r\n", 400),
+        (b"POST / HTTP/1.1\r\nContent-Length: +5\r\n\r\nhello", 400),
+        (b"POST / HTTP/1.1\r\nContent-Length: -1\r\n\r\n", 400),
+        # RFC 9112 6.3: two lengths that differ leave the end of the body unknowable
+        (b"POST / HTTP/1.1\r\nContent-Length: 5\r\nContent-Length: 50\r\n\r\nhello", 400),
     ],
 )
 def test_limits_and_bad_requests(data: bytes, status: int) -> None:
@@ -71,9 +78,86 @@ def test_limits_and_bad_requests(data: bytes, status: int) -> None:
     assert err.value.status == status
 
 
-def test_bad_xml_is_a_400() -> None:
-    with pytest.raises(HttpError, match="400"):
+def test_the_same_content_length_twice_is_one_length() -> None:
+    parser = HttpParser()
+    parser.feed(b"POST / HTTP/1.1\r\nContent-Length: 5\r\ncontent-length: 5\r\n\r\nhello")
+    message = parser.next_message()
+    assert message is not None and message.body == b"hello"
+
+
+def test_bad_xml_is_rosmasters_fault_string() -> None:
+    # rosmaster answers such a body with a fault whose string is exactly this
+    with pytest.raises(BadCall) as err:
         decode_call(b"<methodCall><methodName>x</methodName><params><param>")
+    assert str(err.value) == (
+        "<class 'xml.parsers.expat.ExpatError'>:no element found: line 1, column 53"
+    )
+    with pytest.raises(BadCall) as err:
+        decode_call(b"<?xml version='1.0'?><methodCall><params></params></methodCall>")
+    assert str(err.value) == "<class 'Exception'>:method \"None\" is not supported"
+
+
+def _with_entity(declaration: str, encoding: str = "utf-8") -> bytes:
+    text = (
+        f"<?xml version='1.0' encoding='{encoding}'?>\n<!DOCTYPE m [{declaration}]>\n"
+        "<methodCall><methodName>getPid</methodName><params><param><value><string>&e;"
+        "</string></value></param></params></methodCall>\n"
+    )
+    return text.encode(encoding)
+
+
+LAUGHS = (
+    "<!ENTITY l0 'lol'>"
+    + "".join(f"<!ENTITY l{i} '{f'&l{i - 1};' * 10}'>" for i in range(1, 10))
+    + "<!ENTITY e '&l9;'>"
+)
+
+
+@pytest.mark.parametrize(
+    "body",
+    [
+        _with_entity("<!ENTITY e 'x'>"),  # harmless, but XML-RPC never needs a DTD
+        _with_entity(LAUGHS),  # 10^9 characters once expanded
+        _with_entity(LAUGHS, "utf-16"),  # a byte search for "<!DOCTYPE" would miss it
+        _with_entity("<!ENTITY e SYSTEM 'file:///etc/passwd'>"),
+    ],
+    ids=["one-entity", "billion-laughs", "utf-16", "external"],
+)
+def test_a_doctype_is_refused_before_it_is_read(body: bytes) -> None:
+    with pytest.raises(BadCall, match="needs no DTD") as err:
+        decode_call(body)
+    assert isinstance(err.value.__cause__, DoctypeRefused)
+    answer = body.replace(b"methodCall", b"methodResponse").replace(
+        b"<methodName>getPid</methodName>", b""
+    )
+    with pytest.raises(BadAnswer, match="needs no DTD") as bad:
+        loads_response(answer)
+    assert isinstance(bad.value.__cause__, DoctypeRefused)
+
+
+def test_a_big_call_is_read_as_loads_reads_it() -> None:
+    import xmlrpc.client
+
+    # multi-byte characters cross the slices expat is fed in
+    value = "é€😀<&>" * (SIMPLE_CALL_MAX // 4)
+    params = ("/caller", "/big", value, [1, 2.5, {"k": "v"}])
+    body = xmlrpc.client.dumps(params, "setParam").encode()
+    assert len(body) > 2 * SIMPLE_CALL_MAX
+    assert decode_call(body) == ("setParam", params)
+    assert decode_call(bytearray(body)) == ("setParam", params)
+
+
+def test_a_big_body_is_handed_over_and_what_follows_it_kept() -> None:
+    big, small = b"b" * (1 << 20), b"s" * 10
+    parser = HttpParser()
+    parser.feed(_request(big))
+    message = parser.next_message()
+    assert message is not None and message.body == big
+    parser.feed(_request(big) + _request(small))
+    first, second = parser.next_message(), parser.next_message()
+    assert first is not None and first.body == big
+    assert second is not None and second.body == small
+    assert parser.next_message() is None and not parser.buffer
 
 
 def test_big_ints_cannot_be_encoded() -> None:

@@ -26,7 +26,8 @@ from typing import Any
 from rostools.bag.access import file_name, open_writer
 from rostools.bag.base import BagWriter
 from rostools.bag.model import Connection
-from rostools.errors import RostoolsError, UsageError
+from rostools.bag.sink import WriteError
+from rostools.errors import DataLossError, RostoolsError, UsageError
 from rostools.msgs.topictype import TopicType
 from rostools.node.clock import RosClock
 from rostools.node.connection import Frame, InboundConnection
@@ -172,8 +173,13 @@ class _Writer(threading.Thread):
             self._loop()
         except BaseException as err:  # noqa: BLE001 - reported by the recorder
             self.error = err
-        finally:
+        try:
             self._close_file()
+        except BaseException as err:  # noqa: BLE001 - reported by the recorder, not the thread
+            # A failed write fails the close too: the file stays .active for bag recover.
+            self.writer = None
+            if self.error is None:
+                self.error = err
 
     def _open_file(self, t_ns: int) -> BagWriter:
         opts = self.rec.opts
@@ -463,7 +469,21 @@ class Recorder:
         finally:
             await self._finish()
         if self._writer.error is not None:
-            raise self._writer.error
+            raise self._failure(self._writer.error)
+
+    def _failure(self, err: BaseException) -> BaseException:
+        """What to raise for the writer's error: a failed write says what is kept, and where."""
+        if not isinstance(err, WriteError):
+            return err
+        active = Path(err.path)
+        failure = DataLossError(
+            f"{err}: the recording stopped; what was written stays in {active}",
+            hint=f"free some space, then run 'rostools bag recover {active}'"
+            if err.disk_full
+            else f"run 'rostools bag recover {active}'",
+        )
+        failure.__cause__ = err
+        return failure
 
     async def _clock_valid(self, stop: asyncio.Event) -> bool:
         """Under sim time, wait for the first /clock (False if stopped first), as rosbag."""

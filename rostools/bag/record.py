@@ -476,12 +476,16 @@ class Recorder:
         if not isinstance(err, WriteError):
             return err
         active = Path(err.path)
-        failure = DataLossError(
-            f"{err}: the recording stopped; what was written stays in {active}",
-            hint=f"free some space, then run 'rostools bag recover {active}'"
-            if err.disk_full
-            else f"run 'rostools bag recover {active}'",
-        )
+        space = "free some space" if err.disk_full else None
+        if active.exists():
+            failure = DataLossError(
+                f"{err}: the recording stopped; what was written stays in {active}",
+                hint=f"{space}, then run 'rostools bag recover {active}'"
+                if space
+                else f"run 'rostools bag recover {active}'",
+            )
+        else:  # a new file (the first, or a split) that could not even be started
+            failure = DataLossError(f"{err}: the recording stopped", hint=space)
         failure.__cause__ = err
         return failure
 

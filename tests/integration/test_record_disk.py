@@ -166,6 +166,33 @@ def test_a_full_disk_stops_with_one_line_and_exit_6(
     )
 
 
+def test_a_disk_full_from_the_start_leaves_no_file(
+    rostools_master: str, cli_env: dict[str, str], tmp_path: Path
+) -> None:
+    if (why := _no_tmpfs()) is not None:
+        pytest.skip(why)
+    disk = tmp_path / "disk"
+    disk.mkdir()
+    out = disk / "x.bag"
+    script = (
+        'disk=$1; shift; mount -t tmpfs -o size=64k tmpfs "$disk" || exit 99;'
+        ' head -c 100000 /dev/zero > "$disk/filler" 2>/dev/null;'
+        ' "$@"; code=$?; ls "$disk" >&2; exit $code'
+    )
+    code, err = _record_until_it_stops(
+        ["unshare", "-m", "sh", "-c", script, "sh", str(disk),
+         sys.executable, "-m", "rostools", "bag", "record", "-q", "-L", "0", "/t", "-O", str(out)],
+        cli_env,
+    )  # fmt: skip
+    assert code == 6, err
+    line, listing = err.split("\n", 1)
+    assert line == (
+        f"rostools: cannot write {out}.active: the disk is full (No space left on device):"
+        " the recording stopped (hint: free some space)"
+    )
+    assert listing.split() == ["filler"]  # no empty or partial bag left behind
+
+
 def test_a_file_size_limit_stops_with_one_line_and_exit_6(
     publisher: Proc, cli_env: dict[str, str], tmp_path: Path
 ) -> None:

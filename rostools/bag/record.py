@@ -4,7 +4,8 @@ Frames go from the socket into a bounded queue without being decoded; a thread t
 out and writes them, so the disk never blocks receiving. When the queue holds more than the
 buffer allows, the oldest message is dropped and counted against its topic, as rosbag does,
 but the count is shown and makes the exit code say so. The file is written as ``NAME.active``
-and renamed when it is closed; a recording killed outright is left for ``bag recover``.
+and renamed when it is closed; a recording killed outright, or cut short by a write that
+failed (a full disk), is left for ``bag recover``.
 """
 
 from __future__ import annotations

@@ -79,9 +79,13 @@ class McapWriter(BagWriter):
         self._metadata_indexes: list[bytes] = []
         self._start = _MAX_TIME
         self._end = 0
-        self._sink.write(fmt.MAGIC)
-        self._sink.write(fmt.encode_header(profile, library))
-        self._sink.flush()
+        try:
+            self._sink.write(fmt.MAGIC)
+            self._sink.write(fmt.encode_header(profile, library))
+            self._sink.flush()
+        except BaseException:
+            self.abort()  # a disk already full: no file, and no open descriptor
+            raise
 
     # -- the public interface --------------------------------------------------------------
 

@@ -4,7 +4,8 @@ Frames go from the socket into a bounded queue without being decoded; a thread t
 out and writes them, so the disk never blocks receiving. When the queue holds more than the
 buffer allows, the oldest message is dropped and counted against its topic, as rosbag does,
 but the count is shown and makes the exit code say so. The file is written as ``NAME.active``
-and renamed when it is closed; a recording killed outright is left for ``bag recover``.
+and renamed when it is closed; a recording killed outright, or cut short by a write that
+failed (a full disk), is left for ``bag recover``.
 """
 
 from __future__ import annotations
@@ -26,7 +27,8 @@ from typing import Any
 from rostools.bag.access import file_name, open_writer
 from rostools.bag.base import BagWriter
 from rostools.bag.model import Connection
-from rostools.errors import RostoolsError, UsageError
+from rostools.bag.sink import WriteError
+from rostools.errors import DataLossError, RostoolsError, UsageError
 from rostools.msgs.topictype import TopicType
 from rostools.node.clock import RosClock
 from rostools.node.connection import Frame, InboundConnection
@@ -172,8 +174,13 @@ class _Writer(threading.Thread):
             self._loop()
         except BaseException as err:  # noqa: BLE001 - reported by the recorder
             self.error = err
-        finally:
+        try:
             self._close_file()
+        except BaseException as err:  # noqa: BLE001 - reported by the recorder, not the thread
+            # A failed write fails the close too: the file stays .active for bag recover.
+            self.writer = None
+            if self.error is None:
+                self.error = err
 
     def _open_file(self, t_ns: int) -> BagWriter:
         opts = self.rec.opts
@@ -463,7 +470,25 @@ class Recorder:
         finally:
             await self._finish()
         if self._writer.error is not None:
-            raise self._writer.error
+            raise self._failure(self._writer.error)
+
+    def _failure(self, err: BaseException) -> BaseException:
+        """What to raise for the writer's error: a failed write says what is kept, and where."""
+        if not isinstance(err, WriteError):
+            return err
+        active = Path(err.path)
+        space = "free some space" if err.disk_full else None
+        if active.exists():
+            failure = DataLossError(
+                f"{err}: the recording stopped; what was written stays in {active}",
+                hint=f"{space}, then run 'rostools bag recover {active}'"
+                if space
+                else f"run 'rostools bag recover {active}'",
+            )
+        else:  # a new file (the first, or a split) that could not even be started
+            failure = DataLossError(f"{err}: the recording stopped", hint=space)
+        failure.__cause__ = err
+        return failure
 
     async def _clock_valid(self, stop: asyncio.Event) -> bool:
         """Under sim time, wait for the first /clock (False if stopped first), as rosbag."""

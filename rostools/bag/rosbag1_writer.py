@@ -69,9 +69,13 @@ class Bag1Writer(BagWriter):
         self._chunk_start = 0
         self._chunk_end = 0
         self._chunk_index: dict[int, array[int]] = {}
-        self._sink.write(fmt.MAGIC)
-        self._sink.write(self._bag_header(0, 0, 0))
-        self._sink.flush()
+        try:
+            self._sink.write(fmt.MAGIC)
+            self._sink.write(self._bag_header(0, 0, 0))
+            self._sink.flush()
+        except BaseException:
+            self.abort()  # a disk already full: no file, and no open descriptor
+            raise
 
     # -- the public interface --------------------------------------------------------------
 

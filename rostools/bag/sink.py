@@ -7,6 +7,7 @@ its bytes once (into the page cache) instead of three or four times through Pyth
 
 from __future__ import annotations
 
+import errno
 import os
 import sys
 from array import array
@@ -20,6 +21,33 @@ BIG_PAYLOAD: Final = 16 * 1024
 _IOV_MAX: Final = min(os.sysconf("SC_IOV_MAX") if hasattr(os, "sysconf") else 1024, 1024)
 
 Buffer = bytes | bytearray | memoryview
+
+#: What the OS said, in the words a user needs (the rest say ``strerror``).
+_CAUSES: Final = {
+    errno.ENOSPC: "the disk is full",
+    errno.EDQUOT: "the disk quota is used up",
+    errno.EFBIG: "the file is larger than the file system or the size limit (ulimit -f) allows",
+}
+
+
+class WriteError(InvalidDataError):
+    """The OS refused to write a bag file: a full disk, a size limit, an I/O error.
+
+    ``errno`` is the OS's error number. Once a write has failed, the file's tail is not known,
+    so the sink writes nothing more: what is in the file stays readable by ``bag recover``.
+    """
+
+    def __init__(self, path: str, err: OSError) -> None:
+        self.path = path
+        self.errno = err.errno
+        why = err.strerror or str(err)
+        cause = _CAUSES.get(err.errno or 0)
+        super().__init__(f"cannot write {path}: " + (f"{cause} ({why})" if cause else why))
+
+    @property
+    def disk_full(self) -> bool:
+        """Whether the disk (or the user's quota) is full."""
+        return self.errno in (errno.ENOSPC, errno.EDQUOT)
 
 
 def frozen(data: Buffer) -> bytes | memoryview:
@@ -48,6 +76,7 @@ class Sink:
         self._queue: list[Buffer] = []
         self._queued = 0
         self._small = bytearray()
+        self._failed: WriteError | None = None
 
     def tell(self) -> int:
         """The file offset the next byte will have."""
@@ -84,6 +113,8 @@ class Sink:
             self._queue.append(self._small)
             self._queued += len(self._small)
             self._small = bytearray()
+        if self._failed is not None:
+            raise self._failed
         queue = self._queue
         i = 0
         try:
@@ -99,16 +130,23 @@ class Sink:
                     done -= size
                     i += 1
         except OSError as err:
-            raise InvalidDataError(f"cannot write {self.name}: {err.strerror or err}") from err
+            raise self._fail(err) from err
         finally:
             del queue[:i]
 
     def pwrite(self, data: bytes, pos: int) -> None:
         """Overwrite bytes already handed to the OS (a header patched on close)."""
+        if self._failed is not None:
+            raise self._failed
         try:
             os.pwrite(self.fd, data, pos)
         except OSError as err:
-            raise InvalidDataError(f"cannot write {self.name}: {err.strerror or err}") from err
+            raise self._fail(err) from err
+
+    def _fail(self, err: OSError) -> WriteError:
+        """Remember the failure: a later flush would append after a tail that is not known."""
+        self._failed = WriteError(self.name, err)
+        return self._failed
 
 
 def little_endian(values: array[int]) -> bytes:

@@ -4,15 +4,20 @@ Each runs in a session of its own and is stopped through its process group, whos
 its PID: SIGINT, then SIGTERM, then SIGKILL. Nothing is ever stopped by name, and what a
 launcher started (roslaunch, a shell) goes with it. Output goes to a file, so a child
 that writes a lot never blocks on a full pipe, and a failed test can show its tail.
+If the process that started them dies first (pytest killed by a CI cancel or ``timeout``),
+the reaper (``reaper.py``) stops them.
 """
 
 from __future__ import annotations
 
+import atexit
 import contextlib
 import os
 import signal
 import subprocess
+import sys
 import tempfile
+import threading
 import time
 from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
@@ -24,6 +29,68 @@ from rostools.rosgraph.masterapi import MasterProxy
 STOP_WAIT = 3.0
 #: Lines of output a report shows.
 TAIL_LINES = 20
+
+
+class _Reaper:
+    """The reaper (``reaper.py``) of the process that holds it, started on first use."""
+
+    def __init__(self) -> None:
+        self.lock = threading.Lock()
+        self.popen: subprocess.Popen[bytes] | None = None
+        self.owner = 0  # the PID that started it: a forked child starts its own
+
+    def _started(self) -> subprocess.Popen[bytes]:
+        popen = self.popen
+        if popen is None or self.owner != os.getpid() or popen.poll() is not None:
+            # -I: nothing from the environment or the working folder; it needs only the
+            # standard library. Its own session: a Ctrl-C or a group kill meant for pytest
+            # leaves it to do its work.
+            popen = subprocess.Popen(
+                [sys.executable, "-I", str(Path(__file__).with_name("reaper.py"))],
+                stdin=subprocess.PIPE,
+                stdout=subprocess.DEVNULL,
+                stderr=subprocess.DEVNULL,
+                start_new_session=True,
+            )
+            if self.owner != os.getpid():
+                atexit.register(self.close)
+            self.popen, self.owner = popen, os.getpid()
+        return popen
+
+    def tell(self, line: str) -> None:
+        """Send one ``+PGID`` or ``-PGID`` line (a reaper that died is started again)."""
+        with self.lock:
+            for _ in range(2):
+                popen = self._started()
+                assert popen.stdin is not None
+                try:
+                    popen.stdin.write(line.encode() + b"\n")
+                    popen.stdin.flush()
+                    return
+                except OSError:  # it was killed: the next turn starts another
+                    popen.wait()
+
+    def close(self) -> None:
+        """At exit: close the pipe, so that it stops what is left and exits."""
+        with self.lock:
+            popen = self.popen
+            if popen is None or self.owner != os.getpid():
+                return
+            assert popen.stdin is not None
+            with contextlib.suppress(OSError):
+                popen.stdin.close()
+            with contextlib.suppress(subprocess.TimeoutExpired):
+                popen.wait(10)
+            self.popen = None
+
+
+_REAPER = _Reaper()
+
+
+def reaper_pid() -> int | None:
+    """The PID of this process's reaper, if one runs (for tests)."""
+    popen = _REAPER.popen
+    return popen.pid if popen is not None and _REAPER.owner == os.getpid() else None
 
 
 class RosProcess:
@@ -55,6 +122,7 @@ class RosProcess:
                 start_new_session=True,
             )
         self.pid = self.popen.pid
+        _REAPER.tell(f"+{self.pid}")
         self.master_uri = child_env.get("ROS_MASTER_URI", "")
 
     @property
@@ -91,7 +159,9 @@ class RosProcess:
             with contextlib.suppress(subprocess.TimeoutExpired):
                 self.popen.wait(wait)
         self._signal(signal.SIGKILL)  # whatever it left behind in its group
-        return self.popen.wait()
+        code = self.popen.wait()
+        _REAPER.tell(f"-{self.pid}")
+        return code
 
     def _check_alive(self, waiting_for: str) -> None:
         if self.popen.poll() is not None:

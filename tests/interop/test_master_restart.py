@@ -1,7 +1,8 @@
 """A master killed outright and started again under running nodes, on both masters.
 
-rospy and roscpp never register again, so after a respawn they are invisible to everyone who
-starts later. Ours (pub, echo, record, play) notice the new master and register again, and
+rospy and roscpp never register again what they registered before, so after a respawn that
+is invisible to everyone who starts later (what the README says of them is checked here on
+roscore). Ours (pub, echo, record, play) notice the new master and register again, and
 carry on.
 """
 
@@ -17,8 +18,9 @@ from pathlib import Path
 
 import pytest
 
+from rostools.bag.access import open_bag
 from tests.support.bagdata import write_play_bag
-from tests.support.env import needs_ros1, run_cli
+from tests.support.env import ROOT, needs_ros1, run_cli
 from tests.support.procs import (
     Proc,
     free_port,
@@ -145,3 +147,103 @@ def test_a_roscore_stopped_the_hard_way_leaves_no_master_behind(tmp_path: Path) 
             return True
 
     wait_for(gone, 10, "the master gone")
+
+
+#: The README's claim (its lines joined) that the next test checks.
+README_CLAIM = (
+    "rospy and roscpp nodes never register again what they registered before; only what they"
+    " register afterwards reaches the new master. So a subscriber that starts later cannot find"
+    " an earlier publisher, and an earlier subscriber hears no later publisher: `rosbag record"
+    " TOPIC` records nothing more, and `rosbag record -a`, which asks the master every second,"
+    " records the topics new to it but misses later publishers of the topics it was recording"
+    " already"
+)
+
+
+def test_ros1_nodes_register_nothing_again_after_a_restart(tmp_path: Path) -> None:
+    """What the README says of rospy and roscpp under a restarted roscore (ros_comm 1.15).
+
+    Neither registers again anything it registered before. What a node registers afterwards
+    goes to the new master as usual: ``rosbag record -a`` (roscpp) asks the master every
+    second and subscribes to topics new to it, so it records their later publishers, but not
+    the later publishers of a topic it was recording already. ``rosbag record TOPIC`` and a
+    rospy subscriber hear no later publisher at all.
+    """
+    readme = " ".join((ROOT / "README.md").read_text().split())
+    assert README_CLAIM in readme, "the README no longer says what this test checks"
+    port = free_port()
+    uri = f"http://127.0.0.1:{port}"
+    env = ros_env(uri, tmp_path / "ros_home")
+    master = start_roscore(port, env)
+    procs: list[Proc] = []
+
+    def talker(topic: str, name: str) -> Proc:
+        proc = start_ros1_node("talker.py", [topic, "20", "0", "-1", f"__name:={name}"], env)
+        procs.append(proc)
+        return proc
+
+    def subscribers(topic: str) -> list[str]:
+        return sorted(registered(uri, topic, 1))
+
+    try:
+        talker("/old", "talker_old")
+        listener = start_ros1_node(
+            "listener.py", ["/heard", "std_msgs/String", "__name:=py_listener"], env
+        )
+        procs.append(listener)
+        listener.expect("ready", 20)
+        rec_all = Proc(["rosbag", "record", "-a", "-O", str(tmp_path / "all.bag"),
+                        "__name:=rec_all"], env=env)  # fmt: skip
+        rec_named = Proc(["rosbag", "record", "/named", "-O", str(tmp_path / "named.bag"),
+                          "__name:=rec_named"], env=env)  # fmt: skip
+        procs += [rec_all, rec_named]
+        wait_for(
+            lambda: (
+                "/rec_all" in subscribers("/old")
+                and subscribers("/named") == ["/rec_named"]
+                and any(n.startswith("/py_listener") for n in subscribers("/heard"))
+            ),
+            30,
+            "the ROS 1 nodes registered",
+        )
+
+        kill_master(master, uri)
+        master = start_roscore(port, env)
+        for topic, name in (("/new", "talker_new"), ("/heard", "talker_heard"),
+                            ("/named", "talker_named")):  # fmt: skip
+            talker(topic, name)
+        later = talker("/old", "talker_old2")
+        # rosbag record -a finds /new on its next poll: new registrations reach the new master
+        wait_for(lambda: subscribers("/new") == ["/rec_all"], 20, "rosbag record -a on /new")
+        later.expect(r"said hello 40", 20)  # 2 s of messages from the later publishers
+
+        # what was registered before the restart was never registered again
+        assert registered(uri, "/old") == ["/talker_old2"]  # not the rospy talker_old
+        assert subscribers("/old") == []  # not rosbag record -a (roscpp)
+        # nor rosbag record /named (roscpp), nor the rospy listener; -a subscribed to both anew
+        assert subscribers("/named") == ["/rec_all"]
+        assert subscribers("/heard") == ["/rec_all"]
+        with pytest.raises(AssertionError):  # nothing it printed, nor prints now, says "got"
+            listener.expect(r"^got ", 1.0)
+        for rec in (rec_all, rec_named):
+            rec.signal(signal.SIGINT)
+            rec.popen.wait(20)
+    finally:
+        for proc in procs:
+            proc.stop()
+        master.stop()
+
+    def recorded(bag: str) -> dict[str, set[str]]:
+        """Each topic's publishers (callerids) that the bag holds messages from."""
+        by_topic: dict[str, set[str]] = {}
+        with open_bag(tmp_path / bag) as reader:
+            for conn, _, _ in reader.messages():
+                by_topic.setdefault(conn.topic, set()).add(conn.callerid)
+        return by_topic
+
+    everything = recorded("all.bag")
+    assert everything["/new"] == {"/talker_new"}  # a topic new to it: its publisher recorded
+    assert everything["/heard"] == {"/talker_heard"}
+    assert everything["/old"] == {"/talker_old"}  # a topic it had: the later talker missed
+    assert "/named" in everything and everything["/named"] == {"/talker_named"}
+    assert recorded("named.bag") == {}  # named topics: no later publisher heard

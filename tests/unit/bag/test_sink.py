@@ -2,13 +2,14 @@
 
 from __future__ import annotations
 
+import errno
 import os
 from pathlib import Path
 
 import pytest
 
 from rostools.bag import sink as sink_module
-from rostools.bag.sink import BIG_PAYLOAD, Sink, frozen
+from rostools.bag.sink import BIG_PAYLOAD, Sink, WriteError, frozen
 
 
 def test_partial_writes_are_completed(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
@@ -55,3 +56,55 @@ def test_a_reused_buffer_does_not_change_written_messages(tmp_path: Path) -> Non
         writer.close()
         with open_bag(tmp_path / name) as reader:
             assert [bytes(d)[0] for _, _, d in reader.messages()] == [0, 1, 2]
+
+
+def _full_disk(monkeypatch: pytest.MonkeyPatch, after: int = 0) -> None:
+    """Writes succeed for ``after`` bytes, then fail as on a full disk (ENOSPC)."""
+    real = os.writev
+    room = [after]
+
+    def full(fd: int, buffers: list[bytes]) -> int:
+        if room[0] <= 0:
+            raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+        first = bytes(buffers[0])[: room[0]]
+        room[0] -= len(first)
+        return real(fd, [first])
+
+    monkeypatch.setattr(sink_module.os, "writev", full)
+
+
+def test_after_a_failed_write_nothing_more_is_written(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    # The tail of the file is a record cut short: anything appended later (an index on close,
+    # once some space is freed) would land after it, where no reader looks for it.
+    path = tmp_path / "out"
+    fd = os.open(path, os.O_WRONLY | os.O_CREAT)
+    out = Sink(fd, str(path))
+    _full_disk(monkeypatch, after=5)
+    out.write(b"0123456789")
+    with pytest.raises(WriteError, match=r"cannot write .*out: the disk is full") as failed:
+        out.flush()
+    assert failed.value.disk_full
+    monkeypatch.undo()  # space again
+    out.write(b"more")
+    with pytest.raises(WriteError):
+        out.flush()
+    with pytest.raises(WriteError):
+        out.pwrite(b"X", 0)
+    os.close(fd)
+    assert path.read_bytes() == b"01234"
+
+
+@pytest.mark.parametrize("name", ["x.bag", "x.mcap"])
+def test_a_writer_on_a_full_disk_leaves_no_file_and_no_descriptor(
+    name: str, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    from rostools.bag.access import open_writer
+
+    _full_disk(monkeypatch)
+    fds = len(os.listdir("/proc/self/fd"))
+    with pytest.raises(WriteError, match="the disk is full"):
+        open_writer(tmp_path / name)
+    assert len(os.listdir("/proc/self/fd")) == fds
+    assert not (tmp_path / name).exists()

@@ -165,36 +165,49 @@ class Sampler:
         #: Messages whose array was too short for an index, so gave no sample.
         self.missed = 0
 
-    def feed(self, frames: Sequence[Any], t: float) -> int:
+    def feed(
+        self,
+        frames: Sequence[Any],
+        t: float,
+        skip: Callable[[DecodeError, Any], None] | None = None,
+    ) -> int:
         """Sample messages that arrived at ``t`` (seconds); how many passed the filter.
 
-        Bytes that do not decode as the type says are a ``DecodeError`` naming both.
+        Bytes that do not decode as the type says are a ``DecodeError`` naming both; with
+        ``skip``, it is handed the error and the message, which gives no sample.
         """
         stamp, keep, columns = self.stamp, self.keep, self.columns
         fed = 0
-        try:
-            for data in frames:
+        for data in frames:
+            try:
                 if keep is not None:
                     msg = self.decode(data, 0)[0] if self.decode is not None else None
                     if not keep(self.topic, msg, Time.from_sec(t)):
                         continue
-                fed += 1
                 x = stamp(data) if stamp is not None else t
-                for col in columns:
+                values: list[Any] = []
+                for col in columns:  # every number first: a message that fails gives none
                     try:
-                        value = col.extract(data)
+                        values.append(col.extract(data))
                     except IndexError:
-                        self.missed += 1
-                        continue
-                    if col.put is not None:
-                        col.put(x, value)
-                    else:
-                        for i, v in enumerate(value[:MAX_SLICE]):
-                            col.put_of(i)(x, v)
-        except (DecodeError, *DECODE_ERRORS) as err:
-            raise DecodeError(
-                f"a message on {self.topic} does not decode as {self.type_name}: {err}"
-            ) from err
+                        values.append(None)
+            except (DecodeError, *DECODE_ERRORS) as err:
+                failure = DecodeError(
+                    f"a message on {self.topic} does not decode as {self.type_name}: {err}"
+                )
+                if skip is None:
+                    raise failure from err
+                skip(failure, data)
+                continue
+            fed += 1
+            for col, value in zip(columns, values, strict=True):
+                if value is None:
+                    self.missed += 1
+                elif col.put is not None:
+                    col.put(x, value)
+                else:
+                    for i, v in enumerate(value[:MAX_SLICE]):
+                        col.put_of(i)(x, v)
         return fed
 
 

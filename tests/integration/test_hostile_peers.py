@@ -148,8 +148,8 @@ def test_a_message_that_does_not_decode_is_one_line(
         sock.sendall(valid_header("/empty") + frame(b""))
 
     with FakePublisher(rostools_master, "/empty", empty):
-        echo = Proc([sys.executable, "-m", "rostools", "topic", "echo", "/empty", "--timeout", "5"],
-                    env=cli_env)  # fmt: skip
+        echo = Proc([sys.executable, "-m", "rostools", "topic", "echo", "/empty", "--timeout", "5",
+                     "--strict"], env=cli_env)  # fmt: skip
         try:
             assert echo.popen.wait(20) == 1
             _, err = echo.output()

@@ -27,6 +27,15 @@ def valid_header(topic: str, name: str = "/fake") -> bytes:
     return publisher_header(name, topic, STRING_MD5, "std_msgs/String", "string data\n", False)
 
 
+HEADER_MD5 = "2176decaecbce78abc3b96ef049fabed"
+
+
+def header_type_header(topic: str, name: str = "/fake") -> bytes:
+    """A std_msgs/Header publisher's reply header, length prefix included."""
+    definition = "uint32 seq\ntime stamp\nstring frame_id\n"
+    return publisher_header(name, topic, HEADER_MD5, "std_msgs/Header", definition, False)
+
+
 class FakePublisher:
     """``with FakePublisher(master, "/t", send) as fake:``; ``send(sock)`` runs per subscriber.
 
@@ -40,8 +49,10 @@ class FakePublisher:
         topic: str,
         send: Callable[[socket.socket], None],
         name: str = "/fake",
+        msg_type: str = "std_msgs/String",
     ) -> None:
         self.master_uri, self.topic, self.send, self.name = master_uri, topic, send, name
+        self.msg_type = msg_type
         self.tcp = socket.create_server(("127.0.0.1", 0))
         self.rpc = SimpleXMLRPCServer(("127.0.0.1", 0), logRequests=False, allow_none=True)
         port = self.tcp.getsockname()[1]
@@ -57,7 +68,7 @@ class FakePublisher:
         threading.Thread(target=self._accept, daemon=True).start()
         with xmlrpc.client.ServerProxy(self.master_uri) as master:
             code, message, _ = master.registerPublisher(
-                self.name, self.topic, "std_msgs/String", self.uri
+                self.name, self.topic, self.msg_type, self.uri
             )
         assert code == 1, message
         return self

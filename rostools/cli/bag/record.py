@@ -278,7 +278,7 @@ def record(
     quiet: Annotated[bool, typer.Option("--quiet", "-q", help="No live table.")] = False,
     fmt: FormatOpt = None,
 ) -> None:
-    """Record topics to a .bag or MCAP file (rosbag record). Exit 6 if messages were dropped."""
+    """Record topics to a .bag or MCAP file (rosbag record); exit 6 on drops or a failed write."""
     from rostools.bag.record import Recorder, RecordOptions
 
     topics = topics or []

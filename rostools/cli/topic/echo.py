@@ -11,7 +11,14 @@ import typer
 from rostools.cli.common import FormatOpt, MsgPathOpt, node_session, output_format
 from rostools.cli.settings import type_store
 from rostools.cli.topic.group import app
-from rostools.cli.topic.live import CountOpt, FilterOpt, TimeoutOpt, wait_for_topic
+from rostools.cli.topic.live import (
+    CountOpt,
+    FilterOpt,
+    StrictOpt,
+    TimeoutOpt,
+    Undecodable,
+    wait_for_topic,
+)
 from rostools.cli.topic.printing import Echo, EchoOptions, echo_options
 from rostools.errors import TimeoutExpired, UsageError
 from rostools.names import script_resolve
@@ -19,6 +26,7 @@ from rostools.names import script_resolve
 if TYPE_CHECKING:
     import asyncio
 
+    from rostools.msgs.codec import DecodeError
     from rostools.msgs.store import TypeStore
     from rostools.node.connection import Frame, InboundConnection
     from rostools.node.node import Node
@@ -47,6 +55,7 @@ def echo(
         bool, typer.Option("--all", "-a", help="Every topic of the bag (-b).")
     ] = False,
     timeout: TimeoutOpt = None,
+    strict: StrictOpt = False,
     fmt: FormatOpt = None,
     msg_path: MsgPathOpt = None,
 ) -> None:
@@ -68,7 +77,10 @@ def echo(
         return
     opts = echo_options(fmt, "", count, filter_expr, plot, nostr, noarr, clear, offset, width)
     result = node_session(
-        ctx, lambda node, stop: _live(node, stop, name, store, opts, timeout), "rostools_echo", fmt
+        ctx,
+        lambda node, stop: _live(node, stop, name, store, opts, timeout, strict),
+        "rostools_echo",
+        fmt,
     )
     if result == "timeout":
         wanted = f"{count} message(s)" if count else "a message"
@@ -82,6 +94,7 @@ async def _live(
     store: TypeStore,
     opts: EchoOptions,
     timeout: float | None,
+    strict: bool,
 ) -> str:
     import asyncio
 
@@ -91,6 +104,7 @@ async def _live(
         return "stopped" if stop.is_set() else "timeout"
     opts.field = ref.field
     echo_ = Echo(store, opts)
+    undecodable = Undecodable(node, strict)
     pending: list[tuple[list[Frame], InboundConnection]] = []
     wake = asyncio.Event()  # frames, a stop or the deadline: one event, no task per batch
 
@@ -117,12 +131,17 @@ async def _live(
                     header.get("message_definition", ""),
                     ref.topic,
                 )
-                if not echo_.emit(printer, frames):
+
+                def skip(err: DecodeError, data: Frame, conn: InboundConnection = conn) -> None:
+                    undecodable.skip(err, conn, data)
+
+                if not echo_.emit(printer, frames, skip=skip):
                     return "done"
             if stop.is_set() or (deadline is not None and time.monotonic() >= deadline):
                 break
     finally:
         watcher.cancel()
+        undecodable.report()
     if stop.is_set():
         return "stopped"
     if (opts.count and echo_.printed < opts.count) or echo_.printed == 0:

@@ -14,7 +14,9 @@ from rostools.cli.common import FINITE
 if TYPE_CHECKING:
     import asyncio
 
+    from rostools.msgs.codec import DecodeError
     from rostools.msgs.store import TypeStore
+    from rostools.node.connection import Frame, InboundConnection
     from rostools.node.node import Node
 
 TopicArg = Annotated[str, typer.Argument(help="Topic name; relative names join ROS_NAMESPACE.")]
@@ -25,6 +27,13 @@ TimeoutOpt = Annotated[
         "--timeout",
         click_type=FINITE,
         help="Give up after this many seconds (exit 5 if fewer messages than asked arrived).",
+    ),
+]
+StrictOpt = Annotated[
+    bool,
+    typer.Option(
+        "--strict",
+        help="Stop at a message that does not decode (exit 1), rather than skip it and say so.",
     ),
 ]
 FilterOpt = Annotated[
@@ -60,3 +69,46 @@ async def wait_for_topic(
             return None
         with contextlib.suppress(asyncio.TimeoutError):
             await asyncio.wait_for(stop.wait(), 0.2)
+
+
+class Undecodable:
+    """Messages that do not decode as their publisher's type says, as rostopic: skipped.
+
+    A publisher's first is a notice naming it, the topic and the cause; the others are
+    counted, and ``report`` sums them up at the end. With ``strict`` (``--strict``, for CI),
+    the first ends the command instead.
+    """
+
+    def __init__(self, node: Node, strict: bool) -> None:
+        self.node = node
+        self.strict = strict
+        #: Messages skipped per publisher (its caller id, or its URI).
+        self.counts: dict[str, int] = {}
+
+    def skip(self, err: DecodeError, conn: InboundConnection, data: Frame) -> None:
+        """Skip one message (``err`` names the topic and type), or raise ``err`` if strict."""
+        from rostools.node.notice import Notice
+
+        if self.strict:
+            raise err
+        who = (conn.header or {}).get("callerid") or conn.publisher_uri
+        self.counts[who] = self.counts.get(who, 0) + 1
+        if self.counts[who] == 1:
+            text = f"skipped a {len(data)}-byte message from {who}: {err} (--strict stops instead)"
+            fields = {"node": who, "uri": conn.publisher_uri, "reason": str(err)}
+            self.node.notify(Notice("message_skipped", text, fields))
+
+    def report(self) -> None:
+        """One line for the skipped messages that no notice counted."""
+        from rostools.node.notice import Notice
+
+        total = sum(self.counts.values())
+        if total > len(self.counts):
+            who = ", ".join(sorted(self.counts))
+            self.node.notify(
+                Notice(
+                    "messages_skipped",
+                    f"skipped {total} messages that did not decode, from {who}",
+                    {"count": total, "nodes": sorted(self.counts)},
+                )
+            )

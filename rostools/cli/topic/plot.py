@@ -19,13 +19,21 @@ from rostools.cli.common import FormatOpt, MsgPathOpt, node_session, output_form
 from rostools.cli.output import Format
 from rostools.cli.settings import type_store
 from rostools.cli.topic.group import app
-from rostools.cli.topic.live import CountOpt, FilterOpt, TimeoutOpt, wait_for_topic
+from rostools.cli.topic.live import (
+    CountOpt,
+    FilterOpt,
+    StrictOpt,
+    TimeoutOpt,
+    Undecodable,
+    wait_for_topic,
+)
 from rostools.errors import TimeoutExpired, UsageError
 from rostools.names import script_resolve
 
 if TYPE_CHECKING:
     import asyncio
 
+    from rostools.msgs.codec import DecodeError
     from rostools.msgs.expr import Expression
     from rostools.msgs.sample import Sampler
     from rostools.msgs.store import TypeStore
@@ -61,6 +69,8 @@ class _Live:
         #: ``-n`` messages are in.
         self.done = False
         self.error: BaseException | None = None
+        #: Set once the node runs: what does not decode is skipped there, or ends the plot.
+        self.undecodable: Undecodable | None = None
         # Arrival times are monotonic; the plot's x is the wall clock.
         self.wall = time.time() - time.monotonic()
 
@@ -88,11 +98,17 @@ class _Live:
         try:
             sampler = self.sampler(topic, conn.header or {})
             t = now + self.wall
+            skip = None
+            if (undecodable := self.undecodable) is not None:
+
+                def skip(err: DecodeError, data: Frame) -> None:
+                    undecodable.skip(err, conn, data)
+
             if self.count is None:
-                self.received += sampler.feed(frames, t)
+                self.received += sampler.feed(frames, t, skip)
                 return True
             for data in frames:  # one at a time: the count is exact, filter or not
-                self.received += sampler.feed([data], t)
+                self.received += sampler.feed([data], t, skip)
                 if self.received >= self.count:
                     self.done = True
                     return False
@@ -108,6 +124,9 @@ class _Live:
         line = f"{self.received:,} messages, {self.received / elapsed:,.0f}/s"
         if missed:
             line += f", {missed:,} without the element asked for"
+        skipped = sum(self.undecodable.counts.values()) if self.undecodable else 0
+        if skipped:
+            line += f", {skipped:,} skipped (they did not decode)"
         thinned = [label for label, s in self.plot.series.items() if s.thinned]
         if thinned:
             line += f", thinned: {', '.join(thinned)}"
@@ -133,6 +152,7 @@ def plot(
     count: CountOpt = None,
     filter_expr: FilterOpt = None,
     timeout: TimeoutOpt = None,
+    strict: StrictOpt = False,
     fmt: FormatOpt = None,
     msg_path: MsgPathOpt = None,
 ) -> None:
@@ -152,7 +172,7 @@ def plot(
     names = [script_resolve(f, "rostopic", field_path=True) for f in fields]
     live = _Live(names, type_store(msg_path), SeriesSet(seconds), stamp, keep, count)
     result = node_session(
-        ctx, lambda node, stop: _run(node, stop, live, timeout, fmt), "rostools_plot", fmt
+        ctx, lambda node, stop: _run(node, stop, live, timeout, fmt, strict), "rostools_plot", fmt
     )
     if result == "timeout":
         wanted = f"{count} message(s)" if count else "a message"
@@ -188,7 +208,7 @@ async def _subscribe(node: Node, stop: asyncio.Event, live: _Live, deadline: flo
 
 
 async def _run(
-    node: Node, stop: asyncio.Event, live: _Live, timeout: float | None, fmt: Format
+    node: Node, stop: asyncio.Event, live: _Live, timeout: float | None, fmt: Format, strict: bool
 ) -> str:
     import contextlib
 
@@ -221,6 +241,7 @@ async def _run(
             x_range=(max(right - window, origin), right),
         )  # fmt: skip
 
+    live.undecodable = Undecodable(node, strict)
     stack = contextlib.ExitStack()
     try:
         if screen is not None:
@@ -242,6 +263,7 @@ async def _run(
                 break
     finally:
         stack.close()
+        live.undecodable.report()
     if live.error is not None:
         raise live.error
     if not draw:

@@ -15,6 +15,9 @@ from rostools.cli.output import Format
 from rostools.errors import UsageError
 
 if TYPE_CHECKING:
+    from collections.abc import Callable
+
+    from rostools.msgs.codec import DecodeError
     from rostools.msgs.expr import Expression
     from rostools.msgs.store import TypeStore
     from rostools.node.connection import Frame
@@ -124,41 +127,56 @@ class Echo:
             found = self.printers[key] = Printer(store, type_name, topic, self.opts)
         return found
 
-    def emit(self, printer: Printer, frames: list[Frame], stamp_ns: int | None = None) -> bool:
+    def emit(
+        self,
+        printer: Printer,
+        frames: list[Frame],
+        stamp_ns: int | None = None,
+        skip: Callable[[DecodeError, Frame], None] | None = None,
+    ) -> bool:
         """Print messages; False once ``-n`` is reached.
 
-        Bytes that do not decode as their type says are a ``DecodeError`` naming both.
+        Bytes that do not decode as their type says are a ``DecodeError`` naming both; with
+        ``skip``, it is handed the error and the message, and printing goes on.
         """
         from rostools.msgs.codec import DECODE_ERRORS, DecodeError
 
-        try:
-            return self._emit(printer, frames, stamp_ns)
-        except (DecodeError, *DECODE_ERRORS) as err:
-            raise DecodeError(
-                f"a message on {printer.topic} does not decode as {printer.type_name}: {err}"
-            ) from err
-
-    def _emit(self, printer: Printer, frames: list[Frame], stamp_ns: int | None) -> bool:
         limit = self.opts.count
         if printer.fast is not None and limit is None:
-            texts: list[str] = printer.fast(frames)
-            self.printed += len(texts)
-            sys.stdout.write("".join(texts))
-            sys.stdout.flush()
-            return True
+            try:
+                texts: list[str] = printer.fast(frames)
+            except (DecodeError, *DECODE_ERRORS):
+                pass  # one at a time below, to say which message and print the others
+            else:
+                self.printed += len(texts)
+                sys.stdout.write("".join(texts))
+                sys.stdout.flush()
+                return True
         out: list[str] = []
-        for data in frames:
-            if limit is not None and self.printed >= limit:
-                break
-            text = printer.render(data, stamp_ns, self.opts.plot and not self.header_done)
-            if text is None:
-                continue
-            self.header_done = True
-            out.append(text)
-            self.printed += 1
-        if out:
-            sys.stdout.write("".join(out))
-            sys.stdout.flush()
+        try:
+            for data in frames:
+                if limit is not None and self.printed >= limit:
+                    break
+                try:
+                    text = printer.render(data, stamp_ns, self.opts.plot and not self.header_done)
+                except (DecodeError, *DECODE_ERRORS) as err:
+                    failure = DecodeError(
+                        f"a message on {printer.topic} does not decode as {printer.type_name}: "
+                        f"{err}"
+                    )
+                    if skip is None:
+                        raise failure from err
+                    skip(failure, data)
+                    continue
+                if text is None:
+                    continue
+                self.header_done = True
+                out.append(text)
+                self.printed += 1
+        finally:  # what came before a message that stops us is printed first
+            if out:
+                sys.stdout.write("".join(out))
+                sys.stdout.flush()
         return limit is None or self.printed < limit
 
 

@@ -14,13 +14,15 @@ from rostools.cli import output
 from rostools.cli.common import FormatOpt, node_session, output_format
 from rostools.cli.output import Format
 from rostools.cli.topic.group import app
-from rostools.cli.topic.live import FilterOpt, TimeoutOpt, wait_for_topic
+from rostools.cli.topic.live import FilterOpt, StrictOpt, TimeoutOpt, Undecodable, wait_for_topic
 from rostools.errors import NotFoundError, TimeoutExpired, UsageError
 from rostools.names import script_resolve
 
 if TYPE_CHECKING:
     import asyncio
 
+    from rostools.msgs.codec import DecodeError
+    from rostools.msgs.store import TypeStore
     from rostools.node.connection import Frame, InboundConnection
     from rostools.node.node import Node
 
@@ -46,7 +48,7 @@ class Meter:
 
     Under ``/use_sim_time`` the sink's times are ROS time from ``/clock``, as rostopic's, and
     messages that come before the first ``/clock`` are not counted; ``wall_time`` keeps the
-    wall clock.
+    wall clock. A sink that decodes hands what does not decode to ``skip``.
     """
 
     def __init__(
@@ -57,6 +59,7 @@ class Meter:
         tcp_nodelay: bool = False,
         wall_time: bool = False,
         coalesce: float = 0.0,
+        strict: bool = False,
     ) -> None:
         from rostools.node.clock import RosClock
 
@@ -69,6 +72,13 @@ class Meter:
         self.clock = RosClock()
         self.received = 0
         self.error: BaseException | None = None
+        self.strict = strict
+        self.undecodable: Undecodable | None = None
+
+    def skip(self, err: DecodeError, conn: InboundConnection, data: Frame) -> None:
+        """A message that does not decode: skipped and said, or the end with ``--strict``."""
+        assert self.undecodable is not None, "run() first"
+        self.undecodable.skip(err, conn, data)
 
     def now(self) -> float:
         """Seconds on the meter's clock: ROS time under sim time, else monotonic."""
@@ -83,10 +93,26 @@ class Meter:
     ) -> str:
         """Subscribe to every topic and report until stopped or timed out."""
         from rostools.msgs.store import TypeStore
-        from rostools.node.session import first
 
         deadline = time.monotonic() + self.timeout if self.timeout is not None else None
         store = TypeStore.default()
+        self.undecodable = Undecodable(node, self.strict)
+        try:
+            return await self._run(node, stop, sink, report, store, deadline)
+        finally:
+            self.undecodable.report()
+
+    async def _run(
+        self,
+        node: Node,
+        stop: asyncio.Event,
+        sink: Callable[[str, list[Frame], InboundConnection, float], None],
+        report: Callable[[], None],
+        store: TypeStore,
+        deadline: float | None,
+    ) -> str:
+        from rostools.node.session import first
+
         if not self.wall_time:
             await self.clock.start(node)
         for topic in self.topics:
@@ -158,6 +184,7 @@ def hz(
     ] = False,
     tcp_nodelay: NodelayOpt = False,
     timeout: TimeoutOpt = None,
+    strict: StrictOpt = False,
     fmt: FormatOpt = None,
 ) -> None:
     """The publishing rate of topics (rostopic hz); counts raw frames, decodes only for --filter."""
@@ -167,7 +194,8 @@ def hz(
     names = [script_resolve(t, "rostopic") for t in topics]
     span = 0.0 if window else DEFAULT_SPAN  # an explicit window is rostopic's, exactly
     meters = {n: RateMeter(window or DEFAULT_WINDOW, span) for n in names}
-    check = _filter(filter_expr)
+    runner = Meter(names, timeout, fmt, tcp_nodelay, wall_time, COALESCE, strict)
+    check = _filter(filter_expr, runner.skip)
 
     def sink(topic: str, frames: list[Frame], conn: InboundConnection, now: float) -> None:
         if check is not None:
@@ -188,16 +216,19 @@ def hz(
         else:
             sys.stdout.write(rate_table(rows))
 
-    _run(ctx, Meter(names, timeout, fmt, tcp_nodelay, wall_time, COALESCE), sink, report)
+    _run(ctx, runner, sink, report)
 
 
 def _filter(
-    expr: str | None,
+    expr: str | None, skip: Callable[[DecodeError, InboundConnection, Frame], None]
 ) -> Callable[[list[Frame], InboundConnection, str], list[Frame]] | None:
-    """A frames filter that decodes and evaluates ``expr``, or None."""
+    """A frames filter that decodes and evaluates ``expr``, or None.
+
+    A message that does not decode goes to ``skip`` and is not counted.
+    """
     if not expr:
         return None
-    from rostools.msgs.codec import Codec
+    from rostools.msgs.codec import DECODE_ERRORS, Codec, DecodeError
     from rostools.msgs.expr import compile_expression
     from rostools.msgs.store import TypeStore
 
@@ -212,7 +243,17 @@ def _filter(
         if decode is None:
             store = base.with_definition(*key)
             decode = decoders[key] = Codec.of(store).decoder(key[0])
-        return [data for data in frames if wanted(topic, decode(data, 0)[0])]
+        kept = []
+        for data in frames:
+            try:
+                msg = decode(data, 0)[0]
+            except (DecodeError, *DECODE_ERRORS) as err:
+                why = f"a message on {topic} does not decode as {key[0]}: {err}"
+                skip(DecodeError(why), conn, data)
+                continue
+            if wanted(topic, msg):
+                kept.append(data)
+        return kept
 
     return keep
 
@@ -254,16 +295,18 @@ def delay(
     window: WindowOpt = None,
     tcp_nodelay: NodelayOpt = False,
     timeout: TimeoutOpt = None,
+    strict: StrictOpt = False,
     fmt: FormatOpt = None,
 ) -> None:
     """Now minus ``header.stamp`` of each message (rostopic delay); reads only the stamp."""
+    from rostools.msgs.codec import DecodeError
     from rostools.msgs.store import TypeStore
     from rostools.rates import DEFAULT_WINDOW, DelayMeter, format_delay
 
     fmt = output_format(ctx, fmt)
     name = script_resolve(topic, "rostopic")
     meter = DelayMeter(window or DEFAULT_WINDOW)
-    runner = Meter([name], timeout, fmt, tcp_nodelay)
+    runner = Meter([name], timeout, fmt, tcp_nodelay, strict=strict)
     base = TypeStore.default()
     checked: dict[str, bool] = {}
 
@@ -276,7 +319,15 @@ def delay(
         if not checked[kind]:
             raise NotFoundError(f"{t} carries {kind}, which has no Header to take a stamp from")
         ref = runner.clock.now() / 1e9  # ROS time: /clock under sim time, else the wall clock
-        meter.add([ref - (s + ns * 1e-9) for s, ns in (_STAMP.unpack_from(f, 4) for f in frames)])
+        delays = []
+        for data in frames:
+            if len(data) < 4 + _STAMP.size:  # seq, then the stamp
+                why = f"a message on {t} is {len(data)} bytes, too short for a {kind} Header"
+                runner.skip(DecodeError(why), conn, data)
+                continue
+            secs, nsecs = _STAMP.unpack_from(data, 4)
+            delays.append(ref - (secs + nsecs * 1e-9))
+        meter.add(delays)
 
     def report() -> None:
         stats = meter.report()

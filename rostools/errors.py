@@ -6,6 +6,19 @@ code below. The README's table of exit codes is generated from ``EXIT_CODES``.
 
 from __future__ import annotations
 
+# Names and values quoted in a message may carry control characters or Unicode line
+# breaks (NEL, U+2028); escape them so every line stays one line, on a terminal and in logs.
+_ESCAPES = {c: repr(chr(c))[1:-1] for c in (*range(0x20), *range(0x7F, 0xA0), 0x2028, 0x2029)}
+
+
+def one_line(text: str) -> str:
+    """``text`` with newlines and other control characters escaped.
+
+    Every name, type and URI that comes from a peer or a file goes through it before it is
+    printed as text; JSON escapes them itself.
+    """
+    return text.translate(_ESCAPES)
+
 
 class RostoolsError(Exception):
     """Base of every error rostools reports to a user: the operation failed."""

@@ -5,19 +5,12 @@ from __future__ import annotations
 import os
 import sys
 
+from rostools.errors import one_line
+
 TYPE_CHECKING = False  # ``typing`` is 5-10 ms of start-up; only annotations use it
 if TYPE_CHECKING:
     from collections.abc import Sequence
     from typing import Any
-
-# Names and values quoted in a message may carry control characters or Unicode line
-# breaks (NEL, U+2028); escape them so every error stays one line, on a terminal and in logs.
-_ESCAPES = {c: repr(chr(c))[1:-1] for c in (*range(0x20), *range(0x7F, 0xA0), 0x2028, 0x2029)}
-
-
-def one_line(text: str) -> str:
-    """``text`` with newlines and other control characters escaped."""
-    return text.translate(_ESCAPES)
 
 
 def report(err: BaseException, debug: bool) -> int:

@@ -10,6 +10,8 @@ import sys
 from dataclasses import dataclass, field
 from typing import Any
 
+from rostools.errors import one_line
+
 
 @dataclass(frozen=True)
 class Notice:
@@ -26,5 +28,5 @@ class Notice:
 
 def to_stderr(notice: Notice) -> None:
     """The default ``notify``: one line on stderr."""
-    sys.stderr.write(f"rostools: {notice.message}\n")
+    sys.stderr.write(f"rostools: {one_line(notice.message)}\n")
     sys.stderr.flush()

@@ -92,7 +92,12 @@ class GoalPreempted(RostoolsError):  # noqa: N818
 
 #: Exit code, name and meaning, in the order the README lists them.
 EXIT_CODES: tuple[tuple[int, str, str], ...] = (
-    (0, "ok", "success; also Ctrl-C on a command that runs until stopped (echo, hz, pub, ...)"),
+    (
+        0,
+        "ok",
+        "success; also Ctrl-C on a command that runs until stopped (echo, hz, pub, ...), "
+        "or its reader closing the pipe (`| head`)",
+    ),
     (1, "error", "the operation failed, or the input data is malformed"),
     (2, "usage", "bad arguments or values: unknown option, wrong field type, bad YAML"),
     (3, "not found", "unknown topic, type, service, parameter, node or file"),

@@ -70,17 +70,38 @@ def main(argv: Sequence[str] | None = None) -> None:
         root.REMAPPINGS.update(remappings)
         status = root.app(args=args, prog_name="rostools", standalone_mode=False)
         sys.exit(status if isinstance(status, int) else 0)
-    except SystemExit:
+    except SystemExit as done:
+        # Typer, as click, turns any EPIPE into a silent exit 1, a closed reader's too
+        if isinstance(done.__context__, BrokenPipeError) and _reader_gone():
+            _quiet_exit()
         raise
     except click_exceptions().ClickException as err:
         sys.exit(report_usage(err))
     except KeyboardInterrupt:
         sys.exit(130)
-    except BrokenPipeError:
-        # The reader went away (``| head``): stop quietly. Point stdout at /dev/null so the
-        # interpreter's final flush does not raise again.
-        devnull = os.open(os.devnull, os.O_WRONLY)
-        os.dup2(devnull, sys.stdout.fileno())
-        sys.exit(0)
+    except BrokenPipeError as err:
+        if _reader_gone():
+            _quiet_exit()
+        sys.exit(report(err, "--debug" in args))  # a socket's, not our reader's
     except Exception as err:  # noqa: BLE001 - the one place every error is turned into an exit code
         sys.exit(report(err, "--debug" in args))
+
+
+def _reader_gone() -> bool:
+    """Whether stdout is a pipe whose reader went away (``| head``): poll says POLLERR."""
+    import select
+
+    try:
+        poll = select.poll()
+        poll.register(1, select.POLLOUT)
+        return any(events & select.POLLERR for _, events in poll.poll(0))
+    except (OSError, ValueError):
+        return False
+
+
+def _quiet_exit() -> None:
+    """Exit 0, as rostopic does when its reader goes away: that is how ``| head`` ends it."""
+    # stdout goes to /dev/null, so that the interpreter's final flush does not fail again
+    devnull = os.open(os.devnull, os.O_WRONLY)
+    os.dup2(devnull, 1)
+    sys.exit(0)

@@ -13,9 +13,9 @@ from rostools.cli.output import Format, emit
 from rostools.cli.quick import runs
 from rostools.cli.quick import service as quick
 from rostools.cli.settings import caller_id, type_store
-from rostools.errors import NotFoundError, TimeoutExpired, UsageError
+from rostools.errors import NotFoundError, TimeoutExpired, UsageError, one_line
 from rostools.names import script_resolve
-from rostools.rosgraph.masterapi import SERVICE_TIMEOUT
+from rostools.rosgraph.masterapi import PROBE_TIMEOUT, WAIT_NOTICE
 
 if TYPE_CHECKING:
     from rostools.msgs.store import TypeStore
@@ -32,6 +32,16 @@ app = typer.Typer(
 ServiceArg = Annotated[str, typer.Argument(help="Service name; relative names join ROS_NAMESPACE.")]
 TimeoutOpt = Annotated[
     float, typer.Option("--timeout", click_type=FINITE, help="Seconds to wait for the service.")
+]
+CallTimeoutOpt = Annotated[
+    float | None,
+    typer.Option(
+        "--timeout",
+        click_type=FINITE,
+        help="Give up after this many seconds, for --wait and for each call (exit 5). "
+        "Without it there is no limit, as with rosservice.",
+        show_default=False,
+    ),
 ]
 
 
@@ -80,7 +90,7 @@ def node(ctx: typer.Context, service: ServiceArg, fmt: FormatOpt = None) -> None
 def type_(
     ctx: typer.Context,
     service: ServiceArg,
-    timeout: TimeoutOpt = SERVICE_TIMEOUT,
+    timeout: TimeoutOpt = PROBE_TIMEOUT,
     fmt: FormatOpt = None,
 ) -> None:
     """A service's type, asked of its server (rosservice type)."""
@@ -91,7 +101,7 @@ def type_(
 def args(
     ctx: typer.Context,
     service: ServiceArg,
-    timeout: TimeoutOpt = SERVICE_TIMEOUT,
+    timeout: TimeoutOpt = PROBE_TIMEOUT,
     fmt: FormatOpt = None,
     msg_path: MsgPathOpt = None,
 ) -> None:
@@ -106,7 +116,7 @@ def args(
 def info(
     ctx: typer.Context,
     service: ServiceArg,
-    timeout: TimeoutOpt = SERVICE_TIMEOUT,
+    timeout: TimeoutOpt = PROBE_TIMEOUT,
     fmt: FormatOpt = None,
     msg_path: MsgPathOpt = None,
 ) -> None:
@@ -177,7 +187,7 @@ def call(
     ] = False,
     nostr: Annotated[bool, typer.Option("--nostr", help="Hide strings, as echo does.")] = False,
     noarr: Annotated[bool, typer.Option("--noarr", help="Hide arrays, as echo does.")] = False,
-    timeout: TimeoutOpt = SERVICE_TIMEOUT,
+    timeout: CallTimeoutOpt = None,
     fmt: FormatOpt = None,
     msg_path: MsgPathOpt = None,
 ) -> None:
@@ -188,9 +198,11 @@ def call(
 
     name = script_resolve(service, "rosservice")
     proxy = master(ctx, "rosservice")
+    started = time.monotonic()
     if wait:
         _wait_for(proxy, name, timeout)
-    kind, md5 = quick.type_of(proxy, name, timeout)
+    left = None if timeout is None else max(timeout - (time.monotonic() - started), 0.001)
+    kind, md5 = quick.type_of(proxy, name, PROBE_TIMEOUT if left is None else left)
     store = type_store(msg_path)
     spec = _srv(store, kind, name)
     codec = Codec.of(store)
@@ -206,6 +218,7 @@ def call(
         requests = [[]]
     fmt = output_format(ctx, fmt)
     client = quick.client(proxy, name, timeout)
+    client.waiting = _say_waiting
     for arguments in requests:
         try:
             request = filler.message(spec.request.name, arguments)
@@ -217,11 +230,26 @@ def call(
         _print(codec, spec, request, response, verbose, fmt, TextOptions(nostr, noarr))
 
 
-def _wait_for(proxy: MasterProxy, name: str, timeout: float) -> None:
-    deadline = time.monotonic() + timeout
+def _say_waiting(what: str) -> None:
+    """One line on stderr once a wait without a limit has lasted ``WAIT_NOTICE`` seconds."""
+    sys.stderr.write(
+        f"rostools: waiting for {one_line(what)} ({WAIT_NOTICE:g} s so far; Ctrl-C stops, "
+        "--timeout sets a limit)\n"
+    )
+    sys.stderr.flush()
+
+
+def _wait_for(proxy: MasterProxy, name: str, timeout: float | None) -> None:
+    """Until the master lists ``name`` (rosservice call --wait): at most ``timeout``."""
+    started = time.monotonic()
+    told = False
     while name not in quick.services(proxy):
-        if time.monotonic() > deadline:
+        waited = time.monotonic() - started
+        if timeout is not None and waited > timeout:
             raise TimeoutExpired(f"service {name} did not appear within {timeout:g} s")
+        if timeout is None and not told and waited >= WAIT_NOTICE:
+            _say_waiting(f"service {name} to appear")
+            told = True
         time.sleep(0.1)
 
 

@@ -24,8 +24,13 @@ if TYPE_CHECKING:
 DEFAULT_TIMEOUT = 3.0
 #: Seconds to wait for a node's answer; rosnode's ping uses 3 s (and 5 s for info).
 NODE_TIMEOUT = 3.0
-#: Seconds a service call may take, connecting included, unless the caller says otherwise.
+#: Seconds a service call may take, connecting included, unless the caller says otherwise
+#: (the Python API; ``service call`` waits as long as rosservice does: without a limit).
 SERVICE_TIMEOUT = 10.0
+#: Seconds to connect to a service and read its header: rosservice's probe allows 5 s.
+PROBE_TIMEOUT = 5.0
+#: A wait without a limit says what it waits for once it has lasted this long (s).
+WAIT_NOTICE = 3.0
 
 
 def master_timeout() -> float:

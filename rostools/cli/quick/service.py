@@ -16,7 +16,7 @@ if TYPE_CHECKING:
     from rostools.rosgraph.serviceclient import BlockingServiceClient
 
 
-def client(proxy: MasterProxy, name: str, timeout: float) -> BlockingServiceClient:
+def client(proxy: MasterProxy, name: str, timeout: float | None) -> BlockingServiceClient:
     """A blocking client of service ``name``."""
     from rostools.rosgraph.serviceclient import BlockingServiceClient
 

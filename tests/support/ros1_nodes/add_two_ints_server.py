@@ -1,9 +1,13 @@
-"""A rospy AddTwoInts server on /add_two_ints (the tutorial), plus std_srvs/Trigger on /trigger.
+"""A rospy AddTwoInts server on /add_two_ints (the tutorial), plus std_srvs/Trigger on /trigger
+and on /slow, which answers after the seconds given as the first argument (default 0).
 
 rospy_tutorials is not packaged by Debian, so its classes are generated here from the .srv
 definition with genpy, as the build would. Run with the system python: add_two_ints_server.py
 A negative sum is refused with rospy.ServiceException, so tests see a failure message.
 """
+
+import sys
+import time
 
 import rospy
 from genpy.dynamic import generate_dynamic
@@ -41,8 +45,14 @@ def trigger(_req):
     return TriggerResponse(success=True, message=f"triggered {calls['n']}")
 
 
+def slow(_req):
+    time.sleep(float(sys.argv[1]) if len(sys.argv) > 1 else 0.0)
+    return TriggerResponse(success=True, message="slowly")
+
+
 rospy.init_node("add_two_ints_server")
 rospy.Service("/add_two_ints", AddTwoInts, add)
 rospy.Service("/trigger", Trigger, trigger)
+rospy.Service("/slow", Trigger, slow)
 print("ready", flush=True)
 rospy.spin()

@@ -389,15 +389,17 @@ def test_cleanup_purges_only_the_dead(
 ) -> None:
     before = state(rostools_master)
     assert "/dead" in json.dumps(before)
-    # not a terminal and no --yes: refuse, change nothing
-    out = run_cli("node", "cleanup", env=cli_env)
-    assert out.returncode == 2 and "-y/--yes" in out.stderr
-    assert out.stdout.startswith("Unable to contact the following nodes:\n * /dead (")
-    assert state(rostools_master) == before
+    # the answer comes from stdin, as rosnode reads it: no answer (its end) and "n" are no
+    for answer in ("", "n\n", "maybe\n"):
+        out = run_cli("node", "cleanup", env=cli_env, input=answer)
+        assert out.returncode == 0 and "aborted: nothing was changed" in out.stderr, out.stderr
+        assert out.stdout.startswith("Unable to contact the following nodes:\n * /dead (")
+        assert state(rostools_master) == before
     dry = json.loads(cli(cli_env, "cleanup", "--dry-run", "-F", "json"))
     assert [u["node"] for u in dry["unreachable"]] == ["/dead"] and dry["purged"] is False
     assert state(rostools_master) == before
-    done = json.loads(cli(cli_env, "cleanup", "--yes", "-F", "json"))
+    # echo y | rostools node cleanup (it refused a pipe, exit 2, before)
+    done = json.loads(run_cli("node", "cleanup", "-F", "json", env=cli_env, input="y\n").stdout)
     assert done["purged"] is True
     assert [(u["kind"], u["name"], u["removed"]) for u in done["unregistered"]] == [
         ("publisher", "/dead_out", True),

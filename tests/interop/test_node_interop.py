@@ -160,7 +160,8 @@ def test_cleanup_purges_a_sigkilled_node(any_master: MasterInfo, graph: dict[str
     listener.signal(signal.SIGKILL)  # no chance to unregister
     listener.popen.wait(10)
     assert "/listener" in rosnode(any_master, "list").stdout.split()
-    mine = ours(any_master, "cleanup", "--yes")
+    # the answer through a pipe, as `echo y | rosnode cleanup` takes it
+    mine = run_cli("node", "cleanup", env=any_master.cli_env, input="y\n")
     assert mine.returncode == 0, mine.stderr
     assert mine.stdout.startswith("Unable to contact the following nodes:\n * /listener (")
     assert mine.stdout.endswith("Unregistering /listener\ndone\n")

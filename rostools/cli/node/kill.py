@@ -102,7 +102,7 @@ def kill(
 
 
 def _confirm() -> bool:
-    """Ask y/n on the terminal, as rosnode does; EOF means no."""
+    """Ask y/n on stdin, as rosnode does; the end of stdin means no (rosnode loops forever)."""
     sys.stderr.write("Please type y or n to continue: ")
     sys.stderr.flush()
     while True:
@@ -156,11 +156,7 @@ def cleanup(
         sys.stdout.write(unreachable_text(dead))
         sys.stdout.flush()
     if not dry_run and not yes:
-        if not sys.stdin.isatty():
-            raise UsageError(
-                "will not purge without asking, and stdin is not a terminal",
-                hint="add -y/--yes to purge, or -n/--dry-run to only list",
-            )
+        # asked as rosnode asks: the answer comes from stdin, a terminal or a pipe (echo y |)
         sys.stderr.write(
             "Warning: these might include alive and functioning nodes, e.g. in unstable "
             "networks.\nCleanup will purge all information about these nodes from the master.\n"

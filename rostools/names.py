@@ -101,8 +101,25 @@ def resolve(name: str, caller_id: str, remappings: dict[str, str] | None = None)
     return resolved
 
 
+#: ``__ns:=`` from this process's command line (``use_command_namespace``).
+_command_ns: str | None = None
+
+
+def use_command_namespace(remappings: dict[str, str]) -> None:
+    """Take ``__ns:=`` from a command line's remappings as this process's namespace.
+
+    rosgraph reads ``__ns:=`` in ``sys.argv`` before ``ROS_NAMESPACE``, so that a tool's
+    relative names (``rostopic pub chatter ... __ns:=/robot``) join it.
+    """
+    global _command_ns
+    ns = remappings.get("__ns")
+    _command_ns = make_global_ns(ns) if ns else None
+
+
 def ros_namespace(env: dict[str, str] | None = None) -> str:
-    """The default namespace from ``ROS_NAMESPACE``, global with a trailing slash."""
+    """The default namespace: ``__ns:=``, else ``ROS_NAMESPACE``; global, with a trailing slash."""
+    if _command_ns is not None:
+        return _command_ns
     value = (env if env is not None else os.environ).get("ROS_NAMESPACE", "")
     return make_global_ns(value) if value else GLOBAL_NS
 

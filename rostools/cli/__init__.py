@@ -64,9 +64,10 @@ def main(argv: Sequence[str] | None = None) -> None:
         if status is not None:
             sys.exit(status)
         from rostools.cli import app as root
-        from rostools.names import split_remappings
+        from rostools.names import split_remappings, use_command_namespace
 
         args, remappings = split_remappings(args)
+        use_command_namespace(remappings)
         root.REMAPPINGS.update(remappings)
         status = root.app(args=args, prog_name="rostools", standalone_mode=False)
         sys.exit(status if isinstance(status, int) else 0)

@@ -35,9 +35,10 @@ def dispatch(argv: Sequence[str]) -> int | None:
         return main(list(argv[1:]))
     if os.environ.get("ROSTOOLS_NO_QUICK") or not argv:
         return None
-    from rostools.names import split_remappings
+    from rostools.names import split_remappings, use_command_namespace
 
     args, remappings = split_remappings(list(argv))
+    use_command_namespace(remappings)
     import json  # here, not at the top: completion and an empty line never need it
 
     try:

@@ -205,8 +205,14 @@ class _Writer(threading.Thread):
         self.files.append(self.path)
         self.rec.closed_files.append(self.path)
         self.writer = None
+
+    def _drop_old_splits(self) -> None:
+        """At a split, keep ``--max-splits`` closed files beside the new one, as rosbag.
+
+        The last file is kept when the recording stops: rosbag leaves N + 1 files.
+        """
         max_splits = self.rec.opts.max_splits
-        if self.rec.opts.split and max_splits is not None:
+        if max_splits is not None:
             while len(self.files) > max_splits:
                 self.files.pop(0).unlink(missing_ok=True)
 
@@ -261,6 +267,7 @@ class _Writer(threading.Thread):
                     rec.limit_reached.set()
                     continue
                 self._close_file()
+                self._drop_old_splits()
                 self.index += 1
                 self.written = 0
                 self._open_file(t_ns)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import itertools
 import json
 import re
 import signal
@@ -16,7 +17,7 @@ import pytest
 
 from rostools.bag.access import bag_info, detect_format, open_bag
 from tests.support.bagdata import write_play_bag, write_static_bag
-from tests.support.env import run_cli
+from tests.support.env import needs_ros1, run_cli
 from tests.support.procs import Proc, wait_for, wait_for_name
 
 _STARTED: list[Proc] = []
@@ -137,8 +138,9 @@ def test_record_splits_keeps_newest_and_repeats_latched(
         assert rec.stop() == 0
     finally:
         stop_all(pubs)
-    files = sorted(tmp_path.glob(f"s_*.{storage}"))
-    assert len(files) == 2, files
+    files = sorted(tmp_path.glob(f"s_*.{storage}"), key=lambda p: int(p.stem[2:]))
+    # the two newest closed splits and the last one, as rosbag keeps N + 1 (it kept 2)
+    assert len(files) == 3, files
     assert not list(tmp_path.glob("*.active"))
     for path in files:
         assert strings(path, "/latched") == ["kept"]
@@ -146,8 +148,36 @@ def test_record_splits_keeps_newest_and_repeats_latched(
             assert [c.latching for c in reader.connections if c.topic == "/latched"] == [True]
         info = bag_info(path)
         assert info.duration_ns < 1.5e9
-    first, second = (seqs(p, "/h") for p in files)
-    assert second[0] == first[-1] + 1  # the split loses nothing
+    for first, second in itertools.pairwise(files):
+        assert seqs(second, "/h")[0] == seqs(first, "/h")[-1] + 1  # a split loses nothing
+
+
+@needs_ros1
+@pytest.mark.interop
+def test_record_max_splits_keeps_as_many_files_as_rosbag(
+    rostools_master: str, cli_env: dict[str, str], tmp_path: Path
+) -> None:
+    pubs = start_publishers(cli_env)
+    flags = ["--split", "--duration", "1", "--max-splits", "2", "/h"]
+    ros_env = dict(cli_env, ROS_HOME=str(tmp_path))
+    ours = rostools(cli_env, "bag", "record", "-O", "ours.bag", *flags, cwd=tmp_path)
+    theirs = Proc(["rosbag", "record", "-O", "theirs.bag", *flags], env=ros_env, cwd=tmp_path)
+    try:
+        wait_for(
+            lambda: (
+                (tmp_path / "ours_4.bag.active").exists()
+                and (tmp_path / "theirs_4.bag.active").exists()
+            ),
+            30,
+            "five splits of each",
+        )
+    finally:
+        theirs.stop()
+        ours.stop()
+        stop_all(pubs)
+    mine = sorted(p.name for p in tmp_path.glob("ours_*.bag"))
+    rosbags = sorted(p.name for p in tmp_path.glob("theirs_*.bag"))
+    assert len(mine) == len(rosbags) == 3, (mine, rosbags)
 
 
 def test_record_limit_duration_regex_and_late_topics(

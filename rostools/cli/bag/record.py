@@ -236,7 +236,11 @@ def record(
         str | None, typer.Option("--duration", help="Stop (or split) after 30, 30s, 5m, 2h.")
     ] = None,
     max_splits: Annotated[
-        int | None, typer.Option("--max-splits", help="Keep only the newest N split files.")
+        int | None,
+        typer.Option(
+            "--max-splits",
+            help="Keep only the newest N closed split files, and the last (rosbag: N + 1 in all).",
+        ),
     ] = None,
     repeat_latched: Annotated[
         bool,

@@ -14,6 +14,8 @@ if TYPE_CHECKING:
     from rostools.node.endpoint import Owner
 
 _SEQ = struct.Struct("<I")
+#: The source of latched messages that ``publish`` counted: their ``seq`` counts on.
+_COUNTED = "publish"
 
 
 class Publisher:
@@ -53,14 +55,21 @@ class Publisher:
     def publish(self, payload: Frame) -> None:
         """Send serialised message bytes; a Header's ``seq`` is rewritten as rospy does.
 
-        rospy counts only publishes that reach at least one subscriber, starting at 1.
+        rospy counts the publishes that reach at least one subscriber, starting at 1, and
+        each time it sends the latched message to a subscriber that connects later.
         """
-        if self.type.has_header and self.links and len(payload) >= 4:
-            self.seq = (self.seq + 1) & 0xFFFFFFFF
-            data = bytearray(payload)
-            _SEQ.pack_into(data, 0, self.seq)
-            payload = bytes(data)
-        self.publish_raw(payload)
+        if self.links:
+            payload = self._counted(payload)
+        self.publish_raw(payload, _COUNTED)
+
+    def _counted(self, payload: Frame) -> Frame:
+        """``payload`` with the next ``seq`` in its Header, if its type has one."""
+        if not self.type.has_header or len(payload) < 4:
+            return payload
+        self.seq = (self.seq + 1) & 0xFFFFFFFF
+        data = bytearray(payload)
+        _SEQ.pack_into(data, 0, self.seq)
+        return bytes(data)
 
     def publish_raw(self, payload: Frame, source: Hashable = None, keep: bool = True) -> None:
         """Send bytes exactly as given (bag play, relays).
@@ -98,8 +107,8 @@ class Publisher:
         )
         link.on_close = self._lost
         self.links.append(link)
-        for payload in self.latched.values():
-            link.send(payload)
+        for source, payload in self.latched.items():
+            link.send(self._counted(payload) if source == _COUNTED else payload)
         return link
 
     def _lost(self, link: Outbound) -> None:

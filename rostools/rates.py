@@ -116,9 +116,12 @@ class RateMeter:
         while len(self.points) > 1 and self.points[0][0] < oldest:
             self.points.popleft()
 
-    def report(self) -> Stats | None:
-        """The statistics, or None when nothing new arrived since the last report."""
-        if not self.held or self.count == self.reported_count:
+    def report(self, again: bool = False) -> Stats | None:
+        """The statistics, or None when nothing new arrived since the last report.
+
+        ``again`` gives the window even then: the last report, on Ctrl-C.
+        """
+        if not self.held or (self.count == self.reported_count and not again):
             return None
         self.reported_count = self.count
         n = self.held
@@ -192,9 +195,12 @@ class DelayMeter:
         self.delays.extend(delays)
         self.count += len(delays)
 
-    def report(self) -> Stats | None:
-        """(mean delay, min, max, std dev, window), or None when nothing new arrived."""
-        if not self.delays or self.count == self.reported_count:
+    def report(self, again: bool = False) -> Stats | None:
+        """(mean delay, min, max, std dev, window), or None when nothing new arrived.
+
+        ``again`` gives the window even then: the last report, on Ctrl-C.
+        """
+        if not self.delays or (self.count == self.reported_count and not again):
             return None
         self.reported_count = self.count
         mean, low, high, std = _summary(list(self.delays))

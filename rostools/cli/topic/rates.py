@@ -89,7 +89,7 @@ class Meter:
         node: Node,
         stop: asyncio.Event,
         sink: Callable[[str, list[Frame], InboundConnection, float], None],
-        report: Callable[[], None],
+        report: Callable[[bool], None],
     ) -> str:
         """Subscribe to every topic and report until stopped or timed out."""
         from rostools.msgs.store import TypeStore
@@ -107,7 +107,7 @@ class Meter:
         node: Node,
         stop: asyncio.Event,
         sink: Callable[[str, list[Frame], InboundConnection, float], None],
-        report: Callable[[], None],
+        report: Callable[[bool], None],
         store: TypeStore,
         deadline: float | None,
     ) -> str:
@@ -153,9 +153,11 @@ class Meter:
             if await first(stop.wait(), timeout=max(wait, 0)) == 0:
                 if self.error is not None:
                     raise self.error
+                report(True)  # Ctrl-C: rostopic prints the window once more
+                sys.stdout.flush()
                 return "stopped"
             if time.monotonic() >= next_report:
-                report()
+                report(False)
                 sys.stdout.flush()
                 next_report += REPORT_PERIOD
             if deadline is not None and time.monotonic() >= deadline:
@@ -202,8 +204,8 @@ def hz(
             frames = check(frames, conn, topic)
         meters[topic].add(len(frames), now)
 
-    def report() -> None:
-        rows = [(n, s) for n in names if (s := meters[n].report()) is not None]
+    def report(last: bool = False) -> None:
+        rows = [(n, s) for n in names if (s := meters[n].report(last)) is not None]
         if fmt is not Format.text:
             for n, s in rows:
                 row = {"topic": n, "rate": s.value, "min": s.min, "max": s.max,
@@ -277,7 +279,7 @@ def bw(
     def sink(t: str, frames: list[Frame], conn: InboundConnection, now: float) -> None:
         meter.add([len(f) for f in frames], now)
 
-    def report() -> None:
+    def report(last: bool = False) -> None:
         stats = meter.report(runner.now())
         if stats is None:
             return
@@ -329,8 +331,8 @@ def delay(
             delays.append(ref - (secs + nsecs * 1e-9))
         meter.add(delays)
 
-    def report() -> None:
-        stats = meter.report()
+    def report(last: bool = False) -> None:
+        stats = meter.report(last)
         if stats is None:
             return
         row = {"topic": name, "delay": stats.value, "min": stats.min, "max": stats.max,

@@ -36,8 +36,16 @@ class Settings:
         self.remappings = remappings if remappings is not None else {}
 
     def resolved_master_uri(self) -> str:
-        """``--master-uri``, then ``ROS_MASTER_URI``, then the ROS default."""
-        return self.master_uri or os.environ.get("ROS_MASTER_URI") or DEFAULT_MASTER_URI
+        """``--master-uri``, then ``ROS_MASTER_URI``, then the ROS default.
+
+        One that is not ``http://host[:port][/]`` is a usage error that says what is wrong:
+        ``127.0.0.1:11311`` was read as port 80 of localhost, and ``htp://`` as ``http://``.
+        """
+        if self.master_uri:
+            return checked_master_uri(self.master_uri, "--master-uri")
+        if uri := os.environ.get("ROS_MASTER_URI"):
+            return checked_master_uri(uri, "ROS_MASTER_URI")
+        return DEFAULT_MASTER_URI
 
     def output_format(self, local: Format | str | None) -> Format:
         """A command's ``--format`` wins over the global one."""
@@ -48,6 +56,34 @@ class Settings:
         from rostools.rosgraph.masterapi import MasterProxy
 
         return MasterProxy(self.resolved_master_uri(), caller_id(tool))
+
+
+def checked_master_uri(uri: str, source: str) -> str:
+    """``uri`` if it is an ``http://`` URI with a host (and a numeric port), else a UsageError."""
+    from rostools.errors import UsageError
+
+    scheme, sep, rest = uri.partition("://")
+    if not sep:
+        raise UsageError(f"{source}={uri} has no scheme", hint=f"write it as http://{uri}")
+    if scheme.lower() != "http":
+        raise UsageError(
+            f"{source}={uri} has the scheme {scheme!r}; a ROS master speaks http",
+            hint=f"write it as http://{rest}",
+        )
+    netloc = rest.partition("/")[0]
+    if netloc.startswith("["):  # [IPv6]:port
+        host, _, tail = netloc[1:].partition("]")
+        port: str | None = tail[1:] if tail.startswith(":") else None
+    else:
+        host, colon, port = netloc.partition(":")
+        port = port if colon else None
+    if not host:
+        problem = "has no host"
+    elif port is not None and not port.isdigit():
+        problem = f"has a port that is not a number ({port!r})"
+    else:
+        return uri
+    raise UsageError(f"{source}={uri} {problem}", hint="write it as http://HOST:PORT")
 
 
 def caller_id(tool: str) -> str:

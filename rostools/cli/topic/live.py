@@ -10,6 +10,7 @@ from typing import TYPE_CHECKING, Annotated, Any
 import typer
 
 from rostools.cli.common import FINITE
+from rostools.errors import UsageError
 
 if TYPE_CHECKING:
     import asyncio
@@ -60,10 +61,12 @@ async def wait_for_topic(
         ref = split_field(name, types, store)
         if ref is not None:
             return ref
-        if not warned:  # a typo in a field of a published topic is named
+        if not warned:
+            # a field the published topic's type does not have is a typo: said at once
             problem = field_problem(name, types, store)
-            why = f" ({problem})" if problem else ""
-            sys.stderr.write(f"WARNING: topic [{name}] does not appear to be published yet{why}\n")
+            if problem is not None:
+                raise UsageError(f"{name}: {problem}")
+            sys.stderr.write(f"WARNING: topic [{name}] does not appear to be published yet\n")
             warned = True
         if stop.is_set() or (deadline is not None and time.monotonic() > deadline):
             return None

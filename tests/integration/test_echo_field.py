@@ -1,0 +1,35 @@
+"""A field that a published topic's type does not have is a usage error at once (exit 2).
+
+``topic echo /chatter/dat`` on a std_msgs/String topic warned that the topic did not appear
+to be published yet, then waited forever.
+"""
+
+from __future__ import annotations
+
+import sys
+import time
+
+import pytest
+
+from tests.support.env import run_cli
+from tests.support.procs import Proc, wait_for
+
+
+@pytest.mark.parametrize("verb", ["echo", "plot"])
+def test_a_misspelt_field_is_exit_2_at_once(
+    rostools_master: str, cli_env: dict[str, str], verb: str
+) -> None:
+    pub = Proc([sys.executable, "-m", "rostools", "topic", "pub", "/chatter", "std_msgs/String",
+                "hi"], env=cli_env)  # fmt: skip
+    try:
+        wait_for(lambda: "/chatter" in run_cli("topic", "list", env=cli_env).stdout, 15, "pub")
+        started = time.monotonic()
+        done = run_cli("topic", verb, "/chatter/dat", "--timeout", "30", env=cli_env)
+        assert time.monotonic() - started < 15
+    finally:
+        pub.stop()
+    assert done.returncode == 2, done.stderr
+    assert done.stderr.startswith("rostools: /chatter/dat: /chatter is std_msgs/String: "), (
+        done.stderr
+    )
+    assert "dat" in done.stderr.splitlines()[-1]

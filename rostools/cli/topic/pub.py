@@ -15,13 +15,15 @@ from rostools.cli.common import FINITE, MsgPathOpt, node_session
 from rostools.cli.settings import type_store
 from rostools.cli.topic.group import app
 from rostools.cli.topic.live import TimeoutOpt, TopicArg
-from rostools.errors import NotFoundError, UsageError
+from rostools.errors import NotFoundError, RostoolsError, UsageError, one_line
 from rostools.names import script_resolve
 
 if TYPE_CHECKING:
     import asyncio
 
+    from rostools.msgs.topictype import TopicType
     from rostools.node.node import Node
+    from rostools.node.publisher import Publisher
 
 #: How long ``-1`` stays up so that late subscribers still get the latched message (rostopic).
 ONCE_LINGER = 3.0
@@ -209,7 +211,9 @@ def pub(
         from rostools.msgs.text import formatter, message_type
         from rostools.node.session import first
 
+        known = dict(await node.master_call("getTopicTypes"))  # before ours replaces it
         publisher = await node.advertise(name, ttype, latch=latched, queue_size=1000)
+        refused = _watch_types(known.get(name), publisher, name, ttype)
         show = formatter(codec, message_type(msg_type)) if verbose else None
         deadline = time.monotonic() + timeout if timeout is not None else None
 
@@ -233,6 +237,11 @@ def pub(
             note = f" for {ONCE_LINGER} seconds" if once else ". Press ctrl-C to terminate"
             sys.stderr.write(f"publishing and latching message{note}\n")
             await first(stop.wait(), timeout=linger if once else left())
+            if once and refused and publisher.subscriber_count == 0:
+                raise RostoolsError(
+                    f"no subscriber of {name} took the message: "
+                    f"{', '.join(sorted(refused))} wanted another type"
+                )
             return
         if streamed:  # rostopic waits up to 5 s for a subscriber before a file or stdin
             give_up = time.monotonic() + SUBSCRIBER_WAIT
@@ -276,3 +285,31 @@ def pub(
                 served = time.monotonic()
 
     node_session(ctx, main, "rostools_pub")
+
+
+def _watch_types(
+    carried: str | None, publisher: Publisher, name: str, ttype: TopicType
+) -> set[str]:
+    """Say when the topic carries another type, and each subscriber that refuses ours.
+
+    rospy's publisher logs "topic types do not match" and carries on; the messages reach no
+    one. Returns the set the refusing subscribers' caller ids are added to.
+    """
+    from rostools.wire.tcpros import check_subscription
+
+    if carried not in (None, ttype.type, "*"):
+        sys.stderr.write(
+            one_line(f"WARNING: {name} carries {carried}, not {ttype.type}: its subscribers")
+            + " will refuse these messages\n"
+        )
+    refused: set[str] = set()
+
+    def check(fields: dict[str, str]) -> None:
+        problem = check_subscription(fields, name, ttype.md5sum, ttype.type)
+        caller = fields.get("callerid", "?")
+        if problem is not None and caller not in refused:
+            refused.add(caller)
+            sys.stderr.write(one_line(f"WARNING: {caller} refused the messages: {problem}") + "\n")
+
+    publisher.on_subscriber = check
+    return refused

@@ -1,0 +1,44 @@
+"""``topic pub`` of a type other than the topic's: one warning, and ``-1`` fails if nobody took it.
+
+It printed "publishing" and exited 0 while every subscriber refused the messages; rospy
+only logs "topic types do not match" on the publisher's side.
+"""
+
+from __future__ import annotations
+
+import sys
+
+from tests.support.env import run_cli
+from tests.support.procs import Proc, wait_for
+
+
+def test_another_type_is_said_and_once_fails(rostools_master: str, cli_env: dict[str, str]) -> None:
+    talker = Proc([sys.executable, "-m", "rostools", "topic", "pub", "/chatter",
+                   "std_msgs/String", "hi"], env=cli_env)  # fmt: skip
+    listener = Proc([sys.executable, "-m", "rostools", "topic", "echo", "/chatter"], env=cli_env)
+    try:
+        listener.expect("hi", 20)
+        done = run_cli("topic", "pub", "/chatter", "std_msgs/Int32", "5", "-1", env=cli_env)
+    finally:
+        listener.stop()
+        talker.stop()
+    assert done.returncode == 1, done.stderr
+    lines = done.stderr.splitlines()
+    assert lines[0] == (
+        "WARNING: /chatter carries std_msgs/String, not std_msgs/Int32: its subscribers will "
+        "refuse these messages"
+    )
+    assert any(line.startswith("WARNING: /rostools_echo_") and "refused the messages" in line
+               for line in lines), lines  # fmt: skip
+    assert lines[-1].startswith("rostools: no subscriber of /chatter took the message: ")
+
+
+def test_once_with_nobody_listening_is_still_fine(
+    rostools_master: str, cli_env: dict[str, str]
+) -> None:
+    done = run_cli("topic", "pub", "/lonely", "std_msgs/Int32", "5", "-1", env=cli_env)
+    assert (done.returncode, done.stderr) == (
+        0,
+        "publishing and latching message for 3.0 seconds\n",
+    )
+    wait_for(lambda: "/lonely" not in run_cli("topic", "list", env=cli_env).stdout, 10, "gone")

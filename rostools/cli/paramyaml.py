@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import ast
 import base64
+import datetime
 import math
 import operator
 import re
@@ -142,10 +143,17 @@ def dump(value: Any, *, pretty: bool = False) -> str:
 
 
 def check_value(value: Any, name: str) -> None:
-    """Refuse what XML-RPC cannot carry: integers beyond 32 bits, and null anywhere."""
+    """Refuse what XML-RPC cannot carry: integers beyond 32 bits, null and timestamps."""
     if value is None:
         raise UsageError(
             f"{name}: null is not a parameter value", hint="quote it to set the string 'null'"
+        )
+    if isinstance(value, datetime.date):
+        # rosparam fails on a date (a traceback, exit 0, nothing set) and stores a date and
+        # time as an XML-RPC dateTime that it cannot print back as it was written
+        raise UsageError(
+            f"{name}: {value} is a YAML timestamp, not a parameter value",
+            hint=f"quote it to set the string '{value}'",
         )
     if isinstance(value, bool):
         return

@@ -31,6 +31,9 @@ DEEP = "[" * 10_000 + "]" * 10_000
         (["node", "info", "a//b"], "not a legal ROS name"),
         (["service", "call", "/s:x"], "not a legal ROS name"),
         (["param", "set", "/x", "- - - -"], "/x[0][0][0][0]: null is not a parameter value"),
+        # a YAML date was an internal error (cannot marshal datetime.date)
+        (["param", "set", "/x", "2024-01-01"], "/x: 2024-01-01 is a YAML timestamp, not a"),
+        (["param", "set", "/x", "{a: [2024-01-01 10:00:00]}"], "/x/a[0]: 2024-01-01 10:00:00"),
         (["param", "set", "/x", '{"\\n": null}'], "/x/\\n: null"),  # escaped, still one line
         (["param", "set", "/", '{"\\u0085": null}'], "rostools: /\\x85: null"),  # NEL too
     ],

@@ -23,8 +23,22 @@ app = typer.Typer(
     add_completion=False,
 )
 
-VerboseOpt = Annotated[bool, typer.Option("-v", "--verbose", help="Say what is done, on stderr.")]
+VerboseOpt = Annotated[
+    bool, typer.Option("-v", "--verbose", help="Say what is done, as rosparam -v (stdout).")
+]
 NameArg = Annotated[str, typer.Argument(help="Parameter name; relative names join ROS_NAMESPACE.")]
+
+
+def _print_params(params: Any, ns: str) -> None:
+    """rosparam's -v listing of what load and dump carry: ``name=value`` per leaf."""
+    if not isinstance(params, dict):
+        sys.stdout.write(f"{params}\n")
+        return
+    for key, value in params.items():
+        if isinstance(value, dict):
+            _print_params(value, join(ns, key))
+        else:
+            sys.stdout.write(f"{join(ns, key)}={value}\n")
 
 
 def _set_tree(proxy: Any, name: str, value: Any, verbose: bool) -> None:
@@ -56,7 +70,12 @@ def get(
     ctx: typer.Context,
     name: NameArg,
     pretty: Annotated[
-        bool, typer.Option("-p", "--pretty", help="Multi-line strings as blocks; still YAML.")
+        bool,
+        typer.Option(
+            "-p",
+            "--pretty",
+            help="As rosparam -p: text as it is, multi-line text in mappings as blocks.",
+        ),
     ] = False,
     verbose: VerboseOpt = False,
     fmt: FormatOpt = None,
@@ -117,9 +136,10 @@ def delete(ctx: typer.Context, name: NameArg, verbose: VerboseOpt = False) -> No
     proxy = master(ctx, "rosparam")
     if key == GLOBAL_NS:
         proxy.set_param(GLOBAL_NS, {})
+        quick.say(verbose, "deleted ENTIRE parameter server")
     else:
         proxy.delete_param(key)
-    quick.say(verbose, f"deleted parameter [{key}]")
+        quick.say(verbose, f"deleted parameter [{key}]")
 
 
 @app.command()
@@ -131,19 +151,25 @@ def load(
 ) -> None:
     """Load parameters from a YAML file (every document; a ``_ns`` key picks a namespace)."""
     text = sys.stdin.read() if file == "-" else _read(Path(file)).decode("utf-8", "replace")
+    quick.say(verbose, "reading parameters from " + ("stdin" if file == "-" else f"[{file}]"))
     base = script_resolve(namespace, "rosparam")
     proxy = master(ctx, "rosparam")
+    loaded: list[tuple[Any, str]] = []
     for doc in paramyaml.load_all(text, "stdin" if file == "-" else file):
         if doc is None:
             continue
         ns = base
         if isinstance(doc, dict) and "_ns" in doc:
             ns = join(make_global_ns(base), str(doc.pop("_ns")))
+            quick.say(verbose, f"reading parameters into namespace [{ns}]")
         if ns == GLOBAL_NS and not isinstance(doc, dict):
             raise UsageError("a document loaded into / must be a mapping")
         paramyaml.check_value(doc, ns)
-        quick.say(verbose, f"reading parameters into namespace [{ns}]")
-        _set_tree(proxy, ns, doc, verbose)
+        loaded.append((doc, ns))
+    for doc, ns in loaded:  # every document is read and checked before any is set
+        if verbose:
+            _print_params(doc, ns)
+        _set_tree(proxy, ns, doc, False)
 
 
 @app.command()
@@ -158,8 +184,10 @@ def dump(
 ) -> None:
     """Write parameters as YAML, to a file or stdout."""
     key = script_resolve(namespace, "rosparam")
+    quick.say(verbose, f"dumping namespace [{namespace}] to file [{file}]")  # as given
     value = master(ctx, "rosparam").get_param(key)
-    quick.say(verbose, f"dumping namespace [{key}] to file [{file or 'stdout'}]")
+    if verbose:
+        _print_params(value, key)
     fmt = output_format(ctx, fmt)
     if fmt is Format.text:
         text = paramyaml.dump(value)

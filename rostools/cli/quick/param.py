@@ -13,9 +13,9 @@ if TYPE_CHECKING:
 
 
 def say(verbose: bool, text: str) -> None:
-    """rosparam's -v: a line on stderr."""
+    """rosparam's -v: a line on stdout, as rosparam prints it."""
     if verbose:
-        sys.stderr.write(text + "\n")
+        sys.stdout.write(text + "\n")
 
 
 def list_params(s: Settings, namespace: str, fmt: Format | str | None) -> None:
@@ -34,7 +34,12 @@ def get(s: Settings, name: str, pretty: bool, verbose: bool, fmt: Format | str |
     if out is Format.text:
         from rostools.cli import paramdump  # PyYAML only for values it cannot print itself
 
-        sys.stdout.write(paramdump.dump(value, pretty=pretty) + "\n")  # rosparam's blank line
+        if pretty and isinstance(value, str):
+            sys.stdout.write(value + "\n")  # rosparam -p prints text as it is
+            return
+        # rosparam ends a YAML dump with a blank line, but not its -p print of a mapping
+        end = "" if pretty and isinstance(value, dict) else "\n"
+        sys.stdout.write(paramdump.dump(value, pretty=pretty) + end)
     else:
         from rostools.cli import paramyaml
 

@@ -10,6 +10,7 @@ from typing import TYPE_CHECKING, Annotated, Any
 import typer
 
 from rostools.cli.common import FINITE
+from rostools.errors import one_line
 
 if TYPE_CHECKING:
     import asyncio
@@ -63,7 +64,8 @@ async def wait_for_topic(
         if not warned:  # a typo in a field of a published topic is named
             problem = field_problem(name, types, store)
             why = f" ({problem})" if problem else ""
-            sys.stderr.write(f"WARNING: topic [{name}] does not appear to be published yet{why}\n")
+            line = f"WARNING: topic [{name}] does not appear to be published yet{why}"
+            sys.stderr.write(one_line(line) + "\n")  # the problem may name a peer's type
             warned = True
         if stop.is_set() or (deadline is not None and time.monotonic() > deadline):
             return None

@@ -329,13 +329,23 @@ def format_response(
 
 
 def format_request(host: str, path: str, method: str, params: tuple[Any, ...]) -> bytes:
-    """A complete HTTP POST of an XML-RPC call."""
+    """A complete HTTP POST of an XML-RPC call.
+
+    The path comes from a peer's URI: anything but printable ASCII in it is percent-encoded,
+    so that a line break cannot end the request line and U+2028 cannot fail to encode.
+    """
     body = xmlvalues.dumps_call(method, params)
+    if not (path.isascii() and path.isprintable() and " " not in path):
+        path = "".join(c if "!" <= c <= "~" else _percent(c) for c in path)
     head = (
         f"POST {path or '/'} HTTP/1.1\r\nHost: {host}\r\nUser-Agent: rostools\r\n"
         f"Content-Type: text/xml\r\nContent-Length: {len(body)}\r\n\r\n"
     )
     return head.encode("latin-1") + body
+
+
+def _percent(char: str) -> str:
+    return "".join(f"%{byte:02X}" for byte in char.encode())
 
 
 def decode_response(body: bytes | bytearray) -> Any:

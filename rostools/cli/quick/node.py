@@ -54,7 +54,9 @@ def list_nodes(
         emit(
             out,
             rows,
-            lambda rs: lines(f"{r['uri'] or 'unknown address'} \t{r['name']}" for r in rs),
+            lambda rs: "\n".join(
+                f"{one_line(r['uri'] or 'unknown address')} \t{one_line(r['name'])}" for r in rs
+            ),
         )
     elif uris:
         addresses = [known.uri(n) for n in nodes]

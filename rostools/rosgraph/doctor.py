@@ -29,6 +29,7 @@ from rostools.rosgraph.network import (
     uri_host,
 )
 from rostools.wire.codes import SUCCESS
+from rostools.wire.xmlrpc import request_path
 from rostools.wire.xmlvalues import Fault, dumps_call, loads_response
 
 #: How far apart two clocks may be before we say so (s); HTTP dates have 1 s resolution.
@@ -72,7 +73,7 @@ def ask(uri: str, method: str, params: tuple[Any, ...], timeout: float) -> Answe
     try:
         sent = time.time()
         body = dumps_call(method, params)
-        conn.request("POST", parts.path or "/", body, {"Content-Type": "text/xml"})
+        conn.request("POST", request_path(parts.path), body, {"Content-Type": "text/xml"})
         response = conn.getresponse()
         received = time.time()
         data = response.read()

@@ -56,7 +56,8 @@ def test_graph_names_are_escaped_in_text(hostile: str, cli_env: dict[str, str]) 
     assert shown(NODE) in out and "/legal" in out
     out, _ = cli(cli_env, "node", "list", "-a")
     assert f"{shown(hostile)} \t{shown(NODE)}" in out
-    # /legal cannot be contacted (exit 4); what the master says of it is printed first
+    # /legal cannot be contacted (exit 4; it was an internal error, exit 1, as its URI's path
+    # could not be encoded); what the master says of it is printed first
     out, err = cli(cli_env, "node", "info", "/legal", code=4)
     assert f" * {shown(TOPIC)} [{shown(TYPE)}]" in out
     assert f" * {shown(SERVICE)}" in out
@@ -73,6 +74,11 @@ def test_graph_names_are_escaped_in_text(hostile: str, cli_env: dict[str, str]) 
     assert shown(NODE) in out
     out, _ = cli(cli_env, "node", "graph", "-F", "dot")
     assert f'  "t:{shown(TOPIC)}" -> "n:/legal";' in out
+    # the nodes' URI had its path refused by http.client: "it does not speak the ROS XML-RPC
+    # API (UnicodeEncodeError)"; now the path is percent-encoded and the port refuses
+    out, _ = cli(cli_env, "doctor", "-t", "2", code=4)
+    nodes = next(line for line in out if line.startswith("FAIL  nodes"))
+    assert f"{shown(NODE)} at {shown(hostile)} (connection refused at 127.0.0.1" in nodes, out
 
 
 def test_parameter_values_are_data_and_stay_as_they_are(
@@ -105,12 +111,15 @@ def test_json_keeps_the_names_raw(hostile: str, cli_env: dict[str, str]) -> None
 
 
 def test_notices_and_bag_record_escape_peer_names(hostile: str, cli_env: dict[str, str]) -> None:
-    # the notice was fixed with one_line's move to errors.py; it is checked here with the rest
+    # the notice was escaped by one_line's move to errors.py. Its reason was "it does not
+    # speak the ROS XML-RPC API ('latin-1' codec can't encode character '\u2028' ...)": the
+    # URI's path went into the request line as it was, and is now percent-encoded
     _, err = cli(cli_env, "topic", "echo", "/plain", "--timeout", "3", code=5)
     told = [line for line in err if "cannot connect to" in line]
     assert len(told) == 1, err
     assert told[0].startswith(
         f"rostools: cannot connect to {shown(NODE)} at {shown(hostile)} (publisher of /plain): "
+        "connection refused at 127.0.0.1"
     ), told
     # before: "Subscribing to /x" and "/y" on two lines
     bag = Path(cli_env["HOME"]).parent / "all.bag"

@@ -90,9 +90,9 @@ def _compression_rows(info: BagInfo, duration: float) -> list[tuple[str, str]]:
     for c in info.compression:
         if c.compression != "none" and c.uncompressed_size:
             fraction = 100.0 * c.compressed_size / c.uncompressed_size
-            parts.append(f"{c.compression} [{c.chunks}/{chunks} chunks; {fraction:.2f}%]")
+            parts.append(f"{one_line(c.compression)} [{c.chunks}/{chunks} chunks; {fraction:.2f}%]")
         else:
-            parts.append(f"{c.compression} [{c.chunks}/{chunks} chunks]")
+            parts.append(f"{one_line(c.compression)} [{c.chunks}/{chunks} chunks]")
     rows = [("compression", ", ".join(parts))]
     if all(c.compression == "none" for c in info.compression) or not info.uncompressed_size:
         return rows

@@ -52,6 +52,10 @@ def test_graph_names_are_escaped_in_text(hostile: str, cli_env: dict[str, str]) 
     assert out[:4] == [f"Type: {shown(TYPE)}", "", "Publishers: ", publisher]
     out, _ = cli(cli_env, "topic", "type", "/plain")
     assert out == [shown(TYPE)]
+    out, _ = cli(cli_env, "topic", "find", TYPE)
+    assert out == ["/plain", shown(TOPIC)]
+    out, _ = cli(cli_env, "topic", "list", "--host")
+    assert out[0] == "Host [127.0.0.1]:" and f"  {shown(TOPIC)}" in out
     out, _ = cli(cli_env, "node", "list")
     assert shown(NODE) in out and "/legal" in out
     out, _ = cli(cli_env, "node", "list", "-a")

@@ -12,6 +12,7 @@ import asyncio
 import contextlib
 import email.utils
 import logging
+import socket
 import time
 import xmlrpc.client
 from collections.abc import Callable
@@ -297,7 +298,10 @@ async def call(
     request = format_request(parts.netloc, parts.path or "/", method, params)
 
     async def exchange() -> Any:
-        reader, writer = await asyncio.open_connection(host, port)
+        try:
+            reader, writer = await asyncio.open_connection(host, port)
+        except UnicodeError as err:  # a peer's URI with U+2028 in its host: no name to look up
+            raise socket.gaierror(socket.EAI_NONAME, f"{host!r} is not a host name") from err
         try:
             writer.write(request)
             parser = HttpParser()

@@ -89,6 +89,8 @@ def ask(uri: str, method: str, params: tuple[Any, ...], timeout: float) -> Answe
 
 
 def _failure(err: BaseException, host: str, peer: bool = True) -> Failure:
+    if isinstance(err, UnicodeError):  # a peer's URI with U+2028 in its host: no name to look up
+        return explain(socket.gaierror(socket.EAI_NONAME, str(err)), host, peer)
     if isinstance(err, (Fault, http.client.HTTPException, ValueError)):
         return Failure(f"it does not speak the ROS XML-RPC API ({type(err).__name__})")
     return explain(err, host, peer)

@@ -329,10 +329,14 @@ def format_response(
 
 
 def format_request(host: str, path: str, method: str, params: tuple[Any, ...]) -> bytes:
-    """A complete HTTP POST of an XML-RPC call (``path`` as ``request_path`` sends it)."""
+    """A complete HTTP POST of an XML-RPC call.
+
+    ``host`` and ``path`` come from a peer's URI: both go as ``request_path`` writes them.
+    """
     body = xmlvalues.dumps_call(method, params)
     head = (
-        f"POST {request_path(path)} HTTP/1.1\r\nHost: {host}\r\nUser-Agent: rostools\r\n"
+        f"POST {request_path(path)} HTTP/1.1\r\nHost: {request_path(host)}\r\n"
+        "User-Agent: rostools\r\n"
         f"Content-Type: text/xml\r\nContent-Length: {len(body)}\r\n\r\n"
     )
     return head.encode("latin-1") + body

@@ -28,6 +28,7 @@ from tests.support.hostilenames import (
     TOPIC,
     TYPE,
     URDF,
+    call,
     cli,
     register,
     shown,
@@ -173,3 +174,31 @@ def test_bag_topic_names_are_escaped(cli_env: dict[str, str], tmp_path: Path) ->
     assert any(line.startswith(f"topics:      {escaped}   1 msg") for line in out), out
     done = run_cli("topic", "list", "-b", str(bag), "-F", "json", env=cli_env)
     assert json.loads(done.stdout) == [{"topic": topic, "type": "std_msgs/String"}]
+
+
+def test_a_host_name_with_a_line_separator_is_a_name_that_does_not_resolve(
+    rostools_master: str, cli_env: dict[str, str]
+) -> None:
+    # before: node info and node ping ended in "internal error: UnicodeEncodeError" (exit 1),
+    # and echo said the node "does not speak the ROS XML-RPC API"
+    call(
+        rostools_master,
+        "registerPublisher",
+        "/hosty",
+        "/t",
+        "std_msgs/String",
+        "http://h\u2028x:1/",
+    )
+    _, err = cli(cli_env, "node", "info", "/hosty", code=4)
+    assert err == [
+        "rostools: cannot reach the node /hosty at http://h\\u2028x:1/: 'h\\u2028x' is not a "
+        "host name"
+    ]
+    _, err = cli(cli_env, "node", "ping", "-c", "1", "/hosty", code=4)
+    assert err[-1].endswith("'h\\u2028x' is not a host name"), err
+    _, err = cli(cli_env, "topic", "echo", "/t", "--timeout", "3", code=5)
+    assert (
+        "rostools: cannot connect to /hosty at http://h\\u2028x:1/ (publisher of /t): "
+        "h\\u2028x does not resolve here; set ROS_IP or ROS_HOSTNAME on that host to an address "
+        "others reach it at"
+    ) in err, err

@@ -19,7 +19,7 @@ from typing import Any
 
 from rostools._api import messages
 from rostools._api.messages import Values
-from rostools.errors import NotFoundError, RostoolsError, TimeoutExpired, UsageError
+from rostools.errors import NotFoundError, RostoolsError, TimeoutExpired, UsageError, one_line
 from rostools.msgs.message import Message
 from rostools.node.connection import Frame, InboundConnection
 from rostools.node.node import Node as CoreNode
@@ -49,7 +49,7 @@ def default_master_uri() -> str:
 
 
 def _warn(notice: Notice) -> None:
-    log.warning("%s", notice.message)
+    log.warning("%s", one_line(notice.message))
 
 
 class AsyncSubscription:
@@ -84,7 +84,7 @@ class AsyncSubscription:
                 log.warning(
                     "%s carries %s, not %s: its messages are left out",
                     self.topic,
-                    msg._type,
+                    one_line(msg._type),  # the publisher's word
                     self.msg_type,
                 )
             return
@@ -183,12 +183,12 @@ class _Topic:
                         header.get("message_definition", ""),
                     )  # fmt: skip
                 except RostoolsError as err:
-                    log.warning("cannot decode %s: %s", self.name, err)
+                    log.warning("cannot decode %s: %s", self.name, one_line(err))
                     return
             try:
                 msg = decode(data)
             except Exception as err:  # noqa: BLE001 - one bad message, not the subscription
-                log.warning("a message on %s does not decode: %s", self.name, err)
+                log.warning("a message on %s does not decode: %s", self.name, one_line(err))
                 continue
             for listener in list(self.listeners):
                 listener.deliver(msg)

@@ -23,6 +23,8 @@ from collections.abc import Callable, Iterator, Sequence
 from pathlib import Path
 from typing import Any
 
+from rostools.errors import one_line
+
 #: Seconds a completion may take in all, start-up included (``ROSTOOLS_COMPLETE_DEADLINE``).
 DEADLINE = 0.3
 TREE = Path(__file__).with_name("tree.json")
@@ -98,8 +100,15 @@ class Completer:
         return max(self.deadline - time.monotonic(), 0.001)
 
     def complete(self) -> Iterator[tuple[str, str]]:
-        """The candidates that start with the current word."""
+        """The candidates that start with the current word.
+
+        A name with a control character (a peer's, from the master) would break the one line
+        a candidate is, and cannot be typed anyway: it is left out, and help is escaped.
+        """
         for value, help_text in self._candidates():
+            if one_line(value) != value:
+                continue
+            help_text = one_line(help_text)
             if value.startswith(self.cur) or value.startswith(":"):
                 yield (value if value.startswith(":") else value[len(self.prefix) :]), help_text
 

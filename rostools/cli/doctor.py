@@ -9,7 +9,7 @@ import typer
 
 from rostools.cli.common import FiniteFloat, FormatOpt, output_format, settings
 from rostools.cli.output import Format, emit
-from rostools.errors import RostoolsError, TimeoutExpired, UnreachableError, UsageError
+from rostools.errors import RostoolsError, TimeoutExpired, UnreachableError, UsageError, one_line
 
 app = typer.Typer(
     name="doctor", help="Check this host's view of the ROS graph.", add_completion=False
@@ -51,7 +51,8 @@ def doctor(
     if fmt is Format.text:
         for check in checks:
             hint = f" (hint: {check.hint})" if check.hint else ""
-            sys.stdout.write(f"{check.status.upper():5} {check.name:10} {check.verdict}{hint}\n")
+            verdict = one_line(check.verdict + hint)  # it names nodes and URIs from the master
+            sys.stdout.write(f"{check.status.upper():5} {check.name:10} {verdict}\n")
     else:
         emit(fmt, {"ok": not failed, "checks": [c.as_dict() for c in checks]})
     sys.stdout.flush()

@@ -10,6 +10,10 @@ made them:
   ends each message;
 - ``--format json``: NDJSON, one compact object a line, always valid JSON (NaN and infinity,
   which JSON lacks, become the strings "nan", "inf" and "-inf", as in echo's messages).
+
+Names, types and URIs that come from the master, a peer or a file are foreign: text output
+passes each through ``one_line`` (``lines`` for a list), so that a newline, a terminal escape
+or U+2028 in one cannot forge lines. JSON and YAML keep them raw; their encoders escape.
 """
 
 from __future__ import annotations
@@ -17,9 +21,11 @@ from __future__ import annotations
 import enum
 import sys
 
+from rostools.errors import one_line
+
 TYPE_CHECKING = False  # ``typing`` is 5-10 ms of start-up; only annotations use it
 if TYPE_CHECKING:
-    from collections.abc import Callable
+    from collections.abc import Callable, Iterable
     from typing import Any
 
 
@@ -29,6 +35,11 @@ class Format(str, enum.Enum):
     text = "text"
     json = "json"
     yaml = "yaml"
+
+
+def lines(names: Iterable[str]) -> str:
+    """Foreign names one a line, each escaped by ``one_line``."""
+    return "\n".join(map(one_line, names))
 
 
 def render(fmt: Format, data: Any, text: Callable[[Any], str] | None = None) -> str:

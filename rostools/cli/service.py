@@ -9,7 +9,7 @@ from typing import TYPE_CHECKING, Annotated, Any
 import typer
 
 from rostools.cli.common import FINITE, FormatOpt, MsgPathOpt, master, output_format, settings
-from rostools.cli.output import Format, emit
+from rostools.cli.output import Format, emit, lines
 from rostools.cli.quick import runs
 from rostools.cli.quick import service as quick
 from rostools.cli.settings import caller_id, type_store
@@ -138,8 +138,9 @@ def info(
         "md5sum": md5,
         "args": request,
     }
-    text = f"Node: {providers[0]}\nURI: {found_uri}\nType: {kind}\nArgs: {' '.join(request or [])}"
-    emit(output_format(ctx, fmt), data, lambda _: text)
+    shown = [f"Node: {providers[0]}", f"URI: {found_uri}", f"Type: {kind}"]
+    shown.append(f"Args: {' '.join(request or [])}")
+    emit(output_format(ctx, fmt), data, lambda _: lines(shown))
 
 
 def _has_srv(store: TypeStore, kind: str) -> bool:
@@ -168,7 +169,7 @@ def find(
                 found.append(name)
         except RostoolsError:
             continue  # a dead or slow server is simply not a match
-    emit(output_format(ctx, fmt), found, "\n".join)
+    emit(output_format(ctx, fmt), found, lines)
 
 
 @app.command(context_settings={"ignore_unknown_options": True})

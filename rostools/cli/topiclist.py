@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from rostools.errors import one_line
+
 TYPE_CHECKING = False  # ``typing`` is 5-10 ms of start-up; only annotations use it
 if TYPE_CHECKING:
     from typing import Any
@@ -19,19 +21,24 @@ def list_text(
             names = [i.name for i in infos if i.subscribers]
         else:
             names = [i.name for i in infos]
-        return "\n".join(indent + n for n in sorted(names))
+        return "\n".join(indent + one_line(n) for n in sorted(names))
     lines: list[str] = []
     if not subs_only:
         lines += ["", f"{indent}Published topics:"]
         for i in infos:
             if i.publishers:
                 n = len(i.publishers)
-                lines.append(f"{indent} * {i.name} [{i.type}] {n} publisher{'s' if n > 1 else ''}")
+                lines.append(f"{indent} * {_named(i)} {n} publisher{'s' if n > 1 else ''}")
     if not pubs_only:
         lines += [indent, f"{indent}Subscribed topics:"]
         for i in infos:
             if i.subscribers:
                 n = len(i.subscribers)
-                lines.append(f"{indent} * {i.name} [{i.type}] {n} subscriber{'s' if n > 1 else ''}")
+                lines.append(f"{indent} * {_named(i)} {n} subscriber{'s' if n > 1 else ''}")
     lines.append("")
     return "\n".join(lines)
+
+
+def _named(info: Any) -> str:
+    """``/name [pkg/Type]``, escaped: both are the peers'."""
+    return f"{one_line(info.name)} [{one_line(info.type)}]"

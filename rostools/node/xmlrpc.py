@@ -12,12 +12,14 @@ import asyncio
 import contextlib
 import email.utils
 import logging
+import socket
 import time
 import xmlrpc.client
 from collections.abc import Callable
 from typing import Any
 from urllib.parse import urlsplit
 
+from rostools.errors import one_line
 from rostools.node.listen import Listener, listen
 from rostools.wire.xmlrpc import (
     MAX_BODY,
@@ -74,7 +76,12 @@ def run_call(dispatch: Dispatch, method: str, params: tuple[Any, ...]) -> Any:
     except OverflowError:
         return Encoded(encode_fault(1, "<class 'OverflowError'>:int exceeds XML-RPC limits"))
     except Exception as err:  # noqa: BLE001 - answered as a fault, logged in one line
-        log.warning("XML-RPC method %s failed: %s: %s", method, type(err).__name__, err)
+        # the method's name and the error may be the caller's text: one line in the log
+        log.warning(
+            "XML-RPC method %s failed: %s",
+            one_line(method),
+            one_line(f"{type(err).__name__}: {err}"),
+        )
         return Encoded(encode_fault(1, f"<class '{type(err).__name__}'>:{err}"))
 
 
@@ -148,7 +155,7 @@ class _Connection(asyncio.BufferedProtocol):
             try:
                 self._process()
             except Exception as err:  # noqa: BLE001 - one line per bad request, never a traceback
-                log.warning("XML-RPC request failed: %s: %s", type(err).__name__, err)
+                log.warning("XML-RPC request failed: %s", one_line(f"{type(err).__name__}: {err}"))
                 self._refuse(HttpError(500, "Internal Server Error"))
 
     def _process(self) -> None:
@@ -291,7 +298,10 @@ async def call(
     request = format_request(parts.netloc, parts.path or "/", method, params)
 
     async def exchange() -> Any:
-        reader, writer = await asyncio.open_connection(host, port)
+        try:
+            reader, writer = await asyncio.open_connection(host, port)
+        except UnicodeError as err:  # a peer's URI with U+2028 in its host: no name to look up
+            raise socket.gaierror(socket.EAI_NONAME, f"{host!r} is not a host name") from err
         try:
             writer.write(request)
             parser = HttpParser()

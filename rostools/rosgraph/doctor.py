@@ -29,6 +29,7 @@ from rostools.rosgraph.network import (
     uri_host,
 )
 from rostools.wire.codes import SUCCESS
+from rostools.wire.xmlrpc import request_path
 from rostools.wire.xmlvalues import Fault, dumps_call, loads_response
 
 #: How far apart two clocks may be before we say so (s); HTTP dates have 1 s resolution.
@@ -72,7 +73,7 @@ def ask(uri: str, method: str, params: tuple[Any, ...], timeout: float) -> Answe
     try:
         sent = time.time()
         body = dumps_call(method, params)
-        conn.request("POST", parts.path or "/", body, {"Content-Type": "text/xml"})
+        conn.request("POST", request_path(parts.path), body, {"Content-Type": "text/xml"})
         response = conn.getresponse()
         received = time.time()
         data = response.read()
@@ -88,6 +89,8 @@ def ask(uri: str, method: str, params: tuple[Any, ...], timeout: float) -> Answe
 
 
 def _failure(err: BaseException, host: str, peer: bool = True) -> Failure:
+    if isinstance(err, UnicodeError):  # a peer's URI with U+2028 in its host: no name to look up
+        return explain(socket.gaierror(socket.EAI_NONAME, str(err)), host, peer)
     if isinstance(err, (Fault, http.client.HTTPException, ValueError)):
         return Failure(f"it does not speak the ROS XML-RPC API ({type(err).__name__})")
     return explain(err, host, peer)

@@ -49,8 +49,12 @@ def connect(host: str, port: int, timeout: float) -> _socket.socket:
     """
     # An ASCII host goes as bytes: getaddrinfo encodes a str with idna (2 ms of imports).
     name = host.encode() if host.isascii() else host
+    try:
+        found = _socket.getaddrinfo(name, port, 0, _socket.SOCK_STREAM)
+    except UnicodeError as err:  # a peer's URI with U+2028 in its host: no name to look up
+        raise _socket.gaierror(_socket.EAI_NONAME, f"{host!r} is not a host name") from err
     errors: list[OSError] = []
-    for family, kind, proto, _, address in _socket.getaddrinfo(name, port, 0, _socket.SOCK_STREAM):
+    for family, kind, proto, _, address in found:
         sock = _socket.socket(family, kind, proto)
         try:
             sock.settimeout(timeout)

@@ -5,7 +5,7 @@ from __future__ import annotations
 from collections.abc import Iterable, Mapping
 from typing import Any
 
-from rostools.errors import RostoolsError
+from rostools.errors import RostoolsError, one_line
 from rostools.rosgraph.masterapi import MasterProxy
 
 #: A message longer than this (as text) is cut, so a report stays readable.
@@ -54,6 +54,7 @@ def graph_report(
         lines.append(f"parameters ({len(params)}): {', '.join(shown) or '-'}{more}")
     finally:
         master.http.close()
+    lines = [one_line(line) for line in lines]  # the names are the peers': one line each
     if last_messages:
         lines.append("last message of each subscribed topic:")
         for topic, msg in sorted(last_messages.items()):

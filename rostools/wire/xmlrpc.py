@@ -329,13 +329,32 @@ def format_response(
 
 
 def format_request(host: str, path: str, method: str, params: tuple[Any, ...]) -> bytes:
-    """A complete HTTP POST of an XML-RPC call."""
+    """A complete HTTP POST of an XML-RPC call.
+
+    ``host`` and ``path`` come from a peer's URI: both go as ``request_path`` writes them.
+    """
     body = xmlvalues.dumps_call(method, params)
     head = (
-        f"POST {path or '/'} HTTP/1.1\r\nHost: {host}\r\nUser-Agent: rostools\r\n"
+        f"POST {request_path(path)} HTTP/1.1\r\nHost: {request_path(host)}\r\n"
+        "User-Agent: rostools\r\n"
         f"Content-Type: text/xml\r\nContent-Length: {len(body)}\r\n\r\n"
     )
     return head.encode("latin-1") + body
+
+
+def request_path(path: str) -> str:
+    """A URI's path as a request line carries it: percent-encoded beyond printable ASCII.
+
+    The path comes from a peer's URI: a line break in it must not end the request line, and
+    U+2028 must not fail to encode (Python's http.client, under rospy, refuses both).
+    """
+    if path.isascii() and path.isprintable() and " " not in path:
+        return path or "/"
+    return "".join(c if "!" <= c <= "~" else _percent(c) for c in path)
+
+
+def _percent(char: str) -> str:
+    return "".join(f"%{byte:02X}" for byte in char.encode())
 
 
 def decode_response(body: bytes | bytearray) -> Any:

@@ -40,3 +40,13 @@ def test_option_values_after_an_equals_sign() -> None:
     ]
     assert values("zsh", ["rostools", "topic", "echo", "--format=y"]) == ["--format=yaml"]
     assert values("fish", ["rostools", "topic", "echo", "--quiet=x"]) == []  # a flag takes no value
+
+
+def test_a_peers_name_with_a_line_break_is_not_offered(monkeypatch: pytest.MonkeyPatch) -> None:
+    # before: "/x\n/y" came out as two candidates, "/x" and "/y", neither of them a topic
+    def ask(self: Completer, method: str) -> object:
+        assert method == "getSystemState"
+        return [[["/x\n/y", ["/n"]], ["/ok", ["/n"]], ["/u\u2028", ["/n"]]], [], []]
+
+    monkeypatch.setattr(Completer, "_ask", ask)
+    assert values("bash", ["rostools", "topic", "hz", "/"]) == ["/ok"]

@@ -2,6 +2,12 @@
 
 from __future__ import annotations
 
+import shutil
+import subprocess
+from pathlib import Path
+
+import pytest
+
 from rostools.cli.node.graph import graph_dot, graph_text
 from rostools.cli.node.kill import unreachable_text
 from rostools.cli.node.ping import reply_text
@@ -151,3 +157,55 @@ def test_graph_dot() -> None:
     assert '  "n:/talker" -> "t:/chatter";' in lines
     assert '  "t:/chatter" -> "n:/logger";' in lines
     assert sum("->" in line for line in lines) == 5  # talker, 2 subscribers, odom, cmd
+
+
+# A newline, a backslash before an "n", a quote, the 8-bit CSI and U+2028, from peers.
+HOSTILE = SystemState.from_master(
+    [
+        [["/a\n", ["/n\u2028"]], ["/a\\n", ['/q"\x9b31m']]],
+        [["/a\n", ['/q"\x9b31m']]],
+        [],
+    ]
+)
+HOSTILE_TYPES = {"/a\n": "p/T\n", "/a\\n": "p/T\\"}
+
+
+def test_graph_tree_escapes_peer_names() -> None:
+    # before: "/a" and "" on two lines, and the CSI raw
+    assert graph_text(build_graph(HOSTILE, HOSTILE_TYPES)) == (
+        "/n\\u2028\n"
+        "└── publishes\n"
+        '    └── /a\\n [p/T\\n] → /q"\\x9b31m\n'
+        '/q"\\x9b31m\n'
+        "├── publishes\n"
+        "│   └── /a\\n [p/T\\] → (no subscribers)\n"
+        "└── subscribes\n"
+        "    └── /a\\n [p/T\\n] ← /n\\u2028"
+    )
+
+
+def test_graph_dot_is_one_line_a_statement_and_keeps_names_apart() -> None:
+    # before: a newline inside a label or ID split the statement over two lines, and the CSI
+    # went to the file raw
+    lines = graph_dot(build_graph(HOSTILE, HOSTILE_TYPES)).split("\n")
+    assert all(line.isprintable() for line in lines), lines
+    assert all(line.endswith((";", "{", "}")) for line in lines), lines
+    # "/a\n" and "/a\\n" (a backslash and an n) are two topics: two boxes, two IDs
+    boxes = [line for line in lines if "shape=box" in line]
+    assert boxes == [
+        '  "t:/a\\n" [label="/a\\\\n\\np/T\\\\n", shape=box];',
+        '  "t:/a\\\\n" [label="/a\\\\n\\np/T\\\\", shape=box];',
+    ]
+    assert '  "n:/q\\"\\x9b31m" [label="/q\\"\\\\x9b31m", shape=ellipse];' in lines
+
+
+def test_graphviz_reads_the_hostile_dot(tmp_path: Path) -> None:
+    dot = shutil.which("dot")
+    if dot is None:
+        pytest.skip("Graphviz's dot is not installed")
+    text = graph_dot(build_graph(HOSTILE, HOSTILE_TYPES)) + "\n"
+    done = subprocess.run([dot, "-Tplain"], input=text, capture_output=True, text=True, check=False)
+    assert done.returncode == 0, done.stderr
+    # -Tplain: "node NAME x y w h LABEL ...": two nodes and two topics, each drawn once
+    drawn = [line for line in done.stdout.splitlines() if line.startswith("node ")]
+    assert len(drawn) == 4, done.stdout

@@ -172,6 +172,16 @@ def test_response_and_request_format() -> None:
     assert request.startswith(b"POST / HTTP/1.1\r\nHost: h:1\r\n")
 
 
+def test_a_peers_path_stays_in_the_request_line() -> None:
+    # before: a CR LF in a URI's path ended the request line (the rest became a header) and
+    # U+2028 raised UnicodeEncodeError, which echo reported as "does not speak XML-RPC"
+    request = format_request("h:1", "/a\r\nX: y\u2028%", "getPid", ("/me",))
+    assert request.startswith(b"POST /a%0D%0AX:%20y%E2%80%A8% HTTP/1.1\r\nHost: h:1\r\n")
+    assert format_request("h:1", "", "getPid", ("/me",)).startswith(b"POST / HTTP/1.1\r\n")
+    # the host too: it was a UnicodeEncodeError, an internal error for node info
+    assert b"\r\nHost: h%E2%80%A8x:1\r\n" in format_request("h\u2028x:1", "/", "getPid", ())
+
+
 def test_scalar_calls_are_read_without_xmlrpc_client(monkeypatch: pytest.MonkeyPatch) -> None:
     import xmlrpc.client
 

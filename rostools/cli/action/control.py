@@ -11,9 +11,9 @@ import typer
 from rostools.cli.action.group import app
 from rostools.cli.action.shared import SERVER_WAIT, ActionArg, WaitOpt, action_types, find_action
 from rostools.cli.common import FormatOpt, master, node_session, output_format
-from rostools.cli.output import Format, emit, write
+from rostools.cli.output import Format, emit, lines, write
 from rostools.cli.settings import type_store
-from rostools.errors import NotFoundError, TimeoutExpired, UsageError
+from rostools.errors import NotFoundError, TimeoutExpired, UsageError, one_line
 
 if TYPE_CHECKING:
     import asyncio
@@ -36,10 +36,15 @@ def _table(statuses: dict[str, tuple[int, str, int]]) -> list[dict[str, Any]]:
 def _table_text(rows: list[dict[str, Any]]) -> str:
     if not rows:
         return "(no goals)"
-    width = max(len(r["goal_id"]) for r in rows)
-    lines = [f"{'GOAL ID':<{width}}  {'STATUS':<10}  TEXT"]
-    lines += [f"{r['goal_id']:<{width}}  {r['status']:<10}  {r['text']}" for r in rows]
-    return "\n".join(lines)
+    # a row a goal: the server's ids and texts are escaped so that each stays on its row
+    ids = [one_line(r["goal_id"]) for r in rows]
+    width = max(map(len, ids))
+    table = [f"{'GOAL ID':<{width}}  {'STATUS':<10}  TEXT"]
+    table += [
+        f"{gid:<{width}}  {r['status']:<10}  {one_line(r['text'])}"
+        for gid, r in zip(ids, rows, strict=True)
+    ]
+    return "\n".join(table)
 
 
 @app.command()
@@ -106,7 +111,7 @@ def cancel(
     emit(
         fmt,
         rows,
-        lambda r: "\n".join(f"{x['goal_id']} {x['status']}" for x in r) or "no goal was open",
+        lambda r: lines(f"{x['goal_id']} {x['status']}" for x in r) or "no goal was open",
     )
 
 

@@ -25,6 +25,7 @@ from rostools.errors import (
     TimeoutExpired,
     UnreachableError,
     UsageError,
+    one_line,
 )
 
 if TYPE_CHECKING:
@@ -84,7 +85,7 @@ class _Printer:
         self.said = -1  # the status last written on stderr (text)
 
     def say(self, line: str) -> None:
-        sys.stderr.write(line + "\n")
+        sys.stderr.write(one_line(line) + "\n")  # goal ids and texts are the server's
         sys.stderr.flush()
 
     def event(self, record: dict[str, Any], line: str | None = None) -> None:

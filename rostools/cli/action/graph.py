@@ -13,7 +13,7 @@ from rostools.cli.output import emit
 from rostools.cli.quick import action as quick
 from rostools.cli.quick import runs
 from rostools.cli.settings import type_store
-from rostools.errors import RostoolsError
+from rostools.errors import RostoolsError, one_line
 
 if TYPE_CHECKING:
     from rostools.msgs.spec import MsgSpec
@@ -67,10 +67,10 @@ def info(
     found = find_action(master(ctx, "rostools"), action, need_server=False)
     store = type_store(msg_path)
     data = found.as_dict()
-    text = [f"Action: {found.name}", f"Type: {found.type}", ""]
+    text = [f"Action: {one_line(found.name)}", f"Type: {one_line(found.type)}", ""]
     for label, names in (("Servers", found.servers), ("Clients", found.clients)):
         text.append(f"{label}:" + ("" if names else " None"))
-        text += [f" * {n}" for n in names]
+        text += [f" * {one_line(n)}" for n in names]
         text.append("")
     for part, suffix in PARTS:
         store, spec = _spec(ctx, store, found, part, suffix)

@@ -15,7 +15,7 @@ from rostools.cli.bag.files import BagArg, ForceOpt, Progress, QuietOpt
 from rostools.cli.bag.group import app
 from rostools.cli.common import FormatOpt, output_format
 from rostools.cli.output import Format, emit
-from rostools.errors import NotFoundError, UsageError
+from rostools.errors import NotFoundError, UsageError, one_line
 
 if TYPE_CHECKING:
     from rostools.bag import mcap_format as fmt_
@@ -42,7 +42,7 @@ def _attachments_text(rows: list[dict[str, Any]]) -> str:
         return "no attachments"
     head = ("name", "media type", "log time", "create time", "size")
     table = [head] + [
-        (r["name"], r["media_type"], f"{r['log_time'] / 1e9:.9f}",
+        (one_line(r["name"]), one_line(r["media_type"]), f"{r['log_time'] / 1e9:.9f}",
          f"{r['create_time'] / 1e9:.9f}", str(r["size"]))
         for r in rows
     ]  # fmt: skip
@@ -124,13 +124,14 @@ def doctor(
         reports.append(check(path, bar if bar.bar else None))  # no bar: no count to read
         bar.done()
     if out is Format.text:
-        for r in reports:
+        for r in reports:  # a finding may quote the file's names: one line each, escaped
+            shown = one_line(r.path)
             if r.clean:
-                sys.stdout.write(f"{r.path}: clean ({r.messages} messages)\n")
+                sys.stdout.write(f"{shown}: clean ({r.messages} messages)\n")
             for finding in r.findings:
-                sys.stdout.write(f"{r.path}: {finding}\n")
+                sys.stdout.write(f"{shown}: {one_line(finding)}\n")
             for note in r.notes:
-                sys.stdout.write(f"{r.path}: note: {note}\n")
+                sys.stdout.write(f"{shown}: note: {one_line(note)}\n")
     else:
         data = [
             {"path": str(r.path), "clean": r.clean, "messages": r.messages,

@@ -18,7 +18,7 @@ from rostools.cli import output
 from rostools.cli.bag.group import app
 from rostools.cli.common import FINITE, FormatOpt, output_format
 from rostools.cli.output import Format, emit, render
-from rostools.errors import DataLossError, UsageError
+from rostools.errors import DataLossError, UsageError, one_line
 
 if TYPE_CHECKING:
     from rostools.bag.ops import CopyReport
@@ -464,5 +464,5 @@ def _recover_report(fmt: Format, report: RecoverReport, quiet: bool = False) -> 
         sys.stdout.write(render(fmt, data) + "\n")
     elif not quiet:
         for note in report.notes:
-            sys.stderr.write(f"note: {note}\n")
+            sys.stderr.write(f"note: {one_line(note)}\n")  # may quote the file's names
         sys.stderr.write(f"recovered {report.messages} messages into {report.output}\n")

@@ -7,7 +7,7 @@ import time
 from typing import Any
 
 from rostools.bag.model import BagInfo
-from rostools.errors import UsageError
+from rostools.errors import UsageError, one_line
 
 _NS = 1_000_000_000
 
@@ -51,16 +51,15 @@ def duration_text(duration: float) -> str:
 def info_text(
     info: BagInfo, frequencies: dict[str, float] | None = None, name: str | None = None
 ) -> str:
-    """The text ``rosbag info`` prints, for a ``.bag`` or an MCAP file."""
-    rows: list[tuple[str, str]] = [("path", name or str(info.path))]
-    rows.append(
-        (
-            "version",
-            info.version if info.format == "bag" else f"mcap ({info.profile or 'no'} profile)",
-        )
-    )
+    """The text ``rosbag info`` prints, for a ``.bag`` or an MCAP file.
+
+    Names, types, sums and the library are the file's: each is escaped (``one_line``).
+    """
+    rows: list[tuple[str, str]] = [("path", one_line(name or str(info.path)))]
+    version = info.version if info.format == "bag" else f"mcap ({info.profile or 'no'} profile)"
+    rows.append(("version", one_line(version)))
     if info.format == "mcap" and info.library:
-        rows.append(("library", info.library))
+        rows.append(("library", one_line(info.library)))
     if info.start_ns is None or info.end_ns is None:
         rows.append(("size", human_size(info.size)))
         return _table(rows + _extras_rows(info))
@@ -91,9 +90,9 @@ def _compression_rows(info: BagInfo, duration: float) -> list[tuple[str, str]]:
     for c in info.compression:
         if c.compression != "none" and c.uncompressed_size:
             fraction = 100.0 * c.compressed_size / c.uncompressed_size
-            parts.append(f"{c.compression} [{c.chunks}/{chunks} chunks; {fraction:.2f}%]")
+            parts.append(f"{one_line(c.compression)} [{c.chunks}/{chunks} chunks; {fraction:.2f}%]")
         else:
-            parts.append(f"{c.compression} [{c.chunks}/{chunks} chunks]")
+            parts.append(f"{one_line(c.compression)} [{c.chunks}/{chunks} chunks]")
     rows = [("compression", ", ".join(parts))]
     if all(c.compression == "none" for c in info.compression) or not info.uncompressed_size:
         return rows
@@ -118,20 +117,22 @@ def _type_and_topic_rows(info: BagInfo, freqs: dict[str, float]) -> list[tuple[s
     rows: list[tuple[str, str]] = []
     if not info.topics:
         return rows
-    type_width = max(len(t) for t in info.types)
-    for i, (kind, md5) in enumerate(sorted(info.types.items())):
+    types = [(one_line(k), one_line(v)) for k, v in sorted(info.types.items())]
+    topics = [one_line(t.topic) for t in info.topics]
+    type_width = max(len(k) for k, _ in types)
+    for i, (kind, md5) in enumerate(types):
         rows.append(("types" if i == 0 else "", f"{kind:<{type_width}} [{md5}]"))
-    topic_width = max(len(t.topic) for t in info.topics)
+    topic_width = max(map(len, topics))
     count_width = max(len(str(t.messages)) for t in info.topics)
     freq_width = max((len(human_frequency(f)) for f in freqs.values()), default=0)
-    for i, t in enumerate(info.topics):
+    for i, (shown, t) in enumerate(zip(topics, info.topics, strict=True)):
         unit = "msgs" if t.messages > 1 else "msg "
-        text = f"{t.topic:<{topic_width}}   {t.messages:>{count_width}} {unit}"
+        text = f"{shown:<{topic_width}}   {t.messages:>{count_width}} {unit}"
         if t.topic in freqs:
             text += f" @ {human_frequency(freqs[t.topic]):>{freq_width}}"
         else:
             text += "   " + " " * freq_width
-        text += f" : {t.type:<{type_width}}"
+        text += f" : {one_line(t.type):<{type_width}}"
         if t.connections > 1:
             text += f" ({t.connections} connections)"
         rows.append(("topics" if i == 0 else "", text))

@@ -14,7 +14,7 @@ import typer
 from rostools.cli.bag.group import app
 from rostools.cli.common import FINITE, FormatOpt, node_session, output_format
 from rostools.cli.output import Format, render
-from rostools.errors import UsageError
+from rostools.errors import UsageError, one_line
 
 if TYPE_CHECKING:
     import asyncio
@@ -194,7 +194,7 @@ def play(
             player = Player(node, readers, opts)
             if show_status:
                 for path in paths:
-                    sys.stderr.write(f"Opening {path}\n")
+                    sys.stderr.write(f"Opening {one_line(path)}\n")
             with keyboard(player, asyncio.get_running_loop()) as keys:
                 if show_status and keys:
                     sys.stderr.write("Hit space to toggle paused, or 's' to step.\n")

@@ -14,7 +14,7 @@ from rostools.bag.access import WRITE_COMPRESSIONS
 from rostools.cli.bag.group import app
 from rostools.cli.common import FormatOpt, node_session, output_format
 from rostools.cli.output import Format, render
-from rostools.errors import DataLossError, UsageError
+from rostools.errors import DataLossError, UsageError, one_line
 
 if TYPE_CHECKING:
     import asyncio
@@ -119,7 +119,8 @@ def summary_text(data: dict[str, Any]) -> str:
     for topic, t in data["topics"].items():
         drops = f", {t['drops']} DROPPED" if t["drops"] else ""
         unit = "msg" if t["messages"] == 1 else "msgs"
-        lines.append(f"  {topic} [{t['type'] or '?'}]: {t['messages']} {unit}{drops}")
+        kind = one_line(t["type"] or "?")
+        lines.append(f"  {one_line(topic)} [{kind}]: {t['messages']} {unit}{drops}")
     return "\n".join(lines)
 
 
@@ -168,6 +169,7 @@ class LiveTable:
         self.live.update(self._table(rec, now), refresh=True)
 
     def _table(self, rec: Recorder, now: float) -> Any:
+        from rich.markup import escape
         from rich.table import Table
 
         path = rec.current_file
@@ -183,11 +185,11 @@ class LiveTable:
         for topic, s in sorted(rec.stats.items()):
             hz, bw = self.rates.get(topic, (0.0, 0.0))
             drops = f"[bold red]{s.drops}[/]" if s.drops else "0"
-            kind = s.type or "[dim]no publisher yet[/]"
+            # names are the peers' and may hold markup ("[bold]") or control characters
+            kind = escape(one_line(s.type)) if s.type else "[dim]no publisher yet[/]"
             pubs = str(self.pubs.get(topic, 0))
-            table.add_row(
-                topic, kind, pubs, str(s.written), f"{hz:.1f} Hz", f"{_size(bw)}/s", drops
-            )
+            name = escape(one_line(topic))
+            table.add_row(name, kind, pubs, str(s.written), f"{hz:.1f} Hz", f"{_size(bw)}/s", drops)
         return table
 
 
@@ -350,5 +352,5 @@ def _check_writable(opts: RecordOptions) -> None:
 
 
 def _say_subscribing(topic: str) -> None:
-    sys.stderr.write(f"Subscribing to {topic}\n")
+    sys.stderr.write(f"Subscribing to {one_line(topic)}\n")
     sys.stderr.flush()

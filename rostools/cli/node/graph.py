@@ -17,7 +17,7 @@ import typer
 
 from rostools.cli.common import master, settings
 from rostools.cli.output import Format, emit
-from rostools.errors import NotFoundError, RostoolsError, TimeoutExpired, UsageError
+from rostools.errors import NotFoundError, RostoolsError, TimeoutExpired, UsageError, one_line
 
 if TYPE_CHECKING:
     from rostools.rosgraph.snapshot import RosGraph
@@ -46,7 +46,7 @@ def graph_text(graph: RosGraph) -> str:
     """Each node, the topics it publishes and subscribes, and the nodes at the other end."""
     lines: list[str] = []
     for node in graph.nodes:
-        lines.append(node.name)
+        lines.append(one_line(node.name))
         groups = [
             ("publishes", "→", [(t, graph.topic(t).subscribers) for t in node.publishes]),
             ("subscribes", "←", [(t, graph.topic(t).publishers) for t in node.subscribes]),
@@ -61,26 +61,43 @@ def graph_text(graph: RosGraph) -> str:
             for ti, (topic, peers) in enumerate(topics):
                 branch = "└── " if ti == len(topics) - 1 else "├── "
                 others = (
-                    ", ".join(peers)
+                    ", ".join(map(one_line, peers))
                     if peers
                     else ("(no subscribers)" if arrow == "→" else "(no publishers)")
                 )
                 ty = graph.topic(topic).type
-                lines.append(f"{stem}{branch}{topic} [{ty}] {arrow} {others}")
+                lines.append(f"{stem}{branch}{one_line(topic)} [{one_line(ty)}] {arrow} {others}")
     return "\n".join(lines)
 
 
 def _dot_id(text: str) -> str:
-    return '"' + text.replace("\\", "\\\\").replace('"', '\\"') + '"'
+    r"""A quoted DOT ID on one line, distinct for distinct names.
+
+    Backslashes are doubled before control characters become escapes (``\n``), so that a
+    name holding a backslash and an ``n`` and one holding a newline stay two nodes.
+    """
+    return '"' + one_line(text.replace("\\", "\\\\")).replace('"', '\\"') + '"'
+
+
+def _dot_label(*parts: str) -> str:
+    r"""A quoted DOT label: ``parts`` on lines of their own, each shown as ``one_line`` shows it.
+
+    Graphviz reads ``\n`` in a label as a line break and ``\\`` as a backslash, so the
+    escapes are written with their backslash doubled: they are shown, not obeyed.
+    """
+    shown = (one_line(p).replace("\\", "\\\\").replace('"', '\\"') for p in parts)
+    return '"' + "\\n".join(shown) + '"'
 
 
 def graph_dot(graph: RosGraph) -> str:
     """Graphviz: nodes as ellipses, topics as boxes, arrows along the data flow."""
     lines = ["digraph rosgraph {", "  rankdir=LR;"]
     for node in graph.nodes:
-        lines.append(f"  {_dot_id('n:' + node.name)} [label={_dot_id(node.name)}, shape=ellipse];")
+        lines.append(
+            f"  {_dot_id('n:' + node.name)} [label={_dot_label(node.name)}, shape=ellipse];"
+        )
     for topic in graph.topics:
-        label = _dot_id(f"{topic.name}\n{topic.type}").replace("\n", "\\n")
+        label = _dot_label(topic.name, topic.type)
         lines.append(f"  {_dot_id('t:' + topic.name)} [label={label}, shape=box];")
     for topic in graph.topics:
         tid = _dot_id("t:" + topic.name)

@@ -12,6 +12,7 @@ import typer
 
 from rostools.cli.common import FiniteFloat, settings
 from rostools.cli.quick import node as quick
+from rostools.errors import one_line
 from rostools.rosgraph.masterapi import NODE_TIMEOUT
 
 if TYPE_CHECKING:
@@ -46,5 +47,5 @@ def node_graph(ctx: typer.Context, timeout: float = NODE_TIMEOUT) -> Graph:
 
 
 def warn(text: str) -> None:
-    """One line on stderr that does not stop the command."""
-    sys.stderr.write(f"rostools: {text}\n")
+    """One line on stderr that does not stop the command (names in it escaped)."""
+    sys.stderr.write(f"rostools: {one_line(text)}\n")

@@ -8,10 +8,11 @@ from typing import TYPE_CHECKING, Annotated, Any
 import typer
 
 from rostools.cli.common import FormatOpt, output_format, settings
-from rostools.cli.output import Format, emit
+from rostools.cli.output import Format, emit, lines
 from rostools.errors import (
     NotFoundError,
     UsageError,
+    one_line,
 )
 
 if TYPE_CHECKING:
@@ -32,7 +33,7 @@ def _choose(known: list[str]) -> list[str]:
     """rosnode kill's menu on a terminal: the node whose number is typed (none if none run)."""
     if not known:
         return []
-    print("\n".join(f"{i}. {n}" for i, n in enumerate(known, 1)))
+    print(lines(f"{i}. {n}" for i, n in enumerate(known, 1)))
     print("\nPlease enter the number of the node you wish to kill.")
     while True:
         try:
@@ -87,9 +88,9 @@ def kill(
         return
     if fmt is Format.text:
         if len(names) > 1:
-            print("killing:\n" + "\n".join(f" * {n}" for n in names), flush=True)
+            print("killing:\n" + lines(f" * {n}" for n in names), flush=True)
         else:
-            print(f"killing {names[0]}", flush=True)
+            print(f"killing {one_line(names[0])}", flush=True)
     result = kill_nodes(graph, names)
     if fmt is Format.text:
         if result.killed:
@@ -119,7 +120,7 @@ def _confirm() -> bool:
 def unreachable_text(dead: list[Probe]) -> str:
     """The nodes that did not answer (and why), as rosnode lists them."""
     return "Unable to contact the following nodes:\n" + "".join(
-        f" * {p.node} ({p.error})\n" for p in dead
+        one_line(f" * {p.node} ({p.error})") + "\n" for p in dead
     )
 
 
@@ -175,7 +176,7 @@ def cleanup(
         ]
         if fmt is Format.text:
             for node in sorted(nodes):
-                print(f"Unregistering {node}")
+                print(f"Unregistering {one_line(node)}")
             print("done")
     if fmt is not Format.text:
         emit(fmt, data)

@@ -16,6 +16,7 @@ from rostools.errors import (
     TimeoutExpired,
     UnreachableError,
     UsageError,
+    one_line,
 )
 
 if TYPE_CHECKING:
@@ -35,7 +36,7 @@ from rostools.rosgraph.masterapi import NODE_TIMEOUT
 
 def reply_text(uri: str, ms: float) -> str:
     """A reply line as rosnode prints it."""
-    return f"xmlrpc reply from {uri}\ttime={ms:f}ms"
+    return f"xmlrpc reply from {one_line(uri)}\ttime={ms:f}ms"
 
 
 def _ping_replies(graph: Graph, node: str, count: int | None) -> Iterator[tuple[str, int, float]]:
@@ -95,7 +96,10 @@ def ping(
     name = resolve_node(node)
     graph.require_uri(name)
     if fmt is Format.text:
-        print(f"rosnode: node is [{name}]\npinging {name} with a timeout of {timeout}s", flush=True)
+        shown = one_line(name)
+        print(
+            f"rosnode: node is [{shown}]\npinging {shown} with a timeout of {timeout}s", flush=True
+        )
     times: list[float] = []
     try:
         for seq, (uri, pid, ms) in enumerate(_ping_replies(graph, name, count), 1):
@@ -117,14 +121,14 @@ def _print_reply(fmt: Format, node: str, uri: str, pid: int, ms: float, seq: int
 def _ping_all(graph: Graph, fmt: Format) -> None:
     nodes = graph.state().nodes()
     if fmt is Format.text:
-        print("Will ping the following nodes: \n" + "".join(f" * {n}\n" for n in nodes))
+        print("Will ping the following nodes: \n" + "".join(f" * {one_line(n)}\n" for n in nodes))
     errors: list[RostoolsError] = []
     failed: list[str] = []
     for name in nodes:
         if graph.uri(name) is None:
             continue  # it left between the two calls to the master
         if fmt is Format.text:
-            print(f"pinging {name} with a timeout of {graph.timeout}s", flush=True)
+            print(f"pinging {one_line(name)} with a timeout of {graph.timeout}s", flush=True)
         try:
             for uri, pid, ms in _ping_replies(graph, name, 1):
                 _print_reply(fmt, name, uri, pid, ms, 1)

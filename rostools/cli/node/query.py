@@ -11,7 +11,7 @@ import typer
 
 from rostools.cli.common import FormatOpt, output_format, settings
 from rostools.cli.node.group import TimeoutOpt, app, node_graph
-from rostools.cli.output import emit
+from rostools.cli.output import emit, lines
 from rostools.cli.quick import node as quick
 from rostools.cli.quick import runs
 from rostools.rosgraph.masterapi import NODE_TIMEOUT
@@ -68,7 +68,7 @@ def machine(
         emit(
             fmt,
             [{"host": h, "nodes": ns} for h, ns in hosts.items()],
-            lambda rows: "\n".join(r["host"] for r in rows),
+            lambda rows: lines(r["host"] for r in rows),
         )
     else:
-        emit(fmt, nodes_on_machine(uris, name), "\n".join)
+        emit(fmt, nodes_on_machine(uris, name), lines)

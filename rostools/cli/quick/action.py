@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from rostools.cli.output import emit
+from rostools.cli.output import emit, lines
 
 TYPE_CHECKING = False  # ``typing`` is 5-10 ms of start-up; only annotations use it
 if TYPE_CHECKING:
@@ -17,5 +17,5 @@ def list_actions(s: Settings, show_types: bool, fmt: Format | str | None) -> Non
     proxy = s.master("rostools")
     pubs, subs, _ = proxy.system_state()
     found = find_actions(proxy.topic_types(), pubs, subs)
-    text = "\n".join(f"{a.name} [{a.type}]" if show_types else a.name for a in found)
+    text = lines(f"{a.name} [{a.type}]" if show_types else a.name for a in found)
     emit(s.output_format(fmt), [a.as_dict() for a in found], lambda _: text)

@@ -7,8 +7,14 @@ from __future__ import annotations
 
 import sys
 
-from rostools.cli.output import Format, emit
-from rostools.errors import NotFoundError, RostoolsError, TimeoutExpired, UnreachableError
+from rostools.cli.output import Format, emit, lines
+from rostools.errors import (
+    NotFoundError,
+    RostoolsError,
+    TimeoutExpired,
+    UnreachableError,
+    one_line,
+)
 from rostools.names import script_resolve
 
 TYPE_CHECKING = False  # ``typing`` is 5-10 ms of start-up; only annotations use it
@@ -48,13 +54,15 @@ def list_nodes(
         emit(
             out,
             rows,
-            lambda rs: "\n".join(f"{r['uri'] or 'unknown address'} \t{r['name']}" for r in rs),
+            lambda rs: "\n".join(
+                f"{one_line(r['uri'] or 'unknown address')} \t{one_line(r['name'])}" for r in rs
+            ),
         )
     elif uris:
         addresses = [known.uri(n) for n in nodes]
-        emit(out, addresses, lambda us: "\n".join(u or "unknown address" for u in us))
+        emit(out, addresses, lambda us: lines(u or "unknown address" for u in us))
     else:
-        emit(out, nodes, "\n".join)
+        emit(out, nodes, lines)
 
 
 def failure_class(errors: list[RostoolsError]) -> type[RostoolsError]:
@@ -81,13 +89,13 @@ def worst(errors: list[RostoolsError], what: str) -> RostoolsError:
 def _section(title: str, items: list[str]) -> str:
     if not items:
         return f"{title}: None\n"
-    return f"{title}: \n" + "".join(f"{item}\n" for item in items)
+    return f"{title}: \n" + "".join(f"{one_line(item)}\n" for item in items)
 
 
 def master_info_text(info: NodeInfo) -> str:
     """The registration part of rosnode info: publications, subscriptions, services."""
     return (
-        f"Node [{info.name}]\n"
+        f"Node [{one_line(info.name)}]\n"
         + _section("Publications", [f" * {t} [{ty}]" for t, ty in info.publications])
         + "\n"
         + _section("Subscriptions", [f" * {t} [{ty}]" for t, ty in info.subscriptions])
@@ -97,26 +105,27 @@ def master_info_text(info: NodeInfo) -> str:
 
 
 def connection_text(conn: BusConnection, peer_name: str | None) -> str:
-    """One connection as rosnode prints it (a live one; rosnode skips the others)."""
+    """One connection as rosnode prints it (a live one; rosnode skips the others).
+
+    Every field is the node's own answer (getBusInfo), so each line is escaped whole.
+    """
     peer = f"{peer_name} ({conn.peer})" if peer_name else conn.peer
     direction = f"    * direction: {conn.direction}"
     if conn.local_port is not None:
         direction += f" ({conn.local_port} - {conn.remote}) [{conn.socket}]"
-    return (
-        f" * topic: {conn.topic}\n"
-        f"    * to: {peer}\n"
-        f"{direction}\n"
-        f"    * transport: {conn.transport}\n"
-    )
+    parts = (f" * topic: {conn.topic}", f"    * to: {peer}", direction,
+             f"    * transport: {conn.transport}")  # fmt: skip
+    return "".join(one_line(line) + "\n" for line in parts)
 
 
 def info_text(info: NodeInfo) -> str:
     """A node's info as rosnode prints it, with the node's own part when it was contacted."""
     text = "-" * 80 + "\n" + master_info_text(info) + "\n"
+    uri = one_line(info.uri)
     if info.error is not None:
-        text += f"\ncontacting node {info.uri} ...\n"  # the error follows on stderr
+        text += f"\ncontacting node {uri} ...\n"  # the error follows on stderr
     elif info.pid is not None and info.connections is not None:
-        text += f"\ncontacting node {info.uri} ...\nPid: {info.pid}\n"
+        text += f"\ncontacting node {uri} ...\nPid: {info.pid}\n"
         if info.connections:
             text += "Connections:\n" + "".join(
                 connection_text(c, name) for c, name in info.connections if c.connected

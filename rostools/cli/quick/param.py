@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import sys
 
-from rostools.cli.output import Format, emit
+from rostools.cli.output import Format, emit, lines
 from rostools.names import make_global_ns, script_resolve
 
 TYPE_CHECKING = False  # ``typing`` is 5-10 ms of start-up; only annotations use it
@@ -22,7 +22,7 @@ def list_params(s: Settings, namespace: str, fmt: Format | str | None) -> None:
     """List parameter names, sorted."""
     ns = make_global_ns(script_resolve(namespace, "rosparam"))
     names = sorted(n for n in s.master("rosparam").param_names() if n.startswith(ns))
-    emit(s.output_format(fmt), names, "\n".join)
+    emit(s.output_format(fmt), names, lines)
 
 
 def get(s: Settings, name: str, pretty: bool, verbose: bool, fmt: Format | str | None) -> None:

@@ -6,7 +6,7 @@ import sys
 
 from rostools.cli.output import Format, emit
 from rostools.cli.settings import caller_id
-from rostools.errors import NotFoundError
+from rostools.errors import NotFoundError, one_line
 from rostools.names import make_global_ns, script_resolve
 
 TYPE_CHECKING = False  # ``typing`` is 5-10 ms of start-up; only annotations use it
@@ -47,16 +47,16 @@ def list_services(
     if out is not Format.text:
         emit(out, [{"service": n, "nodes": p} for n, p in found.items()])
     elif nodes:
-        sys.stdout.write("".join(f"{n} {','.join(p)}\n" for n, p in found.items()))
+        sys.stdout.write("".join(one_line(f"{n} {','.join(p)}") + "\n" for n, p in found.items()))
     else:
-        sys.stdout.write("".join(f"{n}\n" for n in found))
+        sys.stdout.write("".join(f"{one_line(n)}\n" for n in found))
 
 
 def uri(s: Settings, service: str, fmt: Format | str | None) -> None:
     """The rosrpc URI of a service."""
     name = script_resolve(service, "rosservice")
     found = s.master("rosservice").lookup_service(name)
-    emit(s.output_format(fmt), {"service": name, "uri": found}, lambda d: d["uri"])
+    emit(s.output_format(fmt), {"service": name, "uri": found}, lambda d: one_line(d["uri"]))
 
 
 def node(s: Settings, service: str, fmt: Format | str | None) -> None:
@@ -65,7 +65,9 @@ def node(s: Settings, service: str, fmt: Format | str | None) -> None:
     providers = services(s.master("rosservice")).get(name)
     if not providers:
         raise NotFoundError(f"unknown service {name}")
-    emit(s.output_format(fmt), {"service": name, "node": providers[0]}, lambda d: d["node"])
+    emit(
+        s.output_format(fmt), {"service": name, "node": providers[0]}, lambda d: one_line(d["node"])
+    )
 
 
 def type_(s: Settings, service: str, timeout: float, fmt: Format | str | None) -> None:
@@ -73,4 +75,4 @@ def type_(s: Settings, service: str, timeout: float, fmt: Format | str | None) -
     name = script_resolve(service, "rosservice")
     kind, md5 = type_of(s.master("rosservice"), name, timeout)
     data = {"service": name, "type": kind, "md5sum": md5}
-    emit(s.output_format(fmt), data, lambda d: d["type"])
+    emit(s.output_format(fmt), data, lambda d: one_line(d["type"]))

@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import sys
 
-from rostools.cli.output import Format, emit
+from rostools.cli.output import Format, emit, lines
 from rostools.cli.topiclist import list_text
-from rostools.errors import NotFoundError, UsageError
+from rostools.errors import NotFoundError, UsageError, one_line
 from rostools.names import script_resolve
 
 TYPE_CHECKING = False  # ``typing`` is 5-10 ms of start-up; only annotations use it
@@ -74,7 +74,7 @@ def list_topics(
                 item = entry.setdefault(info.name, TopicInfo(info.name, info.type))
                 getattr(item, attr).append(node)
     for hostname in sorted(by_host):
-        sys.stdout.write(f"Host [{hostname}]:\n")
+        sys.stdout.write(f"Host [{one_line(hostname)}]:\n")
         sys.stdout.write(list_text(by_host[hostname], verbose, pubs_only, subs_only, "  ") + "\n")
 
 
@@ -96,11 +96,11 @@ def info(s: Settings, topic: str, fmt: Format | str | None) -> None:
         data["subscribers"] = [{"node": n, "uri": apis[n]} for n in entry.subscribers]
         emit(fmt, data)
         return
-    out = [f"Type: {entry.type}", ""]
+    out = [f"Type: {one_line(entry.type)}", ""]
     for label, nodes in (("Publishers", entry.publishers), ("Subscribers", entry.subscribers)):
         if nodes:
             out.append(f"{label}: ")
-            out += [f" * {n} ({apis[n]})" for n in nodes]
+            out += [f" * {one_line(n)} ({one_line(apis[n])})" for n in nodes]
         else:
             out.append(f"{label}: None")
         out.append("")
@@ -111,7 +111,7 @@ def find(s: Settings, msg_type: str, fmt: Format | str | None) -> None:
     """Topics of a given type (rostopic find)."""
     types = s.master("rostopic").topic_types()
     found = sorted(t for t, ty in types.items() if ty == msg_type)
-    emit(s.output_format(fmt), found, "\n".join)
+    emit(s.output_format(fmt), found, lines)
 
 
 def type_(s: Settings, topic: str, fmt: Format | str | None, msg_path: list[Path] | None) -> None:
@@ -128,7 +128,7 @@ def type_(s: Settings, topic: str, fmt: Format | str | None, msg_path: list[Path
         raise NotFoundError(f"unknown topic type [{name}]")
     out = s.output_format(fmt)
     if not ref.field:
-        emit(out, {"topic": ref.topic, "type": ref.type}, lambda d: d["type"])
+        emit(out, {"topic": ref.topic, "type": ref.type}, lambda d: one_line(d["type"]))
         return
     from rostools.msgs import fieldpath
 
@@ -142,7 +142,7 @@ def type_(s: Settings, topic: str, fmt: Format | str | None, msg_path: list[Path
         "field": ref.field,
         "field_type": path.result.type,
     }
-    emit(out, data, lambda d: f"{d['type']} {d['field']} {d['field_type']}")
+    emit(out, data, lambda d: one_line(f"{d['type']} {d['field']} {d['field_type']}"))
 
 
 def learn_type(s: Settings, topic: str, store: TypeStore) -> TypeStore:

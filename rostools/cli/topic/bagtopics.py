@@ -9,7 +9,7 @@ from __future__ import annotations
 import time
 from pathlib import Path
 
-from rostools.cli.output import Format, emit
+from rostools.cli.output import Format, emit, lines
 from rostools.errors import NotFoundError
 
 
@@ -26,7 +26,7 @@ def list_bag_topics(bag: Path, namespace: str | None, fmt: Format) -> None:
         _count(bag, namespace, chosen, fmt)
         return
     rows = [{"topic": t, "type": ty} for t, ty in topics.items()]
-    emit(fmt, rows, lambda r: "\n".join(x["topic"] for x in r))
+    emit(fmt, rows, lambda r: lines(x["topic"] for x in r))
 
 
 def _count(bag: Path, namespace: str, topics: list[str], fmt: Format) -> None:

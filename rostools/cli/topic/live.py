@@ -10,7 +10,7 @@ from typing import TYPE_CHECKING, Annotated, Any
 import typer
 
 from rostools.cli.common import FINITE
-from rostools.errors import UsageError
+from rostools.errors import UsageError, one_line
 
 if TYPE_CHECKING:
     import asyncio
@@ -64,9 +64,10 @@ async def wait_for_topic(
         if not warned:
             # a field the published topic's type does not have is a typo: said at once
             problem = field_problem(name, types, store)
-            if problem is not None:
+            if problem is not None:  # it may name a peer's type
                 raise UsageError(f"{name}: {problem}")
-            sys.stderr.write(f"WARNING: topic [{name}] does not appear to be published yet\n")
+            line = f"WARNING: topic [{name}] does not appear to be published yet"
+            sys.stderr.write(one_line(line) + "\n")
             warned = True
         if stop.is_set() or (deadline is not None and time.monotonic() > deadline):
             return None

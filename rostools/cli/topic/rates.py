@@ -15,7 +15,7 @@ from rostools.cli.common import FormatOpt, node_session, output_format
 from rostools.cli.output import Format
 from rostools.cli.topic.group import app
 from rostools.cli.topic.live import FilterOpt, StrictOpt, TimeoutOpt, Undecodable, wait_for_topic
-from rostools.errors import NotFoundError, TimeoutExpired, UsageError
+from rostools.errors import NotFoundError, TimeoutExpired, UsageError, one_line
 from rostools.names import script_resolve
 
 if TYPE_CHECKING:
@@ -143,7 +143,7 @@ class Meter:
                     ref.topic, on_frames, tcp_nodelay=self.tcp_nodelay, coalesce=self.coalesce,
                     reuse_frames=True,  # the sinks only look at a frame during the call
                 )  # fmt: skip
-            sys.stderr.write(f"subscribed to [{ref.topic}]\n")
+            sys.stderr.write(f"subscribed to [{one_line(ref.topic)}]\n")
         next_report = time.monotonic() + REPORT_PERIOD
         while True:
             now = time.monotonic()

@@ -102,7 +102,7 @@ def set(
     ] = None,
     verbose: VerboseOpt = False,
 ) -> None:
-    """Set a parameter from YAML (negative numbers need no ``--``)."""
+    """Set a parameter from YAML (negative numbers need no '--')."""
     import xmlrpc.client
 
     key = script_resolve(name, "rosparam")
@@ -131,7 +131,7 @@ def _read(path: Path) -> bytes:
 
 @app.command()
 def delete(ctx: typer.Context, name: NameArg, verbose: VerboseOpt = False) -> None:
-    """Delete a parameter or a namespace; ``/`` empties the whole server."""
+    """Delete a parameter or a namespace; '/' empties the whole server."""
     key = script_resolve(name, "rosparam")
     proxy = master(ctx, "rosparam")
     if key == GLOBAL_NS:
@@ -149,7 +149,7 @@ def load(
     namespace: Annotated[str, typer.Argument(help="Load under this namespace.")] = "",
     verbose: VerboseOpt = False,
 ) -> None:
-    """Load parameters from a YAML file (every document; a ``_ns`` key picks a namespace)."""
+    """Load parameters from a YAML file (every document; a '_ns' key picks a namespace)."""
     text = sys.stdin.read() if file == "-" else _read(Path(file)).decode("utf-8", "replace")
     quick.say(verbose, "reading parameters from " + ("stdin" if file == "-" else f"[{file}]"))
     base = script_resolve(namespace, "rosparam")

@@ -436,7 +436,7 @@ def reindex(
 ) -> None:
     """Reindex bags in place, keeping each original as x.orig.bag (rosbag reindex).
 
-    Each bag is rebuilt as ``recover`` does, or written into ``--output-dir``; exit 6 if
+    Each bag is rebuilt as 'recover' does, or written into --output-dir; exit 6 if
     anything was lost.
     """
     from rostools.bag.recover import recover as run_recover

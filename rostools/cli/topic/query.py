@@ -60,5 +60,5 @@ def find(
 def type_(
     ctx: typer.Context, topic: TopicArg, fmt: FormatOpt = None, msg_path: MsgPathOpt = None
 ) -> None:
-    """A topic's type, or the type of a field: ``/odom/pose/pose`` (rostopic type)."""
+    """A topic's type, or the type of a field: /odom/pose/pose (rostopic type)."""
     quick.type_(settings(ctx), topic, fmt, msg_path)

@@ -300,7 +300,7 @@ def delay(
     strict: StrictOpt = False,
     fmt: FormatOpt = None,
 ) -> None:
-    """Now minus ``header.stamp`` of each message (rostopic delay); reads only the stamp."""
+    """Now minus header.stamp of each message (rostopic delay); reads only the stamp."""
     from rostools.msgs.codec import DecodeError
     from rostools.msgs.store import TypeStore
     from rostools.rates import DEFAULT_WINDOW, DelayMeter, format_delay

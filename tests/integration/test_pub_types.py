@@ -7,8 +7,11 @@ only logs "topic types do not match" on the publisher's side.
 from __future__ import annotations
 
 import sys
+from pathlib import Path
 
-from tests.support.env import run_cli
+import pytest
+
+from tests.support.env import needs_ros1, run_cli
 from tests.support.procs import Proc, wait_for
 
 
@@ -42,3 +45,38 @@ def test_once_with_nobody_listening_is_still_fine(
         "publishing and latching message for 3.0 seconds\n",
     )
     wait_for(lambda: "/lonely" not in run_cli("topic", "list", env=cli_env).stdout, 10, "gone")
+
+
+@needs_ros1
+@pytest.mark.interop
+def test_pub_says_what_rostopic_says(
+    rostools_master: str, cli_env: dict[str, str], tmp_path: Path
+) -> None:
+    # -v -1 said "publishing data: ..." then "publishing and latching message ..."; a file of
+    # one message with -r said nothing
+    one = tmp_path / "one.yaml"
+    one.write_text("data: a\n")  # with a trailing ---, rostopic counts an empty second one
+    ros_env = dict(cli_env, ROS_HOME=str(tmp_path), PYTHONUNBUFFERED="1")
+    for argv in (["-v", "-1", "/x", "std_msgs/String", "hi"],
+                 ["-f", str(one), "-r", "5", "/y", "std_msgs/String"]):  # fmt: skip
+        theirs = Proc(["rostopic", "pub", *argv], env=ros_env)
+        ours = Proc([sys.executable, "-m", "rostools", "topic", "pub", *argv], env=cli_env)
+        try:
+            said = theirs.expect("publishing", 30).rstrip("\n")
+            # ours says it on stderr, with the other status lines
+            wait_for(lambda s=said, p=ours: s in _stderr_so_far(p), 30, f"ours to say {said!r}")
+        finally:
+            theirs.stop()
+            ours.stop()
+
+
+def _stderr_so_far(proc: Proc) -> str:
+    """What ``proc`` wrote on stderr so far (a pipe: read what is there without blocking)."""
+    import os
+
+    assert proc.popen.stderr is not None
+    fd = proc.popen.stderr.fileno()
+    os.set_blocking(fd, False)
+    chunk = proc.popen.stderr.read() or b""
+    proc.seen.append(chunk.decode(errors="replace"))
+    return "".join(proc.seen)

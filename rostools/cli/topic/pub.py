@@ -229,13 +229,12 @@ def pub(
         if rate is None:  # one latched message, then wait
             msg = next(messages)
             publisher.publish(msg.serialize())
-            if show is not None:
-                sys.stdout.write(f"publishing {show(msg)}\n")
             linger = ONCE_LINGER if once else None
             if linger is not None and deadline is not None:
                 linger = min(linger, left() or 0)
             note = f" for {ONCE_LINGER} seconds" if once else ". Press ctrl-C to terminate"
-            sys.stderr.write(f"publishing and latching message{note}\n")
+            what = "message" if show is None else f"[{show(msg)}]"  # rostopic's words
+            sys.stderr.write(f"publishing and latching {what}{note}\n")
             await first(stop.wait(), timeout=linger if once else left())
             if once and refused and publisher.subscriber_count == 0:
                 raise RostoolsError(
@@ -243,6 +242,8 @@ def pub(
                     f"{', '.join(sorted(refused))} wanted another type"
                 )
             return
+        if file is not None and repeated:
+            sys.stderr.write("Got one message and a rate, publishing repeatedly\n")  # rostopic's
         if streamed:  # rostopic waits up to 5 s for a subscriber before a file or stdin
             give_up = time.monotonic() + SUBSCRIBER_WAIT
             while publisher.subscriber_count == 0 and time.monotonic() < give_up:

@@ -18,7 +18,7 @@ from typing import Annotated
 
 import typer
 
-from rostools.errors import RostoolsError
+from rostools.errors import RostoolsError, UsageError
 
 app = typer.Typer(name="demo", add_completion=False)
 
@@ -115,12 +115,28 @@ def _run_step(title: str, argv: list[str], env: dict[str, str]) -> None:
 
 @app.command()
 def demo(
-    output: Annotated[Path, typer.Option("--output", "-O", help="Where to record.")] = Path(
-        "demo.mcap"
-    ),
+    output: Annotated[
+        Path | None,
+        typer.Option(
+            "--output",
+            "-O",
+            help="Where to record [default: demo.mcap here, else in a temporary folder].",
+            show_default=False,
+        ),
+    ] = None,
 ) -> None:
     """Try rostools in ten seconds: a master, a talker, a service, a recording."""
     from rostools.master.server import MasterThread
+
+    if output is None:
+        output = Path("demo.mcap")
+        if not _writable(output.parent):  # a read-only folder: the demo still runs
+            import tempfile
+
+            output = Path(tempfile.mkdtemp(prefix="rostools-demo-")) / "demo.mcap"
+            sys.stdout.write(f"(this folder is read-only: recording to {output})\n")
+    elif not _writable(output.parent):
+        raise UsageError(f"cannot write {output}: its folder is missing or read-only")
 
     with MasterThread() as master:
         env = {k: v for k, v in os.environ.items() if k != "ROS_HOSTNAME"}
@@ -136,3 +152,14 @@ def demo(
         f"\nDone; nothing is left running, and {output} is yours. Next: 'rostools core' in one\n"
         "terminal, then any of these commands in another ('rostools -h' lists them all).\n"
     )
+
+
+def _writable(folder: Path) -> bool:
+    """Whether a file can be created in ``folder`` (tried, not guessed: root ignores modes)."""
+    import tempfile
+
+    try:
+        with tempfile.TemporaryFile(dir=folder):
+            return True
+    except OSError:
+        return False

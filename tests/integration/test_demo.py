@@ -37,3 +37,23 @@ def test_demo_runs_the_main_job_in_under_ten_seconds(
     port = int(re.search(r"a master at http://[^:]+:(\d+)/", out).group(1))  # type: ignore[union-attr]
     with socket.socket() as probe:  # nothing is left listening
         assert probe.connect_ex(("127.0.0.1", port)) != 0
+
+
+def test_demo_in_a_read_only_folder_records_in_a_temporary_one(cli_env: dict[str, str]) -> None:
+    # the defect: the recording step failed; /proc refuses a new file even to root
+    env = {k: v for k, v in cli_env.items() if k != "ROS_MASTER_URI"}
+    done = run_cli("demo", env=env, cwd=Path("/proc"), timeout=60)
+    assert done.returncode == 0, done.stdout + done.stderr
+    found = re.search(r"this folder is read-only: recording to (\S+demo\.mcap)\)", done.stdout)
+    assert found, done.stdout
+    recorded = Path(found.group(1))
+    try:
+        assert bag_info(recorded).message_count >= 20
+    finally:
+        recorded.unlink()
+        recorded.parent.rmdir()
+    given = run_cli("demo", "-O", "/proc/x.mcap", env=env, timeout=60)
+    assert given.returncode == 2
+    assert given.stderr == (
+        "rostools: cannot write /proc/x.mcap: its folder is missing or read-only\n"
+    )

@@ -94,6 +94,15 @@ class GoalPreempted(RostoolsError):  # noqa: N818
     exit_code = 9
 
 
+def cannot_write(path: object, why: str) -> UsageError:
+    """An output the user named that cannot be created: exit 2 in every command.
+
+    The path is the user's argument, so a missing folder or one without write permission is
+    the user's to fix, as a bad value is.
+    """
+    return UsageError(f"cannot write {path}: {why}")
+
+
 #: Exit code, name and meaning, in the order the README lists them.
 EXIT_CODES: tuple[tuple[int, str, str], ...] = (
     (

@@ -18,6 +18,7 @@ from typing import Annotated
 
 import typer
 
+from rostools.cli.output import check_writable
 from rostools.errors import RostoolsError, UsageError
 
 app = typer.Typer(name="demo", add_completion=False)
@@ -128,15 +129,17 @@ def demo(
     """Try rostools in ten seconds: a master, a talker, a service, a recording."""
     from rostools.master.server import MasterThread
 
-    if output is None:
+    if output is not None:
+        check_writable(output)
+    else:
         output = Path("demo.mcap")
-        if not _writable(output.parent):  # a read-only folder: the demo still runs
+        try:
+            check_writable(output)
+        except UsageError:  # a read-only folder: the demo still runs
             import tempfile
 
             output = Path(tempfile.mkdtemp(prefix="rostools-demo-")) / "demo.mcap"
             sys.stdout.write(f"(this folder is read-only: recording to {output})\n")
-    elif not _writable(output.parent):
-        raise UsageError(f"cannot write {output}: its folder is missing or read-only")
 
     with MasterThread() as master:
         env = {k: v for k, v in os.environ.items() if k != "ROS_HOSTNAME"}
@@ -152,14 +155,3 @@ def demo(
         f"\nDone; nothing is left running, and {output} is yours. Next: 'rostools core' in one\n"
         "terminal, then any of these commands in another ('rostools -h' lists them all).\n"
     )
-
-
-def _writable(folder: Path) -> bool:
-    """Whether a file can be created in ``folder`` (tried, not guessed: root ignores modes)."""
-    import tempfile
-
-    try:
-        with tempfile.TemporaryFile(dir=folder):
-            return True
-    except OSError:
-        return False

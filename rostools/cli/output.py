@@ -26,6 +26,7 @@ from rostools.errors import one_line
 TYPE_CHECKING = False  # ``typing`` is 5-10 ms of start-up; only annotations use it
 if TYPE_CHECKING:
     from collections.abc import Callable, Iterable
+    from pathlib import Path
     from typing import Any
 
 
@@ -78,3 +79,23 @@ def write(fmt: Format, data: Any, text: Callable[[Any], str] | None = None) -> N
     """Print one record now (a stream is read as it comes, so each is flushed)."""
     sys.stdout.write(record(fmt, data, text))
     sys.stdout.flush()
+
+
+def check_writable(path: Path) -> None:
+    """Fail now, exit 2, when no file can be created where ``path`` goes.
+
+    Tried, not guessed from permission bits, which root ignores. Every command that writes
+    a file it was given checks this before it does the work.
+    """
+    import tempfile
+    from pathlib import Path
+
+    from rostools.errors import cannot_write
+
+    folder = path.parent if str(path.parent) else Path(".")
+    try:
+        with tempfile.TemporaryFile(dir=folder):
+            pass
+    except OSError as err:
+        why = "no such folder" if not folder.is_dir() else err.strerror or str(err)
+        raise cannot_write(path, f"{folder}: {why}") from err

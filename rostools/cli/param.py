@@ -13,7 +13,7 @@ from rostools.cli.common import FormatOpt, master, output_format, settings
 from rostools.cli.output import Format, render
 from rostools.cli.quick import param as quick
 from rostools.cli.quick import runs
-from rostools.errors import NotFoundError, UsageError
+from rostools.errors import NotFoundError, UsageError, cannot_write
 from rostools.names import GLOBAL_NS, join, make_global_ns, script_resolve
 
 app = typer.Typer(
@@ -195,5 +195,8 @@ def dump(
         text = render(fmt, paramyaml.to_plain(value)) + "\n"
     if file in (None, "-"):
         sys.stdout.write(text)
-    else:
+        return
+    try:
         Path(file).write_text(text)
+    except OSError as err:  # it was an internal error: PermissionError
+        raise cannot_write(file, err.strerror or str(err)) from err

@@ -17,8 +17,8 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any, Final
 
 from rostools.cli import output
-from rostools.cli.output import Format
-from rostools.errors import NotFoundError, UsageError
+from rostools.cli.output import Format, check_writable
+from rostools.errors import NotFoundError, UsageError, cannot_write
 from rostools.series import SeriesSet, columns
 
 if TYPE_CHECKING:
@@ -70,9 +70,7 @@ def check_image_target(path: Path, command: str) -> None:
     image_format(path)
     if importlib.util.find_spec("matplotlib") is None:
         raise _no_matplotlib(command)
-    folder = path.parent if str(path.parent) else Path(".")
-    if not folder.is_dir() or not os.access(folder, os.W_OK):
-        raise NotFoundError(f"cannot write {path}: {folder} is not a folder this user can write")
+    check_writable(path)
 
 
 def _no_matplotlib(command: str) -> NotFoundError:
@@ -167,7 +165,7 @@ def write_image(
     try:
         fig.savefig(path, format=kind, metadata=metadata)
     except OSError as err:
-        raise NotFoundError(f"cannot write {path}: {err.strerror or err}") from err
+        raise cannot_write(path, err.strerror or str(err)) from err
 
 
 def records(plot: SeriesSet, kind: str) -> Iterator[dict[str, Any]]:

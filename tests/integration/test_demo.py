@@ -54,6 +54,4 @@ def test_demo_in_a_read_only_folder_records_in_a_temporary_one(cli_env: dict[str
         recorded.parent.rmdir()
     given = run_cli("demo", "-O", "/proc/x.mcap", env=env, timeout=60)
     assert given.returncode == 2
-    assert given.stderr == (
-        "rostools: cannot write /proc/x.mcap: its folder is missing or read-only\n"
-    )
+    assert given.stderr.startswith("rostools: cannot write /proc/x.mcap: /proc: "), given.stderr

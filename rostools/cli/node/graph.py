@@ -16,8 +16,15 @@ from typing import TYPE_CHECKING, Annotated, Final
 import typer
 
 from rostools.cli.common import master, settings
-from rostools.cli.output import Format, emit
-from rostools.errors import NotFoundError, RostoolsError, TimeoutExpired, UsageError, one_line
+from rostools.cli.output import Format, check_writable, emit
+from rostools.errors import (
+    NotFoundError,
+    RostoolsError,
+    TimeoutExpired,
+    UsageError,
+    cannot_write,
+    one_line,
+)
 
 if TYPE_CHECKING:
     from rostools.rosgraph.snapshot import RosGraph
@@ -178,13 +185,14 @@ def draw(dot: str, path: Path) -> None:
     import subprocess
 
     kind = _picture_kind(path)
+    check_writable(path)
     program = shutil.which("dot") if kind is not None else None
     if kind is None or program is None:
         target = path if kind is None else path.with_suffix(".dot")
         try:
             target.write_text(dot)
         except OSError as err:
-            raise NotFoundError(f"cannot write {target}: {err.strerror or err}") from err
+            raise cannot_write(target, err.strerror or str(err)) from err
         if kind is None:
             return
         raise NotFoundError(

@@ -67,7 +67,7 @@ class MasterAPI:
     def call(self, method: str, params: tuple[Any, ...]) -> Any:
         """Run one XML-RPC call; raises ``xmlrpc.client.Fault`` for an unknown method."""
         if method == "system.multicall":
-            return multicall(self.call, params[0] if params else None)
+            return multicall(self.call, params)
         return check.dispatch(self.methods, method, params)
 
     def cache_key(self, method: str, params: tuple[Any, ...]) -> tuple[Any, ...] | None:

@@ -269,7 +269,7 @@ class Node:
 
     def _dispatch(self, method: str, params: tuple[Any, ...]) -> Any:
         if method == "system.multicall":
-            return multicall(self._dispatch, params[0] if params else None)
+            return multicall(self._dispatch, params)
         return check.dispatch(self._methods, method, params)
 
     def _shutdown(self, caller: str, reason: Any) -> Triple:

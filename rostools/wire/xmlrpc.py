@@ -365,13 +365,22 @@ def decode_response(body: bytes | bytearray) -> Any:
     return xmlvalues.loads_response(body)
 
 
-def multicall(dispatch: Any, calls: Any) -> list[Any]:
-    """Run a ``system.multicall`` list through ``dispatch(method, params)``.
+def multicall(dispatch: Any, params: tuple[Any, ...]) -> list[Any]:
+    """Run a ``system.multicall``'s list of calls through ``dispatch(method, params)``.
 
     Each result is wrapped in a one-element list; a failing call becomes a fault struct.
+    Other than one parameter is a fault, with the words of rosmaster's Python server.
     """
     import xmlrpc.client  # servers only: commands never pay for it
 
+    if len(params) != 1:
+        why = (
+            "missing 1 required positional argument: 'call_list'"
+            if not params
+            else f"takes 2 positional arguments but {len(params) + 1} were given"
+        )
+        raise xmlrpc.client.Fault(1, f"<class 'TypeError'>:system_multicall() {why}")
+    calls = params[0]
     if not isinstance(calls, list):
         return [{"faultCode": 1, "faultString": "system.multicall expects a list"}]
     results: list[Any] = []
@@ -379,12 +388,12 @@ def multicall(dispatch: Any, calls: Any) -> list[Any]:
         try:
             if not isinstance(call, dict):
                 raise xmlrpc.client.Fault(1, "multicall entries must be structs")
-            method, params = call.get("methodName"), call.get("params", [])
+            method, args = call.get("methodName"), call.get("params", [])
             if method == "system.multicall":
                 raise xmlrpc.client.Fault(1, "recursive system.multicall forbidden")
-            if not isinstance(params, list):
+            if not isinstance(args, list):
                 raise xmlrpc.client.Fault(1, "multicall params must be an array")
-            results.append([dispatch(method, tuple(params))])
+            results.append([dispatch(method, tuple(args))])
         except xmlrpc.client.Fault as fault:
             results.append({"faultCode": fault.faultCode, "faultString": fault.faultString})
     return results

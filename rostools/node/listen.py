@@ -24,7 +24,7 @@ BACKLOG = 100
 #: While no descriptor is free, accept is tried again this often (rosmaster recovered 0.13 s
 #: after connections closed).
 RETRY_DELAY = 0.1
-#: An episode that starts sooner than this after the last one ended is not reported again.
+#: After an episode is reported, the next one is not for this long (s).
 QUIET = 10.0
 #: accept(2) errors that say a resource ran out, not that this connection failed.
 _EXHAUSTED = {errno.EMFILE, errno.ENFILE, errno.ENOBUFS, errno.ENOMEM}
@@ -64,9 +64,8 @@ class Listener:
         self._loop = asyncio.get_running_loop()
         self._retry: asyncio.TimerHandle | None = None
         self._tasks: set[asyncio.Task[object]] = set()
-        #: When the last episode of exhaustion started and ended (monotonic seconds).
+        #: When running out was last reported (monotonic seconds), and whether it lasts.
         self._reported = -QUIET
-        self._ended = -QUIET
         self._exhausted = False
         for sock in sockets:
             self._loop.add_reader(sock.fileno(), self._accept, sock)
@@ -89,9 +88,7 @@ class Listener:
                     return
                 self._out_of_descriptors(err)
                 return
-            if self._exhausted:
-                self._exhausted = False
-                self._ended = time.monotonic()
+            self._exhausted = False
             conn.setblocking(False)
             task = self._loop.create_task(self._loop.connect_accepted_socket(self.factory, conn))
             self._tasks.add(task)
@@ -105,11 +102,10 @@ class Listener:
     def _out_of_descriptors(self, err: OSError) -> None:
         """Stop accepting for ``RETRY_DELAY``; say so once per episode."""
         now = time.monotonic()
-        if not self._exhausted:
-            self._exhausted = True
-            if now - self._ended >= QUIET and now - self._reported >= QUIET:
-                self._reported = now
-                log.warning("%s; new connections wait until some close", exhausted_line(err))
+        if not self._exhausted and now - self._reported >= QUIET:
+            self._reported = now
+            log.warning("%s; new connections wait until some close", exhausted_line(err))
+        self._exhausted = True
         for sock in self.sockets:
             self._loop.remove_reader(sock.fileno())
         if self._retry is None:

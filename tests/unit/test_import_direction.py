@@ -104,3 +104,17 @@ def test_no_import_circle() -> None:
 def test_every_package_is_on_a_layer() -> None:
     units = {_unit(m) for m in _imports() if m != "rostools"}
     assert units <= set().union(*LAYERS), units - set().union(*LAYERS)
+
+
+def test_no_module_imports_across_its_own_layer() -> None:
+    """A module may not import another package on its own layer (bag -> master, say)."""
+    sideways = [
+        f"{module} imports {target}"
+        for module, targets in _imports().items()
+        if module != "rostools"
+        for target in targets
+        if target != "rostools"
+        and _unit(target) != _unit(module)
+        and _layer(_unit(target)) == _layer(_unit(module))
+    ]
+    assert not sideways, "\n".join(sorted(sideways))

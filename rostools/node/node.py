@@ -15,7 +15,7 @@ from typing import Any
 
 from rostools.msgs.topictype import ANY, TopicType
 from rostools.names import anonymous, canonicalize, make_global_ns, resolve, ros_namespace
-from rostools.node.connection import ConnectionHandler, ServerConnection
+from rostools.node.connection import ConnectionHandler, Pending, ServerConnection
 from rostools.node.notice import Notice, to_stderr
 from rostools.node.publisher import Publisher
 from rostools.node.service import ServiceHandler, ServiceServer, ServiceType
@@ -98,7 +98,10 @@ class Node:
         self._xmlrpc = XmlRpcServer(self._dispatch, bind, 0)
         await self._xmlrpc.start()
         loop = asyncio.get_running_loop()
-        self._tcpros = await loop.create_server(lambda: ServerConnection(self._accept), bind, 0)
+        pending = Pending()  # connections still to send their header, at most MAX_PENDING
+        self._tcpros = await loop.create_server(
+            lambda: ServerConnection(self._accept, pending), bind, 0
+        )
         self.tcpros_port = self._tcpros.sockets[0].getsockname()[1]
         if self.private_params:
             from rostools import yamlio

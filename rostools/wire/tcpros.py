@@ -2,9 +2,13 @@
 
 ``FrameReader`` is the receive half of every TCPROS connection. It follows the asyncio
 ``BufferedProtocol`` shape (``get_buffer``/``buffer_updated``) without doing any IO: small
-frames are received many at a time into one scratch buffer and copied out once; a large
+frames are received many at a time into a scratch buffer and copied out once; a large
 frame gets a buffer of exactly its size, filled in place and handed over without a copy.
 That is what lets Python receive at the speed the socket allows (LIBRARIES.md §5).
+
+Scratch buffers are lent for one read at a time from a small shared pool, not owned by a
+connection: a connection between reads holds only the part of a frame that has arrived, so
+an idle connection costs no buffer, and a closed one leaves none behind.
 """
 
 from __future__ import annotations
@@ -27,9 +31,36 @@ BIG_FRAME = 64 * 1024
 #: The scratch buffer: many small frames per recv; several times BIG_FRAME so it never fills
 #: with a partial small frame.
 SCRATCH = 256 * 1024
+#: Scratch buffers the pool keeps between reads: one per thread that reads, in practice.
+#: rospy and roscpp own a buffer per connection; ours owned 256 KiB each, before a byte
+#: came, and 4,000 idle connections to a node cost it 1 GB that stayed after they closed.
+SPARE_SCRATCH = 4
 #: A big frame's buffer starts this big (or at what has arrived) and doubles as data comes:
 #: what a length prefix alone can make us allocate. 1 MiB holds a 1 MB image without growing.
 GROW_FIRST = 1024 * 1024
+#: The same for a connection header (the first frame): the largest real one is 10.6 KB, and
+#: a peer that has not yet said who it is should cost us little more than what it sent.
+HEADER_GROW_FIRST = BIG_FRAME
+#: A small frame cut short by the end of what the socket had waits as a copy while this
+#: much of it has come, in a buffer of its own (this big, then doubling) once more has: the
+#: scratch buffer goes back to the pool either way, and a frame that trickles in a byte at a
+#: time is not copied whole at every byte.
+PARTIAL_FIRST = 4096
+
+_spare: list[bytearray] = []
+
+
+def _borrow_scratch() -> bytearray:
+    """A scratch buffer for one read: a spare one, else a new one."""
+    try:
+        return _spare.pop()  # atomic: threads that read share the pool safely
+    except IndexError:
+        return bytearray(SCRATCH)
+
+
+def _return_scratch(buf: bytearray) -> None:
+    if len(_spare) < SPARE_SCRATCH:
+        _spare.append(buf)
 
 
 class FrameError(ValueError):
@@ -57,24 +88,34 @@ class FrameReader:
     """Splits a byte stream into frames, receiving into reusable buffers.
 
     A frame's length prefix is not trusted: the buffer of a big frame starts at what has
-    arrived, at least ``GROW_FIRST``, and doubles as more arrives, so a peer that announces
-    a gigabyte and sends twenty bytes costs us a megabyte, not a gigabyte. The first frame of
-    a connection (its header) may have a limit of its own, ``first_max``.
+    arrived, at least ``GROW_FIRST`` (``HEADER_GROW_FIRST`` for the first frame), and doubles
+    as more arrives, so a peer that announces a gigabyte and sends twenty bytes costs us a
+    megabyte, not a gigabyte. The first frame of a connection (its header) may have a limit
+    of its own, ``first_max``.
+
+    The scratch buffer is borrowed from a shared pool in ``get_buffer`` and given back in
+    ``buffer_updated``; the start of a frame that is not complete waits as a copy
+    (``_tail``), or in a buffer of its own that grows as it arrives (``PARTIAL_FIRST``). A
+    read that filled the scratch buffer keeps it instead, as more is surely waiting: a busy
+    connection reads into one buffer, as before.
     """
 
     __slots__ = (
-        "_big", "_big_filled", "_big_length", "_buf", "_end", "_spare", "_start", "_view",
-        "first_max", "max_frame", "reuse",
+        "_big", "_big_filled", "_big_length", "_buf", "_end", "_spare", "_start", "_tail",
+        "_view", "first_max", "max_frame", "reuse",
     )  # fmt: skip
 
     def __init__(self, max_frame: int = MAX_FRAME, first_max: int | None = None) -> None:
         self.max_frame = max_frame
         #: The limit of the next frame only, while it is the first; then ``max_frame``.
         self.first_max = first_max
-        self._buf = bytearray(SCRATCH)
-        self._view = memoryview(self._buf)
+        #: The scratch buffer while a read is under way or the connection is busy, else None.
+        self._buf: bytearray | None = None
+        self._view: memoryview | None = None
         self._start = 0
         self._end = 0
+        #: A partial small frame kept between reads while no scratch buffer is held.
+        self._tail = b""
         self._big: bytearray | None = None
         self._big_filled = 0
         self._big_length = 0
@@ -96,12 +137,26 @@ class FrameReader:
                     grown[: len(big)] = big
                     self._big = big = grown
             return memoryview(big)[self._big_filled : self._big_length]  # a spare may be longer
-        if self._end == SCRATCH:
+        view = self._view
+        if view is None:
+            self._buf = _borrow_scratch()
+            self._view = view = memoryview(self._buf)
+            tail = self._tail
+            if tail:
+                view[: len(tail)] = tail
+                self._tail = b""
+            self._start, self._end = 0, len(tail)
+        elif self._end == SCRATCH:
             # Compact: the partial frame left at the end moves to the front.
             pending = self._end - self._start
-            self._view[:pending] = self._view[self._start : self._end]
+            view[:pending] = view[self._start : self._end]
             self._start, self._end = 0, pending
-        return self._view[self._end :]
+        return view[self._end :]
+
+    @property
+    def holds_scratch(self) -> bool:
+        """Whether a scratch buffer is held between reads (the last read filled it)."""
+        return self._buf is not None
 
     @property
     def mid_big_frame(self) -> bool:
@@ -126,9 +181,11 @@ class FrameReader:
                 done = memoryview(self._big).toreadonly()
             self._big = None
             return [done]
+        view = self._view
+        assert view is not None, "buffer_updated without get_buffer"
         self._end += nbytes
         frames: list[bytes | memoryview] = []
-        view, start, end = self._view, self._start, self._end
+        start, end = self._start, self._end
         # One copy of everything received, then each frame is a slice of it: slicing bytes is
         # one allocation, where slicing the buffer costs a memoryview and a bytes.
         data = bytes(view[start:end])
@@ -145,13 +202,21 @@ class FrameReader:
                 append(data[pos + 4 : after])
                 pos = after
                 limit = self.max_frame
-            elif length >= BIG_FRAME:
+            elif length >= BIG_FRAME or (end < SCRATCH and size - pos - 4 > PARTIAL_FIRST):
+                # A big frame, or much of one cut short by the end of what the socket had: it
+                # waits in a buffer of its own, filled in place by the next reads.
                 have = size - pos - 4
                 spare = self._spare
                 if self.reuse and spare is not None and len(spare) >= length:
                     self._big = spare
                 else:
-                    self._big = bytearray(min(length, max(GROW_FIRST, have)))
+                    if length < BIG_FRAME:
+                        first = PARTIAL_FIRST
+                    elif pos == 0 and self.first_max is not None:
+                        first = HEADER_GROW_FIRST
+                    else:
+                        first = GROW_FIRST
+                    self._big = bytearray(min(length, max(first, have)))
                 self._big[:have] = view[start + pos + 4 : end]
                 self._big_filled, self._big_length = have, length
                 pos = size
@@ -160,10 +225,14 @@ class FrameReader:
                 break
         if pos:
             self.first_max = None  # the first frame is done, or is a big one under way
-        start += pos
-        if start == end:
-            start = end = 0
-        self._start, self._end = start, end
+        if pos < size and end == SCRATCH:
+            self._start += pos  # more is waiting: keep the buffer and its partial frame
+            return frames
+        self._tail = data[pos:] if pos < size else b""  # at most PARTIAL_FIRST + 4 bytes
+        assert self._buf is not None
+        _return_scratch(self._buf)
+        self._buf = self._view = None
+        self._start = self._end = 0
         return frames
 
 

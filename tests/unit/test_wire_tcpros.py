@@ -200,9 +200,12 @@ def _session_events(data: bytes, chunk: int, max_frame: int = 1 << 20) -> list[E
     """Feed ``data`` to a Subscription in chunks; every event, in order (no socket)."""
     session = Subscription(max_frame)
     events: list[Event] = []
-    for pos in range(0, len(data), chunk):
-        piece = data[pos : pos + chunk]
-        session.get_buffer()[: len(piece)] = piece
+    pos = 0
+    while pos < len(data):
+        buf = session.get_buffer()  # as a socket's recv_into: at most what it offers
+        piece = data[pos : pos + min(chunk, len(buf))]
+        buf[: len(piece)] = piece
+        pos += len(piece)
         events += session.buffer_updated(len(piece))
     return events
 

@@ -6,14 +6,16 @@ frames are received many at a time into a scratch buffer and copied out once; a 
 frame gets a buffer of exactly its size, filled in place and handed over without a copy.
 That is what lets Python receive at the speed the socket allows (LIBRARIES.md §5).
 
-Scratch buffers are lent for one read at a time from a small shared pool, not owned by a
-connection: a connection between reads holds only the part of a frame that has arrived, so
-an idle connection costs no buffer, and a closed one leaves none behind.
+The scratch buffer is not a connection's own: each thread that reads has one, lent to a
+connection for one read at a time. Between reads a connection holds only the part of a
+frame that has arrived, so an idle connection costs no buffer, and a closed one leaves
+none behind.
 """
 
 from __future__ import annotations
 
 import struct
+import threading
 from typing import NamedTuple
 
 from rostools.wire.header import MAX_HEADER_LENGTH, HeaderError, decode_fields, encode_header
@@ -31,10 +33,6 @@ BIG_FRAME = 64 * 1024
 #: The scratch buffer: many small frames per recv; several times BIG_FRAME so it never fills
 #: with a partial small frame.
 SCRATCH = 256 * 1024
-#: Scratch buffers the pool keeps between reads: one per thread that reads, in practice.
-#: rospy and roscpp own a buffer per connection; ours owned 256 KiB each, before a byte
-#: came, and 4,000 idle connections to a node cost it 1 GB that stayed after they closed.
-SPARE_SCRATCH = 4
 #: A big frame's buffer starts this big (or at what has arrived) and doubles as data comes:
 #: what a length prefix alone can make us allocate. 1 MiB holds a 1 MB image without growing.
 GROW_FIRST = 1024 * 1024
@@ -43,24 +41,25 @@ GROW_FIRST = 1024 * 1024
 HEADER_GROW_FIRST = BIG_FRAME
 #: A small frame cut short by the end of what the socket had waits as a copy while this
 #: much of it has come, in a buffer of its own (this big, then doubling) once more has: the
-#: scratch buffer goes back to the pool either way, and a frame that trickles in a byte at a
-#: time is not copied whole at every byte.
+#: scratch buffer is free for the next read either way, and a frame that trickles in a byte
+#: at a time is not copied whole at every byte.
 PARTIAL_FIRST = 4096
 
-_spare: list[bytearray] = []
+
+class _Lender(threading.local):
+    """The scratch buffer of this thread, lent to one connection's read at a time.
+
+    Every asyncio transport (selector, proactor, uvloop) calls ``buffer_updated`` or ends the
+    read (end of stream, an error, nothing to read) before it asks any protocol of its thread
+    for a buffer again, so a buffer lent for one read is free at the next ``get_buffer``.
+    Before it was lent, each connection owned 256 KiB from the moment it was accepted:
+    4,000 idle connections cost a node 1 GB, which stayed after they closed.
+    """
+
+    view: memoryview | None = None
 
 
-def _borrow_scratch() -> bytearray:
-    """A scratch buffer for one read: a spare one, else a new one."""
-    try:
-        return _spare.pop()  # atomic: threads that read share the pool safely
-    except IndexError:
-        return bytearray(SCRATCH)
-
-
-def _return_scratch(buf: bytearray) -> None:
-    if len(_spare) < SPARE_SCRATCH:
-        _spare.append(buf)
+_lender = _Lender()
 
 
 class FrameError(ValueError):
@@ -93,15 +92,15 @@ class FrameReader:
     megabyte, not a gigabyte. The first frame of a connection (its header) may have a limit
     of its own, ``first_max``.
 
-    The scratch buffer is borrowed from a shared pool in ``get_buffer`` and given back in
-    ``buffer_updated``; the start of a frame that is not complete waits as a copy
-    (``_tail``), or in a buffer of its own that grows as it arrives (``PARTIAL_FIRST``). A
-    read that filled the scratch buffer keeps it instead, as more is surely waiting: a busy
-    connection reads into one buffer, as before.
+    Each read goes to the scratch buffer its thread lends (``_Lender``); the start of a frame
+    that is not complete then waits as a copy (``_tail``), or in a buffer of its own that
+    grows as it arrives (``PARTIAL_FIRST``). A read that filled the scratch buffer keeps it
+    instead (``_own``), as more is surely waiting: a busy connection reads into one buffer,
+    and the thread makes itself another.
     """
 
     __slots__ = (
-        "_big", "_big_filled", "_big_length", "_buf", "_end", "_spare", "_start", "_tail",
+        "_big", "_big_filled", "_big_length", "_end", "_own", "_spare", "_start", "_tail",
         "_view", "first_max", "max_frame", "reuse",
     )  # fmt: skip
 
@@ -109,12 +108,14 @@ class FrameReader:
         self.max_frame = max_frame
         #: The limit of the next frame only, while it is the first; then ``max_frame``.
         self.first_max = first_max
-        #: The scratch buffer while a read is under way or the connection is busy, else None.
-        self._buf: bytearray | None = None
+        #: The scratch buffer of the read under way (lent or our own); ``_start``, ``_end``:
+        #: the bytes in it not yet split into frames.
         self._view: memoryview | None = None
         self._start = 0
         self._end = 0
-        #: A partial small frame kept between reads while no scratch buffer is held.
+        #: A scratch buffer kept between reads while the connection is busy.
+        self._own: memoryview | None = None
+        #: The start of a frame, kept between reads while no scratch buffer is.
         self._tail = b""
         self._big: bytearray | None = None
         self._big_filled = 0
@@ -137,26 +138,29 @@ class FrameReader:
                     grown[: len(big)] = big
                     self._big = big = grown
             return memoryview(big)[self._big_filled : self._big_length]  # a spare may be longer
-        view = self._view
+        view = self._own
+        if view is not None:
+            if self._end == SCRATCH:
+                # Compact: the partial frame left at the end moves to the front.
+                pending = self._end - self._start
+                view[:pending] = view[self._start : self._end]
+                self._start, self._end = 0, pending
+            return view[self._end :]
+        view = _lender.view
         if view is None:
-            self._buf = _borrow_scratch()
-            self._view = view = memoryview(self._buf)
-            tail = self._tail
-            if tail:
-                view[: len(tail)] = tail
-                self._tail = b""
-            self._start, self._end = 0, len(tail)
-        elif self._end == SCRATCH:
-            # Compact: the partial frame left at the end moves to the front.
-            pending = self._end - self._start
-            view[:pending] = view[self._start : self._end]
-            self._start, self._end = 0, pending
+            view = _lender.view = memoryview(bytearray(SCRATCH))
+        # The tail stays ours until the read is accounted for: a read that ends without
+        # ``buffer_updated`` (nothing to read after all) must not lose it.
+        tail = self._tail
+        if tail:
+            view[: len(tail)] = tail
+        self._view, self._start, self._end = view, 0, len(tail)
         return view[self._end :]
 
     @property
     def holds_scratch(self) -> bool:
-        """Whether a scratch buffer is held between reads (the last read filled it)."""
-        return self._buf is not None
+        """Whether a scratch buffer is kept between reads (the last read filled it)."""
+        return self._own is not None
 
     @property
     def mid_big_frame(self) -> bool:
@@ -226,12 +230,19 @@ class FrameReader:
         if pos:
             self.first_max = None  # the first frame is done, or is a big one under way
         if pos < size and end == SCRATCH:
-            self._start += pos  # more is waiting: keep the buffer and its partial frame
+            # More is waiting: keep the buffer and its partial frame.
+            if self._own is None:
+                self._own = view
+                if _lender.view is view:
+                    _lender.view = None  # the thread makes itself another
+            self._start += pos
             return frames
         self._tail = data[pos:] if pos < size else b""  # at most PARTIAL_FIRST + 4 bytes
-        assert self._buf is not None
-        _return_scratch(self._buf)
-        self._buf = self._view = None
+        if self._own is not None:
+            if _lender.view is None:
+                _lender.view = self._own
+            self._own = None
+        self._view = None
         self._start = self._end = 0
         return frames
 

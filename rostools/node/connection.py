@@ -40,10 +40,14 @@ WRITE_LOW_WATER = 1024 * 1024
 #: Reads smaller than this may wait for company (``Receiver.coalesce``); a busy socket fills
 #: bigger reads than this and is never held back.
 COALESCE_BELOW = 64 * 1024
-#: Connections to one TCPROS server that have not sent their header yet: one more, and the
-#: oldest is dropped. roscpp listens with a backlog of 100 (``MAX_TCPROS_CONN_QUEUE``) and
+#: Connections to one TCPROS server that have not sent their header yet: past this many, the
+#: oldest are dropped. roscpp listens with a backlog of 100 (``MAX_TCPROS_CONN_QUEUE``) and
 #: rospy and roscpp keep any number waiting, each with its buffers, for good.
 MAX_PENDING = 100
+#: Seconds between going past MAX_PENDING and dropping the oldest: a burst of real peers
+#: (a recorder subscribing to 1,000 topics at once) is accepted faster than its headers,
+#: which wait in the sockets, are read; by then they have been.
+PENDING_GRACE = 1.0
 #: Where a subscriber's bytes after its header go: a subscriber sends nothing then, and the
 #: link only reads to see the connection close. One for all links; nobody reads it.
 _ignored = bytearray(4096)
@@ -76,14 +80,15 @@ class ConnectionHandler(Protocol):
 class Pending:
     """The connections of one TCPROS server that have not sent their header yet, oldest first.
 
-    Past ``limit``, the oldest is dropped: a peer that opens connections and says nothing
-    cannot hold more than ``limit`` of them, and a real peer, which sends its header at once,
-    is never the oldest for long.
+    Past ``limit``, the oldest are dropped (``PENDING_GRACE`` later): a peer that opens
+    connections and says nothing cannot hold more than ``limit`` of them for long, and a real
+    peer, which sends its header at once, is never the oldest for long.
     """
 
     def __init__(self, limit: int = MAX_PENDING) -> None:
         self.limit = limit
         self._waiting: dict[ServerConnection, None] = {}  # insertion order: oldest first
+        self._trim: asyncio.TimerHandle | None = None
         #: Connections dropped for the limit so far.
         self.dropped = 0
 
@@ -91,8 +96,13 @@ class Pending:
         return len(self._waiting)
 
     def add(self, conn: ServerConnection) -> None:
-        """A new connection waits for its header; the oldest goes if there are too many."""
+        """A new connection waits for its header; past the limit, the oldest will go."""
         self._waiting[conn] = None
+        if len(self._waiting) > self.limit and self._trim is None:
+            self._trim = asyncio.get_running_loop().call_later(PENDING_GRACE, self._drop_oldest)
+
+    def _drop_oldest(self) -> None:
+        self._trim = None
         while len(self._waiting) > self.limit:
             oldest = next(iter(self._waiting))
             del self._waiting[oldest]

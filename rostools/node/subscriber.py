@@ -232,23 +232,38 @@ class Subscriber:
                 await task
 
 
-#: Name lookups under way, by event loop, master and publisher: when a node with many topics
-#: goes away unannounced, every topic reports it at once, and one getSystemState answers all
-#: (1,000 at once, each reply ~100 KB parsed, took a recorder from 40 MB to 280 MB).
+#: Seconds a publisher's name, once looked up, answers for its URI. When a node with many
+#: topics goes away unannounced, every topic reports it within a few seconds, and one
+#: getSystemState names it for all (1,000 lookups at once, each reply ~100 KB parsed, took a
+#: recorder from 40 MB to 280 MB).
+NAME_KEEP = 10.0
+#: Names found, by master and publisher URI: (when, name).
+_names: dict[tuple[str, str], tuple[float, str | None]] = {}
+#: Lookups under way, by event loop, master and publisher URI.
 _lookups: dict[tuple[asyncio.AbstractEventLoop, str, str], asyncio.Future[str | None]] = {}
 
 
 async def node_at(node: Owner, uri: str, topic: str) -> str | None:
     """The name of the publisher of ``topic`` whose slave API is ``uri``, if the master says.
 
-    Concurrent lookups of one ``uri`` share one (the node there has one name).
+    Lookups of one ``uri`` within ``NAME_KEEP`` seconds share one (the node there has one
+    name).
     """
+    now = time.monotonic()
+    known = _names.get((node.master_uri, uri))
+    if known is not None and now - known[0] < NAME_KEEP:
+        return known[1]
     key = (asyncio.get_running_loop(), node.master_uri, uri)
     lookup = _lookups.get(key)
     if lookup is None:
         lookup = _lookups[key] = asyncio.ensure_future(_node_at(node, uri, topic))
         lookup.add_done_callback(lambda _: _lookups.pop(key, None))
-    return await asyncio.shield(lookup)
+    name = await asyncio.shield(lookup)
+    if len(_names) > 256:  # forget the stale, so that the table stays small
+        for stale in [k for k, (when, _) in _names.items() if now - when >= NAME_KEEP]:
+            del _names[stale]
+    _names[(node.master_uri, uri)] = (time.monotonic(), name)
+    return name
 
 
 async def _node_at(node: Owner, uri: str, topic: str) -> str | None:

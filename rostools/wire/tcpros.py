@@ -36,13 +36,12 @@ SCRATCH = 256 * 1024
 #: A big frame's buffer starts this big (or at what has arrived) and doubles as data comes:
 #: what a length prefix alone can make us allocate. 1 MiB holds a 1 MB image without growing.
 GROW_FIRST = 1024 * 1024
-#: The same for a connection header (the first frame): the largest real one is 10.6 KB, and
-#: a peer that has not yet said who it is should cost us little more than what it sent.
-HEADER_GROW_FIRST = BIG_FRAME
 #: A small frame cut short by the end of what the socket had waits as a copy while this
 #: much of it has come, in a buffer of its own (this big, then doubling) once more has: the
 #: scratch buffer is free for the next read either way, and a frame that trickles in a byte
-#: at a time is not copied whole at every byte.
+#: at a time is not copied whole at every byte. A connection header over BIG_FRAME starts
+#: this big too, not at GROW_FIRST: the largest real one is 10.6 KB, and a peer that has not
+#: said who it is should cost us little more than what it sent.
 PARTIAL_FIRST = 4096
 
 
@@ -87,7 +86,7 @@ class FrameReader:
     """Splits a byte stream into frames, receiving into reusable buffers.
 
     A frame's length prefix is not trusted: the buffer of a big frame starts at what has
-    arrived, at least ``GROW_FIRST`` (``HEADER_GROW_FIRST`` for the first frame), and doubles
+    arrived, at least ``GROW_FIRST`` (``PARTIAL_FIRST`` for the first frame), and doubles
     as more arrives, so a peer that announces a gigabyte and sends twenty bytes costs us a
     megabyte, not a gigabyte. The first frame of a connection (its header) may have a limit
     of its own, ``first_max``.
@@ -214,12 +213,8 @@ class FrameReader:
                 if self.reuse and spare is not None and len(spare) >= length:
                     self._big = spare
                 else:
-                    if length < BIG_FRAME:
-                        first = PARTIAL_FIRST
-                    elif pos == 0 and self.first_max is not None:
-                        first = HEADER_GROW_FIRST
-                    else:
-                        first = GROW_FIRST
+                    header = pos == 0 and self.first_max is not None
+                    first = PARTIAL_FIRST if length < BIG_FRAME or header else GROW_FIRST
                     self._big = bytearray(min(length, max(first, have)))
                 self._big[:have] = view[start + pos + 4 : end]
                 self._big_filled, self._big_length = have, length

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import struct
+import threading
 import tracemalloc
 from collections.abc import Callable
 
@@ -357,3 +358,35 @@ def test_readers_that_share_the_lent_buffer_keep_their_own_bytes(
         pos[i] += n
         got[i] += [bytes(f) for f in readers[i].buffer_updated(n)]
     assert got == [first, second]
+
+
+def test_readers_in_two_threads_do_not_share_a_buffer() -> None:
+    """A read under way in one thread is not overwritten by a read in another."""
+    message = framed([b"from the first thread"])
+    made: list[FrameReader] = []
+    lent = threading.Event()
+    other_done = threading.Event()
+    got: list[bytes] = []
+
+    def first() -> None:
+        reader = FrameReader()
+        buf = reader.get_buffer()
+        buf[: len(message)] = message
+        lent.set()
+        other_done.wait(10)  # the other thread reads meanwhile, in the middle of ours
+        got.extend(bytes(f) for f in reader.buffer_updated(len(message)))
+
+    def second() -> None:
+        lent.wait(10)
+        made.append(FrameReader())
+        other = framed([b"x" * 100] * 10)
+        made[0].get_buffer()[: len(other)] = other
+        made[0].buffer_updated(len(other))
+        other_done.set()
+
+    threads = [threading.Thread(target=first), threading.Thread(target=second)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join(20)
+    assert got == [b"from the first thread"]

@@ -92,9 +92,6 @@ class Pending:
         #: Connections dropped for the limit so far.
         self.dropped = 0
 
-    def __len__(self) -> int:
-        return len(self._waiting)
-
     def add(self, conn: ServerConnection) -> None:
         """A new connection waits for its header; past the limit, the oldest will go."""
         self._waiting[conn] = None

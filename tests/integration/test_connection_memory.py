@@ -59,8 +59,8 @@ def links(master_uri: str, node: str, topic: str) -> int:
     return sum(1 for entry in info if entry[2] == "o" and entry[4] == topic)
 
 
-async def connect(port: int, count: int, first: bytes = b"") -> Streams:
-    """``count`` connections to ``port``, 50 at a time; each sends ``first``."""
+async def connect(port: int, count: int, first: bytes = b"", batch: int = 50) -> Streams:
+    """``count`` connections to ``port``, ``batch`` at a time; each sends ``first`` at once."""
     streams: Streams = []
 
     async def one() -> None:
@@ -69,16 +69,16 @@ async def connect(port: int, count: int, first: bytes = b"") -> Streams:
             writer.write(first)
         streams.append((reader, writer))
 
-    for done in range(0, count, 50):
-        await asyncio.gather(*(one() for _ in range(min(50, count - done))))
+    for done in range(0, count, batch):
+        await asyncio.gather(*(one() for _ in range(min(batch, count - done))))
     return streams
 
 
-def hold(port: int, count: int, first: bytes, while_open: object) -> None:
+def hold(port: int, count: int, first: bytes, while_open: object, batch: int = 50) -> None:
     """Open ``count`` connections that send ``first``, call ``while_open()``, close them."""
 
     async def main() -> None:
-        streams = await connect(port, count, first)
+        streams = await connect(port, count, first, batch)
         await asyncio.get_running_loop().run_in_executor(None, while_open)  # type: ignore[arg-type]
         for _, writer in streams:
             writer.close()
@@ -215,6 +215,36 @@ def test_silent_connections_past_the_limit_drop_the_oldest(
     closed, got = asyncio.run(main())
     assert closed == set(range(extra))
     assert got == [struct.pack("<I", 2) + b"hi"]
+
+
+def test_a_burst_of_subscribers_past_the_limit_all_get_through(master: MasterThread) -> None:
+    """Real subscribers send their header at once; a burst of them is accepted faster than
+    the headers are read, and none may be taken for silent."""
+    count = 3 * connection.MAX_PENDING
+
+    async def main() -> int:
+        node = await Node("popular", master.uri).start()
+        try:
+            pub = await node.advertise("/p", STRING)
+            header = subscriber_header("/many", "/p", "*", "*", "", False)
+            # from another thread and loop, as from another process: the node accepts while
+            # the subscribers write
+            loop = asyncio.get_running_loop()
+            hold_open = loop.run_in_executor(
+                None, hold, node.tcpros_port, count, header, lambda: time.sleep(5), count
+            )
+            for _ in range(200):
+                if pub.subscriber_count == count:
+                    break
+                await asyncio.sleep(0.05)
+            await asyncio.sleep(connection.PENDING_GRACE + 0.5)  # past any drop
+            connected = pub.subscriber_count
+            await hold_open
+            return connected
+        finally:
+            await node.close()
+
+    assert asyncio.run(main()) == count
 
 
 # --- a publisher of many topics that goes away ----------------------------------------------

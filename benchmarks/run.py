@@ -27,6 +27,7 @@ MODULES = [
     "benchmarks.bench_completion",
     "benchmarks.bench_network",
     "benchmarks.bench_load",
+    "benchmarks.bench_load_memory",
     "benchmarks.bench_fixture",
 ]
 

@@ -40,6 +40,17 @@ WRITE_LOW_WATER = 1024 * 1024
 #: Reads smaller than this may wait for company (``Receiver.coalesce``); a busy socket fills
 #: bigger reads than this and is never held back.
 COALESCE_BELOW = 64 * 1024
+#: Connections to one TCPROS server that have not sent their header yet: past this many, the
+#: oldest are dropped. roscpp listens with a backlog of 100 (``MAX_TCPROS_CONN_QUEUE``) and
+#: rospy and roscpp keep any number waiting, each with its buffers, for good.
+MAX_PENDING = 100
+#: Seconds between going past MAX_PENDING and dropping the oldest: a burst of real peers
+#: (a recorder subscribing to 1,000 topics at once) is accepted faster than its headers,
+#: which wait in the sockets, are read; by then they have been.
+PENDING_GRACE = 1.0
+#: Where a subscriber's bytes after its header go: a subscriber sends nothing then, and the
+#: link only reads to see the connection close. One for all links; nobody reads it.
+_ignored = bytearray(4096)
 
 
 def set_nodelay(transport: asyncio.BaseTransport) -> None:
@@ -66,17 +77,66 @@ class ConnectionHandler(Protocol):
         """Our send buffer drained."""
 
 
+class Pending:
+    """The connections of one TCPROS server that have not sent their header yet, oldest first.
+
+    Past ``limit``, the oldest are dropped (``PENDING_GRACE`` later): a peer that opens
+    connections and says nothing cannot hold more than ``limit`` of them for long, and a real
+    peer, which sends its header at once, is never the oldest for long.
+    """
+
+    def __init__(self, limit: int = MAX_PENDING) -> None:
+        self.limit = limit
+        self._waiting: dict[ServerConnection, None] = {}  # insertion order: oldest first
+        self._trim: asyncio.TimerHandle | None = None
+        #: Connections dropped for the limit so far.
+        self.dropped = 0
+
+    def add(self, conn: ServerConnection) -> None:
+        """A new connection waits for its header; past the limit, the oldest will go."""
+        self._waiting[conn] = None
+        if len(self._waiting) > self.limit and self._trim is None:
+            self._trim = asyncio.get_running_loop().call_later(PENDING_GRACE, self._drop_oldest)
+
+    def _drop_oldest(self) -> None:
+        self._trim = None
+        while len(self._waiting) > self.limit:
+            oldest = next(iter(self._waiting))
+            del self._waiting[oldest]
+            self.dropped += 1
+            # One line per server, not one per connection of a flood.
+            report = log.warning if self.dropped == 1 else log.debug
+            report(
+                "more than %d TCPROS connections are waiting for their header; dropping the "
+                "oldest, from %s", self.limit, oldest.peer,
+            )  # fmt: skip
+            oldest.abort()
+
+    def discard(self, conn: ServerConnection) -> None:
+        """``conn`` sent its header or closed."""
+        self._waiting.pop(conn, None)
+
+
 class ServerConnection(asyncio.BufferedProtocol):
-    """A connection accepted by a node's TCPROS server."""
+    """A connection accepted by a node's TCPROS server.
+
+    It costs no receive buffer until bytes arrive (``FrameReader``), waits among its server's
+    ``pending`` connections until its header comes, and reads a subscriber's link into a
+    shared buffer that nobody reads.
+    """
 
     def __init__(
-        self, accept: Callable[[dict[str, str], ServerConnection], ConnectionHandler | None]
+        self,
+        accept: Callable[[dict[str, str], ServerConnection], ConnectionHandler | None],
+        pending: Pending | None = None,
     ) -> None:
         self.accept = accept
-        self.reader = FrameReader(MAX_FRAME, first_max=MAX_HEADER_LENGTH)
+        self.pending = pending
+        self.reader: FrameReader | None = FrameReader(MAX_FRAME, first_max=MAX_HEADER_LENGTH)
         self.transport: asyncio.Transport | None = None
         self.handler: ConnectionHandler | None = None
         self.peer = "?"
+        self._deadline: asyncio.TimerHandle | None = None
 
     def connection_made(self, transport: asyncio.BaseTransport) -> None:
         """Asyncio: connected; the peer has ``HANDSHAKE_TIMEOUT`` to send its header."""
@@ -85,19 +145,34 @@ class ServerConnection(asyncio.BufferedProtocol):
         transport.set_write_buffer_limits(WRITE_HIGH_WATER, WRITE_LOW_WATER)
         peer = transport.get_extra_info("peername")
         self.peer = f"{peer[0]}:{peer[1]}" if peer else "?"
-        asyncio.get_running_loop().call_later(HANDSHAKE_TIMEOUT, self._handshake_expired)
+        loop = asyncio.get_running_loop()
+        self._deadline = loop.call_later(HANDSHAKE_TIMEOUT, self._handshake_expired)
+        if self.pending is not None:
+            self.pending.add(self)
 
     def _handshake_expired(self) -> None:
+        self._deadline = None
         if self.handler is None and self.transport is not None:
             log.warning("TCPROS connection from %s sent no header in time; closing it", self.peer)
             self.transport.abort()
 
+    def _handshake_over(self) -> None:
+        if self._deadline is not None:
+            self._deadline.cancel()
+            self._deadline = None
+        if self.pending is not None:
+            self.pending.discard(self)
+
     def get_buffer(self, sizehint: int) -> memoryview:
         """Asyncio: where to receive into."""
+        if self.reader is None:
+            return memoryview(_ignored)
         return self.reader.get_buffer()
 
     def buffer_updated(self, nbytes: int) -> None:
         """Asyncio: bytes arrived."""
+        if self.reader is None:
+            return
         try:
             frames = self.reader.buffer_updated(nbytes)
         except FrameError as err:
@@ -105,6 +180,7 @@ class ServerConnection(asyncio.BufferedProtocol):
             self.close()
             return
         if self.handler is None and frames:
+            self._handshake_over()
             try:
                 fields = parse_header(frames[0])
             except FrameError as err:
@@ -114,6 +190,9 @@ class ServerConnection(asyncio.BufferedProtocol):
             self.handler = self.accept(fields, self)
             frames = frames[1:]
             if self.handler is None:
+                return
+            if isinstance(self.handler, Outbound):
+                self.reader = None  # a subscriber says nothing after its header
                 return
         if frames and self.handler is not None:
             self.handler.frames_received(frames)
@@ -128,8 +207,15 @@ class ServerConnection(asyncio.BufferedProtocol):
         if self.transport is not None:
             self.transport.close()
 
+    def abort(self) -> None:
+        """Close now, dropping what is buffered."""
+        if self.transport is not None:
+            self.transport.abort()
+
     def connection_lost(self, exc: Exception | None) -> None:
         """Asyncio: the connection closed."""
+        self._handshake_over()
+        self.reader = None
         if self.handler is not None:
             self.handler.connection_lost()
 
@@ -265,6 +351,7 @@ class InboundConnection(asyncio.BufferedProtocol):
         self.peer = "?"
         #: Why we dropped the connection, when we did.
         self.failure: Failure | None = None
+        self._deadline: asyncio.TimerHandle | None = None
 
     def connection_made(self, transport: asyncio.BaseTransport) -> None:
         """Asyncio: connected."""
@@ -274,11 +361,18 @@ class InboundConnection(asyncio.BufferedProtocol):
         peer = transport.get_extra_info("peername")
         self.peer = f"{peer[0]}:{peer[1]}" if peer else "?"
         transport.write(self.request)
-        asyncio.get_running_loop().call_later(HANDSHAKE_TIMEOUT, self._handshake_expired)
+        loop = asyncio.get_running_loop()
+        self._deadline = loop.call_later(HANDSHAKE_TIMEOUT, self._handshake_expired)
 
     def _handshake_expired(self) -> None:
+        self._deadline = None
         if self.header is None and self.failure is None and not self.closed.done():
             self._drop(f"no connection header within {HANDSHAKE_TIMEOUT:g} s")
+
+    def _handshake_over(self) -> None:
+        if self._deadline is not None:
+            self._deadline.cancel()
+            self._deadline = None
 
     def get_buffer(self, sizehint: int) -> memoryview:
         """Asyncio: where to receive into."""
@@ -295,6 +389,7 @@ class InboundConnection(asyncio.BufferedProtocol):
                 small = len(event.frames[0]) < BIG_FRAME  # a big frame comes alone
                 self.subscriber.frames_received(event.frames, self, now)
             elif isinstance(event, Accepted):
+                self._handshake_over()
                 self.header = event.header
                 self.subscriber.header_received(self)
             else:
@@ -332,6 +427,7 @@ class InboundConnection(asyncio.BufferedProtocol):
 
     def connection_lost(self, exc: Exception | None) -> None:
         """Asyncio: the connection closed."""
+        self._handshake_over()
         if not self.closed.done():
             self.closed.set_result(None)
         self.subscriber.connection_closed(self)

@@ -15,7 +15,7 @@ from typing import Any
 
 from rostools.msgs.topictype import ANY, TopicType
 from rostools.names import anonymous, canonicalize, make_global_ns, resolve, ros_namespace
-from rostools.node.connection import ConnectionHandler, ServerConnection
+from rostools.node.connection import ConnectionHandler, Pending, ServerConnection
 from rostools.node.listen import Listener, listen
 from rostools.node.notice import Notice, to_stderr
 from rostools.node.publisher import Publisher
@@ -98,7 +98,8 @@ class Node:
         bind = bind_address(self.host)
         self._xmlrpc = XmlRpcServer(self._dispatch, bind, 0)
         await self._xmlrpc.start()
-        self._tcpros = await listen(lambda: ServerConnection(self._accept), bind, 0)
+        pending = Pending()  # connections still to send their header, at most MAX_PENDING
+        self._tcpros = await listen(lambda: ServerConnection(self._accept, pending), bind, 0)
         self.tcpros_port = self._tcpros.port
         if self.private_params:
             from rostools import yamlio

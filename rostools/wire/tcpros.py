@@ -2,14 +2,20 @@
 
 ``FrameReader`` is the receive half of every TCPROS connection. It follows the asyncio
 ``BufferedProtocol`` shape (``get_buffer``/``buffer_updated``) without doing any IO: small
-frames are received many at a time into one scratch buffer and copied out once; a large
+frames are received many at a time into a scratch buffer and copied out once; a large
 frame gets a buffer of exactly its size, filled in place and handed over without a copy.
 That is what lets Python receive at the speed the socket allows (LIBRARIES.md §5).
+
+The scratch buffer is not a connection's own: each thread that reads has one, lent to a
+connection for one read at a time. Between reads a connection holds only the part of a
+frame that has arrived, so an idle connection costs no buffer, and a closed one leaves
+none behind.
 """
 
 from __future__ import annotations
 
 import struct
+import threading
 from typing import NamedTuple
 
 from rostools.wire.header import MAX_HEADER_LENGTH, HeaderError, decode_fields, encode_header
@@ -30,6 +36,42 @@ SCRATCH = 256 * 1024
 #: A big frame's buffer starts this big (or at what has arrived) and doubles as data comes:
 #: what a length prefix alone can make us allocate. 1 MiB holds a 1 MB image without growing.
 GROW_FIRST = 1024 * 1024
+#: A small frame cut short by the end of what the socket had waits as a copy while this
+#: much of it has come, in a buffer of its own (this big, then doubling) once more has: the
+#: scratch buffer is free for the next read either way, and a frame that trickles in a byte
+#: at a time is not copied whole at every byte. A connection header over BIG_FRAME starts
+#: this big too, not at GROW_FIRST: the largest real one is 10.6 KB, and a peer that has not
+#: said who it is should cost us little more than what it sent.
+PARTIAL_FIRST = 4096
+
+
+class Scratch:
+    """A thread's scratch buffer, lent to one connection's read at a time.
+
+    Every asyncio transport (selector, proactor, uvloop) calls ``buffer_updated`` or ends the
+    read (end of stream, an error, nothing to read) before it asks any protocol of its thread
+    for a buffer again, so a buffer lent for one read is free at the next ``get_buffer``.
+    Before it was lent, each connection owned 256 KiB from the moment it was accepted:
+    4,000 idle connections cost a node 1 GB, which stayed after they closed.
+    """
+
+    __slots__ = ("view",)
+
+    def __init__(self) -> None:
+        #: The buffer, made at the first read; None while a busy connection keeps it.
+        self.view: memoryview | None = None
+
+
+_threads = threading.local()
+
+
+def thread_scratch() -> Scratch:
+    """The calling thread's ``Scratch``."""
+    try:
+        scratch: Scratch = _threads.scratch
+    except AttributeError:
+        scratch = _threads.scratch = Scratch()
+    return scratch
 
 
 class FrameError(ValueError):
@@ -57,24 +99,38 @@ class FrameReader:
     """Splits a byte stream into frames, receiving into reusable buffers.
 
     A frame's length prefix is not trusted: the buffer of a big frame starts at what has
-    arrived, at least ``GROW_FIRST``, and doubles as more arrives, so a peer that announces
-    a gigabyte and sends twenty bytes costs us a megabyte, not a gigabyte. The first frame of
-    a connection (its header) may have a limit of its own, ``first_max``.
+    arrived, at least ``GROW_FIRST`` (``PARTIAL_FIRST`` for the first frame), and doubles
+    as more arrives, so a peer that announces a gigabyte and sends twenty bytes costs us a
+    megabyte, not a gigabyte. The first frame of a connection (its header) may have a limit
+    of its own, ``first_max``.
+
+    Each read goes to the scratch buffer of the thread that made the reader (``Scratch``),
+    so a reader reads in that thread, as an asyncio protocol does. The start of a frame that
+    is not complete then waits as a copy (``_tail``), or in a buffer of its own that grows as
+    it arrives (``PARTIAL_FIRST``). A read that filled the scratch buffer keeps it instead
+    (``_own``), as more is surely waiting: a busy connection reads into one buffer, and the
+    thread makes itself another.
     """
 
     __slots__ = (
-        "_big", "_big_filled", "_big_length", "_buf", "_end", "_spare", "_start", "_view",
-        "first_max", "max_frame", "reuse",
+        "_big", "_big_filled", "_big_length", "_end", "_lender", "_own", "_spare", "_start",
+        "_tail", "_view", "first_max", "max_frame", "reuse",
     )  # fmt: skip
 
     def __init__(self, max_frame: int = MAX_FRAME, first_max: int | None = None) -> None:
         self.max_frame = max_frame
         #: The limit of the next frame only, while it is the first; then ``max_frame``.
         self.first_max = first_max
-        self._buf = bytearray(SCRATCH)
-        self._view = memoryview(self._buf)
+        #: The scratch buffer of the read under way (lent or our own); ``_start``, ``_end``:
+        #: the bytes in it not yet split into frames.
+        self._view: memoryview | None = None
         self._start = 0
         self._end = 0
+        #: A scratch buffer kept between reads while the connection is busy.
+        self._own: memoryview | None = None
+        #: The start of a frame, kept between reads while no scratch buffer is.
+        self._tail = b""
+        self._lender = thread_scratch()  # looked up once: a thread-local costs 80 ns a read
         self._big: bytearray | None = None
         self._big_filled = 0
         self._big_length = 0
@@ -96,12 +152,32 @@ class FrameReader:
                     grown[: len(big)] = big
                     self._big = big = grown
             return memoryview(big)[self._big_filled : self._big_length]  # a spare may be longer
-        if self._end == SCRATCH:
-            # Compact: the partial frame left at the end moves to the front.
-            pending = self._end - self._start
-            self._view[:pending] = self._view[self._start : self._end]
-            self._start, self._end = 0, pending
-        return self._view[self._end :]
+        view = self._own
+        if view is not None:
+            if self._end == SCRATCH:
+                # Compact: the partial frame left at the end moves to the front.
+                pending = self._end - self._start
+                view[:pending] = view[self._start : self._end]
+                self._start, self._end = 0, pending
+            return view[self._end :]
+        lender = self._lender
+        view = lender.view
+        if view is None:
+            view = lender.view = memoryview(bytearray(SCRATCH))
+        self._view = view  # _start and _end are 0 between lent reads
+        # The tail stays ours until the read is accounted for: a read that ends without
+        # ``buffer_updated`` (nothing to read after all) must not lose it.
+        tail = self._tail
+        if tail:
+            self._end = n = len(tail)
+            view[:n] = tail
+            return view[n:]
+        return view
+
+    @property
+    def holds_scratch(self) -> bool:
+        """Whether a scratch buffer is kept between reads (the last read filled it)."""
+        return self._own is not None
 
     @property
     def mid_big_frame(self) -> bool:
@@ -126,9 +202,11 @@ class FrameReader:
                 done = memoryview(self._big).toreadonly()
             self._big = None
             return [done]
+        view = self._view
+        assert view is not None, "buffer_updated without get_buffer"
         self._end += nbytes
         frames: list[bytes | memoryview] = []
-        view, start, end = self._view, self._start, self._end
+        start, end = self._start, self._end
         # One copy of everything received, then each frame is a slice of it: slicing bytes is
         # one allocation, where slicing the buffer costs a memoryview and a bytes.
         data = bytes(view[start:end])
@@ -145,13 +223,17 @@ class FrameReader:
                 append(data[pos + 4 : after])
                 pos = after
                 limit = self.max_frame
-            elif length >= BIG_FRAME:
+            elif length >= BIG_FRAME or (end < SCRATCH and size - pos - 4 > PARTIAL_FIRST):
+                # A big frame, or much of one cut short by the end of what the socket had: it
+                # waits in a buffer of its own, filled in place by the next reads.
                 have = size - pos - 4
                 spare = self._spare
                 if self.reuse and spare is not None and len(spare) >= length:
                     self._big = spare
                 else:
-                    self._big = bytearray(min(length, max(GROW_FIRST, have)))
+                    header = pos == 0 and self.first_max is not None
+                    first = PARTIAL_FIRST if length < BIG_FRAME or header else GROW_FIRST
+                    self._big = bytearray(min(length, max(first, have)))
                 self._big[:have] = view[start + pos + 4 : end]
                 self._big_filled, self._big_length = have, length
                 pos = size
@@ -160,10 +242,21 @@ class FrameReader:
                 break
         if pos:
             self.first_max = None  # the first frame is done, or is a big one under way
-        start += pos
-        if start == end:
-            start = end = 0
-        self._start, self._end = start, end
+        if pos < size and end == SCRATCH:
+            # More is waiting: keep the buffer and its partial frame.
+            if self._own is None:
+                self._own = view
+                if self._lender.view is view:
+                    self._lender.view = None  # the thread makes itself another
+            self._start += pos
+            return frames
+        self._tail = data[pos:] if pos < size else b""  # at most PARTIAL_FIRST + 4 bytes
+        self._end = 0
+        if self._own is not None:
+            self._start = 0
+            if self._lender.view is None:
+                self._lender.view = self._own
+            self._own = None
         return frames
 
 

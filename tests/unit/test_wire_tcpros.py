@@ -3,15 +3,19 @@
 from __future__ import annotations
 
 import struct
+import threading
+import tracemalloc
+from collections.abc import Callable
 
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from rostools.wire.header import decode_fields, encode_header
+from rostools.wire.header import MAX_HEADER_LENGTH, decode_fields, encode_header
 from rostools.wire.tcpros import (
     BIG_FRAME,
     GROW_FIRST,
+    SCRATCH,
     Accepted,
     Event,
     Failed,
@@ -200,9 +204,12 @@ def _session_events(data: bytes, chunk: int, max_frame: int = 1 << 20) -> list[E
     """Feed ``data`` to a Subscription in chunks; every event, in order (no socket)."""
     session = Subscription(max_frame)
     events: list[Event] = []
-    for pos in range(0, len(data), chunk):
-        piece = data[pos : pos + chunk]
-        session.get_buffer()[: len(piece)] = piece
+    pos = 0
+    while pos < len(data):
+        buf = session.get_buffer()  # as a socket's recv_into: at most what it offers
+        piece = data[pos : pos + min(chunk, len(buf))]
+        buf[: len(piece)] = piece
+        pos += len(piece)
         events += session.buffer_updated(len(piece))
     return events
 
@@ -258,3 +265,128 @@ def test_reused_big_buffer_holds_each_frame_and_no_more() -> None:
             out.append(bytes(f))  # copied during the call, as a reusing consumer must
     assert out == payloads
     assert len(seen) == 3 and len(set(seen)) == 1  # one buffer for all three big frames
+
+
+# --- memory per connection (issue 24) ---------------------------------------------------------
+
+
+def _held_each(make: Callable[[], object], count: int = 200) -> float:
+    """Bytes that each of ``count`` results of ``make()`` keeps allocated (tracemalloc)."""
+    tracemalloc.start()
+    try:
+        before = tracemalloc.get_traced_memory()[0]
+        kept = [make() for _ in range(count)]
+        held = tracemalloc.get_traced_memory()[0] - before
+    finally:
+        tracemalloc.stop()
+    del kept
+    return held / count
+
+
+def _fed(data: bytes, first_max: int | None = None) -> FrameReader:
+    """A reader that has received ``data`` in one read."""
+    reader = FrameReader(first_max=first_max)
+    reader.get_buffer()[: len(data)] = data
+    reader.buffer_updated(len(data))
+    return reader
+
+
+def test_a_reader_between_reads_holds_no_scratch_buffer() -> None:
+    # the defect: every connection owned a 256 KiB buffer from the moment it was accepted, so
+    # 4,000 idle connections cost a node 1 GB (a reader after its header: 262 KB each)
+    header = publisher_header("/t", "/c", "m" * 32, "std_msgs/String", "string data", False)
+    assert _held_each(FrameReader) < 1024
+    assert _held_each(lambda: _fed(header + b"\x05\x00")) < 2048  # and 2 bytes of a prefix
+
+
+def test_a_read_that_ends_without_data_takes_no_buffer() -> None:
+    # the defect: get_buffer for a read that found the end of the stream (1,000 publishers
+    # closing at once) took a 256 KiB buffer each, which nothing gave back
+    def eof() -> FrameReader:
+        reader = FrameReader()
+        reader.get_buffer()
+        return reader
+
+    assert _held_each(eof) < 1024
+
+
+def test_a_frame_cut_short_costs_what_has_arrived() -> None:
+    # the defect: the rest of a small frame waited in the 256 KiB buffer, and a header that
+    # announced 900 KB got 1 MiB before its data came
+    small = struct.pack("<I", 60_000) + b"x" * 5000
+    assert _held_each(lambda: _fed(small)) < 12_000
+    header = struct.pack("<I", 900_000) + b"x" * 100
+    assert _held_each(lambda: _fed(header, first_max=MAX_HEADER_LENGTH)) < 12_000
+
+
+def test_a_busy_read_keeps_the_buffer_until_the_socket_is_drained() -> None:
+    """A read that fills the buffer keeps it (more is waiting); a shorter one gives it back."""
+    payloads = [bytes([i % 256]) * 1000 for i in range(300)]  # more than a buffer
+    data, reader = framed(payloads), FrameReader()
+    buf = reader.get_buffer()
+    assert len(buf) == SCRATCH
+    buf[:] = data[:SCRATCH]
+    got = [bytes(f) for f in reader.buffer_updated(SCRATCH)]
+    assert reader.holds_scratch  # it ended mid-frame, and the socket may hold the rest
+    rest = data[SCRATCH:]
+    reader.get_buffer()[: len(rest)] = rest
+    got += [bytes(f) for f in reader.buffer_updated(len(rest))]
+    assert not reader.holds_scratch
+    assert got == payloads
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    st.lists(st.tuples(st.booleans(), st.integers(1, 5000), st.booleans()), max_size=60),
+    st.lists(st.binary(max_size=6000), min_size=1, max_size=12),
+    st.lists(st.binary(max_size=6000), min_size=1, max_size=12),
+)
+def test_readers_that_share_the_lent_buffer_keep_their_own_bytes(
+    steps: list[tuple[bool, int, bool]], first: list[bytes], second: list[bytes]
+) -> None:
+    """Two connections read in turns from one thread's buffer; some reads find nothing."""
+    streams = [framed(first), framed(second)]
+    readers, got = [FrameReader(), FrameReader()], [list[bytes](), list[bytes]()]
+    pos = [0, 0]
+    for which, size, empty in [*steps, *((w, 1 << 20, False) for w in (0, 1) for _ in range(30))]:
+        i = int(which)
+        buf = readers[i].get_buffer()
+        if empty or pos[i] == len(streams[i]):
+            continue  # the read found nothing (end of stream, a spurious wake-up)
+        n = min(size, len(buf), len(streams[i]) - pos[i])
+        buf[:n] = streams[i][pos[i] : pos[i] + n]
+        pos[i] += n
+        got[i] += [bytes(f) for f in readers[i].buffer_updated(n)]
+    assert got == [first, second]
+
+
+def test_readers_in_two_threads_do_not_share_a_buffer() -> None:
+    """A read under way in one thread is not overwritten by a read in another."""
+    message = framed([b"from the first thread"])
+    made: list[FrameReader] = []
+    lent = threading.Event()
+    other_done = threading.Event()
+    got: list[bytes] = []
+
+    def first() -> None:
+        reader = FrameReader()
+        buf = reader.get_buffer()
+        buf[: len(message)] = message
+        lent.set()
+        other_done.wait(10)  # the other thread reads meanwhile, in the middle of ours
+        got.extend(bytes(f) for f in reader.buffer_updated(len(message)))
+
+    def second() -> None:
+        lent.wait(10)
+        made.append(FrameReader())
+        other = framed([b"x" * 100] * 10)
+        made[0].get_buffer()[: len(other)] = other
+        made[0].buffer_updated(len(other))
+        other_done.set()
+
+    threads = [threading.Thread(target=first), threading.Thread(target=second)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join(20)
+    assert got == [b"from the first thread"]

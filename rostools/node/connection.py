@@ -16,6 +16,7 @@ import time
 from collections.abc import Callable
 from typing import Any, Protocol
 
+from rostools.errors import one_line
 from rostools.rosgraph.network import Failure
 from rostools.wire.header import MAX_HEADER_LENGTH
 from rostools.wire.tcpros import (
@@ -176,7 +177,7 @@ class ServerConnection(asyncio.BufferedProtocol):
         try:
             frames = self.reader.buffer_updated(nbytes)
         except FrameError as err:
-            log.warning("TCPROS connection from %s: %s; closing it", self.peer, err)
+            log.warning("TCPROS connection from %s: %s; closing it", self.peer, one_line(err))
             self.close()
             return
         if self.handler is None and frames:
@@ -184,7 +185,7 @@ class ServerConnection(asyncio.BufferedProtocol):
             try:
                 fields = parse_header(frames[0])
             except FrameError as err:
-                log.warning("TCPROS connection from %s: %s; closing it", self.peer, err)
+                log.warning("TCPROS connection from %s: %s; closing it", self.peer, one_line(err))
                 self.close()
                 return
             self.handler = self.accept(fields, self)

@@ -20,7 +20,7 @@ from rostools.node.connection import Frame, InboundConnection
 from rostools.node.notice import Notice
 from rostools.node.xmlrpc import call
 from rostools.rosgraph.masterapi import master_timeout
-from rostools.rosgraph.network import SET_ADDRESS, Failure, explain, is_loopback, uri_host
+from rostools.rosgraph.network import Failure, explain, uri_host
 from rostools.wire.codes import SUCCESS
 from rostools.wire.tcpros import MAX_FRAME, subscriber_header
 
@@ -164,10 +164,12 @@ class Subscriber:
             return explain(err, host)
         if code != SUCCESS or not isinstance(proto, list) or len(proto) < 3 or proto[0] != "TCPROS":
             log.debug("requestTopic %s at %s: %s %s", self.topic, uri, code, message)
-            return Failure(
-                f"it refused the topic: {message}", SET_ADDRESS if is_loopback(host) else ""
-            )
-        host, port = str(proto[1]), int(proto[2])
+            # a node on its way out refuses the topics it already dropped (roscpp does, for
+            # each of its topics): said only if it lasts
+            return Failure(f"it refused the topic: {message}", lasting=False)
+        if type(proto[2]) is not int or not 0 < proto[2] < 65536:
+            return Failure(f"it gave no port to connect to: {proto!r}")
+        host, port = str(proto[1]), proto[2]
         header = subscriber_header(
             self.node.name, self.topic, self.type.md5sum, self.type.type, self.type.definition,
             self.tcp_nodelay,

@@ -35,8 +35,11 @@ RUN = 5.0  # seconds of publishing per measurement
 
 
 def _wait_json(proc: subprocess.Popen[bytes], timeout: float) -> dict[str, float]:
-    """The last JSON line a peer prints."""
-    out, _ = proc.communicate(timeout=timeout)
+    """The last JSON line a peer prints; a peer that overstays is stopped, by its PID."""
+    try:
+        out, _ = proc.communicate(timeout=timeout)
+    finally:
+        stop(proc)
     lines = [line for line in out.decode().splitlines() if line.startswith("{")]
     data: dict[str, float] = json.loads(lines[-1])
     return data

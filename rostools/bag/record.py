@@ -412,6 +412,12 @@ class Recorder:
                 await self.node.subscribe(
                     topic, self._on_frames(topic), tcp_nodelay=self.opts.tcp_nodelay
                 )
+        if any(not s.type for s in self.stats.values()):
+            # a topic with no message yet shows the type the master knows (it showed "?")
+            known = types or dict(await self.node.master_call("getTopicTypes"))
+            for topic, stats in self.stats.items():
+                if not stats.type and known.get(topic, "*") != "*":
+                    stats.type = known[topic]
 
     def _say_subscribing(self, topic: str) -> None:
         if self.on_subscribe is not None:

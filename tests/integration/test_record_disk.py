@@ -217,3 +217,14 @@ def test_a_file_size_limit_stops_with_one_line_and_exit_6(
     assert "size limit" in err and f"rostools bag recover {active}" in err, err
     assert Path(active).stat().st_size == limit
     assert _recovered_messages(Path(active), cli_env)
+
+
+def test_a_topic_without_messages_shows_the_type_the_master_knows(
+    rostools_master: str, cli_env: dict[str, str], tmp_path: Path
+) -> None:
+    # the defect: "/rosout [?]" in the summary, although the master knows its type
+    done = run_cli("bag", "record", "-a", "--duration", "1.5", "-O", str(tmp_path / "x.bag"),
+                   env=cli_env, timeout=60)  # fmt: skip
+    assert done.returncode == 0, done.stderr
+    lines = [line.strip() for line in done.stderr.splitlines()]
+    assert "/rosout_agg [rosgraph_msgs/Log]: 0 msgs" in lines, done.stderr

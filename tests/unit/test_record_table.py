@@ -20,6 +20,7 @@ class _Recorder:
         self.stats = {"/chatter": TopicStats("std_msgs/String", messages=20, bytes=400, written=19)}
         self.connected = 2
         self.current_file = folder / "x.bag.active"
+        self.closed_files: list[Path] = []
         self.started = time.monotonic() - 3
 
     def publishers(self, topic: str) -> int:
@@ -42,3 +43,14 @@ def test_last_frame_keeps_the_publishers_and_counts_what_was_written(tmp_path: P
     table.last_frame(rec)  # type: ignore[arg-type]
     row = _row(table, rec)
     assert row[:4] == ["/chatter", "std_msgs/String", "2", "19"], row
+
+
+def test_last_frame_says_the_size_of_the_closed_file(tmp_path: Path) -> None:
+    # the defect: the .active file was renamed by then, and the title said "0 B written"
+    rec = _Recorder(tmp_path)
+    (tmp_path / "x.bag").write_bytes(b"x" * 5000)
+    rec.closed_files = [tmp_path / "x.bag"]
+    console = Console(file=io.StringIO(), width=200)
+    console.print(LiveTable()._table(rec, time.monotonic()))
+    title = console.file.getvalue().splitlines()[0]  # type: ignore[attr-defined]
+    assert title.startswith("recording x.bag: 4.9 KB written"), title

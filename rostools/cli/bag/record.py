@@ -173,6 +173,8 @@ class LiveTable:
         from rich.table import Table
 
         path = rec.current_file
+        if path is not None and not path.exists() and rec.closed_files:
+            path = rec.closed_files[-1]  # the last frame: the .active file has its name now
         size = path.stat().st_size if path is not None and path.exists() else 0
         free = shutil.disk_usage(path.parent if path is not None else ".").free
         title = (

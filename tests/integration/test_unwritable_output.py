@@ -18,6 +18,7 @@ OFFLINE = [
     ["bag", "plot", "{bag}", "/point/x", "-o", "{out}.png"],
 ]
 LIVE = [
+    ["bag", "record", "-a", "-O", "{out}.bag"],
     ["param", "dump", "{out}.yaml"],
     ["node", "graph", "-o", "{out}.dot"],
     ["node", "graph", "-o", "{out}.svg"],

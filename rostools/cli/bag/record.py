@@ -13,13 +13,13 @@ import typer
 from rostools.bag.access import WRITE_COMPRESSIONS
 from rostools.cli.bag.group import app
 from rostools.cli.common import FormatOpt, node_session, output_format
-from rostools.cli.output import Format, render
+from rostools.cli.output import Format, check_writable, render
 from rostools.errors import DataLossError, UsageError, one_line
 
 if TYPE_CHECKING:
     import asyncio
 
-    from rostools.bag.record import Recorder, RecordOptions
+    from rostools.bag.record import Recorder
     from rostools.node.node import Node
 
 _UNITS = {"s": 1.0, "m": 60.0, "h": 3600.0}
@@ -313,7 +313,7 @@ def record(
         publish=publish,
     )  # fmt: skip
     opts.check()
-    _check_writable(opts)
+    check_writable(opts.base)  # before subscribing
     out = output_format(ctx, fmt)
     live = not quiet and out is Format.text and sys.stderr.isatty()
 
@@ -340,17 +340,6 @@ def record(
         sys.stdout.write(render(out, data) + "\n")
     if rec.drops:
         raise DataLossError(f"{rec.drops} messages were dropped: the buffer (-b) was full")
-
-
-def _check_writable(opts: RecordOptions) -> None:
-    """Fail before subscribing if the output folder is missing or read-only."""
-    import os
-
-    folder = opts.base.parent
-    if not folder.is_dir():
-        raise UsageError(f"cannot record into {folder}: no such folder")
-    if not os.access(folder, os.W_OK):
-        raise UsageError(f"cannot record into {folder}: permission denied")
 
 
 def _say_subscribing(topic: str) -> None:

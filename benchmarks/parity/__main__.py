@@ -91,7 +91,9 @@ def table(cases: Sequence[Case], runs: dict[str, list[Run]]) -> str:
         lines.append(
             f"{tool:<11}{len(chosen):>6}{n_runs:>6}" + "".join(f"{counts[k]:>14}" for k in classes)
         )
-    lines.append("(class counts are of cases, each as its worst paired run)")
+    by_run = Counter(str(r["class"]) for c in cases for r in runs.get(c.id, []))
+    lines.append(f"{'paired runs':<23}" + "".join(f"{by_run[k]:>14}" for k in classes))
+    lines.append("(class counts are of cases, each as its worst paired run, then of paired runs)")
     return "\n".join(lines)
 
 
@@ -164,12 +166,14 @@ def _report(cases: Sequence[Case], runs: dict[str, list[Run]], seconds: float) -
             "class": _class(runs, c).value, "runs": rows,
         })  # fmt: skip
     counts = Counter(str(i["class"]) for i in items)
+    by_run = Counter(str(r["class"]) for rows in runs.values() for r in rows)
     return {
         "when": time.strftime("%Y-%m-%dT%H:%M:%S%z"),
         "seconds": round(seconds),
         "cases": items,
         "summary": {"cases": len(items), "paired_runs": sum(len(r) for r in runs.values()),
-                    **{v.value: counts[v.value] for v in Verdict}},
+                    **{v.value: counts[v.value] for v in Verdict},
+                    "runs": {v.value: by_run[v.value] for v in Verdict}},
         "documented_differences": [
             {"key": x.key, "reason": x.reason, "readme": x.readme} for x in documented.ALL
         ],

@@ -1,0 +1,437 @@
+"""The known differences between the ROS 1 tools and rostools, each where README.md says so.
+
+A case names the differences that may apply to it; ``compare.judge`` takes each out in
+turn, and a pair that then agrees is "documented". Every ``readme`` phrase must be in
+README.md (whitespace collapsed): ``check_readme`` says which are not, and the harness
+refuses to run while one is missing. A difference found that no entry here covers is a
+defect, not a documented one.
+"""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+import yaml
+
+from benchmarks.parity.compare import Difference, Expect, Output
+
+# rostopic's status lines, printed on stdout, which rostools prints on stderr.
+STATUS = re.compile(
+    r"^(subscribed to \[.*\]|publishing and latching .*|publishing message .*|"
+    r"Got one message and a rate.*)$"
+)
+
+
+def _status_to_stderr(a: Output, b: Output, _: Expect) -> tuple[Output, Output]:
+    lines = a.stdout.splitlines(keepends=True)
+    moved = [line for line in lines if STATUS.match(line.rstrip("\n"))]
+    if not moved:
+        return a, b
+    kept = "".join(line for line in lines if line not in moved)
+    return a.but(stdout=kept, stderr="".join(moved) + a.stderr), b
+
+
+def _anon_names(a: Output, b: Output, _: Expect) -> tuple[Output, Output]:
+    def rename(text: str) -> str:
+        return re.sub(r"/rostools_[a-z_]+?_ANON", "/rostopic_ANON", text)
+
+    return a, b.but(stdout=rename(b.stdout), stderr=rename(b.stderr), effects=rename(b.effects))
+
+
+def _sort_blocks(text: str) -> str:
+    """Each run of ``" * "`` lines sorted."""
+    out: list[str] = []
+    run: list[str] = []
+    for line in [*text.split("\n"), None]:
+        if line is not None and line.startswith(" * "):
+            run.append(line)
+            continue
+        out.extend(sorted(run))
+        run = []
+        if line is not None:
+            out.append(line)
+    return "\n".join(out)
+
+
+def _list_v_sorted(a: Output, b: Output, _: Expect) -> tuple[Output, Output]:
+    return a.but(stdout=_sort_blocks(a.stdout)), b
+
+
+def _sorted_lines(a: Output, b: Output, _: Expect) -> tuple[Output, Output]:
+    lines = a.stdout.splitlines()
+    return a.but(stdout="".join(f"{line}\n" for line in sorted(lines))), b
+
+
+def _ros1_signalled_error(a: Output) -> bool:
+    words = ("error", "unknown", "cannot", "not ", "invalid", "unable", "usage", "no such")
+    return a.code != 0 or any(w in a.stderr.lower() for w in words)
+
+
+def _one_line_error(a: Output, b: Output, e: Expect) -> tuple[Output, Output]:
+    if e.error is None or not _ros1_signalled_error(a):
+        return a, b
+    lines = b.stderr.splitlines()
+    if b.stdout or len(lines) != 1 or not lines[0].startswith("rostools: "):
+        return a, b
+    return a.but(stdout=b.stdout, stderr=b.stderr), b
+
+
+def _exit_code(a: Output, b: Output, e: Expect) -> tuple[Output, Output]:
+    if e.error is None or b.code != e.error or not _ros1_signalled_error(a):
+        return a, b
+    return a.but(code=b.code), b
+
+
+UNLOADABLE = re.compile(r"Unable to load type|Cannot load message class|Unable to load msg")
+
+
+def _types_from_peer(a: Output, b: Output, _: Expect) -> tuple[Output, Output]:
+    # rosservice printed what it could before it failed; rostools prints that and the rest
+    if (
+        a.code != 0
+        and UNLOADABLE.search(a.stderr)
+        and b.code == 0
+        and b.stdout.startswith(a.stdout)
+    ):
+        return b, b
+    return a, b
+
+
+def _pretty_mapping(a: Output, b: Output, e: Expect) -> tuple[Output, Output]:
+    """rosparam get -p of a mapping: ours must read back as the value, rosparam's must not.
+
+    Where both print ``key: scalar`` for one key, the scalars may differ only where
+    rosparam's reads back as another value (``''`` printed bare, ``'123'`` unquoted).
+    """
+    try:
+        ours = yaml.safe_load(b.stdout)
+    except yaml.YAMLError:
+        return a, b
+    try:
+        theirs = yaml.safe_load(a.stdout)
+    except yaml.YAMLError:
+        theirs = None
+    if ours != e.value or theirs == e.value:
+        return a, b
+    pairs = re.compile(r"^(\s*)([^\s:]+): (\S.*)$")
+    scalars_a = {(m[1], m[2]): m[3] for m in map(pairs.match, a.stdout.splitlines()) if m}
+    for line in b.stdout.splitlines():
+        m = pairs.match(line)
+        if m is None or (m[1], m[2]) not in scalars_a:
+            continue
+        theirs_text = scalars_a[(m[1], m[2])]
+        if theirs_text == m[3]:
+            continue
+        try:
+            same_value = yaml.safe_load(theirs_text) == yaml.safe_load(m[3])
+        except yaml.YAMLError:
+            same_value = False
+        if same_value:
+            return a, b  # an undocumented difference: rosparam's text was valid too
+    return b, b
+
+
+def _file_in(effects: str, name: str) -> str | None:
+    """The text of file ``name`` as the case's effects show it; None when it was not there."""
+    marker = f"== file {name}\n"
+    if marker not in effects:
+        return None
+    text = effects.split(marker, 1)[1].split("\n== ", 1)[0]
+    return None if text == "(none)\n" else text
+
+
+def _dump_dash(a: Output, b: Output, _: Expect) -> tuple[Output, Output]:
+    # rosparam dump - writes a file named "-"; the case's effects show it
+    written = _file_in(a.effects, "-")
+    if a.stdout or written is None or _file_in(b.effects, "-") is not None:
+        return a, b
+    if written.rstrip("\n") != b.stdout.rstrip("\n"):
+        return a, b
+    return b, b
+
+
+BUILTIN_SERVICE_PACKAGES = (
+    "std_srvs",
+    "roscpp",
+    "nav_msgs",
+    "sensor_msgs",
+    "diagnostic_msgs",
+    "dynamic_reconfigure",
+    "rospy_tutorials",
+)
+
+
+def _builtin_types(a: Output, b: Output, e: Expect) -> tuple[Output, Output]:
+    """rostools lists the types of its built-in table too, installed or not."""
+    theirs, ours = a.stdout.split(), b.stdout.split()
+    extra = [w for w in ours if w not in theirs]
+    if not extra or [w for w in ours if w in theirs] != theirs:
+        return a, b
+    if e.kind == "srv" and any(w.split("/")[0] not in BUILTIN_SERVICE_PACKAGES for w in extra):
+        return a, b
+    return b.but(code=a.code, stderr=a.stderr), b
+
+
+def _contains(big: object, small: object) -> bool:
+    if isinstance(small, dict) and isinstance(big, dict):
+        return all(k in big and _contains(big[k], v) for k, v in small.items())
+    if isinstance(small, list) and isinstance(big, list):
+        return len(big) == len(small) and all(map(_contains, big, small))
+    return big == small
+
+
+def _info_yaml_data(a: Output, b: Output, _: Expect) -> tuple[Output, Output]:
+    try:
+        theirs, ours = yaml.safe_load(a.stdout), yaml.safe_load(b.stdout)
+    except yaml.YAMLError:
+        return a, b
+    if isinstance(theirs, dict) and _contains(ours, theirs):
+        return a.but(stdout=b.stdout), b
+    return a, b
+
+
+def _waits_notice(a: Output, b: Output, _: Expect) -> tuple[Output, Output]:
+    """A wait with no end: each tool says on stderr what it waits for, in its own words."""
+    if a.stopped and b.stopped and a.stdout == b.stdout and a.stderr and b.stderr:
+        return a.but(stderr=b.stderr), b
+    return a, b
+
+
+def _timeout_exit(a: Output, b: Output, _: Expect) -> tuple[Output, Output]:
+    """ROS 1 had to be stopped; rostools' --timeout ended it with exit 5."""
+    if a.stopped and not b.stopped and b.code == 5 and a.stdout == b.stdout:
+        return a.but(code=5, stderr=b.stderr, stopped=False), b
+    return a, b
+
+
+def _rel(text: str) -> str:
+    return re.sub(r"\s+", " ", text).strip()
+
+
+D = Difference
+STATUS_STDERR = D(
+    "status-stderr",
+    "rostopic prints status lines on stdout, rostools on stderr",
+    "Status lines (`subscribed to [/t]`, `publishing and latching message`) go to stderr, "
+    "where rostopic prints them on stdout",
+    _status_to_stderr,
+)
+ANON_NAMES = D(
+    "anon-names",
+    "rostools' short-lived nodes are named after the command, rostopic's /rostopic_PID_MS",
+    "The short-lived node a command runs as is named after the command, "
+    "`/rostools_echo_<pid>_<ms>`",
+    _anon_names,
+)
+LIST_V_SORTED = D(
+    "list-v-sorted",
+    "topic list -v sorts each block; rostopic keeps the master's order",
+    "`-v` sorts, where rostopic keeps the master's order",
+    _list_v_sorted,
+)
+FIND_SORTED = D(
+    "find-sorted",
+    "topic find sorts; rostopic keeps the master's order",
+    "`rostools topic find TYPE` (sorted)",
+    _sorted_lines,
+)
+ONE_LINE_ERROR = D(
+    "one-line-error",
+    "an error is one line on stderr, 'rostools: ...', in rostools' words",
+    "Errors print one line on stderr (`rostools: <what went wrong> (hint: ...)`)",
+    _one_line_error,
+)
+#: The README's row for each exit code an error case may give.
+EXIT_ROWS = {
+    1: "| 1 | error | the operation failed, or the input data is malformed |",
+    2: "| 2 | usage | bad arguments or values: unknown option, wrong field type, bad YAML |",
+    3: "| 3 | not found | unknown topic, type, service, parameter, node or file |",
+    4: "| 4 | unreachable | the master or a peer node could not be contacted |",
+    5: "| 5 | timeout | a wait ran past its --timeout |",
+}
+EXIT_CODES = {
+    code: D(f"exit-{code}", f"rostools exits {code} for this class of error", row, _exit_code)
+    for code, row in EXIT_ROWS.items()
+}
+TYPES_FROM_PEER = D(
+    "types-from-peer",
+    "rostools learns a service's type from the server; rosservice needs it installed",
+    "`type`, `args` and `call` learn a service's type from the server itself (a `probe` "
+    "header), so custom services installed nowhere on this machine still work",
+    _types_from_peer,
+)
+PRETTY_MAPPING = D(
+    "get-p-yaml",
+    "param get -p of a mapping stays valid YAML; rosparam's breaks lists and quoting",
+    "`get -p` of a mapping stays valid YAML, where rosparam's breaks its lists",
+    _pretty_mapping,
+)
+DUMP_DASH = D(
+    "dump-dash",
+    "param dump - prints to stdout; rosparam dump - writes a file named '-'",
+    "`rostools param dump [FILE] [ns]` (no FILE or `-`: stdout)",
+    _dump_dash,
+)
+BUILTIN_TYPES = D(
+    "builtin-types",
+    "msg list/packages include the built-in table's types, installed or not",
+    "the built-in table: rosbags' Noetic store (162 message types) and the common Noetic "
+    "services (std_srvs, roscpp, nav_msgs, sensor_msgs, diagnostic_msgs, "
+    "dynamic_reconfigure, rospy_tutorials/AddTwoInts)",
+    _builtin_types,
+)
+INFO_YAML = D(
+    "info-y-data",
+    "bag info -y prints rostools' data (a superset of rosbag's keys)",
+    "`--format json|yaml` (or `-y`) gives data",
+    _info_yaml_data,
+)
+WAITS_NOTICE = D(
+    "waits-notice",
+    "a wait without a limit is announced on stderr in rostools' words",
+    "A wait without a limit says once, on stderr, what it is waiting for.",
+    _waits_notice,
+)
+TIMEOUT_EXIT = D(
+    "timeout-exit",
+    "rostools --timeout ends a wait with exit 5 where the ROS 1 tool runs until stopped",
+    "Every command that waits takes `--timeout`; on a topic nobody publishes, `echo`, "
+    "`hz`, `bw` and `delay` say so once and exit 5 at the timeout.",
+    _timeout_exit,
+)
+
+
+def _progress(a: Output, b: Output, _: Expect) -> tuple[Output, Output]:
+    """rosbag prints a progress bar on stdout, even into a pipe; rostools a summary."""
+    bar = "\r" in a.stdout or "ETA" in a.stdout
+    summary = b.stderr.startswith("wrote ") and len(b.stderr.splitlines()) == 1
+    if not bar and not summary:
+        return a, b
+    return a.but(stdout="" if bar else a.stdout), b.but(stderr="" if summary else b.stderr)
+
+
+def _says_what_it_recovered(a: Output, b: Output, _: Expect) -> tuple[Output, Output]:
+    """reindex says, as recover does, how many messages it got back (and why it scanned)."""
+    lines = b.stderr.splitlines()
+    said = [x for x in lines if x.startswith(("recovered ", "note: "))]
+    if not said or a.stderr or len(said) != len(lines):
+        return a, b
+    return a, b.but(stderr="")
+
+
+def _csv_keeps_bytes(a: Output, b: Output, _: Expect) -> tuple[Output, Output]:
+    """rostools' CSV keeps the columns of a uint8[] field (NAME0, NAME1, ...); rostopic drops
+    them. Those columns, and only those, are taken out of rostools' rows."""
+    ours, theirs = b.stdout.splitlines(), a.stdout.splitlines()
+    if not ours or not theirs or len(ours) != len(theirs) or not ours[0].startswith("%time"):
+        return a, b
+    head_b, head_a = ours[0].split(","), theirs[0].split(",")
+    extra = [i for i, col in enumerate(head_b) if col not in head_a]
+    names = {re.sub(r"\d+$", "", head_b[i]) for i in extra}
+    if not extra or len(names) != 1 or not all(re.search(r"\d$", head_b[i]) for i in extra):
+        return a, b
+    keep = [i for i in range(len(head_b)) if i not in extra]
+    rows = []
+    for line in ours:
+        cells = line.split(",")
+        if len(cells) != len(head_b):
+            return a, b
+        rows.append(",".join(cells[i] for i in keep))
+    return a, b.but(stdout="".join(f"{r}\n" for r in rows))
+
+
+PROGRESS = D(
+    "progress",
+    "rosbag's progress bar goes to stdout into a pipe too; rostools shows one on a terminal "
+    "and prints a one-line summary on stderr",
+    "Both show a progress bar on a terminal, NDJSON progress with `--format json`",
+    _progress,
+)
+
+
+def _accepted(a: Output, b: Output, _: Expect) -> tuple[Output, Output]:
+    if a.code not in (0, None) and b.code == 0:
+        return b, b
+    return a, b
+
+
+K_IMPLIES_Y = D(
+    "k-implies-y",
+    "bag info -k without -y prints the value; rosbag refuses",
+    "the same flags (`-k` alone implies `-y`)",
+    _accepted,
+)
+MSG_AND_SRV = D(
+    "msg-and-srv",
+    "rostools msg shows message and service types alike; rossrv and rosmsg each know one",
+    "Message and service types both work everywhere",
+    _accepted,
+)
+
+
+def _more_salvaged(a: Output, b: Output, _: Expect) -> tuple[Output, Output]:
+    """rostools' reindex keeps messages of a cut last chunk that rosbag reindex drops."""
+    count = re.compile(r"^messages: +(\d+)$", re.M)
+    ca, cb = count.findall(a.effects), count.findall(b.effects)
+    if not ca or len(ca) != len(cb) or any(int(x) > int(y) for x, y in zip(ca, cb, strict=True)):
+        return a, b
+    masked = re.compile(r"(?m)^(duration|end|messages|topics| +/)\b.*$")
+    if masked.sub("", a.effects) != masked.sub("", b.effects):
+        return a, b
+    return a.but(effects=b.effects), b
+
+
+MORE_SALVAGED = D(
+    "reindex-salvages-more",
+    "reindex keeps the complete messages of a cut last chunk, which rosbag reindex drops",
+    "including those inside a partially written last chunk, which `rosbag reindex` throws away",
+    _more_salvaged,
+)
+
+REINDEX_SAYS = D(
+    "reindex-says",
+    "bag reindex says on stderr how many messages it recovered, as bag recover does",
+    "says what it lost and exits 6 if it lost anything. **reindex** does the same to several "
+    "bags in place",
+    _says_what_it_recovered,
+)
+CSV_BYTES = D(
+    "csv-bytes",
+    "echo -p keeps uint8[]/char[] columns, which rostopic drops",
+    "CSV keeps `uint8[]`/`char[]` columns, which rostopic drops",
+    _csv_keeps_bytes,
+)
+
+ALL = (
+    STATUS_STDERR,
+    ANON_NAMES,
+    LIST_V_SORTED,
+    FIND_SORTED,
+    ONE_LINE_ERROR,
+    *EXIT_CODES.values(),
+    TYPES_FROM_PEER,
+    PRETTY_MAPPING,
+    DUMP_DASH,
+    BUILTIN_TYPES,
+    INFO_YAML,
+    WAITS_NOTICE,
+    TIMEOUT_EXIT,
+    PROGRESS,
+    K_IMPLIES_Y,
+    MSG_AND_SRV,
+    MORE_SALVAGED,
+    REINDEX_SAYS,
+    CSV_BYTES,
+)
+
+
+def error(code: int) -> tuple[Difference, ...]:
+    """What an error case may need: rostools' own words, the exit code of its class."""
+    return (ONE_LINE_ERROR, EXIT_CODES[code])
+
+
+def check_readme(readme: Path) -> list[str]:
+    """The keys of the differences whose phrase README.md does not contain."""
+    text = _rel(readme.read_text())
+    return [d.key for d in ALL if _rel(d.readme) not in text]

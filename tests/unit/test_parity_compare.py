@@ -1,0 +1,202 @@
+"""The parity harness's judging (benchmarks/parity): fake outputs of both tools, no ROS 1.
+
+Each verdict is reached for the reason it claims: normalised noise is identical, a listed
+difference that README.md documents is documented (and only when the case lists it), a
+ROS 1 tool that hangs or crashes is a ROS 1 failure, anything else is a defect.
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+from pathlib import Path
+
+import pytest
+
+from benchmarks.parity import documented as d
+from benchmarks.parity.compare import (
+    Expect,
+    Output,
+    Pairing,
+    Verdict,
+    judge,
+    normalise_text,
+    worst,
+)
+from benchmarks.parity.runner import run
+from tests.support.env import ROOT
+
+
+def out(stdout: str = "", stderr: str = "", code: int | None = 0, **kw: object) -> Output:
+    return Output(code, stdout, stderr, **kw)  # type: ignore[arg-type]
+
+
+def test_identical_after_masking_what_varies() -> None:
+    ros1 = out(" * /rostopic_4242_1700000000000 (http://h:1/)\nPid: 4242\ntime=0.5ms\n")
+    ours = out(" * /rostopic_77_1700000000999 (http://h:1/)\nPid: 77\ntime=12.25ms\n")
+    assert judge(ros1, ours, Pairing()).verdict is Verdict.IDENTICAL
+
+
+def test_live_stamps_and_counters_are_masked_but_nsecs_width_is_kept() -> None:
+    echo = 'header: \n  seq: {}\n  stamp: \n    secs: {}\n    nsecs: {}\ndata: "hello {}"\n'
+    ros1 = out(echo.format(40, 1795571098, "   696659", 12))
+    same_width = out(echo.format(43, 1795571099, "300652027", 15))
+    unpadded = out(echo.format(43, 1795571099, "696659", 15))
+    assert judge(ros1, same_width, Pairing(), live=True).verdict is Verdict.IDENTICAL
+    assert judge(ros1, unpadded, Pairing(), live=True).verdict is Verdict.DEFECT
+    # the same text is a defect when the case is not live: a bag prints fixed stamps
+    assert judge(ros1, same_width, Pairing()).verdict is Verdict.DEFECT
+
+
+def test_csv_rows_of_live_messages() -> None:
+    ros1 = out("%time,field.data\n1795572116869073152,hello 3\n")
+    ours = out("%time,field.data\n1795572118629905757,hello 9\n")
+    assert judge(ros1, ours, Pairing(), live=True).verdict is Verdict.IDENTICAL
+    stamped = "%time,field.header.seq\n1795572116869073152,45,1795572116869073100,map\n"
+    other = "%time,field.header.seq\n1795572118629905757,49,1795572118629905700,map\n"
+    assert judge(out(stamped), out(other), Pairing(), live=True).verdict is Verdict.IDENTICAL
+
+
+def test_a_status_line_on_stderr_is_documented_only_where_the_case_allows_it() -> None:
+    ros1 = out("subscribed to [/point]\naverage rate: 10.000\n")
+    ours = out("average rate: 10.000\n", "subscribed to [/point]\n")
+    allowed = judge(ros1, ours, Pairing(rules=(d.STATUS_STDERR,)))
+    assert allowed.verdict is Verdict.DOCUMENTED
+    assert allowed.rules == ("status-stderr",)
+    not_listed = judge(ros1, ours, Pairing(rules=(d.LIST_V_SORTED,)))
+    assert not_listed.verdict is Verdict.DEFECT
+    assert "subscribed to [/point]" in not_listed.detail
+
+
+def test_rates_agree_within_the_tolerance_only() -> None:
+    block = "subscribed to [/p]\naverage rate: {}\n\tmin: 0.099s max: 0.102s window: {}\n"
+    ros1 = out(block.format("9.974", 8) + block.format("10.000", 18))
+    close = out(block.format("10.010", 10) * 3)
+    far = out(block.format("14.000", 10) * 3)
+    pairing = Pairing(rates=("average",))
+    assert judge(ros1, close, pairing).verdict is Verdict.IDENTICAL
+    judged = judge(ros1, far, pairing)
+    assert judged.verdict is Verdict.DEFECT
+    assert "more than 25% apart" in judged.detail
+
+
+def test_an_error_in_other_words_with_the_readme_exit_code_is_documented() -> None:
+    ros1 = out("", "ERROR: Unknown topic /nope\n", code=1)
+    ours = out("", "rostools: unknown topic /nope\n", code=3)
+    pairing = Pairing(rules=d.error(3), expect=Expect(error=3))
+    judged = judge(ros1, ours, pairing)
+    assert judged.verdict is Verdict.DOCUMENTED
+    assert set(judged.rules) == {"one-line-error", "exit-3"}
+    # a code that is neither ROS 1's nor the README's for this case: a defect
+    other = judge(ros1, ours.but(code=4), pairing)
+    assert other.verdict is Verdict.DEFECT
+    assert "exit: 1 (ROS 1) != 4 (rostools)" in other.detail
+    # an error of two lines is not rostools' documented one-line error
+    two = ours.but(stderr="rostools: unknown topic /nope\nmore\n")
+    assert judge(ros1, two, pairing).verdict is Verdict.DEFECT
+    # nor is an error where ROS 1 succeeded quietly
+    assert judge(out("x\n"), ours, pairing).verdict is Verdict.DEFECT
+
+
+@pytest.mark.parametrize(
+    ("ros1", "why"),
+    [
+        (out("", "Traceback (most recent call last):\n  ...\nValueError: x\n", code=1), "crashed"),
+        (out("", "WARNING: topic [/a/b] does not appear to be published yet\n", code=None), "hung"),
+    ],
+)
+def test_a_ros1_tool_that_crashes_or_hangs_is_a_ros1_failure(ros1: Output, why: str) -> None:
+    ours = out("", "rostools: no field named b in std_msgs/String\n", code=2)
+    judged = judge(ros1, ours, Pairing())
+    assert judged.verdict is Verdict.ROS1_FAILURE
+    assert why in judged.detail
+    # both hanging is no failure of ROS 1 alone
+    assert judge(ros1, ours.but(code=None), Pairing()).verdict is Verdict.DEFECT
+
+
+def test_a_planned_stop_is_not_a_hang() -> None:
+    ros1 = out("", "WARNING: topic [/nope] does not appear to be published yet\n", stopped=True)
+    ours = out("", "rostools: nothing publishes /nope yet; waiting\n", stopped=True)
+    assert judge(ros1, ours, Pairing(rules=(d.WAITS_NOTICE,))).verdict is Verdict.DOCUMENTED
+    assert judge(ros1, ours, Pairing()).verdict is Verdict.DEFECT
+
+
+def test_sorted_listings() -> None:
+    ros1 = out("\nPublished topics:\n * /b [T] 1 publisher\n * /a [T] 1 publisher\n\n")
+    ours = out("\nPublished topics:\n * /a [T] 1 publisher\n * /b [T] 1 publisher\n\n")
+    assert judge(ros1, ours, Pairing(rules=(d.LIST_V_SORTED,))).verdict is Verdict.DOCUMENTED
+    assert judge(out("/b\n/a\n"), out("/a\n/b\n"), Pairing(rules=(d.FIND_SORTED,))).verdict is (
+        Verdict.DOCUMENTED
+    )
+    # a listing that is sorted but not the same set is still a defect
+    assert judge(out("/b\n/a\n"), out("/a\n/c\n"), Pairing(rules=(d.FIND_SORTED,))).verdict is (
+        Verdict.DEFECT
+    )
+
+
+def test_get_p_of_a_mapping_is_documented_only_for_what_valid_yaml_needs() -> None:
+    value = {"empty": "", "list": [1, 2], "num": "123"}
+    ros1 = out("empty: \nlist: - 1\n- 2\nnum: 123\n")
+    ours = out("empty: ''\nlist:\n- 1\n- 2\nnum: '123'\n")
+    pairing = Pairing(rules=(d.PRETTY_MAPPING,), expect=Expect(value=value))
+    assert judge(ros1, ours, pairing).verdict is Verdict.DOCUMENTED
+    # rosparam printed this scalar as valid YAML: a different spelling is not documented
+    value2 = {**value, "u": "h\u00e9llo"}
+    ros1_u = ros1.but(stdout=ros1.stdout + "u: h\u00e9llo\n")
+    ours_u = ours.but(stdout=ours.stdout + 'u: "h\\xE9llo"\n')
+    pairing2 = Pairing(rules=(d.PRETTY_MAPPING,), expect=Expect(value=value2))
+    assert judge(ros1_u, ours_u, pairing2).verdict is Verdict.DEFECT
+    # ours must read back as the value itself
+    wrong = ours.but(stdout="empty: ''\nlist: [1, 3]\nnum: '123'\n")
+    assert judge(ros1, wrong, pairing).verdict is Verdict.DEFECT
+
+
+def test_builtin_types_may_only_add_what_the_readme_names() -> None:
+    ros1 = out("diagnostic_msgs map_msgs std_srvs\n")
+    named = out("diagnostic_msgs dynamic_reconfigure map_msgs std_srvs\n")
+    unnamed = out("diagnostic_msgs map_msgs roscpp_tutorials std_srvs\n")
+    srv = Pairing(rules=(d.BUILTIN_TYPES,), expect=Expect(kind="srv"))
+    assert judge(ros1, named, srv).verdict is Verdict.DOCUMENTED
+    assert judge(ros1, unnamed, srv).verdict is Verdict.DEFECT
+    # ours must keep everything ROS 1 lists
+    assert judge(ros1, out("dynamic_reconfigure map_msgs std_srvs\n"), srv).verdict is (
+        Verdict.DEFECT
+    )
+
+
+def test_bag_info_yaml_may_add_keys_not_change_values() -> None:
+    ros1 = out("path: a.bag\nversion: 2.0\nindexed: True\n")
+    more = out("path: a.bag\nversion: 2.0\nformat: bag\nindexed: true\n")
+    changed = out("path: a.bag\nversion: '2.0'\nindexed: true\n")
+    pairing = Pairing(rules=(d.INFO_YAML,))
+    assert judge(ros1, more, pairing).verdict is Verdict.DOCUMENTED
+    assert judge(ros1, changed, pairing).verdict is Verdict.DEFECT
+
+
+def test_a_case_is_as_bad_as_its_worst_run() -> None:
+    assert worst([Verdict.IDENTICAL, Verdict.DOCUMENTED]) is Verdict.DOCUMENTED
+    assert worst([Verdict.DEFECT, Verdict.ROS1_FAILURE, Verdict.IDENTICAL]) is Verdict.DEFECT
+    assert worst([]) is Verdict.IDENTICAL
+
+
+def test_every_documented_difference_cites_text_that_readme_has(tmp_path: Path) -> None:
+    assert d.check_readme(ROOT / "README.md") == []
+    cut = (ROOT / "README.md").read_text().replace("where rostopic keeps the master's order", "")
+    (tmp_path / "README.md").write_text(cut)
+    assert d.check_readme(tmp_path / "README.md") == ["list-v-sorted"]
+
+
+def test_normalise_text_masks_anonymous_names_of_every_tool() -> None:
+    text = "/rostools_echo_12_345 /rosnode_1_2 /record_3_4 Pid: 99"
+    assert normalise_text(text) == "/rostools_echo_ANON /rosnode_ANON /record_ANON Pid: PID"
+
+
+def test_run_records_a_hang_and_a_planned_stop(tmp_path: Path) -> None:
+    env = dict(os.environ)
+    sleeper = [sys.executable, "-c", "import time; print('up', flush=True); time.sleep(30)"]
+    hung = run(sleeper, env, tmp_path, limit=1.0)
+    assert hung.code is None and not hung.stopped and hung.stdout == "up\n"
+    stopped = run(sleeper, env, tmp_path, stop_after=1.0)
+    assert stopped.stopped and stopped.code is not None
+    done = run([sys.executable, "-c", "import sys; sys.exit(3)"], env, tmp_path)
+    assert done.code == 3 and not done.stopped

@@ -138,7 +138,8 @@ PrettyDumper.add_representer(str, _represent_text)
 def dump(value: Any, *, pretty: bool = False) -> str:
     """Block-style YAML, keys sorted, as rosparam get/dump print it, without ``...``."""
     dumper = PrettyDumper if pretty else ParamDumper
-    text = yaml.dump(value, Dumper=dumper, default_flow_style=False)
+    # -p prints text as it is, as rosparam's does (é, not "\xE9"); a plain dump escapes
+    text = yaml.dump(value, Dumper=dumper, default_flow_style=False, allow_unicode=pretty)
     return text.removesuffix("\n...\n")
 
 

@@ -278,7 +278,7 @@ BUILTIN_TYPES = D(
     "msg list/packages include the built-in table's types, installed or not",
     "the built-in table: rosbags' Noetic store (162 message types) and the common Noetic "
     "services (std_srvs, roscpp, nav_msgs, sensor_msgs, diagnostic_msgs, "
-    "dynamic_reconfigure, rospy_tutorials/AddTwoInts)",
+    "dynamic_reconfigure, rospy_tutorials/AddTwoInts, roscpp_tutorials/TwoInts)",
     _builtin_types,
 )
 INFO_YAML = D(

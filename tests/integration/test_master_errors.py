@@ -13,7 +13,7 @@ from tests.support.env import run_cli
 COMMANDS = [
     (["param", "get", "/x"], "getParam"),  # the blocking client
     (["topic", "list"], "getSystemState"),
-    (["topic", "pub", "-1", "/x", "std_msgs/Empty", "{}"], "registerPublisher"),  # the node
+    (["topic", "pub", "-1", "/x", "std_msgs/Empty", "{}"], "getTopicTypes"),  # type check
     (["topic", "echo", "/x"], "getTopicTypes"),
     (["service", "call", "/s"], "lookupService"),
     (["bag", "record", "-O", "{tmp}/x.bag", "/x"], "hasParam"),  # the node: /use_sim_time

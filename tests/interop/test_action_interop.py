@@ -144,9 +144,10 @@ def test_a_rospy_client_of_a_rostools_server(graph: Graph) -> None:
             ["result", "13", "REJECTED", "0", "0"],
         ]
         assert [line[5].strip() for line in lines[:3]] == ["", "negative goal -2", "unlucky"]
-        # canceled after its third feedback; a fourth may have been on its way
+        # canceled after its third feedback; a fourth may have been on its way, and the last
+        # feedback may come after the result: they travel on two connections
         _, _, state, result, count, text = lines[3]
         assert (state, text.strip()) == ("PREEMPTED", f"canceled at {result}")
-        assert int(count) == int(result) in (3, 4)
+        assert int(result) in (3, 4) and int(count) in (int(result) - 1, int(result))
     finally:
         server.stop()

@@ -22,6 +22,7 @@ from itertools import pairwise
 from typing import TYPE_CHECKING, Any
 
 from rostools.bag.base import Targets
+from rostools.bag.model import BagFormatError
 
 if TYPE_CHECKING:
     from rostools.bag.mcap_writer import McapWriter
@@ -32,6 +33,12 @@ _OP_FIELD = b"\x04\x00\x00\x00op=\x02"
 #: Where that field starts in the record (after the u32 header length): rosbag's C++ writer
 #: sorts the fields (conn, op, time), its Python writer writes op, conn, time.
 _OP_PLACES = (4 + 13, 4)
+#: Where the connection id lies in each layout (after ``conn=``), and the time (after
+#: ``time=``, in both), with the bytes of those fields' lengths and names.
+_CONN_AT = {4 + 13: 13, 4: 21}
+_TIME_AT = 34
+_CONN_FIELD = b"\t\x00\x00\x00conn="
+_TIME_FIELD = b"\r\x00\x00\x00time="
 #: Chunks whose messages average more than this many bytes go the per-message way: its cost
 #: per message is small beside their size, and it hands payloads to the kernel without the
 #: per-byte pass that compacting the chunk here costs.
@@ -80,13 +87,23 @@ def _convert_chunk(
     wanted: Any,
     chunk: Chunk,
 ) -> int | None:
-    """One bag chunk as one MCAP chunk; None when the chunk does not qualify."""
-    buf, base, end = reader.chunk_data(chunk)
+    """One bag chunk as one MCAP chunk; None when the chunk does not qualify.
+
+    Nor does a chunk that does not read, or whose index disagrees with its records in
+    count, connection or time: the per-message path reads it from its records and says so.
+    """
+    try:
+        buf, base, end = reader.chunk_data(chunk)
+        index = list(reader.index_records(chunk))
+    except BagFormatError:
+        return None
     size = end - base
     arr = np.frombuffer(buf, dtype=np.uint8, count=size, offset=base)
     entry = np.dtype([("secs", "<u4"), ("nsecs", "<u4"), ("off", "<u4")])
-    parts, channels, ranks = [], [], []
-    for conn_id, raw in reader.index_records(chunk):
+    parts, channels, ranks, sources = [], [], [], []
+    if {conn_id: len(raw) // 12 for conn_id, raw in index} != chunk.counts:
+        return None
+    for conn_id, raw in index:
         if conn_id not in wanted:
             return None
         rank, conn = wanted[conn_id]
@@ -94,6 +111,7 @@ def _convert_chunk(
         parts.append(entries)
         channels.append(np.full(len(entries), targets.resolve(conn).id, dtype=np.uint16))
         ranks.append(np.full(len(entries), rank, dtype=np.uint32))
+        sources.append(np.full(len(entries), conn_id, dtype=np.uint32))
     if not parts:
         return 0
     entries = np.concatenate(parts)
@@ -103,6 +121,8 @@ def _convert_chunk(
     order = np.argsort(offs, kind="stable")  # file order
     offs, times = offs[order], times[order]
     rank, cids = np.concatenate(ranks)[order], np.concatenate(channels)[order]
+    if int(times.min()) < chunk.start_ns or int(times.max()) > chunk.end_ns:
+        return None  # the chunk info disagrees: the per-message path says how
     if count > 1:
         # Time order (time, rank, position) must be file order: no step back in (time, rank).
         step = np.diff(times.astype(np.int64))
@@ -114,7 +134,18 @@ def _convert_chunk(
         return None
     if not bool(np.all(_u32_at(np, arr, offs) == 38)):
         return None
-    if not any(_op_field_at(np, arr, offs + k) for k in _OP_PLACES):
+    layout = next((k for k in _OP_PLACES if _bytes_at(np, arr, offs + k, _OP_FIELD)), None)
+    if layout is None:
+        return None
+    # Each record's connection and time must be its index entry's.
+    conn_at = _CONN_AT[layout]
+    if not (
+        _bytes_at(np, arr, offs + conn_at - 9, _CONN_FIELD)
+        and _bytes_at(np, arr, offs + _TIME_AT - 9, _TIME_FIELD)
+        and np.array_equal(_u32_at(np, arr, offs + conn_at), np.concatenate(sources)[order])
+        and np.array_equal(_u32_at(np, arr, offs + _TIME_AT), entries["secs"][order])
+        and np.array_equal(_u32_at(np, arr, offs + _TIME_AT + 4), entries["nsecs"][order])
+    ):
         return None
     dlen = _u32_at(np, arr, offs + 42).astype(np.int64)
     ends = offs + _BAG_HEAD + dlen
@@ -170,9 +201,9 @@ def _u32_at(np: Any, arr: Any, at: Any) -> Any:
     return value
 
 
-def _op_field_at(np: Any, arr: Any, at: Any) -> bool:
-    """Whether every offset holds the op=2 header field."""
-    return all(bool(np.all(arr[at + k] == byte)) for k, byte in enumerate(_OP_FIELD))
+def _bytes_at(np: Any, arr: Any, at: Any, expected: bytes) -> bool:
+    """Whether every offset holds these bytes."""
+    return all(bool(np.all(arr[at + k] == byte)) for k, byte in enumerate(expected))
 
 
 def _mcap_header(np: Any) -> Any:

@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import dataclasses
 import sys
-from collections.abc import Callable
+from collections.abc import Callable, Iterable, Sequence
 from functools import partial
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated, Any
@@ -21,6 +21,7 @@ from rostools.cli.output import Format, emit, render
 from rostools.errors import DataLossError, UsageError
 
 if TYPE_CHECKING:
+    from rostools.bag.base import BagReader
     from rostools.bag.ops import CopyReport
     from rostools.bag.recover import RecoverReport
     from rostools.bag.rename import Renames
@@ -99,7 +100,7 @@ def info(
     ] = None,
     fmt: FormatOpt = None,
 ) -> None:
-    """Summarise bags from their index alone (rosbag info)."""
+    """Summarise bags from their index alone (rosbag info); exit 6 if a bag is damaged."""
     from rostools.bag.access import open_bag, topic_frequencies
     from rostools.cli.bag.infotext import info_data, info_key, info_text
 
@@ -107,18 +108,41 @@ def info(
     if key is not None and fmt is Format.text:
         fmt = Format.yaml  # a key is a path into the YAML document; rosbag demands -y for it
     results = []
+    readers = []
     for name in bags:
         with open_bag(name) as reader:
             summary = reader.info()
             freqs = topic_frequencies(reader) if freq else None
         results.append((summary, freqs, name))
+        readers.append(reader)
     if fmt is Format.text:
         sys.stdout.write("\n---\n".join(info_text(*r) for r in results) + "\n")
-        return
-    data = [info_data(*r) for r in results]
-    if key is not None:
-        data = [info_key(d, key) for d in data]
-    emit(fmt, data[0] if len(data) == 1 else data)
+    else:
+        data = [info_data(*r) for r in results]
+        if key is not None:
+            data = [info_key(d, key) for d in data]
+        emit(fmt, data[0] if len(data) == 1 else data)
+    check_read(readers, "read the summary")
+
+
+def say_notes(notes: Iterable[str]) -> None:
+    """How the inputs had to be read (an index that disagrees, a scan): ``note:`` lines."""
+    for note in notes:
+        sys.stderr.write(f"note: {note}\n")
+
+
+def check_read(readers: Sequence[BagReader], done: str) -> None:
+    """After a command read these bags: say their notes, and exit 6 if anything was left out.
+
+    ``done`` says what the command did, for the error line.
+    """
+    from rostools.bag.base import problems
+    from rostools.bag.model import lost_data
+
+    notes, lost = problems(readers)
+    say_notes(notes)
+    if lost:
+        raise lost_data(done, lost)
 
 
 class Progress:
@@ -164,11 +188,14 @@ def _report(fmt: Format, report: CopyReport) -> None:
         "extras_copied": report.extras_copied,
         "extras_left_out": report.extras_left_out,
     }
+    if report.notes or report.lost:
+        data.update(notes=list(report.notes), lost=list(report.lost))
     if fmt is Format.text:
         sys.stderr.write(
             f"wrote {report.messages_written} of {report.messages_read} messages to "
             f"{report.output} ({report.format}, {report.compression})\n"
         )
+        say_notes(report.notes)
         if report.extras_left_out:
             sys.stderr.write(
                 f"left out {report.extras_left_out} MCAP attachment/metadata record(s): "
@@ -199,6 +226,7 @@ def copy_command(
     finally:
         progress.done()
     _report(fmt, report)
+    report.raise_if_lost()
 
 
 def seconds_to_ns(value: float | None) -> int | None:

@@ -2,15 +2,27 @@
 
 from __future__ import annotations
 
+import contextlib
 import random
 from pathlib import Path
 
 import pytest
 
-from rostools.bag.access import open_bag
+from rostools.bag import rosbag1_format as fmt
+from rostools.bag.access import bag_info, open_bag
+from rostools.bag.ops import convert
 from rostools.bag.recover import recover
-from rostools.errors import RostoolsError
-from tests.support.bagdata import write_sample
+from rostools.bag.rosbag1_reader import Bag1Reader
+from rostools.errors import DataLossError, RostoolsError
+from tests.support.bagdata import (
+    Record,
+    Sample,
+    bag_records,
+    chunk_spans,
+    read_stream,
+    swap_spans,
+    write_sample,
+)
 
 CASES = [
     ("x.bag", "none"),
@@ -54,3 +66,148 @@ def test_random_damage_gives_our_errors(tmp_path: Path, name: str, compression: 
                 action(bad)
             except RostoolsError as err:
                 assert "\n" not in str(err)
+
+
+# -- issue 24.3: damage never comes out silently wrong ------------------------------------
+
+BAG_CASES = ["none", "bz2", "lz4"]
+
+
+def _sample(tmp_path: Path, compression: str, count: int = 400) -> tuple[Sample, bytes]:
+    sample = write_sample(tmp_path / "x.bag", count, compression=compression, chunk_size=3000)
+    return sample, sample.path.read_bytes()
+
+
+def _messages_and_reader(path: Path) -> tuple[list[tuple[str, str, int, bytes]], Bag1Reader]:
+    reader = open_bag(path)
+    assert isinstance(reader, Bag1Reader)
+    with reader:
+        got = [(c.topic, c.callerid, t, bytes(d)) for c, t, d in reader.messages()]
+    return got, reader
+
+
+def _index(raw: bytes, nth: int = 0) -> Record:
+    return [r for r in bag_records(raw) if r[1] == fmt.OP_INDEX_DATA][nth]
+
+
+@pytest.mark.parametrize("compression", BAG_CASES)
+def test_message_times_come_from_the_records(tmp_path: Path, compression: str) -> None:
+    sample, raw = _sample(tmp_path, compression)
+    damaged = bytearray(raw)
+    index = _index(raw, 1)
+    damaged[index[3] + 12 * 2 + 3] ^= 0x04  # the third entry's seconds: + 2**26 s
+    bad = tmp_path / "bad.bag"
+    bad.write_bytes(bytes(damaged))
+    got, reader = _messages_and_reader(bad)
+    assert got == sample.stream
+    assert not reader.damage
+    assert [n for n in reader.notes if "index" in n and "records" in n], reader.notes
+    report = recover(bad, tmp_path / "out.bag")
+    assert report.complete and read_stream(tmp_path / "out.bag") == sample.stream
+    assert bag_info(tmp_path / "out.bag").end_ns == sample.stream[-1][2]
+
+
+@pytest.mark.parametrize("compression", BAG_CASES)
+def test_an_index_entry_pointing_at_another_record(tmp_path: Path, compression: str) -> None:
+    sample, raw = _sample(tmp_path, compression)
+    damaged = bytearray(raw)
+    index = _index(raw)
+    # The second entry points where the first does: one message twice, another never.
+    damaged[index[3] + 20 : index[3] + 24] = raw[index[3] + 8 : index[3] + 12]
+    damaged[index[3] + 12 : index[3] + 20] = raw[index[3] : index[3] + 8]
+    bad = tmp_path / "bad.bag"
+    bad.write_bytes(bytes(damaged))
+    got, reader = _messages_and_reader(bad)
+    assert got == sample.stream
+    assert any("index" in n for n in reader.notes), reader.notes
+
+
+@pytest.mark.parametrize("compression", BAG_CASES)
+def test_index_counts_that_disagree_with_the_records(tmp_path: Path, compression: str) -> None:
+    sample, raw = _sample(tmp_path, compression)
+    damaged = bytearray(raw)
+    index = _index(raw)
+    count = fmt.u32_field(index[2], "count")
+    # The index claims one message fewer than the chunk holds.
+    header = raw[index[0] : index[3]]
+    where = header.index(b"count=") + 6
+    damaged[index[0] + where : index[0] + where + 4] = fmt.U32.pack(count - 1)
+    bad = tmp_path / "bad.bag"
+    bad.write_bytes(bytes(damaged))
+    got, reader = _messages_and_reader(bad)
+    assert got == sample.stream
+    assert any("index" in n for n in reader.notes), reader.notes
+
+
+@pytest.mark.parametrize("compression", BAG_CASES)
+def test_a_damaged_chunk_header_mid_file_hides_nothing_else(
+    tmp_path: Path, compression: str
+) -> None:
+    sample, raw = _sample(tmp_path, compression)
+    chunks = [r for r in bag_records(raw) if r[1] == fmt.OP_CHUNK]
+    assert len(chunks) >= 5
+    victim = chunks[2]
+    bad = tmp_path / "bad.bag"
+    bad.write_bytes(raw[: victim[0]] + bytes(victim[3] - victim[0]) + raw[victim[3] :])
+    got, reader = _messages_and_reader(bad)
+    assert any(str(victim[0]) in d for d in reader.damage), reader.damage
+    if compression == "none":
+        assert got == sample.stream  # only the chunk's header is lost: its records read on
+    else:
+        with open_bag(sample.path) as whole:
+            lost = sum(1 for _ in whole.messages()) - len(got)
+        assert 0 < lost < 200
+        assert all(m in sample.stream for m in got)
+        missing = [m for m in sample.stream if m not in got]
+        times = [m[2] for m in missing]
+        # What is missing is one run of messages: the damaged chunk's.
+        assert missing == [m for m in sample.stream if min(times) <= m[2] <= max(times)]
+    with pytest.raises(DataLossError) if reader.damage else contextlib.nullcontext():
+        convert(bad, tmp_path / "out.mcap").raise_if_lost()
+    assert read_stream(tmp_path / "out.mcap") == got
+
+
+def test_a_damaged_message_record_mid_chunk_hides_nothing_else(tmp_path: Path) -> None:
+    sample = write_sample(tmp_path / "x.bag", 200)  # one uncompressed chunk
+    raw = sample.path.read_bytes()
+    chunk = next(r for r in bag_records(raw) if r[1] == fmt.OP_CHUNK)
+    inner = [r for r in bag_records(raw, chunk[3], chunk[3] + chunk[4]) if r[1] == fmt.OP_MSG_DATA]
+    victim = inner[100]
+    bad = tmp_path / "bad.bag"
+    bad.write_bytes(raw[: victim[0]] + bytes(victim[3] - victim[0]) + raw[victim[3] :])
+    got, reader = _messages_and_reader(bad)
+    assert got == sample.stream[:100] + sample.stream[101:]
+    assert reader.damage
+    # Without its index (cut where the index starts), the walk gives the same messages.
+    bad.write_bytes(bad.read_bytes()[: chunk_spans(raw)[-1][1]])
+    got, reader = _messages_and_reader(bad)
+    assert got == sample.stream[:100] + sample.stream[101:] and reader.damage
+
+
+@pytest.mark.parametrize("compression", BAG_CASES)
+def test_chunks_before_their_connection_records(tmp_path: Path, compression: str) -> None:
+    sample, raw = _sample(tmp_path, compression)
+    spans = chunk_spans(raw)
+    bad = tmp_path / "bad.bag"
+    bad.write_bytes(swap_spans(raw, spans[0], spans[3]))
+    got, reader = _messages_and_reader(bad)
+    assert sorted(got, key=lambda m: m[2]) == sample.stream
+    assert not reader.damage and reader.notes
+    report = recover(bad, tmp_path / "out.bag")
+    assert report.complete and read_stream(tmp_path / "out.bag") == sample.stream
+
+
+@pytest.mark.parametrize("compression", ["bz2", "lz4"])
+def test_an_unreadable_chunk_is_left_out_and_named(tmp_path: Path, compression: str) -> None:
+    sample, raw = _sample(tmp_path, compression)
+    victim = [r for r in bag_records(raw) if r[1] == fmt.OP_CHUNK][1]
+    damaged = bytearray(raw)
+    middle = victim[3] + victim[4] // 2
+    damaged[middle : middle + 8] = bytes(8)
+    bad = tmp_path / "bad.bag"
+    bad.write_bytes(bytes(damaged))
+    got, reader = _messages_and_reader(bad)  # no exception: the other chunks still read
+    assert got and all(m in sample.stream for m in got) and len(got) < len(sample.stream)
+    assert any(str(victim[0]) in d for d in reader.damage), reader.damage
+    report = convert(bad, tmp_path / "out.bag")
+    assert report.messages_written == len(got) and report.lost

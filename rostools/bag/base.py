@@ -7,7 +7,7 @@ import dataclasses
 import mmap
 import os
 from abc import ABC, abstractmethod
-from collections.abc import Collection, Iterable, Iterator, Mapping, Sequence
+from collections.abc import Callable, Collection, Iterable, Iterator, Mapping, Sequence
 from pathlib import Path
 from types import TracebackType
 from typing import TYPE_CHECKING
@@ -19,6 +19,7 @@ from rostools.bag.model import (
     BagUsageError,
     Connection,
     connection_from_header,
+    lost_data,
 )
 from rostools.bag.ordering import Block, Entry, RawMessage, ordered
 from rostools.bag.sink import Sink
@@ -204,6 +205,19 @@ def problems(readers: Sequence[BagReader]) -> tuple[tuple[str, ...], tuple[str, 
     """(notes, damage) of the readers so far, each naming its file."""
     notes = tuple(f"{r.path}: {n}" for r in readers for n in r.notes)
     return notes, tuple(f"{r.path}: {d}" for r in readers for d in r.damage)
+
+
+def after_reading(readers: Sequence[BagReader], done: str, say: Callable[[str], object]) -> None:
+    """Hand each note of these readers to ``say``; raise if they left anything out.
+
+    What a command does once it has read its bags: the error is ``BagDataLossError`` (exit
+    code 6) naming what was left out; ``done`` says what the command did, for its line.
+    """
+    notes, lost = problems(readers)
+    for note in notes:
+        say(note)
+    if lost:
+        raise lost_data(done, lost)
 
 
 class BagWriter(ABC):

@@ -15,6 +15,7 @@ decompress; a chunk whose header's time range disagrees with its messages is not
 
 from __future__ import annotations
 
+import mmap
 import struct
 from bisect import bisect_left
 from collections.abc import Iterator, Mapping
@@ -217,7 +218,7 @@ class McapReader(BagReader):
                     scan.counts[channel_id] = scan.counts.get(channel_id, 0) + 1
                     times.append(log)
             elif op in (fmt.OP_SCHEMA, fmt.OP_CHANNEL):
-                self._register(fmt.parse(op, mm, start, stop))
+                self._register_inner(op, mm, rec, stop, None)
             elif op == fmt.OP_ATTACHMENT:
                 scan.attachments += 1
             elif op == fmt.OP_METADATA:
@@ -379,13 +380,17 @@ class McapReader(BagReader):
         return resume
 
     def _register_inner(
-        self, op: int, buf: bytes | memoryview, pos: int, nxt: int, rec: int
+        self, op: int, buf: bytes | memoryview | mmap.mmap, pos: int, nxt: int, rec: int | None
     ) -> None:
-        """Register a schema or channel record found in a chunk; a damaged one is listed."""
+        """Register the schema or channel record at ``pos``; a damaged one is listed.
+
+        ``rec``: the chunk it lies in, or None at the top level.
+        """
         try:
             self._register(fmt.parse(op, buf, pos + 9, nxt))
         except fmt.McapFormatError as err:
-            self.damaged(f"chunk at {rec}: skipped a damaged {_NAMES[op]} record ({err})")
+            where = f"chunk at {rec}: " if rec is not None else ""
+            self.damaged(f"{where}skipped a damaged {_NAMES[op]} record at {pos} ({err})")
 
     def _register(self, record: fmt.Record | None) -> None:
         if isinstance(record, fmt.Schema):
@@ -470,6 +475,13 @@ class McapReader(BagReader):
                 index = by_offset.get(rec)
                 if complete and (last < lo or first > hi):
                     continue
+                if index is not None and (
+                    index.message_start_time,
+                    index.message_end_time,
+                    index.chunk_length,
+                ) != (first, last, stop - rec):
+                    self.note(f"the summary's index of the chunk at {rec} does not match it")
+                    index = None  # its channels are not this chunk's: read the chunk
                 if (
                     index is not None
                     and index.message_index_offsets
@@ -490,7 +502,7 @@ class McapReader(BagReader):
                 )
                 blocks.append(Block(first, last, len(blocks), load))
             elif op in (fmt.OP_SCHEMA, fmt.OP_CHANNEL):
-                self._register(fmt.parse(op, mm, start, stop))
+                self._register_inner(op, mm, rec, stop, None)
             elif op in (fmt.OP_DATA_END, fmt.OP_FOOTER):
                 break
         if loose:
@@ -568,7 +580,16 @@ class McapReader(BagReader):
                 pos = self._read_on(buf, pos, end, rec, complete, err)
         out.sort()
         first, last = _CHUNK_HEAD.unpack_from(self._mm, start)[:2]
-        if out and complete and (out[0][0] < first or out[-1][0] > last):
+        # Every message read: the range must be the header's; some: within it.
+        if (
+            out
+            and complete
+            and (
+                (out[0][0], out[-1][0]) != (first, last)
+                if everything
+                else (out[0][0] < first or out[-1][0] > last)
+            )
+        ):
             self.note(
                 f"chunk at {rec}: its messages run from {out[0][0]} to {out[-1][0]} ns, its"
                 f" header says {first} to {last}"

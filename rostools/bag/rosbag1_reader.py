@@ -580,10 +580,16 @@ class Bag1Reader(BagReader):
                 )
         if out is None:
             out = self._walked(chunk, buf, base, end, wanted)
+        # Every message of the chunk read: its range must be the chunk info's; some: within it.
+        whole = wanted.keys() >= chunk.counts.keys()
         if (
             out
             and chunk.index_pos >= 0
-            and (out[0][0] < chunk.start_ns or out[-1][0] > chunk.end_ns)
+            and (
+                (out[0][0], out[-1][0]) != (chunk.start_ns, chunk.end_ns)
+                if whole
+                else out[0][0] < chunk.start_ns or out[-1][0] > chunk.end_ns
+            )
         ):
             self.note(
                 f"chunk at {chunk.pos}: its records run from {out[0][0]} to {out[-1][0]} ns,"
@@ -732,11 +738,11 @@ class Bag1Reader(BagReader):
 def _mismatch(conn_id: int, traw: int, off: int, c: int, rtime: int) -> str:
     """How an index entry and the record it points at differ."""
     if c != conn_id:
-        return f"an entry of connection {conn_id} points at a record of connection {c} ({off})"
+        return f"an entry of connection {conn_id} points at a record of connection {c}"
     if rtime != traw:
-        said, stored = ((x & _LOW) * _NS + (x >> 32) for x in (traw, rtime))
-        return f"an entry says {said} ns, its record at {off} {stored} ns"
-    return f"an entry points at a record at {off} that runs past the chunk"
+        said, stored = (f"{x & _LOW}.{x >> 32:09d} s" for x in (traw, rtime))
+        return f"an entry says {said}, its record (at offset {off}) {stored}"
+    return f"an entry points at a record (at offset {off}) that runs past the chunk"
 
 
 def _u32_or(fields: Mapping[str, bytes], name: str, default: int) -> int:

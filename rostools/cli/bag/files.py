@@ -122,13 +122,18 @@ def info(
         if key is not None:
             data = [info_key(d, key) for d in data]
         emit(fmt, data[0] if len(data) == 1 else data)
-    check_read(readers, "read the summary")
+    check_read(readers, "summarised " + ", ".join(bags))
+
+
+def say_note(note: str) -> None:
+    """How an input had to be read (an index that disagrees, a scan): a ``note:`` line."""
+    sys.stderr.write(f"note: {note}\n")
 
 
 def say_notes(notes: Iterable[str]) -> None:
-    """How the inputs had to be read (an index that disagrees, a scan): ``note:`` lines."""
+    """``say_note`` for each."""
     for note in notes:
-        sys.stderr.write(f"note: {note}\n")
+        say_note(note)
 
 
 def check_read(readers: Sequence[BagReader], done: str) -> None:
@@ -136,13 +141,9 @@ def check_read(readers: Sequence[BagReader], done: str) -> None:
 
     ``done`` says what the command did, for the error line.
     """
-    from rostools.bag.base import problems
-    from rostools.bag.model import lost_data
+    from rostools.bag.base import after_reading
 
-    notes, lost = problems(readers)
-    say_notes(notes)
-    if lost:
-        raise lost_data(done, lost)
+    after_reading(readers, done, say_note)
 
 
 class Progress:

@@ -4,12 +4,16 @@ from __future__ import annotations
 
 import contextlib
 import random
+import re
+import struct
 from pathlib import Path
 
 import pytest
 
+from rostools.bag import mcap_format
 from rostools.bag import rosbag1_format as fmt
 from rostools.bag.access import bag_info, open_bag
+from rostools.bag.mcap_reader import McapReader
 from rostools.bag.ops import convert
 from rostools.bag.recover import recover
 from rostools.bag.rosbag1_reader import Bag1Reader
@@ -211,3 +215,72 @@ def test_an_unreadable_chunk_is_left_out_and_named(tmp_path: Path, compression: 
     assert any(str(victim[0]) in d for d in reader.damage), reader.damage
     report = convert(bad, tmp_path / "out.bag")
     assert report.messages_written == len(got) and report.lost
+
+
+def _mcap_chunks(path: Path) -> list[int]:
+    with McapReader(path) as reader:
+        return [i.chunk_start_offset for i in reader.chunk_indexes]
+
+
+@pytest.mark.parametrize("compression", ["zstd", "lz4", "none"])
+def test_mcap_a_damaged_chunk_header_mid_file_hides_nothing_else(
+    tmp_path: Path, compression: str
+) -> None:
+    sample = write_sample(tmp_path / "x.mcap", 400, compression=compression, chunk_size=3000)
+    raw = sample.path.read_bytes()
+    chunks = _mcap_chunks(sample.path)
+    assert len(chunks) >= 5
+    victim = chunks[2]
+    bad = tmp_path / "bad.mcap"
+    bad.write_bytes(raw[:victim] + bytes(30) + raw[victim + 30 :])
+    got, reader = _mcap_messages(bad)
+    # Said where: the zeroed record reads as an (empty) record of opcode 0, then what follows
+    # does not parse.
+    places = [int(n) for d in reader.damage for n in re.findall(r" at (\d+)", d)]
+    assert any(victim <= p <= victim + 64 for p in places), reader.damage
+    if compression == "none":
+        assert got == sample.stream  # only the chunk's header is lost: its records read on
+    else:
+        missing = [m for m in sample.stream if m not in got]
+        times = [m[2] for m in missing]
+        assert all(m in sample.stream for m in got) and 0 < len(missing) < 200
+        assert missing == [m for m in sample.stream if min(times) <= m[2] <= max(times)]
+
+
+def test_mcap_a_damaged_record_mid_chunk_hides_nothing_else(tmp_path: Path) -> None:
+    sample = write_sample(tmp_path / "x.mcap", 200, compression="none")  # one chunk
+    raw = sample.path.read_bytes()
+    (chunk,) = _mcap_chunks(sample.path)
+    _, _, start, stop = next(mcap_format.records(raw, chunk, len(raw)))
+    clen = struct.unpack_from("<I", raw, start + 28)[0]
+    inner = start + 40 + clen
+    messages = [
+        at for at, op, _, _ in mcap_format.records(raw, inner, stop) if op == mcap_format.OP_MESSAGE
+    ]
+    victim = messages[100]
+    bad = tmp_path / "bad.mcap"
+    bad.write_bytes(raw[:victim] + bytes(9) + raw[victim + 9 :])  # opcode and length zeroed
+    got, reader = _mcap_messages(bad)
+    assert got == sample.stream[:100] + sample.stream[101:]
+    assert reader.damage
+
+
+def test_mcap_chunk_times_that_disagree_with_the_messages_are_noted(tmp_path: Path) -> None:
+    sample = write_sample(tmp_path / "x.mcap", 400, compression="zstd", chunk_size=3000)
+    raw = bytearray(sample.path.read_bytes())
+    victim = _mcap_chunks(sample.path)[1]
+    first = struct.unpack_from("<Q", raw, victim + 9)[0]
+    struct.pack_into("<Q", raw, victim + 17, first)  # its end time: its start time
+    bad = tmp_path / "bad.mcap"
+    bad.write_bytes(bytes(raw))
+    got, reader = _mcap_messages(bad)
+    assert got == sample.stream and not reader.damage
+    assert any("header says" in n for n in reader.notes), reader.notes
+
+
+def _mcap_messages(path: Path) -> tuple[list[tuple[str, str, int, bytes]], McapReader]:
+    reader = open_bag(path)
+    assert isinstance(reader, McapReader)
+    with reader:
+        got = [(c.topic, c.callerid, t, bytes(d)) for c, t, d in reader.messages()]
+    return got, reader

@@ -9,7 +9,7 @@ chunk that was never closed and the decompressible part of one that was cut shor
 
 Damage never comes out silently wrong. The message records are the truth: times and
 connections come from them, and each index entry is checked against the record it points at
-as the chunk is read. A chunk whose index disagrees with its records is read by walking the
+as the chunk is read (``rosbag1_index``). A chunk whose index disagrees with its records is read by walking the
 records, and the disagreement is noted. Bytes that do not parse, at the top level or inside a
 chunk, are skipped to the next whole record (``rosbag1_format.next_record``), and what they
 held is listed in ``damage``; a chunk that does not decompress is left out and listed there.
@@ -17,13 +17,12 @@ held is listed in ``damage``; a chunk that does not decompress is left out and l
 
 from __future__ import annotations
 
-import mmap
 import struct
 from bisect import bisect_left
 from collections.abc import Collection, Iterator, Mapping
 from dataclasses import dataclass, field
 from functools import partial
-from operator import attrgetter, itemgetter
+from operator import attrgetter
 from pathlib import Path
 
 from rostools.bag import rosbag1_format as fmt
@@ -38,43 +37,16 @@ from rostools.bag.model import (
     summarize,
 )
 from rostools.bag.ordering import Block, Entry, RawMessage, ordered, out_of_order
+from rostools.bag.rosbag1_index import Buffer, Disagreement, checked_entries, index_times
 from rostools.wire.header import HeaderError, split_fields
 
-#: A chunk's records: the file map (uncompressed chunks) or the decompressed bytes.
-Buffer = bytes | mmap.mmap
-#: An index entry: its time as the u64 a time field reads as (secs | nsecs << 32), offset.
-_ENTRY = struct.Struct("<QI")
-_EMPTY = memoryview(b"")
 _U32 = fmt.U32
-_NS = 1_000_000_000
-_LOW = 0xFFFFFFFF
-#: The 38-byte message record headers rosbag writes, read in one go: (fixed bytes, conn,
-#: fixed bytes, time, data length). Its C++ writer sorts the fields (conn, op, time); its
-#: Python writer writes op, conn, time. The fixed bytes are the header length and field names.
-_CPP = (
-    struct.Struct("<13sI17sQI"),
-    b"&\x00\x00\x00\t\x00\x00\x00conn=",
-    b"\x04\x00\x00\x00op=\x02\r\x00\x00\x00time=",
-)
-_PY = (
-    struct.Struct("<21sI9sQI"),
-    b"&\x00\x00\x00\x04\x00\x00\x00op=\x02\t\x00\x00\x00conn=",
-    b"\r\x00\x00\x00time=",
-)
+_ID = attrgetter("id")
 #: Records worth reading on at after damage: at the top level, and inside a chunk.
 _TOP_OPS = frozenset(
     (fmt.OP_CHUNK, fmt.OP_CONNECTION, fmt.OP_INDEX_DATA, fmt.OP_CHUNK_INFO, fmt.OP_MSG_DATA)
 )
 _CHUNK_OPS = frozenset((fmt.OP_MSG_DATA, fmt.OP_CONNECTION))
-
-
-#: An entry's position in its chunk.
-_OFFSET = itemgetter(2)
-_ID = attrgetter("id")
-
-
-class _Disagreement(Exception):  # noqa: N818 - internal: never leaves this module
-    """A chunk's index does not match its records; the text says how."""
 
 
 @dataclass
@@ -535,19 +507,10 @@ class Bag1Reader(BagReader):
     def _index_entries(
         self, chunk: Chunk, wanted: Mapping[int, tuple[int, Connection]]
     ) -> list[Entry]:
-        out: list[Entry] = []
         try:
-            for conn_id, raw in self.index_records(chunk):
-                if conn_id in wanted:
-                    rank, conn = wanted[conn_id]
-                    out += [
-                        ((traw & _LOW) * _NS + (traw >> 32), rank, off, conn, _EMPTY)
-                        for traw, off in _ENTRY.iter_unpack(raw)
-                    ]
+            return index_times(self.index_records(chunk), wanted)
         except fmt.RecordError:  # no usable index: the records say
             return self._entries(chunk, wanted, 0, MAX_TIME_NS)
-        out.sort()
-        return out
 
     def _entries(
         self,
@@ -572,8 +535,12 @@ class Bag1Reader(BagReader):
         out = None
         if chunk.index_pos >= 0:
             try:
-                out = self._indexed(chunk, buf, base, end, wanted)
-            except _Disagreement as why:
+                try:
+                    records = list(self.index_records(chunk))
+                except fmt.RecordError as err:
+                    raise Disagreement(f"its index records do not parse: {err}") from err
+                out = checked_entries(buf, base, end, records, chunk.counts, wanted)
+            except Disagreement as why:
                 self.note(
                     f"chunk at {chunk.pos}: its index disagrees with its records ({why});"
                     " read from the records"
@@ -600,84 +567,6 @@ class Bag1Reader(BagReader):
         if out and hi < out[-1][0]:
             out = out[: bisect_left(out, (hi + 1,))]
         return out
-
-    def _indexed(
-        self,
-        chunk: Chunk,
-        buf: Buffer,
-        base: int,
-        end: int,
-        wanted: Mapping[int, tuple[int, Connection]],
-    ) -> list[Entry]:
-        """The wanted messages of a chunk by its index, each entry checked against its record.
-
-        Raises ``_Disagreement`` when the index and the records do not say the same.
-        """
-        try:
-            records = list(self.index_records(chunk))
-        except fmt.RecordError as err:
-            raise _Disagreement(f"its index records do not parse: {err}") from err
-        listed = dict(chunk.counts)
-        for conn_id, raw in records:
-            n = len(raw) // fmt.INDEX_ENTRY_SIZE
-            if listed.pop(conn_id, None) != n:
-                raise _Disagreement(
-                    f"{n} index entries of connection {conn_id}; its chunk info lists"
-                    f" {chunk.counts.get(conn_id, 0)}"
-                )
-        if listed:
-            raise _Disagreement(f"no index entries of connection {min(listed)}")
-        view = memoryview(buf)
-        out: list[Entry] = []
-        append = out.append
-        layout, other = _CPP, _PY
-        fast, head, tail = layout
-        limit = end - 46
-        for conn_id, raw in records:
-            if conn_id not in wanted:
-                continue
-            rank, conn = wanted[conn_id]
-            for traw, off in _ENTRY.iter_unpack(raw):
-                p = base + off
-                if p <= limit:
-                    h, c, t, rtime, dlen = fast.unpack_from(buf, p)
-                    if h != head or t != tail:
-                        layout, other = other, layout
-                        fast, head, tail = layout
-                        h, c, t, rtime, dlen = fast.unpack_from(buf, p)
-                    q = p + 46
-                    if h != head or t != tail:
-                        c, rtime, q, dlen = self._record_at(buf, p, end)
-                else:
-                    c, rtime, q, dlen = self._record_at(buf, p, end)
-                if c != conn_id or rtime != traw or q + dlen > end:
-                    raise _Disagreement(_mismatch(conn_id, traw, off, c, rtime))
-                append(((traw & _LOW) * _NS + (traw >> 32), rank, off, conn, view[q : q + dlen]))
-        if len(set(map(_OFFSET, out))) != len(out):
-            raise _Disagreement("two index entries point at one record")
-        out.sort()
-        return out
-
-    def _record_at(self, buf: Buffer, pos: int, end: int) -> tuple[int, int, int, int]:
-        """(connection, time as a u64, data start, data length) of the record at ``pos``.
-
-        Connection records before it are skipped, as rosbag does; anything else that is not
-        a message record is a ``_Disagreement``.
-        """
-        try:
-            while True:
-                fields, data, dlen = fmt.read_record(buf, pos, end)
-                op = fmt.op_of(fields)
-                if op == fmt.OP_MSG_DATA:
-                    raw = fields.get("time", b"")
-                    if len(raw) != 8:
-                        raise fmt.RecordError("a message record without a time")
-                    return fmt.u32_field(fields, "conn"), fmt.U64.unpack(raw)[0], data, dlen
-                if op != fmt.OP_CONNECTION:
-                    raise fmt.RecordError(f"a record with op {op}")
-                pos = data + dlen
-        except fmt.RecordError as err:
-            raise _Disagreement(f"an index entry points at no message record: {err}") from err
 
     def _walked(
         self,
@@ -733,16 +622,6 @@ class Bag1Reader(BagReader):
         if view is not None:
             view.release()
         release(getattr(self, "_mm", None))
-
-
-def _mismatch(conn_id: int, traw: int, off: int, c: int, rtime: int) -> str:
-    """How an index entry and the record it points at differ."""
-    if c != conn_id:
-        return f"an entry of connection {conn_id} points at a record of connection {c}"
-    if rtime != traw:
-        said, stored = (f"{x & _LOW}.{x >> 32:09d} s" for x in (traw, rtime))
-        return f"an entry says {said}, its record (at offset {off}) {stored}"
-    return f"an entry points at a record (at offset {off}) that runs past the chunk"
 
 
 def _u32_or(fields: Mapping[str, bytes], name: str, default: int) -> int:

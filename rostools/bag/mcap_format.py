@@ -12,7 +12,6 @@ message, which caps a conversion of small messages far below the speed of the di
 from __future__ import annotations
 
 import mmap
-import re
 import struct
 import zlib
 from collections.abc import Collection, Iterator, Mapping
@@ -380,6 +379,8 @@ def next_record(buf: Buffer, start: int, end: int, ops: Collection[int]) -> int 
     record after it is one of ``ops`` that fits too, or the end: random bytes pass both
     checks about once in 2**70 places.
     """
+    import re  # only after damage: 5 ms that opening a file need not pay
+
     pattern = re.compile(b"[" + re.escape(bytes(sorted(ops))) + b"]")
     hit = pattern.search(buf, start, end)
     while hit is not None:

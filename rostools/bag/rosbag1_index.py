@@ -10,6 +10,7 @@ does anyway. ``Disagreement`` says how the index and the records differ.
 
 from __future__ import annotations
 
+import functools
 import mmap
 import struct
 from collections.abc import Iterable, Mapping
@@ -28,20 +29,23 @@ ENTRY = struct.Struct("<QI")
 _EMPTY = memoryview(b"")
 _NS = 1_000_000_000
 _LOW = 0xFFFFFFFF
-#: The 38-byte message record headers rosbag writes, read in one go: (fixed bytes, conn,
-#: fixed bytes, time, data length). Its C++ writer sorts the fields (conn, op, time); its
-#: Python writer writes op, conn, time. The fixed bytes are the header length and field names.
-_CPP = (
-    struct.Struct("<13sI17sQI"),
-    b"&\x00\x00\x00\t\x00\x00\x00conn=",
-    b"\x04\x00\x00\x00op=\x02\r\x00\x00\x00time=",
-)
-_PY = (
-    struct.Struct("<21sI9sQI"),
-    b"&\x00\x00\x00\x04\x00\x00\x00op=\x02\t\x00\x00\x00conn=",
-    b"\r\x00\x00\x00time=",
-)
+#: A 38-byte message record, as rosbag writes them: its first 34 bytes (the header length, the
+#: conn and op fields and the name of the time field), its time as a u64, its data length.
+_RECORD = struct.Struct("<34sQI")
 _HEAD = 46  # bytes of such a record before its data
+
+
+@functools.lru_cache(maxsize=1024)
+def _prefixes(conn_id: int) -> tuple[bytes, bytes]:
+    """The 34 bytes a message record of ``conn_id`` starts with, in both of rosbag's layouts.
+
+    Its C++ writer sorts the fields (conn, op, time); its Python writer writes op, conn, time.
+    """
+    conn = b"\t\x00\x00\x00conn=" + struct.pack("<I", conn_id)
+    op, time = b"\x04\x00\x00\x00op=\x02", b"\r\x00\x00\x00time="
+    return b"&\x00\x00\x00" + conn + op + time, b"&\x00\x00\x00" + op + conn + time
+
+
 #: An entry's position in its chunk.
 _OFFSET = itemgetter(2)
 
@@ -76,30 +80,38 @@ def checked_entries(
     view = memoryview(buf)
     out: list[Entry] = []
     append = out.append
-    layout, other = _CPP, _PY
-    fast, head, tail = layout
-    limit = end - _HEAD
+    unpack = _RECORD.unpack_from
+    low, ns, head = _LOW, _NS, _HEAD
+    limit = end - head
+    rising = True  # each connection's offsets rise: no two entries can share a record
     for conn_id, raw in records:
         if conn_id not in wanted:
             continue
         rank, conn = wanted[conn_id]
+        expected, other = _prefixes(conn_id)
+        last = -1
         for traw, off in ENTRY.iter_unpack(raw):
             p = base + off
             if p <= limit:
-                h, c, t, rtime, dlen = fast.unpack_from(buf, p)
-                if h != head or t != tail:  # the other writer's layout, or anything else
-                    layout, other = other, layout
-                    fast, head, tail = layout
-                    h, c, t, rtime, dlen = fast.unpack_from(buf, p)
-                q = p + _HEAD
-                if h != head or t != tail:
-                    c, rtime, q, dlen = record_at(buf, p, end)
+                prefix, rtime, dlen = unpack(buf, p)
+                if prefix != expected:  # the other writer's layout, or anything else
+                    expected, other = other, expected
+                    if prefix != expected:
+                        c, rtime, q, dlen = record_at(buf, p, end)
+                        if c != conn_id:
+                            raise Disagreement(_mismatch(conn_id, traw, off, c, rtime))
+                q = p + head
             else:
                 c, rtime, q, dlen = record_at(buf, p, end)
-            if c != conn_id or rtime != traw or q + dlen > end:
-                raise Disagreement(_mismatch(conn_id, traw, off, c, rtime))
-            append(((traw & _LOW) * _NS + (traw >> 32), rank, off, conn, view[q : q + dlen]))
-    if len(set(map(_OFFSET, out))) != len(out):
+                if c != conn_id:
+                    raise Disagreement(_mismatch(conn_id, traw, off, c, rtime))
+            if rtime != traw or q + dlen > end:
+                raise Disagreement(_mismatch(conn_id, traw, off, conn_id, rtime))
+            if off <= last:
+                rising = False
+            last = off
+            append(((traw & low) * ns + (traw >> 32), rank, off, conn, view[q : q + dlen]))
+    if not rising and len(set(map(_OFFSET, out))) != len(out):
         raise Disagreement("two index entries point at one record")
     out.sort()
     return out

@@ -7,9 +7,9 @@ after a chunk are read only when that chunk's messages are. A bag without a usab
 killed recorder, a cut-short copy) is read by walking its chunks, including the records of a
 chunk that was never closed and the decompressible part of one that was cut short.
 
-Damage never comes out silently wrong. The message records are the truth: times and
-connections come from them, and each index entry is checked against the record it points at
-as the chunk is read (``rosbag1_index``). A chunk whose index disagrees with its records is read by walking the
+Damage never comes out silently wrong. The message records are the truth: times and connections
+come from them, and each index entry is checked against the record it points at as the chunk is
+read (``rosbag1_index``). A chunk whose index disagrees with its records is read by walking the
 records, and the disagreement is noted. Bytes that do not parse, at the top level or inside a
 chunk, are skipped to the next whole record (``rosbag1_format.next_record``), and what they
 held is listed in ``damage``; a chunk that does not decompress is left out and listed there.

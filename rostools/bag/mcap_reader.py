@@ -170,6 +170,8 @@ class McapReader(BagReader):
             nxt = pos
             try:
                 for rec, op, start, stop in fmt.records(mm, pos, end):
+                    if op == fmt.OP_MESSAGE and stop - start < 22:
+                        raise fmt.McapFormatError(f"message at {rec} is too short")
                     nxt = stop
                     yield rec, op, start, stop, True
                 return

@@ -218,8 +218,12 @@ def copy_command(
     quiet: bool,
     label: str,
     run: Callable[[Any], CopyReport],
-) -> None:
-    """Run a copying command with a progress bar, then report what it wrote."""
+    check: bool = True,
+) -> CopyReport:
+    """Run a copying command with a progress bar, then report what it wrote.
+
+    With ``check``, exit 6 if the input had damage that was left out.
+    """
     fmt = output_format(ctx, fmt)
     progress = Progress(label, fmt, quiet)
     try:
@@ -227,7 +231,9 @@ def copy_command(
     finally:
         progress.done()
     _report(fmt, report)
-    report.raise_if_lost()
+    if check:
+        report.raise_if_lost()
+    return report
 
 
 def seconds_to_ns(value: float | None) -> int | None:
@@ -324,7 +330,12 @@ def _in_place(
     label: str,
     run: Callable[[Path, Path, Any], CopyReport],
 ) -> None:
-    """rosbag compress's way: write beside, keep the original as ``x.orig.bag``."""
+    """rosbag compress's way: write beside, keep the original as ``x.orig.bag``.
+
+    A damaged bag is rewritten with what reads (the original is kept all the same); exit 6
+    at the end, naming what was left out.
+    """
+    lost: list[str] = []
     for path, dst, keep in _targets(bags, output_dir, force):
 
         def step(
@@ -332,8 +343,14 @@ def _in_place(
         ) -> CopyReport:
             return dataclasses.replace(run(src, dst, progress), output=out)
 
-        copy_command(ctx, fmt, quiet, label, step)
+        report = copy_command(ctx, fmt, quiet, label, step, check=False)
         _swap(path, dst, keep)
+        lost += report.lost
+    if lost:
+        from rostools.bag.model import lost_data
+
+        kept = "" if output_dir else " (each original is kept as NAME.orig.bag)"
+        raise lost_data(f"{label}ed {len(bags)} bag(s){kept}", lost)
 
 
 def _targets(

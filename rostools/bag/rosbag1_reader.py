@@ -79,8 +79,8 @@ class Bag1Reader(BagReader):
         super().__init__(path)
         self.chunks: list[Chunk] = []
         self._by_id: dict[int, Connection] = {}
-        #: Chunk position -> messages, as an index that could not be used lists them.
-        self._listed: dict[int, int] = {}
+        #: (chunk position, start, end, messages per connection) as the index lists them.
+        self._infos: list[tuple[int, int, int, dict[int, int]]] = []
         mm, self.size = map_file(self.path)
         if mm is None:
             raise BagFormatError(f"{self.path} is empty, not a bag")
@@ -160,8 +160,7 @@ class Bag1Reader(BagReader):
             start, end = fmt.time_field(fields, "start_time"), fmt.time_field(fields, "end_time")
             infos.append((chunk_pos, start, end, counts))
             pos = data + dlen
-        # What the index lists, for a damage report should the chunks not be where it says.
-        self._listed = {p: sum(counts.values()) for p, _, _, counts in infos}
+        self._infos = infos  # for a damage report, should the chunks not be where it says
         for chunk_pos, start, end, counts in infos:
             unknown = counts.keys() - self._by_id.keys()
             if unknown:
@@ -256,7 +255,7 @@ class Bag1Reader(BagReader):
         """
         nxt = fmt.next_record(self._mm, pos + 1, self.size, _TOP_OPS)
         stop = self.size if nxt is None else nxt
-        listed = sum(n for p, n in self._listed.items() if pos <= p < stop)
+        listed = sum(sum(c.values()) for p, _, _, c in self._infos if pos <= p < stop)
         lost = f"; the index lists {listed} messages in chunks there" if listed else ""
         chunk = self._broken_chunk(pos, stop)
         if chunk is not None:

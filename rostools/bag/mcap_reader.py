@@ -40,6 +40,7 @@ _PREFIX = fmt.PREFIX
 _CHUNK_HEAD = struct.Struct("<QQQI")
 _U32 = struct.Struct("<I")
 _U64 = struct.Struct("<Q")
+_U16 = struct.Struct("<H")
 #: What a damage note calls a record.
 _NAMES = {fmt.OP_SCHEMA: "schema", fmt.OP_CHANNEL: "channel"}
 #: Channel id -> (rank, connection) of a read; unfiltered reads add channels met late.
@@ -489,6 +490,7 @@ class McapReader(BagReader):
                     and index.message_index_offsets
                     and not everything
                     and wanted.keys().isdisjoint(index.message_index_offsets)
+                    and self._channels_agree(index)
                 ):
                     continue
                 load = partial(
@@ -510,6 +512,26 @@ class McapReader(BagReader):
         if loose:
             blocks.append(_loose_block(loose, len(blocks)))
         return blocks
+
+    def _channels_agree(self, index: fmt.ChunkIndex) -> bool:
+        """Whether the message indexes a chunk index points at are of the channels it names.
+
+        Checked before the chunk is left out of a read by its channels, so a damaged chunk
+        index hides nothing (noted when it disagrees).
+        """
+        mm = self._mm
+        for channel_id, offset in index.message_index_offsets.items():
+            if not (
+                offset + 11 <= self.size
+                and mm[offset] == fmt.OP_MESSAGE_INDEX
+                and _U16.unpack_from(mm, offset + 9)[0] == channel_id
+            ):
+                self.note(
+                    f"the summary's index of the chunk at {index.chunk_start_offset} names"
+                    f" channels its message indexes do not"
+                )
+                return False
+        return True
 
     def _selects(self, channel_id: int, wanted: _Wanted, everything: bool) -> bool:
         """Whether a read selects a channel.

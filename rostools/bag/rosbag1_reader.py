@@ -152,10 +152,12 @@ class Bag1Reader(BagReader):
             if fmt.op_of(fields) != fmt.OP_CHUNK_INFO:
                 raise fmt.RecordError(f"expected a chunk info record at {pos}")
             count = fmt.u32_field(fields, "count")
-            if dlen < 8 * count:
+            if dlen != 8 * count:
                 raise fmt.RecordError(f"chunk info at {pos} lists {count} connections in {dlen} B")
             pairs = struct.unpack_from(f"<{2 * count}I", mm, data)
             counts = dict(zip(pairs[::2], pairs[1::2], strict=True))
+            if len(counts) != count:
+                raise fmt.RecordError(f"chunk info at {pos} lists a connection twice")
             chunk_pos = fmt.u64_field(fields, "chunk_pos")
             start, end = fmt.time_field(fields, "start_time"), fmt.time_field(fields, "end_time")
             infos.append((chunk_pos, start, end, counts))
@@ -465,7 +467,11 @@ class Bag1Reader(BagReader):
     def blocks(
         self, wanted: Mapping[int, tuple[int, Connection]], lo: int, hi: int, everything: bool
     ) -> list[Block]:
-        """One block per chunk that may hold a wanted message in time."""
+        """One block per chunk that may hold a wanted message in time.
+
+        A chunk is left out by its chunk info's times and connections; the connections only
+        once its index records (their headers) agree: a damaged chunk info hides nothing.
+        """
         blocks = [
             Block(
                 chunk.start_ns,
@@ -476,9 +482,19 @@ class Bag1Reader(BagReader):
             for order, chunk in enumerate(self.chunks)
             if chunk.end_ns >= lo
             and chunk.start_ns <= hi
-            and not wanted.keys().isdisjoint(chunk.counts)
+            and (not wanted.keys().isdisjoint(chunk.counts) or not self._lists_truly(chunk))
         ]
         return blocks
+
+    def _lists_truly(self, chunk: Chunk) -> bool:
+        """Whether a chunk's index records are of the connections its chunk info lists."""
+        if chunk.index_pos < 0:
+            return True  # counted by walking its records
+        try:
+            found = {conn_id: len(raw) // 12 for conn_id, raw in self.index_records(chunk)}
+        except fmt.RecordError:
+            return False
+        return found == chunk.counts
 
     def chunk_messages(
         self, chunk: Chunk, wanted: Mapping[int, tuple[int, Connection]]
@@ -614,6 +630,15 @@ class Bag1Reader(BagReader):
             if pos > self.size:
                 raise fmt.RecordError(f"index data at {data} is cut short")
             yield conn_id, self._view[data:pos]
+        try:  # no index records of a connection the chunk info does not list
+            fields, _, _ = fmt.read_record(self._mm, pos, self.size)
+            more = fmt.op_of(fields) == fmt.OP_INDEX_DATA
+        except fmt.RecordError:
+            more = False  # not ours to judge: whatever follows is read (or noted) on its own
+        if more:
+            raise fmt.RecordError(
+                f"the chunk at {chunk.pos} has more index records than its chunk info lists"
+            )
 
     def close(self) -> None:
         """Release the file map."""

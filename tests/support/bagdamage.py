@@ -25,12 +25,14 @@ from tests.support.bagdata import bag_records, chunk_spans, swap_spans
 Message = tuple[str, int, str]
 
 
-def messages_of(path: Path) -> tuple[list[Message], Bag1Reader | McapReader]:
-    """What our reader gives from ``path``, and the reader (closed) with its notes."""
+def messages_of(
+    path: Path, topics: list[str] | None = None
+) -> tuple[list[Message], Bag1Reader | McapReader]:
+    """What our reader gives from ``path`` (of ``topics``), and the reader (closed)."""
     reader = open_bag(path)
     assert isinstance(reader, Bag1Reader | McapReader)
     with reader:
-        got = [(c.topic, t, _md5(d)) for c, t, d in reader.messages()]
+        got = [(c.topic, t, _md5(d)) for c, t, d in reader.messages(topics=topics)]
     return got, reader
 
 

@@ -12,13 +12,14 @@ import pytest
 
 from rostools.bag import mcap_format
 from rostools.bag import rosbag1_format as fmt
-from rostools.bag.access import bag_info, open_bag
+from rostools.bag.access import bag_info, open_bag, open_writer
 from rostools.bag.mcap_reader import McapReader
 from rostools.bag.ops import convert
 from rostools.bag.recover import recover
 from rostools.bag.rosbag1_reader import Bag1Reader
 from rostools.errors import DataLossError, RostoolsError
 from tests.support.bagdata import (
+    INT32_MD5,
     Record,
     Sample,
     bag_records,
@@ -284,3 +285,71 @@ def _mcap_messages(path: Path) -> tuple[list[tuple[str, str, int, bytes]], McapR
     with reader:
         got = [(c.topic, c.callerid, t, bytes(d)) for c, t, d in reader.messages()]
     return got, reader
+
+
+def test_a_chunk_info_that_lists_a_connection_twice(tmp_path: Path) -> None:
+    """Found by the long fuzz: one bit turned a chunk info's last connection into another
+    one it lists; the chunk's messages of the last were silently left out."""
+    sample, raw = _sample(tmp_path, "none")
+    info = next(r for r in bag_records(raw) if r[1] == fmt.OP_CHUNK_INFO)
+    assert fmt.u32_field(info[2], "count") == 4
+    damaged = bytearray(raw)
+    damaged[info[3] + 24] ^= 1  # the 4th connection id: 3 -> 2
+    bad = tmp_path / "bad.bag"
+    bad.write_bytes(bytes(damaged))
+    got, reader = _messages_and_reader(bad)
+    assert got == sample.stream
+    assert any("twice" in n for n in reader.notes), reader.notes
+
+
+def _runs_bag(path: Path, suffix: str) -> tuple[list[tuple[str, str, int, bytes]], Path]:
+    """Two topics in runs of 40 messages, in chunks small enough to hold one topic each."""
+    bag = path / f"runs{suffix}"
+    stream = []
+    with open_writer(bag, chunk_size=1000) as writer:
+        conns = [
+            writer.add_connection(t, "std_msgs/Int32", INT32_MD5, "int32 data\n", callerid="/c")
+            for t in ("/a", "/b")
+        ]
+        for i in range(400):
+            conn = conns[(i // 40) % 2]
+            data = struct.pack("<i", i)
+            writer.write(conn, i * 1000, data)
+            stream.append((conn.topic, conn.callerid, i * 1000, data))
+    return stream, bag
+
+
+def test_a_chunk_info_that_names_another_connection_hides_nothing(tmp_path: Path) -> None:
+    stream, bag = _runs_bag(tmp_path, ".bag")
+    raw = bag.read_bytes()
+    infos = [r for r in bag_records(raw) if r[1] == fmt.OP_CHUNK_INFO]
+    only_a = next(r for r in infos if fmt.u32_field(r[2], "count") == 1 and raw[r[3]] == 0)
+    damaged = bytearray(raw)
+    damaged[only_a[3]] = 1  # its one connection: /a (0) -> /b (1)
+    bad = tmp_path / "bad.bag"
+    bad.write_bytes(bytes(damaged))
+    wanted = [m for m in stream if m[0] == "/a"]
+    assert read_stream(bad, topics=["/a"]) == wanted
+    with open_bag(bad) as reader:
+        list(reader.messages(topics=["/a"]))
+        assert any("index" in n for n in reader.notes), reader.notes
+
+
+def test_an_mcap_chunk_index_that_names_another_channel_hides_nothing(tmp_path: Path) -> None:
+    stream, path = _runs_bag(tmp_path, ".mcap")
+    raw = bytearray(path.read_bytes())
+    footer_at = len(raw) - len(mcap_format.MAGIC) - mcap_format.FOOTER_SIZE
+    footer = mcap_format.parse_footer(bytes(raw[footer_at:]))
+    assert footer is not None
+    flipped = False
+    for _, op, start, stop in mcap_format.records(raw, footer.summary_start, footer_at):
+        index = mcap_format.parse(op, raw, start, stop)
+        # The first chunk of /a's channel (0) alone: its index names /b's (1) instead.
+        if isinstance(index, mcap_format.ChunkIndex) and list(index.message_index_offsets) == [0]:
+            struct.pack_into("<H", raw, start + 32 + 4, 1)  # after 4 u64 and the map's length
+            flipped = True
+            break
+    assert flipped
+    bad = tmp_path / "bad.mcap"
+    bad.write_bytes(bytes(raw))
+    assert read_stream(bad, topics=["/a"]) == [m for m in stream if m[0] == "/a"]

@@ -47,6 +47,8 @@ _TOP_OPS = frozenset(
     (fmt.OP_CHUNK, fmt.OP_CONNECTION, fmt.OP_INDEX_DATA, fmt.OP_CHUNK_INFO, fmt.OP_MSG_DATA)
 )
 _CHUNK_OPS = frozenset((fmt.OP_MSG_DATA, fmt.OP_CONNECTION))
+#: The op field of an INDEX_DATA record header, as stored.
+_INDEX_OP = b"\x04\x00\x00\x00op=\x04"
 
 
 @dataclass
@@ -630,15 +632,14 @@ class Bag1Reader(BagReader):
             if pos > self.size:
                 raise fmt.RecordError(f"index data at {data} is cut short")
             yield conn_id, self._view[data:pos]
-        try:  # no index records of a connection the chunk info does not list
-            fields, _, _ = fmt.read_record(self._mm, pos, self.size)
-            more = fmt.op_of(fields) == fmt.OP_INDEX_DATA
-        except fmt.RecordError:
-            more = False  # not ours to judge: whatever follows is read (or noted) on its own
-        if more:
-            raise fmt.RecordError(
-                f"the chunk at {chunk.pos} has more index records than its chunk info lists"
-            )
+        # No index records of a connection the chunk info does not list: the next record's
+        # header has no index data op (what follows is otherwise read, or noted, on its own).
+        if pos + 4 <= self.size:
+            header_end = min(pos + 4 + _U32.unpack_from(self._mm, pos)[0], self.size)
+            if self._mm.find(_INDEX_OP, pos + 4, header_end) >= 0:
+                raise fmt.RecordError(
+                    f"the chunk at {chunk.pos} has more index records than its chunk info lists"
+                )
 
     def close(self) -> None:
         """Release the file map."""

@@ -353,3 +353,15 @@ def test_an_mcap_chunk_index_that_names_another_channel_hides_nothing(tmp_path: 
     bad = tmp_path / "bad.mcap"
     bad.write_bytes(bytes(raw))
     assert read_stream(bad, topics=["/a"]) == [m for m in stream if m[0] == "/a"]
+
+
+def test_a_chunk_info_that_lists_fewer_connections_than_the_chunk_has(tmp_path: Path) -> None:
+    sample, raw = _sample(tmp_path, "none")
+    pos, _, fields, data, dlen = next(r for r in bag_records(raw) if r[1] == fmt.OP_CHUNK_INFO)
+    # Rewritten whole and consistent, one connection short: only the index records say more.
+    short = fmt.encode_record({**fields, "count": fmt.U32.pack(3)}, raw[data : data + dlen - 8])
+    bad = tmp_path / "bad.bag"
+    bad.write_bytes(raw[:pos] + short + raw[data + dlen :])
+    got, reader = _messages_and_reader(bad)
+    assert got == sample.stream
+    assert any("more index records" in n for n in reader.notes), reader.notes

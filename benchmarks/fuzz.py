@@ -1,6 +1,6 @@
 """The fuzz suites (tests/fuzz) for hours: round after round, each with a new seed.
 
-Usage: python -m benchmarks.fuzz [--hours H] [--examples N] [--seed S]
+Usage: python -m benchmarks.fuzz [--hours H] [--examples N] [--seed S] [--tests PATH]
 
 CI runs every fuzz test with 150 cases and one fixed seed. This runs the same tests with
 ``--examples`` cases each, seed ``S``, ``S + 1``, ... until ``--hours`` have passed, and
@@ -27,14 +27,14 @@ from benchmarks.common import ROOT
 SECONDS_PER_CASE = 1.0
 
 
-def _round(seed: int, examples: int, out: Path) -> dict[str, object]:
-    """One pass over tests/fuzz; its outcome."""
+def _round(seed: int, examples: int, out: Path, tests: str) -> dict[str, object]:
+    """One pass over the fuzz tests (``tests``: tests/fuzz or one of its files); its outcome."""
     env = dict(os.environ, ROSTOOLS_FUZZ_SEED=str(seed), ROSTOOLS_FUZZ_EXAMPLES=str(examples))
     limit = max(120, int(examples * SECONDS_PER_CASE))
     began = time.monotonic()
     done = subprocess.run(
         [sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", f"--timeout={limit}",
-         "tests/fuzz"],
+         tests],
         cwd=ROOT, env=env, capture_output=True, text=True, check=False,
     )  # fmt: skip
     tail = done.stdout.strip().splitlines()[-1:] or [""]
@@ -52,11 +52,11 @@ def _round(seed: int, examples: int, out: Path) -> dict[str, object]:
     return result
 
 
-def _tests() -> int:
+def _tests(tests: str) -> int:
     """How many fuzz tests there are (cases per round = tests x examples)."""
     found = subprocess.run(
         [sys.executable, "-m", "pytest", "-q", "--collect-only", "-p", "no:cacheprovider",
-         "tests/fuzz"],
+         tests],
         cwd=ROOT, capture_output=True, text=True, check=False,
     )  # fmt: skip
     return sum(1 for line in found.stdout.splitlines() if "::" in line)
@@ -68,17 +68,19 @@ def main() -> int:
     parser.add_argument("--hours", type=float, default=1.0)
     parser.add_argument("--examples", type=int, default=1000)
     parser.add_argument("--seed", type=int, default=int(time.time()) % 1_000_000)
+    parser.add_argument("--tests", default="tests/fuzz", help="One suite, e.g. its file.")
     args = parser.parse_args()
     out = ROOT / "benchmarks" / "results" / f"fuzz-{time.strftime('%Y%m%d-%H%M%S')}.json"
-    tests = _tests()
+    tests = _tests(args.tests)
     rounds: list[dict[str, object]] = []
     end = time.monotonic() + args.hours * 3600
     seed = args.seed
     while not rounds or time.monotonic() < end:
-        rounds.append(_round(seed, args.examples, out))
+        rounds.append(_round(seed, args.examples, out, args.tests))
         print(json.dumps(rounds[-1]), flush=True)
         seed += 1
     summary = {
+        "tests": args.tests,
         "rounds": len(rounds),
         "cases": len(rounds) * tests * args.examples,
         "failed_rounds": sum(1 for r in rounds if r["exit"] != 0),

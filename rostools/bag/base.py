@@ -7,8 +7,7 @@ import dataclasses
 import mmap
 import os
 from abc import ABC, abstractmethod
-from collections.abc import Collection, Iterable, Iterator, Mapping
-from functools import partial
+from collections.abc import Callable, Collection, Iterable, Iterator, Mapping, Sequence
 from pathlib import Path
 from types import TracebackType
 from typing import TYPE_CHECKING
@@ -20,6 +19,7 @@ from rostools.bag.model import (
     BagUsageError,
     Connection,
     connection_from_header,
+    lost_data,
 )
 from rostools.bag.ordering import Block, Entry, RawMessage, ordered
 from rostools.bag.sink import Sink
@@ -91,16 +91,15 @@ class BagReader(ABC):
     ``connections`` lists every connection (MCAP: channel) in id order. ``messages`` yields
     ``(connection, time_ns, data)`` in time order with ``data`` the raw serialized message (a
     memoryview into the file or a decompressed chunk; never decoded). ``notes`` says how an
-    unindexed or unfinished file was read; ``damage`` lists data that could not be read.
+    unindexed, unfinished or inconsistent file was read (nothing lost); ``damage`` lists data
+    that could not be read, which a read skips: it gives every message it can, and what it
+    left out is in ``damage`` when it ends.
     """
 
     path: Path
     format: str
     indexed: bool
     connections: list[Connection]
-    #: Set by recovery: a chunk that does not read is skipped (and listed in ``damage``)
-    #: instead of ending the read with an error.
-    skip_damaged = False
 
     def __init__(self, path: str | Path) -> None:
         self.path = Path(path)
@@ -156,7 +155,7 @@ class BagReader(ABC):
         lo = 0 if start is None else start
         hi = MAX_TIME_NS if end is None else end
         everything = topics is None and connections is None
-        return self.guarded(self.blocks(wanted, lo, hi, everything))
+        return self.blocks(wanted, lo, hi, everything)
 
     @abstractmethod
     def blocks(
@@ -189,19 +188,6 @@ class BagReader(ABC):
     ) -> None:
         self.close()
 
-    def guarded(self, blocks: list[Block]) -> list[Block]:
-        """The blocks, loading with damage skipped when ``skip_damaged`` is set."""
-        if not self.skip_damaged:
-            return blocks
-        return [Block(b.start_ns, b.end_ns, b.order, partial(self._load, b)) for b in blocks]
-
-    def _load(self, block: Block) -> list[Entry]:
-        try:
-            return block.load()
-        except BagFormatError as err:
-            self.damaged(f"skipped a damaged chunk ({err})")
-            return []
-
     def wanted(
         self, topics: Collection[str] | None, connections: Iterable[Connection] | None
     ) -> Mapping[int, tuple[int, Connection]]:
@@ -213,6 +199,25 @@ class BagReader(ABC):
             for rank, c in enumerate(self.connections)
             if (topic_set is None or c.topic in topic_set) and (ids is None or c.id in ids)
         }
+
+
+def problems(readers: Sequence[BagReader]) -> tuple[tuple[str, ...], tuple[str, ...]]:
+    """(notes, damage) of the readers so far, each naming its file."""
+    notes = tuple(f"{r.path}: {n}" for r in readers for n in r.notes)
+    return notes, tuple(f"{r.path}: {d}" for r in readers for d in r.damage)
+
+
+def after_reading(readers: Sequence[BagReader], done: str, say: Callable[[str], object]) -> None:
+    """Hand each note of these readers to ``say``; raise if they left anything out.
+
+    What a command does once it has read its bags: the error is ``BagDataLossError`` (exit
+    code 6) naming what was left out; ``done`` says what the command did, for its line.
+    """
+    notes, lost = problems(readers)
+    for note in notes:
+        say(note)
+    if lost:
+        raise lost_data(done, lost)
 
 
 class BagWriter(ABC):

@@ -1,10 +1,12 @@
 """``bag doctor``: checks a ``.bag`` or MCAP file without changing it, one finding per line.
 
-What it checks: that the file opens and reads to the end (record lengths, index entries
-against the chunks they point into, cut-short or unindexed tails, and whether ``bag
-recover`` would help); the index's message count against the messages read; MCAP chunk CRCs
-and the data section CRC; each ROS 1 connection's md5sum against its definition text, and
-that the text parses; and every message against its type (shorter or longer than it).
+What it checks: that the file opens and reads to the end (record lengths, bytes that do not
+parse and what the reader skipped, cut-short or unindexed tails, and whether ``bag recover``
+would help); the index against the records (each index entry's time and connection against
+its record, chunk time ranges, the message count of each connection against the messages
+read); MCAP chunk CRCs and the data section CRC; each ROS 1 connection's md5sum against its
+definition text, and that the text parses; and every message against its type (shorter or
+longer than it).
 Messages out of time order within a chunk are a note, not a finding: the formats allow it.
 Library code: no printing.
 """
@@ -165,14 +167,25 @@ def _messages(
     if progress is not None:
         progress(done, done)
     try:
-        indexed = reader.info().message_count
+        info = reader.info()
     except RostoolsError as err:
         report.findings.append(f"no summary: {err}")
         return
-    if indexed != report.messages and not reader.notes:
+    if reader.notes:
+        return  # the summary is not the file's own index: the notes say why
+    if info.message_count != report.messages:
         report.findings.append(
-            f"the index counts {indexed} messages but {report.messages} were read"
+            f"the index counts {info.message_count} messages but {report.messages} were read"
         )
+    by_id = {c.id: c for c in reader.connections}
+    for cid in sorted(info.connection_counts.keys() | counts.keys()):
+        listed, read = info.connection_counts.get(cid, 0), counts.get(cid, 0)
+        if listed != read:
+            topic = by_id[cid].topic if cid in by_id else "?"
+            report.findings.append(
+                f"the index counts {listed} messages of connection {cid} ({topic}) but"
+                f" {read} were read"
+            )
 
 
 def _indexed(reader: BagReader) -> int | None:

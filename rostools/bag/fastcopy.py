@@ -10,9 +10,11 @@ with MCAP fields turns the chunk's records into the MCAP chunk's records in two 
 
 It applies when the bag is indexed, its chunks do not overlap in time, and inside each chunk
 time order (ties: connection rank) is file order, so the MCAP file yields exactly the stream
-the bag does. Any chunk that does not qualify, or whose messages are big (images: the
-per-message path is already cheap for them), goes through the ordinary per-message path.
-numpy comes with rosbags; without it, ``convert`` simply uses the ordinary path.
+the bag does; and when the index agrees with the records (connection, time, counts, the chunk's
+time range), else the per-message path reads the chunk and says how they differ. Any chunk that
+does not qualify, or whose messages are big (images: the per-message path is already cheap for
+them), goes through the ordinary per-message path. numpy comes with rosbags; without it,
+``convert`` simply uses the ordinary path.
 """
 
 from __future__ import annotations
@@ -22,16 +24,27 @@ from itertools import pairwise
 from typing import TYPE_CHECKING, Any
 
 from rostools.bag.base import Targets
+from rostools.bag.model import BagFormatError
 
 if TYPE_CHECKING:
     from rostools.bag.mcap_writer import McapWriter
     from rostools.bag.rosbag1_reader import Bag1Reader, Chunk
 
-#: 8 bytes at a fixed place of a 38-byte message record header: the ``op=2`` field.
-_OP_FIELD = b"\x04\x00\x00\x00op=\x02"
-#: Where that field starts in the record (after the u32 header length): rosbag's C++ writer
-#: sorts the fields (conn, op, time), its Python writer writes op, conn, time.
-_OP_PLACES = (4 + 13, 4)
+#: A 38-byte message record header as rosbag's C++ writer (fields sorted: conn, op, time)
+#: and its Python writer (op, conn, time) lay it out: (place, bytes) of its fixed parts (the
+#: header length, each field's length and name, the op), and where its numbers lie.
+_LAYOUT_CPP = (
+    ((0, b"&\x00\x00\x00\t\x00\x00\x00conn="), (17, b"\x04\x00\x00\x00op=\x02\r\x00\x00\x00time=")),
+    [("pad0", "V13"), ("conn", "<u4"), ("pad1", "V17"), ("secs", "<u4"), ("nsecs", "<u4"),
+     ("dlen", "<u4")],
+)  # fmt: skip
+_LAYOUT_PY = (
+    ((0, b"&\x00\x00\x00\x04\x00\x00\x00op=\x02\t\x00\x00\x00conn="), (25, b"\r\x00\x00\x00time=")),
+    [("pad0", "V21"), ("conn", "<u4"), ("pad1", "V9"), ("secs", "<u4"), ("nsecs", "<u4"),
+     ("dlen", "<u4")],
+)  # fmt: skip
+#: The layouts as numpy wants them: ((place, bytes as an array), ...), record dtype.
+_NUMPY_LAYOUTS: list[tuple[list[tuple[int, Any]], Any]] = []
 #: Chunks whose messages average more than this many bytes go the per-message way: its cost
 #: per message is small beside their size, and it hands payloads to the kernel without the
 #: per-byte pass that compacting the chunk here costs.
@@ -80,13 +93,23 @@ def _convert_chunk(
     wanted: Any,
     chunk: Chunk,
 ) -> int | None:
-    """One bag chunk as one MCAP chunk; None when the chunk does not qualify."""
-    buf, base, end = reader.chunk_data(chunk)
+    """One bag chunk as one MCAP chunk; None when the chunk does not qualify.
+
+    Nor does a chunk that does not read, or whose index disagrees with its records in
+    count, connection or time: the per-message path reads it from its records and says so.
+    """
+    try:
+        buf, base, end = reader.chunk_data(chunk)
+        index = list(reader.index_records(chunk))
+    except BagFormatError:
+        return None
     size = end - base
     arr = np.frombuffer(buf, dtype=np.uint8, count=size, offset=base)
     entry = np.dtype([("secs", "<u4"), ("nsecs", "<u4"), ("off", "<u4")])
-    parts, channels, ranks = [], [], []
-    for conn_id, raw in reader.index_records(chunk):
+    parts, channels, ranks, sources = [], [], [], []
+    if {conn_id: len(raw) // 12 for conn_id, raw in index} != chunk.counts:
+        return None
+    for conn_id, raw in index:
         if conn_id not in wanted:
             return None
         rank, conn = wanted[conn_id]
@@ -94,6 +117,7 @@ def _convert_chunk(
         parts.append(entries)
         channels.append(np.full(len(entries), targets.resolve(conn).id, dtype=np.uint16))
         ranks.append(np.full(len(entries), rank, dtype=np.uint32))
+        sources.append(np.full(len(entries), conn_id, dtype=np.uint32))
     if not parts:
         return 0
     entries = np.concatenate(parts)
@@ -103,6 +127,8 @@ def _convert_chunk(
     order = np.argsort(offs, kind="stable")  # file order
     offs, times = offs[order], times[order]
     rank, cids = np.concatenate(ranks)[order], np.concatenate(channels)[order]
+    if (int(times.min()), int(times.max())) != (chunk.start_ns, chunk.end_ns):
+        return None  # the chunk info disagrees: the per-message path says how
     if count > 1:
         # Time order (time, rank, position) must be file order: no step back in (time, rank).
         step = np.diff(times.astype(np.int64))
@@ -112,11 +138,30 @@ def _convert_chunk(
             return None  # two index entries for one record
     if int(offs[-1]) + _BAG_HEAD > size:
         return None
-    if not bool(np.all(_u32_at(np, arr, offs) == 38)):
+    # Every record's 46-byte head in one gather; the fixed bytes say which layout it is in,
+    # and its connection and time must be its index entry's.
+    windows = np.lib.stride_tricks.as_strided(
+        arr, shape=(size - _BAG_HEAD + 1, _BAG_HEAD), strides=(1, 1)
+    )
+    heads = windows[offs]
+    layout = next(
+        (
+            lay
+            for lay in _layouts(np)
+            if all(bool(np.all(heads[:, at : at + len(b)] == b)) for at, b in lay[0])
+        ),
+        None,
+    )
+    if layout is None:
         return None
-    if not any(_op_field_at(np, arr, offs + k) for k in _OP_PLACES):
+    fields = heads.view(layout[1])[:, 0]
+    if not (
+        np.array_equal(fields["conn"], np.concatenate(sources)[order])
+        and np.array_equal(fields["secs"], entries["secs"][order])
+        and np.array_equal(fields["nsecs"], entries["nsecs"][order])
+    ):
         return None
-    dlen = _u32_at(np, arr, offs + 42).astype(np.int64)
+    dlen = fields["dlen"].astype(np.int64)
     ends = offs + _BAG_HEAD + dlen
     if int(ends[-1]) > size or (count > 1 and not bool(np.all(ends[:-1] <= offs[1:]))):
         return None
@@ -162,17 +207,13 @@ def _convert_chunk(
     return count
 
 
-def _u32_at(np: Any, arr: Any, at: Any) -> Any:
-    """Little-endian u32s at arbitrary (unaligned) byte offsets."""
-    value = arr[at].astype(np.uint32)
-    for k in (1, 2, 3):
-        value |= arr[at + k].astype(np.uint32) << (8 * k)
-    return value
-
-
-def _op_field_at(np: Any, arr: Any, at: Any) -> bool:
-    """Whether every offset holds the op=2 header field."""
-    return all(bool(np.all(arr[at + k] == byte)) for k, byte in enumerate(_OP_FIELD))
+def _layouts(np: Any) -> list[tuple[list[tuple[int, Any]], Any]]:
+    """The message record layouts (fixed parts, record dtype), made once numpy is loaded."""
+    if not _NUMPY_LAYOUTS:
+        for fixed, fields in (_LAYOUT_CPP, _LAYOUT_PY):
+            parts = [(at, np.frombuffer(b, dtype=np.uint8)) for at, b in fixed]
+            _NUMPY_LAYOUTS.append((parts, np.dtype(fields)))
+    return _NUMPY_LAYOUTS
 
 
 def _mcap_header(np: Any) -> Any:

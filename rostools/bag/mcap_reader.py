@@ -6,11 +6,18 @@ bodies) and loading chunks lazily in time order. The records inside chunks are a
 a summary that lacks some channels or schemas (valid MCAP; the upstream Python indexed reader
 fails on such files) makes the reader collect them from the data section instead. Files cut
 short are read up to the last complete record, plus what decompresses of a cut-short chunk.
+
+Damage never comes out silently wrong: times come from the message records; a record that
+does not parse, at the top level or inside a chunk, is skipped to the next plausible record
+(``mcap_format.next_record``) and listed in ``damage``, as is a chunk that does not
+decompress; a chunk whose header's time range disagrees with its messages is noted.
 """
 
 from __future__ import annotations
 
+import mmap
 import struct
+from bisect import bisect_left
 from collections.abc import Iterator, Mapping
 from dataclasses import dataclass, field
 from functools import partial
@@ -33,6 +40,9 @@ _PREFIX = fmt.PREFIX
 _CHUNK_HEAD = struct.Struct("<QQQI")
 _U32 = struct.Struct("<I")
 _U64 = struct.Struct("<Q")
+_U16 = struct.Struct("<H")
+#: What a damage note calls a record.
+_NAMES = {fmt.OP_SCHEMA: "schema", fmt.OP_CHANNEL: "channel"}
 #: Channel id -> (rank, connection) of a read; unfiltered reads add channels met late.
 _Wanted = dict[int, tuple[int, Connection]]
 
@@ -151,21 +161,35 @@ class McapReader(BagReader):
     def _top(self, pos: int, end: int) -> Iterator[tuple[int, int, int, int, bool]]:
         """(record, opcode, content start, content end, complete) of top-level records.
 
-        At a record that does not fit (a cut-short file) the walk ends; if that record is a
-        chunk whose header is whole, it is yielded with ``complete`` False and the end of the
-        file as its end, so what decompresses of it can still be read.
+        At a record that does not fit, the walk reads on at the next plausible record; if
+        that record is a chunk whose header is whole, it is yielded with ``complete`` False
+        and the place the walk reads on at (or the end) as its end, so what decompresses of
+        it can still be read.
         """
-        mm, nxt = self._mm, pos
-        try:
-            for rec, op, start, stop in fmt.records(mm, pos, end):
-                nxt = stop
-                yield rec, op, start, stop, True
-        except fmt.McapFormatError as err:
-            if nxt + 9 + 40 <= self.size and mm[nxt] == fmt.OP_CHUNK:
-                self.damaged(f"chunk at {nxt} is cut short; read what decompresses")
-                yield nxt, fmt.OP_CHUNK, nxt + 9, self.size, False
-            else:
-                self.damaged(f"data section ends in a damaged or cut-short record ({err})")
+        mm = self._mm
+        while pos < end:
+            nxt = pos
+            try:
+                for rec, op, start, stop in fmt.records(mm, pos, end):
+                    if op == fmt.OP_MESSAGE and stop - start < 22:
+                        raise fmt.McapFormatError(f"message at {rec} is too short")
+                    nxt = stop
+                    yield rec, op, start, stop, True
+                return
+            except fmt.McapFormatError as err:
+                resume = fmt.next_record(mm, nxt + 1, end, fmt.DATA_OPS)
+                stop = end if resume is None else resume
+                if nxt + 9 + 40 <= stop and mm[nxt] == fmt.OP_CHUNK:
+                    how = "is cut short" if resume is None else "does not fit its record"
+                    self.damaged(f"chunk at {nxt} {how}; read what decompresses")
+                    yield nxt, fmt.OP_CHUNK, nxt + 9, stop, False
+                elif resume is None:
+                    self.damaged(f"data section ends in a damaged or cut-short record ({err})")
+                else:
+                    self.damaged(
+                        f"{resume - nxt} bytes at {nxt} do not parse ({err}); read on at {resume}"
+                    )
+                pos = stop
 
     def _scan(self) -> _Scan:
         """Walk the data section for schemas, channels, counts and times (no summary).
@@ -193,11 +217,11 @@ class McapReader(BagReader):
                     continue
                 if complete:
                     scan.chunks.append((compression or "none", data_len, size))
-                for channel_id, log in self._inner(data, base, data_end, rec):
+                for channel_id, log in self._inner(data, base, data_end, rec, complete):
                     scan.counts[channel_id] = scan.counts.get(channel_id, 0) + 1
                     times.append(log)
             elif op in (fmt.OP_SCHEMA, fmt.OP_CHANNEL):
-                self._register(fmt.parse(op, mm, start, stop))
+                self._register_inner(op, mm, rec, stop, None)
             elif op == fmt.OP_ATTACHMENT:
                 scan.attachments += 1
             elif op == fmt.OP_METADATA:
@@ -314,18 +338,62 @@ class McapReader(BagReader):
         return data, 0, len(data)
 
     def _inner(
-        self, buf: bytes | memoryview, pos: int, end: int, rec: int
+        self, buf: bytes | memoryview, pos: int, end: int, rec: int, complete: bool
     ) -> Iterator[tuple[int, int]]:
         """(channel, log time) of the messages in a chunk; registers schemas and channels."""
+        for _, op, start, stop in self._chunk_records(buf, pos, end, rec, complete):
+            if op == fmt.OP_MESSAGE:
+                channel_id, log = struct.unpack_from("<H4xQ", buf, start)
+                yield channel_id, log
+            elif op in (fmt.OP_SCHEMA, fmt.OP_CHANNEL):
+                self._register_inner(op, buf, start - 9, stop, rec)
+
+    def _chunk_records(
+        self, buf: bytes | memoryview, pos: int, end: int, rec: int, complete: bool
+    ) -> Iterator[tuple[int, int, int, int]]:
+        """The records of a chunk, reading on past bytes that do not parse (listed in damage).
+
+        Message records shorter than their fixed fields count as bytes that do not parse.
+        """
+        while pos < end:
+            nxt = pos
+            try:
+                for at, op, start, stop in fmt.records(buf, pos, end):
+                    if op == fmt.OP_MESSAGE and stop - start < 22:
+                        raise fmt.McapFormatError(f"message at {at} is too short")
+                    nxt = stop
+                    yield at, op, start, stop
+                return
+            except fmt.McapFormatError as err:
+                pos = self._read_on(buf, nxt, end, rec, complete, err)
+
+    def _read_on(
+        self, buf: bytes | memoryview, pos: int, end: int, rec: int, complete: bool, err: Exception
+    ) -> int:
+        """Where reading a chunk goes on after bytes at ``pos`` that do not parse (or ``end``)."""
+        resume = fmt.next_record(buf, pos + 1, end, fmt.CHUNK_OPS) if complete else None
+        if resume is None:
+            how = "ends in a damaged record" if complete else "is cut short"
+            self.damaged(f"chunk at {rec} {how} ({err})")
+            return end
+        self.damaged(
+            f"chunk at {rec}: {resume - pos} bytes at {pos} do not parse ({err});"
+            f" read on at {resume}"
+        )
+        return resume
+
+    def _register_inner(
+        self, op: int, buf: bytes | memoryview | mmap.mmap, pos: int, nxt: int, rec: int | None
+    ) -> None:
+        """Register the schema or channel record at ``pos``; a damaged one is listed.
+
+        ``rec``: the chunk it lies in, or None at the top level.
+        """
         try:
-            for _, op, start, stop in fmt.records(buf, pos, end):
-                if op == fmt.OP_MESSAGE:
-                    channel_id, log = struct.unpack_from("<H4xQ", buf, start)
-                    yield channel_id, log
-                elif op in (fmt.OP_SCHEMA, fmt.OP_CHANNEL):
-                    self._register(fmt.parse(op, buf, start, stop))
-        except (fmt.McapFormatError, struct.error) as err:
-            self.damaged(f"chunk at {rec} ends in a damaged record ({err})")
+            self._register(fmt.parse(op, buf, pos + 9, nxt))
+        except fmt.McapFormatError as err:
+            where = f"chunk at {rec}: " if rec is not None else ""
+            self.damaged(f"{where}skipped a damaged {_NAMES[op]} record at {pos} ({err})")
 
     def _register(self, record: fmt.Record | None) -> None:
         if isinstance(record, fmt.Schema):
@@ -410,11 +478,19 @@ class McapReader(BagReader):
                 index = by_offset.get(rec)
                 if complete and (last < lo or first > hi):
                     continue
+                if index is not None and (
+                    index.message_start_time,
+                    index.message_end_time,
+                    index.chunk_length,
+                ) != (first, last, stop - rec):
+                    self.note(f"the summary's index of the chunk at {rec} does not match it")
+                    index = None  # its channels are not this chunk's: read the chunk
                 if (
                     index is not None
                     and index.message_index_offsets
                     and not everything
                     and wanted.keys().isdisjoint(index.message_index_offsets)
+                    and self._channels_agree(index)
                 ):
                     continue
                 load = partial(
@@ -430,12 +506,32 @@ class McapReader(BagReader):
                 )
                 blocks.append(Block(first, last, len(blocks), load))
             elif op in (fmt.OP_SCHEMA, fmt.OP_CHANNEL):
-                self._register(fmt.parse(op, mm, start, stop))
+                self._register_inner(op, mm, rec, stop, None)
             elif op in (fmt.OP_DATA_END, fmt.OP_FOOTER):
                 break
         if loose:
             blocks.append(_loose_block(loose, len(blocks)))
         return blocks
+
+    def _channels_agree(self, index: fmt.ChunkIndex) -> bool:
+        """Whether the message indexes a chunk index points at are of the channels it names.
+
+        Checked before the chunk is left out of a read by its channels, so a damaged chunk
+        index hides nothing (noted when it disagrees).
+        """
+        mm = self._mm
+        for channel_id, offset in index.message_index_offsets.items():
+            if not (
+                offset + 11 <= self.size
+                and mm[offset] == fmt.OP_MESSAGE_INDEX
+                and _U16.unpack_from(mm, offset + 9)[0] == channel_id
+            ):
+                self.note(
+                    f"the summary's index of the chunk at {index.chunk_start_offset} names"
+                    f" channels its message indexes do not"
+                )
+                return False
+        return True
 
     def _selects(self, channel_id: int, wanted: _Wanted, everything: bool) -> bool:
         """Whether a read selects a channel.
@@ -463,46 +559,69 @@ class McapReader(BagReader):
         hi: int,
         complete: bool,
     ) -> list[Entry]:
-        """The wanted messages of one chunk, sorted."""
+        """The wanted messages of one chunk from ``lo`` to ``hi`` ns, sorted.
+
+        Never raises for what is in the file: a chunk that does not read is listed in
+        ``damage``, a time range that disagrees with the messages in ``notes``.
+        """
         self._forget.up_to(rec)
         try:
             compression, size, data_start, dlen = self._chunk_fields(rec, start, stop, complete)
             buf, pos, end = self._chunk_data(compression, size, data_start, dlen, complete)
-        except fmt.McapFormatError as err:
-            if complete:
-                raise BagFormatError(f"{self.path}: {err}") from err
-            self.damaged(f"cut-short chunk at {rec} is unreadable ({err})")
+        except BagFormatError as err:
+            what = "" if complete else "cut-short "
+            self.damaged(f"{what}chunk at {rec} is unreadable ({err}); its messages are left out")
             return []
         view = memoryview(buf)
         out: list[Entry] = []
         append = out.append
         unpack = _MSG.unpack_from
-        try:
-            while pos < end:
-                if pos + 31 > end:
-                    op, length = _PREFIX.unpack_from(buf, pos) if pos + 9 <= end else (0, 1 << 62)
-                    if pos + 9 + length > end:
-                        raise fmt.McapFormatError(f"record at {pos} in chunk {rec} is cut short")
-                    pos += 9 + length
-                    continue
-                op, length, channel_id, seq, log, pub = unpack(buf, pos)
-                nxt = pos + 9 + length
-                if nxt > end:
-                    raise fmt.McapFormatError(f"record at {pos} in chunk {rec} is cut short")
-                if op == fmt.OP_MESSAGE:
-                    if length < 22:
-                        raise fmt.McapFormatError(f"message at {pos} in chunk {rec} is too short")
-                    if lo <= log <= hi and self._selects(channel_id, wanted, everything):
-                        rank, conn = wanted[channel_id]
-                        append((log, rank, pos, conn, view[pos + 31 : nxt], seq, pub))
-                elif op in (fmt.OP_SCHEMA, fmt.OP_CHANNEL):
-                    self._register(fmt.parse(op, buf, pos + 9, nxt))
-                pos = nxt
-        except fmt.McapFormatError as err:
-            if complete:
-                raise BagFormatError(f"{self.path}: {err}") from err
-            self.damaged(f"cut-short chunk at {rec}: {err}")
+        while pos < end:
+            try:
+                while pos < end:
+                    if pos + 31 > end:
+                        op, length = (
+                            _PREFIX.unpack_from(buf, pos) if pos + 9 <= end else (0, 1 << 62)
+                        )
+                        if pos + 9 + length > end:
+                            raise fmt.McapFormatError(f"record at {pos} is cut short")
+                        pos += 9 + length
+                        continue
+                    op, length, channel_id, seq, log, pub = unpack(buf, pos)
+                    nxt = pos + 9 + length
+                    if nxt > end:
+                        raise fmt.McapFormatError(f"record at {pos} is cut short")
+                    if op == fmt.OP_MESSAGE:
+                        if length < 22:
+                            raise fmt.McapFormatError(f"message at {pos} is too short")
+                        if self._selects(channel_id, wanted, everything):
+                            rank, conn = wanted[channel_id]
+                            append((log, rank, pos, conn, view[pos + 31 : nxt], seq, pub))
+                    elif op in (fmt.OP_SCHEMA, fmt.OP_CHANNEL):
+                        self._register_inner(op, buf, pos, nxt, rec)
+                    pos = nxt
+            except fmt.McapFormatError as err:
+                pos = self._read_on(buf, pos, end, rec, complete, err)
         out.sort()
+        first, last = _CHUNK_HEAD.unpack_from(self._mm, start)[:2]
+        # Every message read: the range must be the header's; some: within it.
+        if (
+            out
+            and complete
+            and (
+                (out[0][0], out[-1][0]) != (first, last)
+                if everything
+                else (out[0][0] < first or out[-1][0] > last)
+            )
+        ):
+            self.note(
+                f"chunk at {rec}: its messages run from {out[0][0]} to {out[-1][0]} ns, its"
+                f" header says {first} to {last}"
+            )
+        if out and lo > out[0][0]:
+            out = out[bisect_left(out, (lo,)) :]
+        if out and hi < out[-1][0]:
+            out = out[: bisect_left(out, (hi + 1,))]
         return out
 
     def close(self) -> None:

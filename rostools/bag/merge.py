@@ -22,7 +22,7 @@ from rostools.bag.access import (
     open_writer,
     require_ros1,
 )
-from rostools.bag.base import BagReader, BagWriter, Targets
+from rostools.bag.base import BagReader, BagWriter, Targets, problems
 from rostools.bag.model import BagUsageError, Connection
 from rostools.bag.ops import PROGRESS_EVERY, CopyReport, Progress, compile_filter
 
@@ -125,6 +125,7 @@ def merge(
             writer.abort()
             raise
         writer.close()
+        notes, lost = problems(readers)
     return CopyReport(
         source=paths[0],
         output=dst,
@@ -135,6 +136,8 @@ def merge(
         connections=len(seen),
         extras_copied=sum(e[0] for e in extras),
         extras_left_out=sum(e[1] for e in extras),
+        notes=notes,
+        lost=lost,
     )
 
 

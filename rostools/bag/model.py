@@ -6,7 +6,7 @@ and consume these, so the operations in ``ops`` and ``recover`` never see a form
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -202,3 +202,14 @@ class BagUsageError(UsageError):
 
 class BagDataLossError(DataLossError):
     """Recovery could not salvage everything; the report says what was lost."""
+
+
+#: A data-loss error lists this many of the problems found; ``bag doctor`` lists them all.
+LISTED = 5
+
+
+def lost_data(what: str, lost: Sequence[str]) -> BagDataLossError:
+    """The error (exit code 6) for ``what`` was done, with ``lost`` left out."""
+    shown = "; ".join(lost[:LISTED])
+    more = f"; and {len(lost) - LISTED} more (bag doctor lists them)" if len(lost) > LISTED else ""
+    return BagDataLossError(f"{what}, but left out what could not be read: {shown}{more}")

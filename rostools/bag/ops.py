@@ -3,6 +3,8 @@
 Library functions: no printing. Each reads through ``open_bag`` and writes through
 ``open_writer``, so every combination of ``.bag`` and MCAP works; messages pass as raw bytes
 unless a filter expression needs the decoded message. A failure deletes the partial output.
+Damage in the input does not fail a copy: every message that reads is written, and the report
+lists what was left out (``CopyReport.lost``).
 """
 
 from __future__ import annotations
@@ -22,8 +24,8 @@ from rostools.bag.access import (
     open_writer,
     require_ros1,
 )
-from rostools.bag.base import BagReader, BagWriter, Targets
-from rostools.bag.model import BagUsageError, Connection, UnsupportedBagError
+from rostools.bag.base import BagReader, BagWriter, Targets, problems
+from rostools.bag.model import BagUsageError, Connection, UnsupportedBagError, lost_data
 from rostools.bag.ordering import RawMessage
 from rostools.errors import RostoolsError
 from rostools.msgs.expr import Expression, compile_expression
@@ -52,6 +54,15 @@ class CopyReport:
     #: MCAP attachments and metadata records copied, and left out (see ``copy_extras``).
     extras_copied: int = 0
     extras_left_out: int = 0
+    #: How the inputs had to be read, and what of them could not be (``BagReader``), each
+    #: naming its file.
+    notes: tuple[str, ...] = ()
+    lost: tuple[str, ...] = ()
+
+    def raise_if_lost(self) -> None:
+        """Raise ``BagDataLossError`` (exit code 6) naming what was left out, if anything."""
+        if self.lost:
+            raise lost_data(f"wrote {self.messages_written} messages to {self.output}", self.lost)
 
 
 def convert(
@@ -273,6 +284,7 @@ def _copy(
             writer.abort()
             raise
         writer.close()
+        notes, lost = problems([reader])
     return CopyReport(
         source=src,
         output=dst,
@@ -283,6 +295,8 @@ def _copy(
         connections=conns,
         extras_copied=extras[0],
         extras_left_out=extras[1],
+        notes=notes,
+        lost=lost,
     )
 
 

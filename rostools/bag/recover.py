@@ -74,7 +74,6 @@ def recover(
         kind = format_for_name(dst)
         if kind != "mcap":  # an MCAP output takes any encoding as it is
             require_ros1(reader, f"writing to .{kind}")
-        reader.skip_damaged = True
         info = reader.info()
         writer = open_writer(
             dst,

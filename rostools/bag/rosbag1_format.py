@@ -10,7 +10,7 @@ from __future__ import annotations
 import bz2
 import mmap
 import struct
-from collections.abc import Mapping
+from collections.abc import Collection, Mapping
 from typing import Final
 
 from rostools.bag.model import NS_PER_SEC, BagFormatError, UnsupportedBagError
@@ -48,6 +48,13 @@ MAX_CHUNK_SIZE: Final = 1 << 30
 MAX_CONNECTION_HEADER: Final = 64 * 1024 * 1024
 
 COMPRESSIONS: Final = ("none", "bz2", "lz4")
+
+#: Reading on after a damaged record looks for the next ``op`` field, then for the record's
+#: start up to this many bytes before it: the fields that sort before ``op`` are short (a
+#: chunk info's chunk_pos, count and end_time take 57 bytes).
+RESYNC_REACH: Final = 256
+#: An ``op`` field as it is stored: its length (4), then ``op=``.
+_OP_TAG: Final = b"\x04\x00\x00\x00op="
 
 #: What the record parsers read from: bytes, a memoryview, or the file map.
 ReadBuffer = bytes | bytearray | memoryview | mmap.mmap
@@ -135,6 +142,69 @@ def read_record(
     if data + dlen > end:
         raise RecordError(f"record data at {pos} ({dlen} bytes) is cut short")
     return fields, data, dlen
+
+
+def next_record(
+    buf: bytes | bytearray | mmap.mmap, start: int, end: int, ops: Collection[int]
+) -> int | None:
+    """Where the first whole record of one of ``ops`` at or after ``start`` begins, or None.
+
+    What reading on after damage needs. A record is recognised by its ``op`` field, then
+    parsed whole (with the fields its op requires) from each place its header could start,
+    nearest first; and the record after it must be one of ``ops`` too, or the end. So the
+    bytes of a message (or the literals of an lz4 chunk) that hold one record header are not
+    taken for a record.
+    """
+    find = buf.find
+    hit = find(_OP_TAG, start + 4, end)
+    while hit >= 0 and hit + 8 <= end:
+        op = buf[hit + 7]
+        if op in ops:
+            for at in range(hit - 4, max(start, hit - 4 - RESYNC_REACH) - 1, -1):
+                (hlen,) = _LEN.unpack_from(buf, at)
+                if hit + 8 <= at + 4 + hlen <= at + 4 + MAX_RECORD_HEADER:
+                    after = _whole(buf, at, end, ops)
+                    if after is not None and (after == end or _whole(buf, after, end, ops)):
+                        return at
+        hit = find(_OP_TAG, hit + 1, end)
+    return None
+
+
+def _whole(
+    buf: bytes | bytearray | mmap.mmap, at: int, end: int, ops: Collection[int]
+) -> int | None:
+    """Where the record at ``at`` ends, if it is a well-formed record of one of ``ops``."""
+    try:
+        fields, data, dlen = read_record(buf, at, end)
+        op = op_of(fields)
+    except RecordError:
+        return None
+    if op not in ops or not _well_formed(op, fields):
+        return None
+    if op == OP_INDEX_DATA:  # rosbag reads `count` entries whatever data_len says
+        dlen = INDEX_ENTRY_SIZE * int(U32.unpack(fields["count"])[0])
+    return data + dlen if data + dlen <= end else None
+
+
+#: The fields each op requires, with their sizes (None: any size).
+_REQUIRED: Final[dict[int, dict[str, int | None]]] = {
+    OP_MSG_DATA: {"conn": 4, "time": 8},
+    OP_CHUNK: {"compression": None, "size": 4},
+    OP_INDEX_DATA: {"ver": 4, "conn": 4, "count": 4},
+    OP_CHUNK_INFO: {"ver": 4, "chunk_pos": 8, "start_time": 8, "end_time": 8, "count": 4},
+    OP_CONNECTION: {"conn": 4, "topic": None},
+}
+
+
+def _well_formed(op: int, fields: Mapping[str, bytes]) -> bool:
+    """Whether a header has every field its op requires, each of the right size."""
+    for name, size in _REQUIRED.get(op, {}).items():
+        value = fields.get(name)
+        if value is None or (size is not None and len(value) != size):
+            return False
+    if op == OP_CHUNK:
+        return fields["compression"].decode("ascii", "replace") in COMPRESSIONS
+    return True
 
 
 def op_of(fields: Mapping[str, bytes]) -> int:

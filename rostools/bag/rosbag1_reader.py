@@ -6,15 +6,23 @@ Opening an indexed bag reads the bag header, the CONNECTION and CHUNK_INFO recor
 after a chunk are read only when that chunk's messages are. A bag without a usable index (a
 killed recorder, a cut-short copy) is read by walking its chunks, including the records of a
 chunk that was never closed and the decompressible part of one that was cut short.
+
+Damage never comes out silently wrong. The message records are the truth: times and connections
+come from them, and each index entry is checked against the record it points at as the chunk is
+read (``rosbag1_index``). A chunk whose index disagrees with its records is read by walking the
+records, and the disagreement is noted. Bytes that do not parse, at the top level or inside a
+chunk, are skipped to the next whole record (``rosbag1_format.next_record``), and what they
+held is listed in ``damage``; a chunk that does not decompress is left out and listed there.
 """
 
 from __future__ import annotations
 
-import mmap
 import struct
+from bisect import bisect_left
 from collections.abc import Collection, Iterator, Mapping
 from dataclasses import dataclass, field
 from functools import partial
+from operator import attrgetter
 from pathlib import Path
 
 from rostools.bag import rosbag1_format as fmt
@@ -29,19 +37,18 @@ from rostools.bag.model import (
     summarize,
 )
 from rostools.bag.ordering import Block, Entry, RawMessage, ordered, out_of_order
+from rostools.bag.rosbag1_index import Buffer, Disagreement, checked_entries, index_times
 from rostools.wire.header import HeaderError, split_fields
 
-#: A chunk's records: the file map (uncompressed chunks) or the decompressed bytes.
-Buffer = bytes | mmap.mmap
-_ENTRY = struct.Struct("<III")
-_EMPTY = memoryview(b"")
 _U32 = fmt.U32
-_NS = 1_000_000_000
-#: A message record's header length, op field and data length, read in one go for the
-#: 38-byte headers rosbag writes: fields sorted (C++: conn, op, time) or Python's op, conn, time.
-_MSG_CPP = struct.Struct("<I13x8s17xI")
-_MSG_PY = struct.Struct("<I8s30xI")
-_OP_FIELD = b"\x04\x00\x00\x00op=\x02"
+_ID = attrgetter("id")
+#: Records worth reading on at after damage: at the top level, and inside a chunk.
+_TOP_OPS = frozenset(
+    (fmt.OP_CHUNK, fmt.OP_CONNECTION, fmt.OP_INDEX_DATA, fmt.OP_CHUNK_INFO, fmt.OP_MSG_DATA)
+)
+_CHUNK_OPS = frozenset((fmt.OP_MSG_DATA, fmt.OP_CONNECTION))
+#: The op field of an INDEX_DATA record header, as stored.
+_INDEX_OP = b"\x04\x00\x00\x00op=\x04"
 
 
 @dataclass
@@ -74,6 +81,8 @@ class Bag1Reader(BagReader):
         super().__init__(path)
         self.chunks: list[Chunk] = []
         self._by_id: dict[int, Connection] = {}
+        #: (chunk position, start, end, messages per connection) as the index lists them.
+        self._infos: list[tuple[int, int, int, dict[int, int]]] = []
         mm, self.size = map_file(self.path)
         if mm is None:
             raise BagFormatError(f"{self.path} is empty, not a bag")
@@ -139,21 +148,34 @@ class Bag1Reader(BagReader):
                 raise fmt.RecordError(f"expected a connection record at {pos}")
             self._add_connection(fields, data, dlen)
             pos = data + dlen
+        infos: list[tuple[int, int, int, dict[int, int]]] = []
         for _ in range(chunk_count):
             fields, data, dlen = fmt.read_record(mm, pos, size)
             if fmt.op_of(fields) != fmt.OP_CHUNK_INFO:
                 raise fmt.RecordError(f"expected a chunk info record at {pos}")
             count = fmt.u32_field(fields, "count")
-            if dlen < 8 * count:
+            if dlen != 8 * count:
                 raise fmt.RecordError(f"chunk info at {pos} lists {count} connections in {dlen} B")
             pairs = struct.unpack_from(f"<{2 * count}I", mm, data)
-            chunk = self._chunk_header(fmt.u64_field(fields, "chunk_pos"))
-            chunk.start_ns = fmt.time_field(fields, "start_time")
-            chunk.end_ns = fmt.time_field(fields, "end_time")
-            chunk.counts = dict(zip(pairs[::2], pairs[1::2], strict=True))
+            counts = dict(zip(pairs[::2], pairs[1::2], strict=True))
+            if len(counts) != count:
+                raise fmt.RecordError(f"chunk info at {pos} lists a connection twice")
+            chunk_pos = fmt.u64_field(fields, "chunk_pos")
+            start, end = fmt.time_field(fields, "start_time"), fmt.time_field(fields, "end_time")
+            infos.append((chunk_pos, start, end, counts))
+            pos = data + dlen
+        self._infos = infos  # for a damage report, should the chunks not be where it says
+        for chunk_pos, start, end, counts in infos:
+            unknown = counts.keys() - self._by_id.keys()
+            if unknown:
+                raise fmt.RecordError(
+                    f"the chunk info of the chunk at {chunk_pos} lists connection"
+                    f" {min(unknown)}, which no connection record defines"
+                )
+            chunk = self._chunk_header(chunk_pos)
+            chunk.start_ns, chunk.end_ns, chunk.counts = start, end, counts
             chunk.index_pos = chunk.data_pos + chunk.data_len
             self.chunks.append(chunk)
-            pos = data + dlen
 
     def _chunk_header(self, pos: int) -> Chunk:
         fields, data, dlen = fmt.read_record(self._mm, pos, self.size)
@@ -192,32 +214,28 @@ class Bag1Reader(BagReader):
         return conn
 
     def _scan(self) -> None:
-        """Walk the records after the bag header: chunks, their connections and messages."""
+        """Walk the records after the bag header: chunks, their connections and messages.
+
+        Bytes that do not parse are skipped to the next whole record. Messages of a
+        connection whose record comes later (chunks out of place) are kept.
+        """
         mm, size, pos = self._mm, self.size, self._records_start
         while pos < size:
             try:
                 fields, data, dlen = fmt.read_record(mm, pos, size)
                 op = fmt.op_of(fields)
+                chunk = self._chunk_header(pos) if op == fmt.OP_CHUNK else None
             except fmt.RecordError as err:
-                self._cut_short(pos, err)
-                return
-            if op == fmt.OP_CHUNK:
-                try:
-                    chunk = self._chunk_header(pos)
-                except fmt.RecordError as err:
-                    self._cut_short(pos, err)
-                    return
+                pos = self._read_on(pos, err)
+                continue
+            if chunk is not None:
                 if dlen == 0 and chunk.size == 0:
                     # Never closed: its records follow the provisional header up to EOF.
                     chunk.data_len = size - data
                     chunk.complete = False
-                    self._scan_chunk(chunk)
-                    if chunk.counts:
-                        self.chunks.append(chunk)
-                    return
-                self._scan_chunk(chunk)
-                if chunk.counts:
-                    self.chunks.append(chunk)
+                    self._add_scanned(chunk)
+                    break
+                self._add_scanned(chunk)
             elif op == fmt.OP_CONNECTION:
                 try:
                     self._add_connection(fields, data, dlen)
@@ -226,42 +244,104 @@ class Bag1Reader(BagReader):
             elif op == fmt.OP_INDEX_DATA:
                 # rosbag reads `count` entries whatever data_len says (a known writer bug).
                 dlen = fmt.INDEX_ENTRY_SIZE * _u32_or(fields, "count", dlen // 12)
+            elif op == fmt.OP_MSG_DATA:
+                pos = self._loose(pos)
+                continue
             pos = data + dlen
+        self._drop_orphans()
+        self.connections.sort(key=_ID)  # in id order, as the index lists them
 
-    def _cut_short(self, pos: int, err: Exception) -> None:
-        """The walk hit a record that does not parse: salvage a cut-short chunk, or stop."""
+    def _read_on(self, pos: int, err: Exception) -> int:
+        """The record at ``pos`` does not parse: salvage what can be, and find the next one.
+
+        A chunk whose header is whole but whose data runs past the next record (or the end
+        of the file) is read as far as it decompresses.
+        """
+        nxt = fmt.next_record(self._mm, pos + 1, self.size, _TOP_OPS)
+        stop = self.size if nxt is None else nxt
+        listed = sum(sum(c.values()) for p, _, _, c in self._infos if pos <= p < stop)
+        lost = f"; the index lists {listed} messages in chunks there" if listed else ""
+        chunk = self._broken_chunk(pos, stop)
+        if chunk is not None:
+            self._add_scanned(chunk)
+            got = sum(chunk.counts.values())
+            if nxt is None:
+                self.damaged(
+                    f"chunk at {pos} is cut short ({self.size - chunk.data_pos} of its bytes"
+                    f" are in the file); {got} messages salvaged from it"
+                )
+            else:
+                self.damaged(
+                    f"chunk at {pos} does not fit its record ({err}); {got} messages salvaged"
+                    f" from it, read on at {nxt}"
+                )
+        elif nxt is None:
+            self.damaged(f"{self.size - pos} bytes at {pos} do not parse ({err}){lost}")
+        else:
+            self.damaged(f"{nxt - pos} bytes at {pos} do not parse ({err}){lost}; read on at {nxt}")
+        return stop
+
+    def _broken_chunk(self, pos: int, stop: int) -> Chunk | None:
+        """The chunk at ``pos`` if its header parses, with its data up to ``stop``."""
         try:
             hlen = _U32.unpack_from(self._mm, pos)[0]
-            fields = fmt.parse_header(self._mm, pos + 4, pos + 4 + hlen)
-            is_chunk = fmt.op_of(fields) == fmt.OP_CHUNK and pos + 8 + hlen <= self.size
-        except (fmt.RecordError, struct.error):
-            is_chunk = False
-        if is_chunk:
             data = pos + 8 + hlen
-            chunk = Chunk(
-                pos=pos,
-                compression=fields.get("compression", b"none").decode("ascii", "replace"),
-                size=_u32_or(fields, "size", 0),
-                data_pos=data,
-                data_len=self.size - data,
-                complete=False,
-            )
-            self._scan_chunk(chunk)
-            if chunk.counts:
-                self.chunks.append(chunk)
-            got = sum(chunk.counts.values())
-            self.damaged(
-                f"chunk at {pos} is cut short ({self.size - data} of its bytes are in the file);"
-                f" {got} messages salvaged from it"
-            )
-        else:
-            self.damaged(f"{self.size - pos} bytes at {pos} do not parse ({err})")
+            if data > stop:
+                return None
+            fields = fmt.parse_header(self._mm, pos + 4, pos + 4 + hlen)
+            if fmt.op_of(fields) != fmt.OP_CHUNK:
+                return None
+        except (fmt.RecordError, struct.error):
+            return None
+        return Chunk(
+            pos=pos,
+            compression=fields.get("compression", b"none").decode("ascii", "replace"),
+            size=_u32_or(fields, "size", 0),
+            data_pos=data,
+            data_len=stop - data,
+            complete=False,
+        )
+
+    def _loose(self, pos: int) -> int:
+        """Message records outside any chunk (its header lost): read them as one chunk."""
+        mm, size, end = self._mm, self.size, pos
+        while end < size:
+            try:
+                fields, data, dlen = fmt.read_record(mm, end, size)
+                if fmt.op_of(fields) not in _CHUNK_OPS:
+                    break
+            except fmt.RecordError:
+                break
+            end = data + dlen
+        chunk = Chunk(pos, "none", end - pos, pos, end - pos)
+        self._add_scanned(chunk)
+        self.note(
+            f"{sum(chunk.counts.values())} message records at {pos} lie outside any chunk;"
+            " read them as they are"
+        )
+        return end
+
+    def _add_scanned(self, chunk: Chunk) -> None:
+        self._scan_chunk(chunk)
+        if chunk.counts:
+            self.chunks.append(chunk)
+
+    def _drop_orphans(self) -> None:
+        """Leave out (and list) messages whose connection record the whole scan never met."""
+        for chunk in self.chunks:
+            orphans = [c for c in chunk.counts if c not in self._by_id]
+            if orphans:
+                lost = sum(chunk.counts.pop(c) for c in orphans)
+                self.damaged(
+                    f"chunk at {chunk.pos}: {lost} messages of connections whose record is lost"
+                )
+        self.chunks = [c for c in self.chunks if c.counts]
 
     def _scan_chunk(self, chunk: Chunk) -> None:
         """Fill a chunk's counts and times by walking its records (no index)."""
         try:
             buf, base, end = self.chunk_data(chunk)
-        except fmt.RecordError as err:
+        except BagFormatError as err:
             self.damaged(f"chunk at {chunk.pos} is unreadable: {err}")
             return
         first = True
@@ -281,7 +361,7 @@ class Bag1Reader(BagReader):
         for chunk in self.chunks:
             try:
                 buf, base, end = self.chunk_data(chunk)
-            except fmt.RecordError as err:
+            except BagFormatError as err:
                 found.append(f"chunk at {chunk.pos}: {err}")
                 continue
             late = out_of_order(t for t, _, _ in self._walk(chunk, buf, base, end))
@@ -294,36 +374,48 @@ class Bag1Reader(BagReader):
     ) -> Iterator[tuple[int, int, int]]:
         """(time, connection id, record offset) of each message record, by walking records.
 
-        Connection records met on the way are registered. A record that does not parse ends
-        the walk (the rest of an unclosed or cut-short chunk), noted in ``damage``.
+        Connection records met on the way are registered. Bytes that do not parse are
+        skipped to the next whole record, and listed in ``damage``; at the end of an unclosed
+        or cut-short chunk they are its partial last record.
         """
         pos = base
-        unknown = 0
         while pos < end:
             try:
                 fields, data, dlen = fmt.read_record(buf, pos, end)
                 op = fmt.op_of(fields)
+                found = None
                 if op == fmt.OP_MSG_DATA:
-                    conn_id = fmt.u32_field(fields, "conn")
-                    if conn_id in self._by_id:
-                        yield fmt.time_field(fields, "time"), conn_id, pos - base
-                    else:
-                        unknown += 1
-                elif op == fmt.OP_CONNECTION:
-                    self._add_connection(fields, data, dlen, buf)
+                    found = (fmt.time_field(fields, "time"), fmt.u32_field(fields, "conn"))
             except fmt.RecordError as err:
-                if chunk.complete:
-                    self.damaged(f"chunk at {chunk.pos}: record at {pos - base}: {err}")
-                else:
+                pos = self._skip(chunk, buf, base, end, pos, err)
+                continue
+            if found is not None:
+                yield found[0], found[1], pos - base
+            elif op == fmt.OP_CONNECTION:
+                try:
+                    self._add_connection(fields, data, dlen, buf)
+                except fmt.RecordError as err:
                     self.damaged(
-                        f"chunk at {chunk.pos} ends in a partial record ({end - pos} bytes lost)"
+                        f"chunk at {chunk.pos}: skipped a damaged connection record: {err}"
                     )
-                break
             pos = data + dlen
-        if unknown:
+
+    def _skip(
+        self, chunk: Chunk, buf: Buffer, base: int, end: int, pos: int, err: Exception
+    ) -> int:
+        """Where the walk of a chunk reads on after bytes at ``pos`` that do not parse."""
+        nxt = fmt.next_record(buf, pos + 1, end, _CHUNK_OPS)
+        if nxt is not None:
             self.damaged(
-                f"chunk at {chunk.pos}: {unknown} messages of connections whose record is lost"
+                f"chunk at {chunk.pos}: {nxt - pos} bytes at offset {pos - base} do not parse"
+                f" ({err}); read on at offset {nxt - base}"
             )
+            return nxt
+        if chunk.complete:
+            self.damaged(f"chunk at {chunk.pos}: record at {pos - base}: {err}")
+        else:
+            self.damaged(f"chunk at {chunk.pos} ends in a partial record ({end - pos} bytes lost)")
+        return end
 
     def chunk_data(self, chunk: Chunk) -> tuple[Buffer, int, int]:
         """(buffer, start, end) of a chunk's uncompressed records.
@@ -377,7 +469,11 @@ class Bag1Reader(BagReader):
     def blocks(
         self, wanted: Mapping[int, tuple[int, Connection]], lo: int, hi: int, everything: bool
     ) -> list[Block]:
-        """One block per chunk that may hold a wanted message in time."""
+        """One block per chunk that may hold a wanted message in time.
+
+        A chunk is left out by its chunk info's times and connections; the connections only
+        once its index records (their headers) agree: a damaged chunk info hides nothing.
+        """
         blocks = [
             Block(
                 chunk.start_ns,
@@ -388,9 +484,19 @@ class Bag1Reader(BagReader):
             for order, chunk in enumerate(self.chunks)
             if chunk.end_ns >= lo
             and chunk.start_ns <= hi
-            and not wanted.keys().isdisjoint(chunk.counts)
+            and (not wanted.keys().isdisjoint(chunk.counts) or not self._lists_truly(chunk))
         ]
         return blocks
+
+    def _lists_truly(self, chunk: Chunk) -> bool:
+        """Whether a chunk's index records are of the connections its chunk info lists."""
+        if chunk.index_pos < 0:
+            return True  # counted by walking its records
+        try:
+            found = {conn_id: len(raw) // 12 for conn_id, raw in self.index_records(chunk)}
+        except fmt.RecordError:
+            return False
+        return found == chunk.counts
 
     def chunk_messages(
         self, chunk: Chunk, wanted: Mapping[int, tuple[int, Connection]]
@@ -418,16 +524,10 @@ class Bag1Reader(BagReader):
     def _index_entries(
         self, chunk: Chunk, wanted: Mapping[int, tuple[int, Connection]]
     ) -> list[Entry]:
-        out: list[Entry] = []
-        for conn_id, raw in self.index_records(chunk):
-            if conn_id in wanted:
-                rank, conn = wanted[conn_id]
-                out += [
-                    (secs * _NS + nsecs, rank, off, conn, _EMPTY)
-                    for secs, nsecs, off in _ENTRY.iter_unpack(raw)
-                ]
-        out.sort()
-        return out
+        try:
+            return index_times(self.index_records(chunk), wanted)
+        except fmt.RecordError:  # no usable index: the records say
+            return self._entries(chunk, wanted, 0, MAX_TIME_NS)
 
     def _entries(
         self,
@@ -436,91 +536,110 @@ class Bag1Reader(BagReader):
         lo: int,
         hi: int,
     ) -> list[Entry]:
-        """The wanted messages of one chunk, sorted."""
+        """The wanted messages of one chunk from ``lo`` to ``hi`` ns, sorted.
+
+        Never raises for what is in the file: a chunk that does not read is listed in
+        ``damage``, an index that disagrees with the records in ``notes``.
+        """
         try:
             buf, base, end = self.chunk_data(chunk)
-        except fmt.RecordError as err:
-            raise BagFormatError(f"{self.path}: chunk at {chunk.pos}: {err}") from err
+        except BagFormatError as err:
+            listed = sum(chunk.counts.values())
+            self.damaged(
+                f"chunk at {chunk.pos} is unreadable ({err}); its {listed} messages are lost"
+            )
+            return []
+        out = None
+        if chunk.index_pos >= 0:
+            try:
+                try:
+                    records = list(self.index_records(chunk))
+                except fmt.RecordError as err:
+                    raise Disagreement(f"its index records do not parse: {err}") from err
+                out = checked_entries(buf, base, end, records, chunk.counts, wanted)
+            except Disagreement as why:
+                self.note(
+                    f"chunk at {chunk.pos}: its index disagrees with its records ({why});"
+                    " read from the records"
+                )
+        if out is None:
+            out = self._walked(chunk, buf, base, end, wanted)
+        # Every message of the chunk read: its range must be the chunk info's; some: within it.
+        whole = wanted.keys() >= chunk.counts.keys()
+        if (
+            out
+            and chunk.index_pos >= 0
+            and (
+                (out[0][0], out[-1][0]) != (chunk.start_ns, chunk.end_ns)
+                if whole
+                else out[0][0] < chunk.start_ns or out[-1][0] > chunk.end_ns
+            )
+        ):
+            self.note(
+                f"chunk at {chunk.pos}: its records run from {out[0][0]} to {out[-1][0]} ns,"
+                f" its chunk info says {chunk.start_ns} to {chunk.end_ns}"
+            )
+        if out and lo > out[0][0]:
+            out = out[bisect_left(out, (lo,)) :]
+        if out and hi < out[-1][0]:
+            out = out[: bisect_left(out, (hi + 1,))]
+        return out
+
+    def _walked(
+        self,
+        chunk: Chunk,
+        buf: Buffer,
+        base: int,
+        end: int,
+        wanted: Mapping[int, tuple[int, Connection]],
+    ) -> list[Entry]:
+        """The wanted messages of a chunk by walking its records, sorted."""
         view = memoryview(buf)
         out: list[Entry] = []
-        append = out.append
-        if chunk.index_pos < 0:
-            unpack = _U32.unpack_from
-            for t, conn_id, off in self._walk(chunk, buf, base, end):
-                if conn_id in wanted and lo <= t <= hi:
-                    p = base + off
-                    q = p + 8 + unpack(buf, p)[0]
-                    dlen = unpack(buf, q - 4)[0]
-                    rank, conn = wanted[conn_id]
-                    append((t, rank, off, conn, view[q : q + dlen]))
-            out.sort()
-            return out
-        fast = _MSG_CPP
-        limit = end - _MSG_CPP.size
-        for conn_id, raw in self.index_records(chunk):
-            if conn_id not in wanted:
+        unpack = _U32.unpack_from
+        orphans = 0
+        for t, conn_id, off in self._walk(chunk, buf, base, end):
+            item = wanted.get(conn_id)
+            if item is None:
+                orphans += conn_id not in self._by_id
                 continue
-            rank, conn = wanted[conn_id]
-            for secs, nsecs, off in _ENTRY.iter_unpack(raw):
-                t = secs * _NS + nsecs
-                if t < lo or t > hi:
-                    continue
-                p = base + off
-                # Message record headers are 38 bytes in rosbag's C++ or Python field order;
-                # anything else (or a connection record first) takes the general path.
-                if p <= limit:
-                    hlen, op_field, dlen = fast.unpack_from(buf, p)
-                    if hlen != 38 or op_field != _OP_FIELD:
-                        fast = _MSG_PY if fast is _MSG_CPP else _MSG_CPP
-                        hlen, op_field, dlen = fast.unpack_from(buf, p)
-                    q = p + 46
-                    if hlen != 38 or op_field != _OP_FIELD:
-                        q, dlen = self._message_at(buf, p, end, chunk.pos)
-                else:
-                    q, dlen = self._message_at(buf, p, end, chunk.pos)
-                if q + dlen > end:
-                    raise BagFormatError(f"{self.path}: chunk at {chunk.pos}: index points past it")
-                append((t, rank, off, conn, view[q : q + dlen]))
+            p = base + off
+            q = p + 8 + unpack(buf, p)[0]
+            dlen = unpack(buf, q - 4)[0]
+            out.append((t, item[0], off, item[1], view[q : q + dlen]))
+        if orphans:
+            self.damaged(
+                f"chunk at {chunk.pos}: {orphans} messages of connections whose record is lost"
+            )
         out.sort()
         return out
 
     def index_records(self, chunk: Chunk) -> Iterator[tuple[int, memoryview]]:
-        """(connection id, raw entries) of each INDEX_DATA record after a chunk."""
+        """(connection id, raw entries) of each INDEX_DATA record after a chunk.
+
+        Raises ``RecordError`` when they do not parse.
+        """
         pos = chunk.index_pos
         for _ in range(len(chunk.counts)):
-            try:
-                fields, data, _dlen = fmt.read_record(self._mm, pos, self.size)
-                if fmt.op_of(fields) != fmt.OP_INDEX_DATA:
-                    raise fmt.RecordError(f"expected index data at {pos}")
-                if fmt.u32_field(fields, "ver") != fmt.INDEX_VERSION:
-                    raise fmt.RecordError(f"index data at {pos} has an unknown version")
-                count = fmt.u32_field(fields, "count")
-                conn_id = fmt.u32_field(fields, "conn")
-            except fmt.RecordError as err:
-                raise BagFormatError(
-                    f"{self.path}: damaged index after chunk {chunk.pos}: {err}"
-                ) from err
+            fields, data, _dlen = fmt.read_record(self._mm, pos, self.size)
+            if fmt.op_of(fields) != fmt.OP_INDEX_DATA:
+                raise fmt.RecordError(f"expected index data at {pos}")
+            if fmt.u32_field(fields, "ver") != fmt.INDEX_VERSION:
+                raise fmt.RecordError(f"index data at {pos} has an unknown version")
+            count = fmt.u32_field(fields, "count")
+            conn_id = fmt.u32_field(fields, "conn")
             pos = data + fmt.INDEX_ENTRY_SIZE * count
             if pos > self.size:
-                raise BagFormatError(f"{self.path}: index data at {data} is cut short")
+                raise fmt.RecordError(f"index data at {data} is cut short")
             yield conn_id, self._view[data:pos]
-
-    def _message_at(self, buf: Buffer, pos: int, end: int, chunk_pos: int) -> tuple[int, int]:
-        """(data start, data length) of the message record at ``pos``.
-
-        Connection records before it are skipped, as rosbag does.
-        """
-        try:
-            while True:
-                fields, data, dlen = fmt.read_record(buf, pos, end)
-                op = fmt.op_of(fields)
-                if op == fmt.OP_MSG_DATA:
-                    return data, dlen
-                if op != fmt.OP_CONNECTION:
-                    raise fmt.RecordError(f"index points at a record with op {op}")
-                pos = data + dlen
-        except fmt.RecordError as err:
-            raise BagFormatError(f"{self.path}: chunk at {chunk_pos}: {err}") from err
+        # No index records of a connection the chunk info does not list: the next record's
+        # header has no index data op (what follows is otherwise read, or noted, on its own).
+        if pos + 4 <= self.size:
+            header_end = min(pos + 4 + _U32.unpack_from(self._mm, pos)[0], self.size)
+            if self._mm.find(_INDEX_OP, pos + 4, header_end) >= 0:
+                raise fmt.RecordError(
+                    f"the chunk at {chunk.pos} has more index records than its chunk info lists"
+                )
 
     def close(self) -> None:
         """Release the file map."""

@@ -21,8 +21,8 @@ from rostools.bag.access import (
     open_writer,
     require_ros1,
 )
-from rostools.bag.base import BagWriter, Targets
-from rostools.bag.model import BagUsageError, Connection
+from rostools.bag.base import BagWriter, Targets, problems
+from rostools.bag.model import BagUsageError, Connection, lost_data
 from rostools.bag.ops import PROGRESS_EVERY, Progress
 
 if TYPE_CHECKING:
@@ -45,6 +45,15 @@ class SplitReport:
 
     source: Path
     parts: list[Part] = field(default_factory=list)
+    #: How the source had to be read, and what of it could not be (``BagReader``).
+    notes: tuple[str, ...] = ()
+    lost: tuple[str, ...] = ()
+
+    def raise_if_lost(self) -> None:
+        """Raise ``BagDataLossError`` (exit code 6) naming what was left out, if anything."""
+        if self.lost:
+            written = sum(p.messages for p in self.parts)
+            raise lost_data(f"wrote {written} messages in {len(self.parts)} parts", self.lost)
 
 
 @dataclass(frozen=True)
@@ -165,6 +174,7 @@ def split(
             raise
         if writer is not None:
             writer.close()
+        report.notes, report.lost = problems([reader])
     if progress is not None:
         progress(read, info.message_count)
     return report

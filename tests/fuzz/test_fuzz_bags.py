@@ -5,6 +5,12 @@ Each command runs in this process through the CLI's own entry point. The invaria
 documented exit code, no traceback, no "internal error", one error line exactly when the
 exit code is not 0 (reports of what was done may precede it), and no case slower than
 ``CASE_SECONDS``.
+
+A second test damages the structure (``tests/support/bagdamage.py``: a chunk or message
+record header zeroed mid-file, index records, chunk infos and index entries damaged, chunks
+swapped) and checks what comes out: only messages of the original, each exactly as it was;
+every intact one; anything left out listed, ``bag cat`` exiting 6 then and 0 otherwise; and
+``bag doctor`` flagging the file.
 """
 
 from __future__ import annotations
@@ -13,6 +19,7 @@ import contextlib
 import io
 import signal
 import struct
+from collections import Counter
 from pathlib import Path
 from types import FrameType
 
@@ -20,8 +27,11 @@ import pytest
 from hypothesis import given, seed
 from hypothesis import strategies as st
 
+from rostools.bag.doctor import doctor
 from rostools.cli import main
 from tests.fuzz.conftest import FUZZ, SEED
+from tests.support.bagdamage import BAG_KINDS, MCAP_KINDS, Source, load, messages_of, mutate
+from tests.support.bagdata import write_sample
 from tests.support.env import CORPUS, needs_corpus
 
 pytestmark = needs_corpus
@@ -123,3 +133,71 @@ def test_mutant_bags_fail_cleanly(tmp: Path, source: str, kind: str, at: int, si
 def tmp(tmp_path_factory: pytest.TempPathFactory) -> Path:
     """One folder for every case (hypothesis calls the test many times per fixture)."""
     return tmp_path_factory.mktemp("mutants")
+
+
+#: Corpus files for the structured damage: several chunks (unsorted ones too), or one.
+STRUCTURED = [
+    "ros1/embag/test_2.bag",
+    "ros1/rosbag.js/example-unsorted-chunks.bag",
+    "ros1/frost/compressed_lz4.bag",
+    "ros1/frost/decompressed.bag",
+]
+#: Our own files beside them: many small chunks of every compression.
+WRITTEN = ["none.bag", "bz2.bag", "lz4.bag", "zstd.mcap", "lz4.mcap", "none.mcap"]
+
+
+@pytest.fixture(scope="module")
+def sources(tmp: Path) -> dict[str, Source]:
+    """Every source's layout and messages, read once."""
+    found = {name: load(name, CORPUS / name) for name in STRUCTURED}
+    for name in WRITTEN:
+        compression = name.split(".")[0]
+        path = tmp / f"source-{name}"
+        write_sample(path, 300, compression=compression, chunk_size=3000)
+        found[name] = load(name, path)
+    return found
+
+
+def _kinds(name: str) -> st.SearchStrategy[tuple[str, str]]:
+    kinds = MCAP_KINDS if name.endswith(".mcap") else BAG_KINDS
+    return st.tuples(st.just(name), st.sampled_from(kinds))
+
+
+@seed(SEED)
+@FUZZ
+@given(
+    st.sampled_from(STRUCTURED + WRITTEN).flatmap(_kinds),
+    st.integers(0, 2**16),
+    st.integers(0, 7),
+)
+def test_structured_damage_gives_every_intact_message(
+    tmp: Path, sources: dict[str, Source], damage: tuple[str, str], pick: int, bit: int
+) -> None:
+    name, kind = damage
+    source = sources[name]
+    mutant = mutate(source, kind, pick, bit)
+    if mutant is None:  # nothing of that kind in this file
+        return
+    path = tmp / ("damaged.mcap" if source.mcap else "damaged.bag")
+    path.write_bytes(mutant.raw)
+    case = (name, mutant.what)
+    got, reader = messages_of(path)
+    # Nothing wrong comes out: each message is one of the original's, times and bytes.
+    assert not Counter(got) - Counter(source.messages), case
+    # Every intact message does.
+    assert not Counter(mutant.intact) - Counter(got), (case, reader.damage)
+    if Counter(got) != Counter(source.messages):
+        assert reader.damage, case  # what was left out is said
+    if got != sorted(got, key=lambda m: m[1]):
+        assert reader.notes, case  # out of time order only where the index said wrong
+    # A read of one topic leaves chunks out by the index: it must hide nothing either.
+    topics = sorted({m[0] for m in source.messages})
+    topic = topics[pick % len(topics)]
+    one, _ = messages_of(path, [topic])
+    assert not Counter(one) - Counter(m for m in source.messages if m[0] == topic), case
+    assert not Counter(m for m in mutant.intact if m[0] == topic) - Counter(one), case
+    code, err = _run("bag", "cat", "--raw", str(path))
+    assert code == (6 if reader.damage else 0), (case, code, err)
+    assert "Traceback" not in err and "internal error" not in err, (case, err)
+    checkup = doctor(path)
+    assert not checkup.clean, case

@@ -9,8 +9,16 @@ from pathlib import Path
 import pytest
 import yaml
 
+from rostools.bag import rosbag1_format as fmt
 from rostools.bag.access import bag_info, open_bag
-from tests.support.bagdata import STEP_NS, STRING_MD5, read_stream, write_play_bag, write_sample
+from tests.support.bagdata import (
+    STEP_NS,
+    STRING_MD5,
+    bag_records,
+    read_stream,
+    write_play_bag,
+    write_sample,
+)
 from tests.support.env import run_cli
 
 
@@ -141,6 +149,24 @@ def test_compress_and_decompress_in_place(tmp_path: Path) -> None:
     outdir.mkdir()
     done = run_cli("bag", "compress", str(sample.path), "--output-dir", str(outdir))
     assert done.returncode == 0 and bag_info(outdir / "s.bag").compression[0].compression == "bz2"
+
+
+def test_compressing_a_damaged_bag_keeps_what_reads_and_exits_6(tmp_path: Path) -> None:
+    """Issue 24: the rest of the bag is compressed, the original kept, the loss named."""
+    sample = write_sample(tmp_path / "s.bag", 400, chunk_size=3000)
+    raw = sample.path.read_bytes()
+    victim = [r for r in bag_records(raw) if r[1] == fmt.OP_CHUNK][2]
+    (tmp_path / "d.bag").write_bytes(raw[: victim[0]] + bytes(8) + raw[victim[0] + 8 :])
+    done = run_cli("bag", "compress", str(tmp_path / "d.bag"))
+    assert done.returncode == 6, done.stderr
+    errors = [line for line in done.stderr.splitlines() if line.startswith("rostools: ")]
+    assert len(errors) == 1 and "compressed 1 bag(s)" in errors[0] and str(victim[0]) in errors[0]
+    assert (tmp_path / "d.orig.bag").read_bytes() == (
+        raw[: victim[0]] + bytes(8) + raw[victim[0] + 8 :]
+    )
+    # An uncompressed chunk whose header is lost still reads: every message is there.
+    assert read_stream(tmp_path / "d.bag") == sample.stream
+    assert bag_info(tmp_path / "d.bag").compression[0].compression == "bz2"
 
 
 def test_recover_reports_loss_with_exit_6(tmp_path: Path) -> None:

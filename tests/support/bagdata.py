@@ -145,3 +145,43 @@ def write_static_bag(path: Path) -> None:
         for k, text in enumerate(["a1", "b1", "c1", "a2"]):
             payload = struct.pack("<I", 2) + text.encode()
             writer.write(conns["/" + text[0]], 100 * 10**9 + k * 10**8, payload)
+
+
+#: (position, op, header fields, data start, data length) of one record of a ``.bag``.
+Record = tuple[int, int, dict[str, bytes], int, int]
+
+
+def bag_records(raw: bytes, start: int = 13, end: int | None = None) -> list[Record]:
+    """The records of an intact ``.bag`` from ``start`` (after the magic line) to ``end``.
+
+    Top level by default; give a chunk's data span for the records inside an uncompressed one.
+    """
+    from rostools.bag import rosbag1_format as fmt
+
+    end = len(raw) if end is None else end
+    out: list[Record] = []
+    pos = start
+    while pos < end:
+        fields, data, dlen = fmt.read_record(raw, pos, end)
+        op = fmt.op_of(fields)
+        if op == fmt.OP_INDEX_DATA:
+            dlen = fmt.INDEX_ENTRY_SIZE * fmt.u32_field(fields, "count")
+        out.append((pos, op, fields, data, dlen))
+        pos = data + dlen
+    return out
+
+
+def chunk_spans(raw: bytes) -> list[tuple[int, int]]:
+    """[start, end) of each chunk record of a ``.bag`` together with the index records after it."""
+    from rostools.bag import rosbag1_format as fmt
+
+    records = bag_records(raw)
+    starts = [r[0] for r in records if r[1] == fmt.OP_CHUNK]
+    index = next(r[0] for r in records if r[0] > starts[-1] and r[1] == fmt.OP_CONNECTION)
+    return list(zip(starts, [*starts[1:], index], strict=True))
+
+
+def swap_spans(raw: bytes, first: tuple[int, int], second: tuple[int, int]) -> bytes:
+    """``raw`` with two byte ranges (first before second) swapped."""
+    (a, b), (c, d) = first, second
+    return raw[:a] + raw[c:d] + raw[b:c] + raw[a:b] + raw[d:]

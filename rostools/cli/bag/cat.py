@@ -19,7 +19,7 @@ from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
-from rostools.cli.bag.files import EndOpt, FilterExprOpt, StartOpt, time_window
+from rostools.cli.bag.files import EndOpt, FilterExprOpt, StartOpt, check_read, time_window
 from rostools.cli.bag.group import app
 from rostools.errors import InvalidDataError, UsageError
 
@@ -159,7 +159,8 @@ def cat(
         keeps = [compile_filter(expression) if expression else None for _ in readers]
         if expression and any(cdr):
             raise UsageError("--filter reads ROS 1 messages only; this selection has ROS 2 ones")
-        _print(readers, cdr, topics, lo, hi, keeps, fmt, raw, count)
+        printed = _print(readers, cdr, topics, lo, hi, keeps, fmt, raw, count)
+        check_read(readers, f"printed {printed} messages")
 
 
 def _cdr_connections(
@@ -198,7 +199,8 @@ def _print(
     fmt: CatFormat,
     raw: bool,
     count: int | None,
-) -> None:
+) -> int:
+    """Print the messages; how many."""
     from rostools.bag.ros2 import Ros2Types
 
     lines: dict[tuple[int, int], _Lines] = {}
@@ -241,3 +243,4 @@ def _print(
             out.clear()
             pending = 0
     write("".join(out))
+    return printed

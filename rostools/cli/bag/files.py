@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import dataclasses
 import sys
-from collections.abc import Callable
+from collections.abc import Callable, Iterable, Sequence
 from functools import partial
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated, Any
@@ -21,6 +21,7 @@ from rostools.cli.output import Format, emit, render
 from rostools.errors import DataLossError, UsageError, one_line
 
 if TYPE_CHECKING:
+    from rostools.bag.base import BagReader
     from rostools.bag.ops import CopyReport
     from rostools.bag.recover import RecoverReport
     from rostools.bag.rename import Renames
@@ -99,7 +100,7 @@ def info(
     ] = None,
     fmt: FormatOpt = None,
 ) -> None:
-    """Summarise bags from their index alone (rosbag info)."""
+    """Summarise bags from their index alone (rosbag info); exit 6 if a bag is damaged."""
     from rostools.bag.access import open_bag, topic_frequencies
     from rostools.cli.bag.infotext import info_data, info_key, info_text
 
@@ -107,18 +108,42 @@ def info(
     if key is not None and fmt is Format.text:
         fmt = Format.yaml  # a key is a path into the YAML document; rosbag demands -y for it
     results = []
+    readers = []
     for name in bags:
         with open_bag(name) as reader:
             summary = reader.info()
             freqs = topic_frequencies(reader) if freq else None
         results.append((summary, freqs, name))
+        readers.append(reader)
     if fmt is Format.text:
         sys.stdout.write("\n---\n".join(info_text(*r) for r in results) + "\n")
-        return
-    data = [info_data(*r) for r in results]
-    if key is not None:
-        data = [info_key(d, key) for d in data]
-    emit(fmt, data[0] if len(data) == 1 else data)
+    else:
+        data = [info_data(*r) for r in results]
+        if key is not None:
+            data = [info_key(d, key) for d in data]
+        emit(fmt, data[0] if len(data) == 1 else data)
+    check_read(readers, "summarised " + ", ".join(bags))
+
+
+def say_note(note: str) -> None:
+    """How an input had to be read (an index that disagrees, a scan): a ``note:`` line."""
+    sys.stderr.write(f"note: {note}\n")
+
+
+def say_notes(notes: Iterable[str]) -> None:
+    """``say_note`` for each."""
+    for note in notes:
+        say_note(note)
+
+
+def check_read(readers: Sequence[BagReader], done: str) -> None:
+    """After a command read these bags: say their notes, and exit 6 if anything was left out.
+
+    ``done`` says what the command did, for the error line.
+    """
+    from rostools.bag.base import after_reading
+
+    after_reading(readers, done, say_note)
 
 
 class Progress:
@@ -164,11 +189,14 @@ def _report(fmt: Format, report: CopyReport) -> None:
         "extras_copied": report.extras_copied,
         "extras_left_out": report.extras_left_out,
     }
+    if report.notes or report.lost:
+        data.update(notes=list(report.notes), lost=list(report.lost))
     if fmt is Format.text:
         sys.stderr.write(
             f"wrote {report.messages_written} of {report.messages_read} messages to "
             f"{report.output} ({report.format}, {report.compression})\n"
         )
+        say_notes(report.notes)
         if report.extras_left_out:
             sys.stderr.write(
                 f"left out {report.extras_left_out} MCAP attachment/metadata record(s): "
@@ -190,8 +218,12 @@ def copy_command(
     quiet: bool,
     label: str,
     run: Callable[[Any], CopyReport],
-) -> None:
-    """Run a copying command with a progress bar, then report what it wrote."""
+    check: bool = True,
+) -> CopyReport:
+    """Run a copying command with a progress bar, then report what it wrote.
+
+    With ``check``, exit 6 if the input had damage that was left out.
+    """
     fmt = output_format(ctx, fmt)
     progress = Progress(label, fmt, quiet)
     try:
@@ -199,6 +231,9 @@ def copy_command(
     finally:
         progress.done()
     _report(fmt, report)
+    if check:
+        report.raise_if_lost()
+    return report
 
 
 def seconds_to_ns(value: float | None) -> int | None:
@@ -295,7 +330,12 @@ def _in_place(
     label: str,
     run: Callable[[Path, Path, Any], CopyReport],
 ) -> None:
-    """rosbag compress's way: write beside, keep the original as ``x.orig.bag``."""
+    """rosbag compress's way: write beside, keep the original as ``x.orig.bag``.
+
+    A damaged bag is rewritten with what reads (the original is kept all the same); exit 6
+    at the end, naming what was left out.
+    """
+    lost: list[str] = []
     for path, dst, keep in _targets(bags, output_dir, force):
 
         def step(
@@ -303,8 +343,14 @@ def _in_place(
         ) -> CopyReport:
             return dataclasses.replace(run(src, dst, progress), output=out)
 
-        copy_command(ctx, fmt, quiet, label, step)
+        report = copy_command(ctx, fmt, quiet, label, step, check=False)
         _swap(path, dst, keep)
+        lost += report.lost
+    if lost:
+        from rostools.bag.model import lost_data
+
+        kept = "" if output_dir else " (each original is kept as NAME.orig.bag)"
+        raise lost_data(f"{label}ed {len(bags)} bag(s){kept}", lost)
 
 
 def _targets(

@@ -14,7 +14,7 @@ from typing import TYPE_CHECKING, Annotated
 
 import typer
 
-from rostools.cli.bag.files import EndOpt, StartOpt, time_window
+from rostools.cli.bag.files import EndOpt, StartOpt, check_read, time_window
 from rostools.cli.bag.group import app
 from rostools.cli.common import FormatOpt, output_format
 from rostools.cli.output import Format
@@ -76,6 +76,23 @@ def plot_cmd(
         lo, hi = time_window([bag], start, end)
         count = _read(reader, samplers, lo, hi)
         begin = lo if lo is not None else (reader.info().start_ns or 0)
+    _draw(plot, bag, fields, fmt, out, stamp, begin, count)
+    check_read([reader], f"plotted {count:,} messages")
+
+
+def _draw(
+    plot: SeriesSet,
+    bag: Path,
+    fields: list[str],
+    fmt: Format,
+    out: Path | None,
+    stamp: bool,
+    begin: int,
+    count: int,
+) -> None:
+    """The picture (terminal or image) or the samples as data."""
+    from rostools.cli import plotting
+
     kind = "stamp" if stamp else "bag"
     held = plot.bounds()
     origin = held[0] if stamp and held else begin / 1e9

@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import sys
 from pathlib import Path
-from typing import TYPE_CHECKING, Annotated
+from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
@@ -26,6 +26,7 @@ from rostools.cli.bag.files import (
     TopicsOpt,
     copy_command,
     renames,
+    say_notes,
     time_window,
 )
 from rostools.cli.bag.group import app
@@ -65,16 +66,19 @@ def merge(
 
 
 def _split_report(fmt: Format, report: SplitReport) -> None:
-    data = {
+    data: dict[str, Any] = {
         "source": str(report.source),
         "parts": [
             {"path": str(p.path), "messages": p.messages, "start": p.start_ns, "end": p.end_ns}
             for p in report.parts
         ],
     }
+    if report.notes or report.lost:
+        data.update(notes=list(report.notes), lost=list(report.lost))
     if fmt is Format.text:
         for p in report.parts:
             sys.stderr.write(f"wrote {p.messages} messages to {p.path}\n")
+        say_notes(report.notes)
     elif fmt is Format.json:
         output.write(fmt, data)  # the last record of the NDJSON progress stream
     else:
@@ -142,3 +146,4 @@ def split(
     finally:
         progress.done()
     _split_report(chosen, report)
+    report.raise_if_lost()

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import sys
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -15,6 +16,7 @@ if TYPE_CHECKING:
 def echo_bag(path: Path, name: str | None, store: TypeStore, opts: EchoOptions) -> None:
     """Print the messages of ``name`` (a topic, maybe with a field path), or of every topic."""
     from rostools.bag.access import open_bag, require_ros1
+    from rostools.bag.base import after_reading
     from rostools.cli.topic.printing import Echo
     from rostools.errors import InvalidDataError
     from rostools.rosgraph.topics import split_field
@@ -30,6 +32,7 @@ def echo_bag(path: Path, name: str | None, store: TypeStore, opts: EchoOptions) 
             topics = [ref.topic]
         require_ros1(bag, "topic echo -b", topics)
         echo = Echo(store, opts)
+        printed = 0
         for conn, t_ns, data in bag.messages(topics=topics):
             try:
                 printer = echo.printer(conn.type, conn.md5sum, conn.definition, conn.topic)
@@ -37,3 +40,6 @@ def echo_bag(path: Path, name: str | None, store: TypeStore, opts: EchoOptions) 
                     return
             except InvalidDataError as err:  # a bad definition or message: say where
                 raise InvalidDataError(f"{path}: message at {t_ns / 1e9:.9f} s: {err}") from err
+            printed += 1
+    # A damaged bag: every message that reads was printed; say what was left out (exit 6).
+    after_reading([bag], f"printed {printed} messages", lambda n: sys.stderr.write(f"note: {n}\n"))

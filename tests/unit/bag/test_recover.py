@@ -188,8 +188,10 @@ def test_a_corrupt_chunk_is_skipped_and_reported(
     raw[middle : middle + 64] = b"\xa5" * 64  # garbage in the middle of a compressed chunk
     bad = tmp_path / ("bad" + Path(name).suffix)
     bad.write_bytes(bytes(raw))
-    with pytest.raises(BagFormatError), open_bag(bad) as reader:
-        list(reader.messages())
+    # Any read skips the chunk and lists it (issue 24): it does not stop at it.
+    with open_bag(bad) as reader:
+        assert 300 < len(list(reader.messages())) < 600
+        assert reader.damage
     report = recover(bad, tmp_path / ("out" + Path(name).suffix))
     assert not report.complete
     got = read_stream(tmp_path / ("out" + Path(name).suffix))

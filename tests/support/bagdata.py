@@ -145,3 +145,19 @@ def write_static_bag(path: Path) -> None:
         for k, text in enumerate(["a1", "b1", "c1", "a2"]):
             payload = struct.pack("<I", 2) + text.encode()
             writer.write(conns["/" + text[0]], 100 * 10**9 + k * 10**8, payload)
+
+
+def recorded(path: Path, topic: str) -> int:
+    """How many messages on ``topic`` a file still being written holds on disk so far.
+
+    Read as a killed recorder's file is: a chunk that is not whole yet is skipped. 0 while
+    the file is missing or holds no whole header yet.
+    """
+    from rostools.errors import RostoolsError
+
+    try:
+        with open_bag(path) as reader:
+            reader.skip_damaged = True
+            return sum(1 for _ in reader.messages([topic]))
+    except (RostoolsError, OSError):
+        return 0

@@ -212,6 +212,8 @@ class Proc:
                 break
         self.signal(signal.SIGKILL)  # anything the launcher left behind in its group
         code = self.popen.wait()
+        for reader in self._readers:  # at the pipes' end by now; closed under it, it would raise
+            reader.join(1)
         for stream in (self.popen.stdout, self.popen.stderr):
             if stream is not None:
                 stream.close()

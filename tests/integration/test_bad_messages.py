@@ -9,7 +9,6 @@ from __future__ import annotations
 import json
 import socket
 import struct
-import sys
 import time
 
 import pytest
@@ -18,7 +17,7 @@ from rostools.msgs.store import BuiltinSource, TypeStore
 from rostools.msgs.topictype import TopicType
 from rostools.wire.tcpros import publisher_header
 from tests.support.fakepeer import FakePublisher, frame, header_type_header, valid_header
-from tests.support.procs import Proc
+from tests.support.procs import start_cli
 
 #: The audit's frame: a string whose length says 2 GiB, and four bytes of it.
 LYING_STRING = bytes.fromhex("ffffff7f61626364")
@@ -34,7 +33,7 @@ def _header(seq: int) -> bytes:
 
 
 def _run(cli_env: dict[str, str], *argv: str) -> tuple[int, str, str]:
-    proc = Proc([sys.executable, "-m", "rostools", *argv], env=cli_env)
+    proc = start_cli(*argv, env=cli_env)
     try:
         code = proc.popen.wait(30)
         out, err = proc.output()

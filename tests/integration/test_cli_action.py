@@ -16,7 +16,7 @@ from typing import Any
 import pytest
 
 from tests.support.env import run_cli
-from tests.support.procs import Proc, core_and_env, wait_for
+from tests.support.procs import Proc, core_and_env, start_cli, wait_for
 
 ROOT = Path(__file__).resolve().parent.parent.parent
 SERVER = ROOT / "tests" / "support" / "rt_nodes" / "rt_actions.py"
@@ -104,10 +104,7 @@ def test_timeout_cancels_and_another_client_preempts(env: dict[str, str]) -> Non
         {k: g[k] for k in ("goal_id", "status")} for g in table["goals"]
     ]
     # a goal canceled by someone else: exit 9
-    sender = Proc(
-        [sys.executable, "-m", "rostools", "action", "send-goal", "/fib", "1000", "-F", "json"],
-        env=env,
-    )
+    sender = start_cli("action", "send-goal", "/fib", "1000", "-F", "json", env=env)
     try:
         goal_id = json.loads(sender.expect('"ACTIVE"', 20))["goal_id"]
         canceled = run_cli("action", "cancel", "/fib", "--all", "-F", "json", env=env)

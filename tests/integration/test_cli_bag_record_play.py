@@ -9,16 +9,23 @@ import signal
 import struct
 import sys
 import time
-import xmlrpc.client
 from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
 
 from rostools.bag.access import bag_info, detect_format, open_bag
-from tests.support.bagdata import write_play_bag, write_static_bag
+from tests.support.bagdata import recorded, write_play_bag, write_static_bag
 from tests.support.env import needs_ros1, run_cli
-from tests.support.procs import Proc, wait_for, wait_for_name
+from tests.support.procs import (
+    Proc,
+    linked,
+    publishers,
+    start_cli,
+    subscribed,
+    wait_for,
+    wait_for_name,
+)
 
 _STARTED: list[Proc] = []
 
@@ -32,15 +39,10 @@ def _stop_everything_started() -> Iterator[None]:
 
 
 def rostools(env: dict[str, str], *args: str, cwd: Path | None = None) -> Proc:
-    proc = Proc([sys.executable, "-m", "rostools", *args], env=env, cwd=cwd)
+    """``rostools ARGS``, stopped after the test."""
+    proc = start_cli(*args, env=env, cwd=cwd)
     _STARTED.append(proc)
     return proc
-
-
-def subscribed(uri: str, topic: str, prefix: str) -> bool:
-    """Whether a node whose name starts with ``prefix`` subscribes to ``topic``."""
-    _, _, (_, subs, _) = xmlrpc.client.ServerProxy(uri).getSystemState("/test")
-    return any(t == topic and any(n.startswith(prefix) for n in nodes) for t, nodes in subs)
 
 
 def seqs(path: Path, topic: str) -> list[int]:
@@ -66,9 +68,9 @@ def stop_all(procs: list[Proc]) -> None:
         proc.stop()
 
 
-def wait_growing(path: Path, timeout: float = 15) -> None:
-    """Until ``path`` holds at least one flushed message."""
-    wait_for(lambda: path.exists() and path.stat().st_size > 5000, timeout, f"{path} to grow")
+def wait_recorded(path: Path, topic: str, count: int, timeout: float = 20) -> None:
+    """Until the recording ``path`` holds ``count`` messages on ``topic`` on disk."""
+    wait_for(lambda: recorded(path, topic) >= count, timeout, f"{count} on {topic} in {path}", 0.2)
 
 
 def test_record_closes_on_sigint_and_keeps_everything(
@@ -82,8 +84,7 @@ def test_record_closes_on_sigint_and_keeps_everything(
         wait_for(
             lambda: subscribed(rostools_master, "/h", "/rostools_record"), 15, "record to subscribe"
         )
-        wait_growing(tmp_path / "run.bag.active")
-        time.sleep(0.5)
+        wait_recorded(tmp_path / "run.bag.active", "/h", 51)
         rec.signal(signal.SIGINT)
         out, err = rec.output()
         assert rec.popen.returncode == 0, err
@@ -200,17 +201,18 @@ def test_record_limit_duration_regex_and_late_topics(
             cli_env, "bag", "record", "-O", str(tmp_path / "e.bag"), "-e", "/a/.*", "-x", "/a/y",
             "-x", "/a/z.*",  # several excludes: any one leaves a topic out
         )  # fmt: skip
+        # The topics left out come first: the master poll that finds /a/x finds them too.
         late = [
             rostools(cli_env, "topic", "pub", "-r", "20", name, "std_msgs/String", "data: x")
-            for name in ("/a/x", "/a/y", "/a/zz", "/a", "/b/a/x")
+            for name in ("/a/y", "/a/zz", "/a", "/b/a/x")
         ]
         try:
-            wait_for(
-                lambda: subscribed(rostools_master, "/a/x", "/rostools_record"),
-                15,
-                "/a/x picked up",
+            for topic in ("/a/y", "/a/zz", "/a", "/b/a/x"):
+                wait_for(lambda t=topic: publishers(rostools_master, t), 15, f"{topic} published")
+            late.append(
+                rostools(cli_env, "topic", "pub", "-r", "20", "/a/x", "std_msgs/String", "data: x")
             )
-            time.sleep(1.0)
+            wait_recorded(tmp_path / "e.bag.active", "/a/x", 1)
             assert rec.stop() == 0
         finally:
             stop_all(late)
@@ -227,14 +229,12 @@ def test_sigkilled_recording_is_recovered(
     active = tmp_path / f"k.{storage}.active"
     rec = rostools(cli_env, "bag", "record", "-O", f"k.{storage}", "/h", "/latched", cwd=tmp_path)
     try:
-        wait_growing(active)
-        time.sleep(1.6)
+        wait_recorded(active, "/h", 101)
         rec.signal(signal.SIGKILL)
         rec.stop()
     finally:
         stop_all(pubs)
     with open_bag(active) as reader:
-        reader.skip_damaged = True
         on_disk = [(c.topic, t, bytes(d)) for c, t, d in reader.messages()]
     done = run_cli("bag", "recover", str(active), "-F", "json", env=cli_env)
     assert done.returncode == 0, done.stderr
@@ -415,8 +415,15 @@ def test_play_keys_step_and_pause(
         child.expect("Hit space to toggle paused, or 's' to step.")
         child.expect(r"\[PAUSED \]")
         chatter = echo(cli_env, "/chatter", 3)
-        wait_for(lambda: subscribed(rostools_master, "/chatter", "/rostools_echo"), 15, "echo")
-        time.sleep(1.0)  # registered; give the TCP connection time to come up
+        wait_for(
+            lambda: any(
+                peer.startswith("/rostools_echo")
+                for player in publishers(rostools_master, "/chatter")
+                for peer in linked(rostools_master, player, "/chatter")
+            ),
+            15,
+            "the player connected to echo",
+        )
         child.send("ssss")  # /latched "old", then m0, m1, m2
         assert received(chatter) == ["m0", "m1", "m2"]
         child.expect(r"\[PAUSED \]")  # still paused after the steps
@@ -521,14 +528,13 @@ def test_record_stamps_with_sim_time(
 ) -> None:
     assert run_cli("param", "set", "/use_sim_time", "true", env=cli_env).returncode == 0
     rec = rostools(cli_env, "bag", "record", "-O", "sim.bag", "/chatter", "/clock", cwd=tmp_path)
-    time.sleep(2.5)  # no /clock yet: nothing is recorded, not even a file
-    assert list(tmp_path.iterdir()) == []
+    rec.expect("no clock is published; still waiting", 20, stderr=True)  # after 2 s
+    assert list(tmp_path.iterdir()) == []  # nothing is recorded, not even a file
     bag = tmp_path / "p.bag"
     write_play_bag(bag)  # bag time 100.0 .. 100.9 s
     player = rostools(cli_env, "bag", "play", str(bag), "--clock", "-l", "-d", "0.5")
     try:
-        wait_for(lambda: (tmp_path / "sim.bag.active").exists(), 20, "the first /clock")
-        time.sleep(3.0)  # three loops of the bag
+        wait_recorded(tmp_path / "sim.bag.active", "/chatter", 10)  # a loop of the bag or more
         rec.signal(signal.SIGINT)
         assert rec.popen.wait(20) == 0
     finally:
@@ -588,11 +594,13 @@ def test_play_takes_rosbags_greedy_topics_and_bags(
 def test_record_chooses_topics_by_type(
     rostools_master: str, cli_env: dict[str, str], tmp_path: Path
 ) -> None:
-    pubs = [
+    # /s, left out, comes first: every master poll of the recorders finds it.
+    pubs = [rostools(cli_env, "topic", "pub", "-r", "20", "/s", "std_msgs/String", "{}")]
+    wait_for(lambda: publishers(rostools_master, "/s"), 15, "/s published")
+    pubs += [
         rostools(cli_env, "topic", "pub", "-r", "20", topic, topic_type, "{}")
         for topic, topic_type in (
             ("/img", "sensor_msgs/Image"),
-            ("/s", "std_msgs/String"),
             ("/p", "geometry_msgs/PointStamped"),
         )
     ]
@@ -605,9 +613,9 @@ def test_record_chooses_topics_by_type(
         cwd=tmp_path,
     )  # fmt: skip
     try:
-        for topic in ("/img", "/p"):
-            wait_for(lambda t=topic: subscribed(rostools_master, t, "/rostools_record"), 20, topic)
-        time.sleep(2.0)  # both recorders have polled the master since, and got messages
+        for name in ("t.bag", "x.bag"):
+            for topic in ("/img", "/p"):
+                wait_recorded(tmp_path / f"{name}.active", topic, 1)
         for rec in (by_type, but_type):
             assert rec.stop() == 0
     finally:

@@ -17,23 +17,18 @@ import time
 import xmlrpc.client
 from collections.abc import Iterator
 from typing import Any
-from xmlrpc.server import SimpleXMLRPCRequestHandler, SimpleXMLRPCServer
 
 import pytest
 import yaml
 
+from tests.support import fakepeer
 from tests.support.env import run_cli
-from tests.support.procs import Proc, free_port
+from tests.support.procs import free_port, silent_port, start_cli
 
 PID = 4242
 
 
-class _QuietHandler(SimpleXMLRPCRequestHandler):
-    def log_message(self, format: str, *args: Any) -> None:
-        pass
-
-
-class FakeNode:
+class FakeNode(fakepeer.FakeNode):
     """A node's slave API on loopback, registered on the master under ``name``."""
 
     def __init__(
@@ -46,34 +41,20 @@ class FakeNode:
     ) -> None:
         self.name = name
         self.bus_info: list[list[Any]] = []
-        self.calls: list[tuple[str, tuple[Any, ...]]] = []
         self.shutdown_called = threading.Event()
-        self.server = SimpleXMLRPCServer(
-            ("127.0.0.1", 0), requestHandler=_QuietHandler, logRequests=False
+        super().__init__(
+            {
+                "getPid": lambda *_: [1, "", PID],
+                "getBusInfo": lambda *_: [1, "bus info", self.bus_info],
+                "shutdown": self._shutdown,
+                "publisherUpdate": lambda *_: [1, "", 0],
+            }
         )
-        for method in ("getPid", "getBusInfo", "shutdown", "publisherUpdate"):
-            self.server.register_function(self._handler(method), method)
-        self.uri = f"http://127.0.0.1:{self.server.server_address[1]}/"
-        threading.Thread(target=self.server.serve_forever, daemon=True).start()
         register(master_uri, name, self.uri, pubs, subs, services)
 
-    def _handler(self, method: str) -> Any:
-        def handle(*args: Any) -> Any:
-            self.calls.append((method, args))
-            if method == "getPid":
-                return [1, "", PID]
-            if method == "getBusInfo":
-                return [1, "bus info", self.bus_info]
-            if method == "shutdown":
-                self.shutdown_called.set()
-                return [1, "shutdown", 0]
-            return [1, "", 0]
-
-        return handle
-
-    def close(self) -> None:
-        self.server.shutdown()
-        self.server.server_close()
+    def _shutdown(self, *_: Any) -> list[Any]:
+        self.shutdown_called.set()
+        return [1, "shutdown", 0]
 
 
 def register(
@@ -152,15 +133,10 @@ def dead_uri(rostools_master: str) -> str:
 @pytest.fixture
 def hanging(rostools_master: str) -> Iterator[str]:
     """/hang: registered at a port that accepts connections and never answers."""
-    sock = socket.socket()
-    sock.bind(("127.0.0.1", 0))
-    sock.listen(16)
-    uri = f"http://127.0.0.1:{sock.getsockname()[1]}/"
-    register(rostools_master, "/hang", uri, pubs=(("/hang_out", "std_msgs/Empty"),))
-    try:
+    with silent_port() as port:
+        uri = f"http://127.0.0.1:{port}/"
+        register(rostools_master, "/hang", uri, pubs=(("/hang_out", "std_msgs/Empty"),))
         yield uri
-    finally:
-        sock.close()
 
 
 def cli(env: dict[str, str], *args: str, code: int = 0) -> str:
@@ -320,7 +296,7 @@ def test_ping_usage_errors(nodes: dict[str, FakeNode], cli_env: dict[str, str]) 
 def test_ping_runs_until_ctrl_c_and_prints_the_average(
     nodes: dict[str, FakeNode], cli_env: dict[str, str]
 ) -> None:
-    proc = Proc([sys.executable, "-m", "rostools", "node", "ping", "/talker"], env=cli_env)
+    proc = start_cli("node", "ping", "/talker", env=cli_env)
     try:
         proc.expect(r"^pinging /talker")
         proc.expect(r"^xmlrpc reply from")
@@ -499,7 +475,7 @@ def test_cleanup_asks_on_a_terminal(
 
     for answer, purged in (("n", False), ("y", True)):
         terminal, stdin = pty.openpty()
-        proc = Proc([sys.executable, "-m", "rostools", "node", "cleanup"], env=cli_env, stdin=stdin)
+        proc = start_cli("node", "cleanup", env=cli_env, stdin=stdin)
         os.close(stdin)
         try:
             os.write(terminal, f"{answer}\n".encode())

@@ -4,20 +4,18 @@ from __future__ import annotations
 
 import json
 import signal
-import socket
-import sys
 import time
 import xmlrpc.client
 from pathlib import Path
 
 from tests.support.env import run_cli
-from tests.support.procs import Proc, free_port, master_answers, wait_for
+from tests.support.procs import free_port, master_answers, silent_port, start_cli, wait_for
 
 
 def test_core_prints_its_uri_sets_params_and_stops_on_sigterm(cli_env: dict[str, str]) -> None:
     port = free_port()
     bare = {k: v for k, v in cli_env.items() if k != "ROS_IP"}  # a bare core: loopback only
-    proc = Proc([sys.executable, "-m", "rostools", "core", "-p", str(port)], env=bare)
+    proc = start_cli("core", "-p", str(port), env=bare)
     try:
         wait_for(lambda: master_answers(f"http://127.0.0.1:{port}/"), 15, "core")
         cli_env["ROS_MASTER_URI"] = f"http://127.0.0.1:{port}"
@@ -97,10 +95,8 @@ def test_unreachable_master_fails_fast(cli_env: dict[str, str]) -> None:
     assert "cannot reach the master at" in out.stderr
     assert time.monotonic() - start < 5
     # A master that accepts the connection but never answers: the timeout path.
-    with socket.socket() as silent:
-        silent.bind(("127.0.0.1", 0))
-        silent.listen()
-        cli_env["ROS_MASTER_URI"] = f"http://127.0.0.1:{silent.getsockname()[1]}"
+    with silent_port() as port:
+        cli_env["ROS_MASTER_URI"] = f"http://127.0.0.1:{port}"
         cli_env["ROSTOOLS_MASTER_TIMEOUT"] = "0.5"
         start = time.monotonic()
         out = run_cli("param", "get", "/x", env=cli_env)

@@ -8,15 +8,14 @@ from __future__ import annotations
 
 import os
 import subprocess
-import sys
 from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
 
 from tests.support.bagdata import write_sample
-from tests.support.env import needs_ros1, run_cli
-from tests.support.procs import Proc, free_port, start_rostools_core, wait_for
+from tests.support.env import CLI, needs_ros1, run_cli
+from tests.support.procs import free_port, start_cli, start_rostools_core, wait_for
 
 LIVE = [
     ["topic", "echo", "/chatter"],
@@ -43,7 +42,7 @@ def _closed_reader(argv: list[str], env: dict[str, str]) -> tuple[int, str]:
     read, write = os.pipe()
     os.close(read)
     proc = subprocess.Popen(
-        [sys.executable, "-m", "rostools", *argv],
+        [*CLI, *argv],
         stdout=write,
         stderr=subprocess.PIPE,
         env=env,
@@ -68,8 +67,7 @@ def talking(tmp_path_factory: pytest.TempPathFactory) -> Iterator[dict[str, str]
     port = free_port()
     env["ROS_MASTER_URI"] = f"http://127.0.0.1:{port}"
     core = start_rostools_core(port, env)
-    pub = Proc([sys.executable, "-m", "rostools", "topic", "pub", "/chatter", "std_msgs/String",
-                "hello", "-r", "50"], env=env)  # fmt: skip
+    pub = start_cli("topic", "pub", "/chatter", "std_msgs/String", "hello", "-r", "50", env=env)
     try:
         wait_for(lambda: "/chatter" in run_cli("topic", "list", env=env).stdout, 15, "/chatter")
         yield env

@@ -16,8 +16,8 @@ import pytest
 
 from rostools.cli.completer import load_tree
 from tests.support.bagdata import write_sample
-from tests.support.env import run_cli
-from tests.support.procs import Proc, core_and_env, free_port, wait_for
+from tests.support.env import CLI, run_cli
+from tests.support.procs import Proc, core_and_env, free_port, start_cli, wait_for
 
 ROOT = Path(__file__).resolve().parent.parent.parent
 
@@ -116,8 +116,7 @@ def graph(tmp_path_factory: pytest.TempPathFactory) -> Iterator[tuple[dict[str, 
 
     tmp = tmp_path_factory.mktemp("tree")
     core, env = core_and_env(tmp)
-    rostools = [sys.executable, "-m", "rostools"]
-    pub = [*rostools, "topic", "pub"]
+    pub = [*CLI, "topic", "pub"]
     procs = [
         Proc([*pub, "-r", "20", "/chatter_demo", "std_msgs/String", "data: x"], env=env),
         Proc(
@@ -161,10 +160,7 @@ def test_core_format_json(graph: tuple[dict[str, str], Path]) -> None:
     # with every flag of roscore's: a script written for roscore must not die on a usage error
     roscore_flags = ["-v", "-w", "3", "-t", "4", "--master-logger-level", "warn",
                      "--sigint-timeout", "5", "--sigterm-timeout", "2"]  # fmt: skip
-    core = Proc(
-        [sys.executable, "-m", "rostools", "core", "-p", str(port), "-F", "json", *roscore_flags],
-        env=env,
-    )
+    core = start_cli("core", "-p", str(port), "-F", "json", *roscore_flags, env=env)
     try:
         line = core.expect(r"^\{", timeout=20)
         assert json.loads(line)["uri"].endswith(f":{port}/")

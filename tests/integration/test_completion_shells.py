@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import socket
 import sys
 import time
 from collections.abc import Iterator
@@ -13,7 +12,8 @@ import pytest
 from rostools.cli.completer import TREE
 from rostools.cli.completion import SCRIPT_NAMES, quick_text, script, tree_text
 from rostools.cli.launch import QUICK
-from tests.support.procs import Proc, wait_for
+from tests.support.env import CLI
+from tests.support.procs import Proc, silent_port, start_cli, wait_for
 from tests.support.shells import ROOT, Shell, shell_missing
 
 SHELLS = [
@@ -36,10 +36,10 @@ def test_checked_in_scripts_and_tree_are_fresh() -> None:
 def graph(rostools_master: str, cli_env: dict[str, str]) -> Iterator[dict[str, str]]:
     """A publisher on /chatter_demo and the test services on the master."""
     procs = [
-        Proc([sys.executable, "-m", "rostools", "topic", "pub", "-r", "5", "/chatter_demo",
-              "std_msgs/String", "data: hi"], env=cli_env),
-        Proc([sys.executable, "-m", "rostools", "topic", "pub", "-r", "5", "/pose_demo",
-              "geometry_msgs/PoseStamped", "{}"], env=cli_env),
+        start_cli("topic", "pub", "-r", "5", "/chatter_demo", "std_msgs/String", "data: hi",
+                  env=cli_env),
+        start_cli("topic", "pub", "-r", "5", "/pose_demo", "geometry_msgs/PoseStamped", "{}",
+                  env=cli_env),
         Proc([sys.executable, str(ROOT / "tests/support/rt_nodes/rt_services.py")], env=cli_env),
     ]  # fmt: skip
     try:
@@ -109,7 +109,7 @@ def test_bag_files_offered(
     sh: Shell = shell_in(shell, cli_env)  # type: ignore[operator]
     assert sh.complete("rostools bag info ru") == "rostools bag info run.bag"
     assert sh.complete("rostools bag info no") == "rostools bag info no"  # not a bag: not offered
-    shown = sh.offers("rostools bag play ")
+    shown = sh.offers("rostools bag play ", "run.bag", "trip.mcap")
     assert "run.bag" in shown and "trip.mcap" in shown and "notes.txt" not in shown
 
 
@@ -137,12 +137,9 @@ def test_a_silent_master_cannot_hold_completion_past_the_deadline(
 ) -> None:
     import subprocess
 
-    with socket.socket() as silent:  # accepts connections, never answers
-        silent.bind(("127.0.0.1", 0))
-        silent.listen(8)
-        env = dict(cli_env, ROS_MASTER_URI=f"http://127.0.0.1:{silent.getsockname()[1]}")
-        argv = [sys.executable, "-m", "rostools", "__complete", "bash", "3",
-                "rostools", "topic", "echo", "/"]  # fmt: skip
+    with silent_port() as port:
+        env = dict(cli_env, ROS_MASTER_URI=f"http://127.0.0.1:{port}")
+        argv = [*CLI, "__complete", "bash", "3", "rostools", "topic", "echo", "/"]
         started = time.monotonic()
         done = subprocess.run(argv, env=env, capture_output=True, text=True, timeout=10)
         took = time.monotonic() - started

@@ -26,7 +26,7 @@ from rostools.node import connection, subscriber
 from rostools.node.node import Node
 from rostools.node.notice import Notice
 from rostools.wire.tcpros import subscriber_header
-from tests.support.procs import Proc, free_port, wait_for
+from tests.support.procs import Proc, free_port, linked, publishers, start_cli, wait_for
 
 STRING = TopicType.of(TypeStore([BuiltinSource()]), "std_msgs/String")
 #: Connections per test: each cost 256 KiB (1,000: +257 MB) before; a few KB now.
@@ -52,11 +52,8 @@ def tcpros_port(master_uri: str, node: str, topic: str) -> int:
 
 
 def links(master_uri: str, node: str, topic: str) -> int:
-    """How many subscribers of ``topic`` the node says are connected (getBusInfo)."""
-    master = xmlrpc.client.ServerProxy(master_uri)
-    api = master.lookupNode("/t", node)[2]
-    info = xmlrpc.client.ServerProxy(api).getBusInfo("/t")[2]
-    return sum(1 for entry in info if entry[2] == "o" and entry[4] == topic)
+    """How many subscribers of ``topic``, which ``node`` publishes, it says are connected."""
+    return len(linked(master_uri, node, topic))
 
 
 async def connect(port: int, count: int, first: bytes = b"", batch: int = 50) -> Streams:
@@ -128,15 +125,10 @@ def test_hostile_subscribers_cost_a_publisher_little(
     # the defect: each subscriber that announced a huge frame after its header got a 1 MiB
     # buffer for it and a 256 KiB one for reading (300 of them: +375 MB); a subscriber sends
     # nothing after its header, and what it sends now goes nowhere
-    pub = Proc(
-        [sys.executable, "-m", "rostools", "topic", "pub", "-r", "1", "/target",
-         "std_msgs/String", "data: x"],
-        env=cli_env,
-    )  # fmt: skip
+    pub = start_cli("topic", "pub", "-r", "1", "/target", "std_msgs/String", "data: x", env=cli_env)
     try:
-        master = xmlrpc.client.ServerProxy(rostools_master)
-        wait_for(lambda: any(t == "/target" for t, _ in master.getSystemState("/t")[2][0]), 15)
-        [[_, [name]]] = [p for p in master.getSystemState("/t")[2][0] if p[0] == "/target"]
+        wait_for(lambda: publishers(rostools_master, "/target"), 15, "/target published")
+        [name] = publishers(rostools_master, "/target")
         port = tcpros_port(rostools_master, name, "/target")
         hostile = subscriber_header("/evil", "/target", "*", "*", "", False)
         hostile += struct.pack("<I", 999_999_999) + b"x" * 1000

@@ -6,21 +6,19 @@ to be published yet, then waited forever.
 
 from __future__ import annotations
 
-import sys
 import time
 
 import pytest
 
 from tests.support.env import run_cli
-from tests.support.procs import Proc, wait_for
+from tests.support.procs import start_cli, wait_for
 
 
 @pytest.mark.parametrize("verb", ["echo", "plot"])
 def test_a_misspelt_field_is_exit_2_at_once(
     rostools_master: str, cli_env: dict[str, str], verb: str
 ) -> None:
-    pub = Proc([sys.executable, "-m", "rostools", "topic", "pub", "/chatter", "std_msgs/String",
-                "hi"], env=cli_env)  # fmt: skip
+    pub = start_cli("topic", "pub", "/chatter", "std_msgs/String", "hi", env=cli_env)
     try:
         wait_for(lambda: "/chatter" in run_cli("topic", "list", env=cli_env).stdout, 15, "pub")
         started = time.monotonic()

@@ -3,8 +3,6 @@
 from __future__ import annotations
 
 import signal
-import sys
-import time
 from pathlib import Path
 
 import pytest
@@ -12,7 +10,8 @@ import pytest
 from rostools.errors import EXIT_CODES
 from tests.support.bagdata import write_sample
 from tests.support.env import run_cli
-from tests.support.procs import Proc
+from tests.support.fakepeer import FakeNode
+from tests.support.procs import start_cli, wait_for
 
 CODES = {name: code for code, name, _ in EXIT_CODES}
 
@@ -69,26 +68,16 @@ def test_error_and_data_loss(cli_env: dict[str, str], tmp_path: Path) -> None:
     assert "lost" in done.stderr.splitlines()[-1]
 
 
-def test_interrupted_wait_is_130(rostools_master: str, cli_env: dict[str, str]) -> None:
-    waiting = Proc(
-        [
-            sys.executable,
-            "-m",
-            "rostools",
-            "service",
-            "call",
-            "/nosuch",
-            "--wait",
-            "--timeout",
-            "60",
-        ],
-        env=cli_env,
-    )
-    try:
-        time.sleep(1.5)
-        waiting.signal(signal.SIGINT)
-        assert waiting.popen.wait(10) == CODES["interrupted"]
-        _, err = waiting.output()
-        assert "Traceback" not in err
-    finally:
-        waiting.stop()
+def test_interrupted_wait_is_130(cli_env: dict[str, str]) -> None:
+    # A master that lists no service: its second getSystemState says the wait has begun.
+    with FakeNode({"getSystemState": lambda caller: [1, "", [[], [], []]]}) as master:
+        cli_env["ROS_MASTER_URI"] = master.uri
+        waiting = start_cli("service", "call", "/nosuch", "--wait", "--timeout", "60", env=cli_env)
+        try:
+            wait_for(lambda: master.asked("getSystemState") >= 2, 15, "the wait")
+            waiting.signal(signal.SIGINT)
+            assert waiting.popen.wait(10) == CODES["interrupted"]
+            _, err = waiting.output()
+            assert "Traceback" not in err
+        finally:
+            waiting.stop()

@@ -5,17 +5,14 @@ from __future__ import annotations
 import json
 import os
 import signal
-import sys
 import time
 import xmlrpc.client
 from pathlib import Path
 
+from rostools.node.watch import SUBSCRIBER_CHECK_PERIOD
+from tests.support.bagdata import recorded
 from tests.support.env import run_cli
-from tests.support.procs import Proc, free_port, wait_for
-
-
-def rostools(*args: str, env: dict[str, str]) -> Proc:
-    return Proc([sys.executable, "-m", "rostools", *args], env=env)
+from tests.support.procs import free_port, start_cli, subscribers, wait_for
 
 
 def register(master: str, method: str, node: str, topic: str, uri: str) -> None:
@@ -49,11 +46,13 @@ def test_a_subscriber_that_never_connects_is_named(
     rostools_master: str, cli_env: dict[str, str]
 ) -> None:
     # before: a publisher whose subscribers could not reach it said nothing at all
-    pub = rostools("topic", "pub", "-r", "5", "/lonely", "std_msgs/String", "data: x", env=cli_env)
+    pub = start_cli("topic", "pub", "-r", "5", "/lonely", "std_msgs/String", "data: x", env=cli_env)
     try:
         deaf = f"http://127.0.0.1:{free_port()}/"
         register(rostools_master, "registerSubscriber", "/deaf", "/lonely", deaf)
-        time.sleep(7)  # start-up, then 3 s silent, then the next check
+        pub.expect("/deaf subscribes to /lonely", 20, stderr=True)  # after 3 s of silence
+        # The time is the behaviour here: the next check comes and says nothing more.
+        time.sleep(SUBSCRIBER_CHECK_PERIOD * 1.5)
         pub.signal(signal.SIGINT)
         _, err = pub.output()
     finally:
@@ -72,11 +71,13 @@ def test_a_second_sigint_during_shutdown_still_unregisters(
     # traceback and left the node registered. The master is paused so that the second
     # signal lands while the unregister call waits.
     core_pid = int(xmlrpc.client.ServerProxy(rostools_master).getPid("/t")[2])
-    echo = rostools("topic", "echo", "/rosout", env=cli_env)
+    echo = start_cli("topic", "echo", "/rosout", env=cli_env)
     try:
-        wait_for(lambda: _subscribers(rostools_master, "/rosout") >= 2, 15, "echo subscribed")
+        wait_for(lambda: len(subscribers(rostools_master, "/rosout")) >= 2, 15, "echo subscribed")
         os.kill(core_pid, signal.SIGSTOP)
         try:
+            # Nothing outside the process tells that its unregister call has begun, or that
+            # the second signal has been taken; 0.3 s is ample for either.
             echo.signal(signal.SIGINT)
             time.sleep(0.3)
             echo.signal(signal.SIGINT)
@@ -88,24 +89,18 @@ def test_a_second_sigint_during_shutdown_still_unregisters(
         echo.stop()
     _, err = echo.output()
     assert "Traceback" not in err and "KeyboardInterrupt" not in err, err
-    assert _subscribers(rostools_master, "/rosout") == 1  # only core's own /rosout is left
-
-
-def _subscribers(master: str, topic: str) -> int:
-    _, _, (_, subs, _) = xmlrpc.client.ServerProxy(master).getSystemState("/t")
-    return sum(len(names) for t, names in subs if t == topic)
+    assert len(subscribers(rostools_master, "/rosout")) == 1  # only core's own /rosout is left
 
 
 def test_sighup_finalises_a_recording(
     rostools_master: str, cli_env: dict[str, str], tmp_path: Path
 ) -> None:
     # an SSH session that drops sends SIGHUP; C++ rosbag leaves the file .active
-    pub = rostools("topic", "pub", "-r", "20", "/hup", "std_msgs/String", "data: x", env=cli_env)
+    pub = start_cli("topic", "pub", "-r", "20", "/hup", "std_msgs/String", "data: x", env=cli_env)
     out = tmp_path / "hup.bag"
-    rec = rostools("bag", "record", "/hup", "-O", str(out), env=cli_env)
+    rec = start_cli("bag", "record", "/hup", "-O", str(out), env=cli_env)
     try:
-        wait_for(lambda: _subscribers(rostools_master, "/hup") == 1, 15, "recorder subscribed")
-        time.sleep(1.0)
+        wait_for(lambda: recorded(Path(f"{out}.active"), "/hup"), 15, "a message recorded")
         rec.signal(signal.SIGHUP)
         assert rec.popen.wait(10) == 0
     finally:

@@ -6,7 +6,6 @@ import asyncio
 import re
 import socket
 import struct
-import sys
 import time
 from collections.abc import Iterator
 from pathlib import Path
@@ -19,7 +18,7 @@ from rostools.msgs.topictype import TopicType
 from rostools.node import connection
 from rostools.node.node import Node
 from tests.support.fakepeer import FakePublisher, frame, valid_header
-from tests.support.procs import Proc
+from tests.support.procs import Proc, start_cli
 
 STRING = TopicType.of(TypeStore([BuiltinSource()]), "std_msgs/String")
 
@@ -51,8 +50,7 @@ def test_an_announced_gigabyte_costs_little(rostools_master: str, cli_env: dict[
         sock.sendall(struct.pack("<I", 999_999_999) + b"x" * 20)
 
     with FakePublisher(rostools_master, "/huge", lie):
-        echo = Proc([sys.executable, "-m", "rostools", "topic", "echo", "/huge", "--timeout", "3"],
-                    env=cli_env)  # fmt: skip
+        echo = start_cli("topic", "echo", "/huge", "--timeout", "3", env=cli_env)
         try:
             peak = peak_rss_mb(echo, 15)
             assert echo.popen.wait(15) == 5
@@ -67,8 +65,7 @@ def test_an_oversized_frame_is_said_once(rostools_master: str, cli_env: dict[str
         sock.sendall(valid_header("/over") + struct.pack("<I", 2_000_000_000))
 
     with FakePublisher(rostools_master, "/over", oversized):
-        echo = Proc([sys.executable, "-m", "rostools", "topic", "echo", "/over", "--timeout", "4"],
-                    env=cli_env)  # fmt: skip
+        echo = start_cli("topic", "echo", "/over", "--timeout", "4", env=cli_env)
         try:
             assert echo.popen.wait(20) == 5
             _, err = echo.output()
@@ -148,8 +145,7 @@ def test_a_message_that_does_not_decode_is_one_line(
         sock.sendall(valid_header("/empty") + frame(b""))
 
     with FakePublisher(rostools_master, "/empty", empty):
-        echo = Proc([sys.executable, "-m", "rostools", "topic", "echo", "/empty", "--timeout", "5",
-                     "--strict"], env=cli_env)  # fmt: skip
+        echo = start_cli("topic", "echo", "/empty", "--timeout", "5", "--strict", env=cli_env)
         try:
             assert echo.popen.wait(20) == 1
             _, err = echo.output()
@@ -206,11 +202,17 @@ def test_a_stalled_subscriber_costs_the_others_nothing(
     """A subscriber that never reads: the healthy one keeps its rate, the publisher's memory
     stays bounded by its queue (100 messages of 10 KB), not by how long the stall lasts.
     ``-s`` makes every message a new object, so a queue that kept them all would grow."""
-    pub = Proc(
-        [sys.executable, "-m", "rostools", "topic", "pub", "-r", "500", "-s", "/load",
-         "sensor_msgs/CompressedImage", "{header: {stamp: now}, format: " + "x" * 10_000 + "}"],
+    pub = start_cli(
+        "topic",
+        "pub",
+        "-r",
+        "500",
+        "-s",
+        "/load",
+        "sensor_msgs/CompressedImage",
+        "{header: {stamp: now}, format: " + "x" * 10_000 + "}",
         env=cli_env,
-    )  # fmt: skip
+    )
     try:
         deadline = time.monotonic() + 15
         while True:

@@ -19,7 +19,7 @@ from rostools.bag.access import open_bag
 from rostools.wire.tcpros import publisher_header
 from tests.support.env import run_cli
 from tests.support.fakepeer import FakePublisher, frame
-from tests.support.procs import Proc
+from tests.support.procs import Proc, start_cli
 
 #: 200 KB messages, each of one byte value: a frame overwritten by the next shows at once.
 BIG = 70_000
@@ -59,8 +59,9 @@ def _go(proc: Proc) -> None:
 def test_record_keeps_every_big_frame_intact(
     big_publisher: Proc, cli_env: dict[str, str], tmp_path: Path
 ) -> None:
-    rec = Proc([sys.executable, "-m", "rostools", "bag", "record", "-O", "big.bag", "/big",
-                "-l", str(COUNT)], env=cli_env, cwd=tmp_path)  # fmt: skip
+    rec = start_cli(
+        "bag", "record", "-O", "big.bag", "/big", "-l", str(COUNT), env=cli_env, cwd=tmp_path
+    )
     try:
         big_publisher.expect("ready", 30)
         _go(big_publisher)
@@ -76,8 +77,7 @@ def test_record_keeps_every_big_frame_intact(
 
 
 def test_echo_prints_every_big_message_intact(big_publisher: Proc, cli_env: dict[str, str]) -> None:
-    echo = Proc([sys.executable, "-m", "rostools", "topic", "echo", "/big", "-n", str(COUNT),
-                 "-F", "json"], env=cli_env)  # fmt: skip
+    echo = start_cli("topic", "echo", "/big", "-n", str(COUNT), "-F", "json", env=cli_env)
     try:
         big_publisher.expect("ready", 30)
         _go(big_publisher)
@@ -129,8 +129,9 @@ def test_record_and_play_never_decode(
         got = [bytes(d) for _, _, d in reader.messages()]
     assert got == [struct.pack("<I", i) + b"opaque" * 10 for i in range(got[0][0], 50 + got[0][0])]
     # play sends the same bytes, and record takes them again: a round trip, byte for byte
-    again = Proc([sys.executable, "-m", "rostools", "bag", "record", "-O", "again.bag",
-                  "/opaque", "-l", "50"], env=cli_env, cwd=tmp_path)  # fmt: skip
+    again = start_cli(
+        "bag", "record", "-O", "again.bag", "/opaque", "-l", "50", env=cli_env, cwd=tmp_path
+    )
     try:
         play = run_cli("bag", "play", "--wait-for-subscribers", str(tmp_path / "o.bag"),
                        env=cli_env, timeout=60)  # fmt: skip

@@ -2,13 +2,13 @@
 
 from __future__ import annotations
 
-import socket
 from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
 
 from tests.support.env import run_cli
+from tests.support.procs import silent_port
 
 COMMANDS = [
     (["param", "get", "/x"], "getParam"),  # the blocking client
@@ -23,10 +23,8 @@ COMMANDS = [
 @pytest.fixture
 def silent_master(cli_env: dict[str, str]) -> Iterator[str]:
     """A master that accepts connections and never answers."""
-    with socket.socket() as silent:
-        silent.bind(("127.0.0.1", 0))
-        silent.listen(16)
-        cli_env["ROS_MASTER_URI"] = f"http://127.0.0.1:{silent.getsockname()[1]}"
+    with silent_port() as port:
+        cli_env["ROS_MASTER_URI"] = f"http://127.0.0.1:{port}"
         cli_env["ROSTOOLS_MASTER_TIMEOUT"] = "0.5"
         yield cli_env["ROS_MASTER_URI"]
 

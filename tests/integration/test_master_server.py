@@ -9,12 +9,12 @@ import time
 import xmlrpc.client
 from collections.abc import Iterator
 from typing import Any
-from xmlrpc.server import SimpleXMLRPCServer
 
 import pytest
 
 from rostools.master.server import MasterThread
 from rostools.node import xmlrpc as graph_xmlrpc
+from tests.support.fakepeer import FakeNode
 from tests.support.procs import wait_for
 
 
@@ -97,33 +97,15 @@ def test_concurrent_clients(master: MasterThread) -> None:
     assert len(pubs) == 50 and all(len(nodes) == 6 for _, nodes in pubs)
 
 
-class FakeNode:
-    """An XML-RPC server recording what the master sends a node."""
-
-    def __init__(self) -> None:
-        self.calls: list[tuple[str, tuple[object, ...]]] = []
-        self.server = SimpleXMLRPCServer(("127.0.0.1", 0), logRequests=False, allow_none=False)
-        self.server.register_function(self._record("publisherUpdate"), "publisherUpdate")
-        self.server.register_function(self._record("paramUpdate"), "paramUpdate")
-        self.server.register_function(self._record("shutdown"), "shutdown")
-        self.uri = f"http://127.0.0.1:{self.server.server_address[1]}/"
-        self.thread = threading.Thread(target=self.server.serve_forever, daemon=True)
-        self.thread.start()
-
-    def _record(self, name: str):  # type: ignore[no-untyped-def]
-        def handler(*args: object) -> list[object]:
-            self.calls.append((name, args))
-            return [1, "", 0]
-
-        return handler
-
-    def close(self) -> None:
-        self.server.shutdown()
-        self.server.server_close()
+def recording_node() -> FakeNode:
+    """A slave API that records what the master sends a node."""
+    return FakeNode(
+        dict.fromkeys(("publisherUpdate", "paramUpdate", "shutdown"), lambda *_: [1, "", 0])
+    )
 
 
 def test_notifications_reach_nodes(master: MasterThread) -> None:
-    sub, old = FakeNode(), FakeNode()
+    sub, old = recording_node(), recording_node()
     try:
         proxy = xmlrpc.client.ServerProxy(master.uri)
         proxy.registerSubscriber("/listener", "/chatter", "std_msgs/String", sub.uri)

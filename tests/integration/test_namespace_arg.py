@@ -7,12 +7,10 @@ published on ``/rm2``.
 
 from __future__ import annotations
 
-import sys
-
 import pytest
 
 from tests.support.env import needs_ros1, run_cli
-from tests.support.procs import Proc, wait_for
+from tests.support.procs import Proc, start_cli, wait_for
 
 
 def _topics(env: dict[str, str]) -> list[str]:
@@ -22,8 +20,7 @@ def _topics(env: dict[str, str]) -> list[str]:
 def test_pub_echo_and_param_join_the_namespace(
     rostools_master: str, cli_env: dict[str, str]
 ) -> None:
-    pub = Proc([sys.executable, "-m", "rostools", "topic", "pub", "rm2", "std_msgs/String", "hi",
-                "__ns:=/robot"], env=cli_env)  # fmt: skip
+    pub = start_cli("topic", "pub", "rm2", "std_msgs/String", "hi", "__ns:=/robot", env=cli_env)
     try:
         wait_for(lambda: "/robot/rm2" in _topics(cli_env), 15, "/robot/rm2")
         assert "/rm2" not in _topics(cli_env)
@@ -46,8 +43,7 @@ def test_rostopic_pub_joins_it_the_same(rostools_master: str, cli_env: dict[str,
     ros_env = dict(cli_env, ROS_HOME=cli_env["HOME"])
     theirs = Proc(["rostopic", "pub", "rm3", "std_msgs/String", "hi", "__ns:=/robot"],
                   env=ros_env)  # fmt: skip
-    ours = Proc([sys.executable, "-m", "rostools", "topic", "pub", "rm4", "std_msgs/String", "hi",
-                 "__ns:=/robot"], env=cli_env)  # fmt: skip
+    ours = start_cli("topic", "pub", "rm4", "std_msgs/String", "hi", "__ns:=/robot", env=cli_env)
     try:
         wait_for(lambda: {"/robot/rm3", "/robot/rm4"} <= set(_topics(cli_env)), 30, "both")
         assert not {"/rm3", "/rm4"} & set(_topics(cli_env))

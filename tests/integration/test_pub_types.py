@@ -6,19 +6,17 @@ only logs "topic types do not match" on the publisher's side.
 
 from __future__ import annotations
 
-import sys
 from pathlib import Path
 
 import pytest
 
 from tests.support.env import needs_ros1, run_cli
-from tests.support.procs import Proc, wait_for
+from tests.support.procs import Proc, start_cli, wait_for
 
 
 def test_another_type_is_said_and_once_fails(rostools_master: str, cli_env: dict[str, str]) -> None:
-    talker = Proc([sys.executable, "-m", "rostools", "topic", "pub", "/chatter",
-                   "std_msgs/String", "hi"], env=cli_env)  # fmt: skip
-    listener = Proc([sys.executable, "-m", "rostools", "topic", "echo", "/chatter"], env=cli_env)
+    talker = start_cli("topic", "pub", "/chatter", "std_msgs/String", "hi", env=cli_env)
+    listener = start_cli("topic", "echo", "/chatter", env=cli_env)
     try:
         listener.expect("hi", 20)
         done = run_cli("topic", "pub", "/chatter", "std_msgs/Int32", "5", "-1", env=cli_env)
@@ -60,7 +58,7 @@ def test_pub_says_what_rostopic_says(
     for argv in (["-v", "-1", "/x", "std_msgs/String", "hi"],
                  ["-f", str(one), "-r", "5", "/y", "std_msgs/String"]):  # fmt: skip
         theirs = Proc(["rostopic", "pub", *argv], env=ros_env)
-        ours = Proc([sys.executable, "-m", "rostools", "topic", "pub", *argv], env=cli_env)
+        ours = start_cli("topic", "pub", *argv, env=cli_env)
         try:
             said = theirs.expect("publishing", 30).rstrip("\n")
             # ours says it on stderr, with the other status lines

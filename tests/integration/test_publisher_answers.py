@@ -7,47 +7,32 @@ of 1,000 topics went away). An answer without a port number crashed the subscrib
 
 from __future__ import annotations
 
-import sys
-import threading
 import xmlrpc.client
 from collections.abc import Iterator
 from typing import Any
-from xmlrpc.server import SimpleXMLRPCServer
 
 import pytest
 
-from tests.support.procs import Proc
+from tests.support.fakepeer import FakeNode
+from tests.support.procs import Proc, start_cli, wait_for
 
 
-class FakeSlave:
+class FakeSlave(FakeNode):
     """A registered publisher of /t whose requestTopic answers ``answer``."""
 
     def __init__(self, master_uri: str, answer: list[Any]) -> None:
         self.master = xmlrpc.client.ServerProxy(master_uri)
-        self.rpc = SimpleXMLRPCServer(("127.0.0.1", 0), logRequests=False, allow_none=True)
-        self.asked = threading.Event()
-
-        def request_topic(*_: Any) -> list[Any]:
-            self.asked.set()
-            return answer
-
-        self.rpc.register_function(request_topic, "requestTopic")
-        self.uri = f"http://127.0.0.1:{self.rpc.server_address[1]}/"
-        threading.Thread(target=self.rpc.serve_forever, daemon=True).start()
+        super().__init__({"requestTopic": lambda *_: answer})
         self.master.registerPublisher("/leaving", "/t", "std_msgs/String", self.uri)
 
     def leave(self) -> None:
+        """Unregister, as a node shutting down does."""
         self.master.unregisterPublisher("/leaving", "/t", self.uri)
-
-    def close(self) -> None:
-        self.rpc.shutdown()
-        self.rpc.server_close()
 
 
 @pytest.fixture
 def echo(cli_env: dict[str, str]) -> Iterator[Proc]:
-    proc = Proc([sys.executable, "-m", "rostools", "topic", "echo", "/t", "--timeout", "4"],
-                env=cli_env)  # fmt: skip
+    proc = start_cli("topic", "echo", "/t", "--timeout", "4", env=cli_env)
     yield proc
     proc.stop()
 
@@ -57,7 +42,7 @@ def test_a_refusal_from_a_node_on_its_way_out_is_not_reported(
 ) -> None:
     slave = FakeSlave(rostools_master, [-1, "/t is not a published topic", 0])
     try:
-        assert slave.asked.wait(15)  # echo subscribed and was refused
+        wait_for(lambda: slave.asked("requestTopic"), 15, "echo to ask")  # and be refused
         slave.leave()  # then the node goes, as a node shutting down does
         assert echo.popen.wait(20) == 5  # nothing arrived within --timeout
         _, err = echo.output()

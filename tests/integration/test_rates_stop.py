@@ -3,11 +3,10 @@
 from __future__ import annotations
 
 import signal
-import sys
 
 import pytest
 
-from tests.support.procs import Proc
+from tests.support.procs import start_cli
 
 FIRST = {"hz": "average rate", "bw": "average:", "delay": "average delay"}
 
@@ -16,9 +15,17 @@ FIRST = {"hz": "average rate", "bw": "average:", "delay": "average delay"}
 def test_ctrl_c_prints_a_last_report(
     rostools_master: str, cli_env: dict[str, str], meter: str
 ) -> None:
-    pub = Proc([sys.executable, "-m", "rostools", "topic", "pub", "-r", "50", "/p",
-                "geometry_msgs/PointStamped", "{header: auto}"], env=cli_env)  # fmt: skip
-    rate = Proc([sys.executable, "-m", "rostools", "topic", meter, "/p"], env=cli_env)
+    pub = start_cli(
+        "topic",
+        "pub",
+        "-r",
+        "50",
+        "/p",
+        "geometry_msgs/PointStamped",
+        "{header: auto}",
+        env=cli_env,
+    )
+    rate = start_cli("topic", meter, "/p", env=cli_env)
     try:
         rate.expect(FIRST[meter], 20)  # the first report; the next is due a second later
         rate.signal(signal.SIGINT)

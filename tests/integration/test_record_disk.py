@@ -27,8 +27,8 @@ from rostools.errors import RostoolsError
 from rostools.master.server import MasterThread
 from rostools.msgs.topictype import TopicType
 from rostools.node.node import Node
-from tests.support.env import run_cli
-from tests.support.procs import Proc
+from tests.support.env import CLI, run_cli
+from tests.support.procs import Proc, start_cli
 
 STRING = TopicType("std_msgs/String", "992ce8a1687cec8c8bd883ec73ca41d1", "string data\n")
 
@@ -102,11 +102,9 @@ def _no_tmpfs() -> str | None:
 @pytest.fixture
 def publisher(rostools_master: str, cli_env: dict[str, str]) -> Iterator[Proc]:
     """``/t`` at 200 Hz, 20 KB a message, until the test ends."""
-    pub = Proc(
-        [sys.executable, "-m", "rostools", "topic", "pub", "-r", "200", "/t", "std_msgs/String",
-         f"data: {PAYLOAD}"],
-        env=cli_env,
-    )  # fmt: skip
+    pub = start_cli(
+        "topic", "pub", "-r", "200", "/t", "std_msgs/String", f"data: {PAYLOAD}", env=cli_env
+    )
     try:
         yield pub
     finally:
@@ -150,7 +148,7 @@ def test_a_full_disk_stops_with_one_line_and_exit_6(
     )
     code, err = _record_until_it_stops(
         ["unshare", "-m", "sh", "-c", script, "sh", str(disk), str(kept),
-         sys.executable, "-m", "rostools", "bag", "record", "-q", "-L", "0", "/t", "-O", str(out),
+         *CLI, "bag", "record", "-q", "-L", "0", "/t", "-O", str(out),
          "--chunksize", CHUNK_KB, *FORMATS[fmt]],
         cli_env,
     )  # fmt: skip
@@ -181,7 +179,7 @@ def test_a_disk_full_from_the_start_leaves_no_file(
     )
     code, err = _record_until_it_stops(
         ["unshare", "-m", "sh", "-c", script, "sh", str(disk),
-         sys.executable, "-m", "rostools", "bag", "record", "-q", "-L", "0", "/t", "-O", str(out)],
+         *CLI, "bag", "record", "-q", "-L", "0", "/t", "-O", str(out)],
         cli_env,
     )  # fmt: skip
     assert code == 6, err

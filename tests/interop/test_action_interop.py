@@ -24,6 +24,7 @@ from tests.support.procs import (
     Proc,
     core_and_env,
     ros_env,
+    start_cli,
     start_ros1_node,
     wait_for,
 )
@@ -95,11 +96,7 @@ def test_send_goal_to_a_rospy_server(graph: Graph, rospy_server: str) -> None:
     assert got[-1]["event"] == "result" and got[-1]["status"] == "PREEMPTED"
     assert got[-1]["text"].startswith("preempted at ")
     # Ctrl-C too
-    sender = Proc(
-        [sys.executable, "-m", "rostools", "action", "send-goal", rospy_server, "1000",
-         "-F", "json"],
-        env=graph.cli_env,
-    )  # fmt: skip
+    sender = start_cli("action", "send-goal", rospy_server, "1000", "-F", "json", env=graph.cli_env)
     try:
         sender.expect('"ACTIVE"', 20)
         sender.signal(signal.SIGINT)

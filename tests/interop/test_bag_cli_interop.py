@@ -11,9 +11,6 @@ from __future__ import annotations
 import re
 import signal
 import subprocess
-import sys
-import time
-import xmlrpc.client
 from pathlib import Path
 
 import pytest
@@ -22,22 +19,21 @@ from rostools.bag.access import open_bag
 from tests.conftest import MasterInfo
 from tests.interop.test_bag_interop import as_rosbag_sees, rosbag_view
 from tests.support import cppbuild
-from tests.support.bagdata import write_play_bag, write_static_bag
+from tests.support.bagdata import recorded, write_play_bag, write_static_bag
 from tests.support.env import needs_ros1, run_cli
-from tests.support.procs import Proc, start_ros1_node, wait_for, wait_for_name
+from tests.support.procs import (
+    Proc,
+    publishers,
+    start_cli,
+    start_ros1_node,
+    subscribed,
+    wait_for,
+    wait_for_name,
+)
 
 pytestmark = [pytest.mark.interop, needs_ros1]
 _CPP_REASON = cppbuild.cpp_missing()
 needs_cpp = pytest.mark.skipif(_CPP_REASON is not None, reason=_CPP_REASON or "")
-
-
-def rostools(info: MasterInfo, *args: str, cwd: Path | None = None) -> Proc:
-    return Proc([sys.executable, "-m", "rostools", *args], env=info.cli_env, cwd=cwd)
-
-
-def subscribed(uri: str, topic: str, prefix: str) -> bool:
-    _, _, (_, subs, _) = xmlrpc.client.ServerProxy(uri).getSystemState("/test")
-    return any(t == topic and any(n.startswith(prefix) for n in nodes) for t, nodes in subs)
 
 
 def hellos(path: Path, topic: str) -> list[int]:
@@ -46,11 +42,12 @@ def hellos(path: Path, topic: str) -> list[int]:
     return [int(t.split()[1]) for t in texts]
 
 
-def record_while(info: MasterInfo, rec: Proc, pubs: list[Proc], topic: str, seconds: float) -> None:
-    """Once ``rec`` subscribes to ``topic``, record ``seconds`` more; then stop everything."""
+def record_until(rec: Proc, pubs: list[Proc], out: Path, counts: dict[str, int]) -> None:
+    """Once ``rec`` has ``counts`` messages of each topic in ``out`` on disk, stop everything."""
+    active = out.with_name(f"{out.name}.active")
     try:
-        wait_for(lambda: subscribed(info.uri, topic, "/rostools_record"), 20, "record")
-        time.sleep(seconds)
+        for topic, count in counts.items():
+            wait_for(lambda t=topic, n=count: recorded(active, t) >= n, 30, topic, 0.2)
         rec.signal(signal.SIGINT)
         assert rec.popen.wait(20) == 0, rec.output()[1]
     finally:
@@ -67,12 +64,14 @@ def test_record_captures_rospy_and_roscpp(
     talker = cppbuild.build("talker")
     out = tmp_path / f"x.{storage}"
     flags = ["--lz4"] if storage == "bag" else []
-    rec = rostools(any_master, "bag", "record", "-O", out.name, "/py", "/cpp", *flags, cwd=tmp_path)
+    rec = start_cli(
+        "bag", "record", "-O", out.name, "/py", "/cpp", *flags, env=any_master.cli_env, cwd=tmp_path
+    )
     pubs = [
         start_ros1_node("talker.py", ["/py", "50"], any_master.ros_env),
         Proc([str(talker), "/cpp", "--rate", "50", "--name", "cpp_talker"], env=any_master.ros_env),
     ]
-    record_while(any_master, rec, pubs, "/cpp", 3.0)
+    record_until(rec, pubs, out, {"/py": 51, "/cpp": 51})
     for topic, callerid in (("/py", "/talker"), ("/cpp", "/cpp_talker")):
         got = hellos(out, topic)
         assert len(got) > 50, topic
@@ -97,7 +96,7 @@ def test_real_rosbag_play_plays_our_bags(
 ) -> None:
     bag = tmp_path / "p.bag"
     write_play_bag(bag, compression)
-    echo = rostools(any_master, "topic", "echo", "/chatter", "-n", "10")
+    echo = start_cli("topic", "echo", "/chatter", "-n", "10", env=any_master.cli_env)
     player = Proc(["rosbag", "play", "-d", "3", "-q", str(bag)], env=any_master.ros_env)
     try:
         assert echo.popen.wait(30) == 0
@@ -132,7 +131,9 @@ def test_real_subscribers_get_what_we_play(
     chatter.expect("ready", 20)
     # The player starts once the listener has subscribed, and waits for it to connect.
     # -s 0.5: /latched's only message is before the start, and must still be sent (latched)
-    player = rostools(any_master, "bag", "play", str(bag), "-s", "0.5", "-d", "0", "-k")
+    player = start_cli(
+        "bag", "play", str(bag), "-s", "0.5", "-d", "0", "-k", env=any_master.cli_env
+    )
     try:
         assert lines(chatter, 5) == [f"m{i}" for i in range(5, 10)]
         late = listen(any_master, "/latched", cpp)  # after the end: the latched copy is kept
@@ -146,16 +147,10 @@ def test_real_subscribers_get_what_we_play(
 
 
 def test_real_rosbag_info_reads_our_recording(any_master: MasterInfo, tmp_path: Path) -> None:
-    pub = rostools(any_master, "topic", "pub", "-r", "50", "/t", "std_msgs/String", "data: x")
-    rec = rostools(any_master, "bag", "record", "-O", "r.bag", "--bz2", "/t", cwd=tmp_path)
-    try:
-        wait_for(lambda: subscribed(any_master.uri, "/t", "/rostools_record"), 20, "record")
-        time.sleep(1.5)
-        rec.signal(signal.SIGINT)
-        assert rec.popen.wait(20) == 0
-    finally:
-        rec.stop()
-        pub.stop()
+    env = any_master.cli_env
+    pub = start_cli("topic", "pub", "-r", "50", "/t", "std_msgs/String", "data: x", env=env)
+    rec = start_cli("bag", "record", "-O", "r.bag", "--bz2", "/t", env=env, cwd=tmp_path)
+    record_until(rec, [pub], tmp_path / "r.bag", {"/t": 21})
     done = subprocess.run(
         ["rosbag", "info", str(tmp_path / "r.bag")],
         env=any_master.ros_env,
@@ -185,9 +180,9 @@ def ros_tool(info: MasterInfo, *argv: str) -> subprocess.CompletedProcess[str]:
 def test_real_rosservice_pauses_our_player(any_master: MasterInfo, tmp_path: Path) -> None:
     bag = tmp_path / "p.bag"
     write_play_bag(bag)
-    player = rostools(
-        any_master, "bag", "play", str(bag), "--topics", "/chatter", "--pause-topics", "/chatter",
-        "--wait-for-subscribers", "-d", "0",
+    player = start_cli(
+        "bag", "play", str(bag), "--topics", "/chatter", "--pause-topics", "/chatter",
+        "--wait-for-subscribers", "-d", "0", env=any_master.cli_env,
     )  # fmt: skip
     chatter = listen(any_master, "/chatter")
     service = ""
@@ -215,9 +210,10 @@ def test_real_rosservice_pauses_our_player(any_master: MasterInfo, tmp_path: Pat
 def test_real_rostopic_paces_our_player(any_master: MasterInfo, tmp_path: Path) -> None:
     bag = tmp_path / "p.bag"
     write_play_bag(bag)  # /chatter m0..m9 at 100.0, 100.1, ... 100.9 s
-    player = rostools(
-        any_master, "bag", "play", str(bag), "--topics", "/chatter", "--wait-for-subscribers",
+    player = start_cli(
+        "bag", "play", str(bag), "--topics", "/chatter", "--wait-for-subscribers",
         "-d", "0", "--rate-control-topic", "/ctl", "--rate-control-max-delay", "0.25",
+        env=any_master.cli_env,
     )  # fmt: skip
     chatter = listen(any_master, "/chatter")
     try:
@@ -241,11 +237,13 @@ def test_record_follows_real_rosbag_play_clock(any_master: MasterInfo, tmp_path:
     assert ros_tool(any_master, "rosparam", "set", "/use_sim_time", "true").returncode == 0
     bag = tmp_path / "p.bag"
     write_play_bag(bag)  # bag time 100.0 .. 100.9 s
-    rec = rostools(any_master, "bag", "record", "-O", "sim.bag", "/chatter", cwd=tmp_path)
+    rec = start_cli(
+        "bag", "record", "-O", "sim.bag", "/chatter", env=any_master.cli_env, cwd=tmp_path
+    )
     player = Proc(["rosbag", "play", "--clock", "-l", "-q", str(bag)], env=any_master.ros_env)
     try:
-        wait_for(lambda: (tmp_path / "sim.bag.active").exists(), 30, "the first /clock")
-        time.sleep(3.0)
+        active = tmp_path / "sim.bag.active"  # opened at the first /clock
+        wait_for(lambda: recorded(active, "/chatter") >= 10, 30, "a loop of the bag", 0.2)
         rec.signal(signal.SIGINT)
         assert rec.popen.wait(20) == 0, rec.output()[1]
     finally:
@@ -260,14 +258,15 @@ def test_record_follows_real_rosbag_play_clock(any_master: MasterInfo, tmp_path:
 def test_record_by_type_asks_the_masters_topic_types(
     any_master: MasterInfo, tmp_path: Path
 ) -> None:
-    pubs = [
-        start_ros1_node("talker.py", ["/py", "50"], any_master.ros_env),
-        rostools(any_master, "topic", "pub", "-r", "20", "/img", "sensor_msgs/Image", "{}"),
-    ]
-    rec = rostools(
-        any_master, "bag", "record", "-O", "t.bag", "--topic-types", "std_msgs/*", cwd=tmp_path
+    env = any_master.cli_env
+    pubs = [start_cli("topic", "pub", "-r", "20", "/img", "sensor_msgs/Image", "{}", env=env)]
+    # /img, left out, comes first: every master poll of the recorder finds it.
+    wait_for(lambda: publishers(any_master.uri, "/img"), 20, "/img published")
+    pubs.append(start_ros1_node("talker.py", ["/py", "50"], any_master.ros_env))
+    rec = start_cli(
+        "bag", "record", "-O", "t.bag", "--topic-types", "std_msgs/*", env=env, cwd=tmp_path
     )
-    record_while(any_master, rec, pubs, "/py", 1.5)
+    record_until(rec, pubs, tmp_path / "t.bag", {"/py": 1})
     with open_bag(tmp_path / "t.bag") as reader:
         assert {c.topic for c in reader.connections} == {"/py"}
 
@@ -281,7 +280,7 @@ def test_a_late_real_subscriber_gets_every_recorded_latched_publisher(
     write_static_bag(bag)
     flags = ["-k", "--wait-for-subscribers"]
     proc = (
-        rostools(any_master, "bag", "play", str(bag), "-d", "0", *flags)
+        start_cli("bag", "play", str(bag), "-d", "0", *flags, env=any_master.cli_env)
         if player == "rostools"
         else Proc(["rosbag", "play", str(bag), *flags], env=any_master.ros_env)
     )

@@ -5,7 +5,6 @@ from __future__ import annotations
 import json
 import shutil
 import subprocess
-import sys
 from pathlib import Path
 from typing import Any
 
@@ -16,7 +15,7 @@ from rostools.bag import ops
 from rostools.bag.access import bag_info
 from rostools.bag.recover import recover
 from tests.support.bagdata import digest, first_chunk_data, headers, read_stream, write_sample
-from tests.support.env import SYSTEM_PYTHON, needs_ros1, run_system_python
+from tests.support.env import CLI, SYSTEM_PYTHON, needs_ros1, run_system_python
 
 pytestmark = [pytest.mark.interop, needs_ros1]
 
@@ -110,7 +109,7 @@ def test_reindex_takes_what_rosbag_reindex_takes(tmp_path: Path) -> None:
         names = [work / "a.bag", work / "b.bag"]
         for name in names:
             shutil.copy(sample.path, name)
-        cmd = ["rosbag"] if tool == "rosbag" else [sys.executable, "-m", "rostools", "bag"]
+        cmd = ["rosbag"] if tool == "rosbag" else [*CLI, "bag"]
         subprocess.run([*cmd, "reindex", "-q", *map(str, names)], capture_output=True, check=True)
         trees[tool] = sorted(p.name for p in work.iterdir())
         view = rosbag_view(*names)

@@ -15,7 +15,6 @@ import signal
 import socket
 import struct
 import subprocess
-import sys
 import time
 import xmlrpc.client
 from collections.abc import Iterator
@@ -29,6 +28,7 @@ from tests.support.procs import (
     Proc,
     free_port,
     ros_env,
+    start_cli,
     start_ros1_node,
     start_roscore,
     start_rostools_core,
@@ -241,10 +241,11 @@ def test_rostools_hz_and_bw_read_a_roscpp_publisher(run: Peers) -> None:
     (This replaces a test of pub_rate alone, which held the harness to account, not rostools.)
     """
     meters = {
-        verb: Proc([sys.executable, "-m", "rostools", "topic", verb, "/rate_20k", "-F", "json",
-                    "--timeout", "4"], env=run.master.env)
+        verb: start_cli(
+            "topic", verb, "/rate_20k", "-F", "json", "--timeout", "4", env=run.master.env
+        )
         for verb in ("hz", "bw")
-    }  # fmt: skip
+    }
     pub = run.start(
         "pub_rate", "/rate_20k", "std_msgs/String", "16", "20000", "3", "--wait-subscribers", "2"
     )

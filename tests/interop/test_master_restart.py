@@ -11,7 +11,6 @@ from __future__ import annotations
 import json
 import os
 import signal
-import sys
 import time
 import xmlrpc.client
 from pathlib import Path
@@ -19,16 +18,19 @@ from pathlib import Path
 import pytest
 
 from rostools.bag.access import open_bag
-from tests.support.bagdata import write_play_bag
+from tests.support.bagdata import recorded, write_play_bag
 from tests.support.env import ROOT, needs_ros1, run_cli
 from tests.support.procs import (
     Proc,
     free_port,
     master_answers,
+    publishers,
     ros_env,
+    start_cli,
     start_ros1_node,
     start_roscore,
     start_rostools_core,
+    subscribers,
     wait_for,
 )
 
@@ -37,12 +39,6 @@ pytestmark = [pytest.mark.interop, needs_ros1]
 
 def listed(topic: str, env: dict[str, str]) -> bool:
     return topic in run_cli("topic", "list", env=env).stdout.split()
-
-
-def registered(master: str, topic: str, kind: int = 0) -> list[str]:
-    """The publishers (``kind`` 0) or subscribers (1) of ``topic`` the master lists."""
-    state = xmlrpc.client.ServerProxy(master).getSystemState("/t")[2][kind]
-    return next((names for t, names in state if t == topic), [])
 
 
 def kill_master(master: Proc, uri: str) -> None:
@@ -72,25 +68,27 @@ def test_nodes_carry_on_through_a_master_restart(
             start_rostools_core(port, cli_env) if kind == "rostools" else start_roscore(port, env)
         )
 
-    rostools = [sys.executable, "-m", "rostools"]
     master = start_master()
     procs: list[Proc] = []
     try:
-        procs.append(Proc([*rostools, "topic", "pub", "-r", "10", "/kept", "std_msgs/String",
-                           "data: kept"], env=cli_env))  # fmt: skip
+        procs.append(
+            start_cli(
+                "topic", "pub", "-r", "10", "/kept", "std_msgs/String", "data: kept", env=cli_env
+            )
+        )
         talker = start_ros1_node("talker.py", ["/spoken", "20"], env)
         procs.append(talker)
-        echo = Proc([*rostools, "topic", "echo", "/spoken", "-F", "json"], env=cli_env)
+        echo = start_cli("topic", "echo", "/spoken", "-F", "json", env=cli_env)
         procs.append(echo)
         write_play_bag(tmp_path / "loop.bag")
-        procs.append(Proc([*rostools, "bag", "play", "-l", str(tmp_path / "loop.bag"),
-                           "/chatter:=/replayed"], env=cli_env))  # fmt: skip
+        loop = str(tmp_path / "loop.bag")
+        procs.append(start_cli("bag", "play", "-l", loop, "/chatter:=/replayed", env=cli_env))
         bag = tmp_path / "through.bag"
-        record = Proc([*rostools, "bag", "record", "-a", "-O", str(bag)], env=cli_env)
+        record = start_cli("bag", "record", "-a", "-O", str(bag), env=cli_env)
         procs.append(record)
         wait_for(lambda: listed("/kept", cli_env) and listed("/spoken", cli_env), 20, "graph")
         echo.expect("hello", 15)
-        wait_for(lambda: any("record" in n for n in registered(uri, "/spoken", 1)), 10, "recording")
+        wait_for(lambda: any("record" in n for n in subscribers(uri, "/spoken")), 10, "recording")
 
         kill_master(master, uri)
         master = start_master()
@@ -98,7 +96,7 @@ def test_nodes_carry_on_through_a_master_restart(
         wait_for(lambda: listed("/kept", cli_env), 5, "/kept registered again")
         back_after = time.monotonic() - restarted
         # the rospy talker never registers again: the new master knows no publisher of /spoken
-        assert registered(uri, "/spoken") == []
+        assert publishers(uri, "/spoken") == []
 
         # a subscriber that starts now hears the publisher that started before
         listener = start_ros1_node("listener.py", ["/kept"], env)
@@ -117,8 +115,8 @@ def test_nodes_carry_on_through_a_master_restart(
         for _ in range(5):
             assert json.loads(echo.expect("hello", 10))["data"].startswith("hello")
         # the recorder asks the master every second; then the talker has 20 messages a second
-        wait_for(lambda: any("record" in n for n in registered(uri, "/later", 1)), 20, "/later")
-        time.sleep(1.0)
+        active = bag.with_name(f"{bag.name}.active")
+        wait_for(lambda: recorded(active, "/later"), 20, "/later recorded", 0.2)
         record.signal(signal.SIGINT)
         assert record.popen.wait(15) == 0
         info = json.loads(run_cli("bag", "info", str(bag), "-F", "json", env=cli_env).stdout)
@@ -182,8 +180,8 @@ def test_ros1_nodes_register_nothing_again_after_a_restart(tmp_path: Path) -> No
         procs.append(proc)
         return proc
 
-    def subscribers(topic: str) -> list[str]:
-        return sorted(registered(uri, topic, 1))
+    def subs(topic: str) -> list[str]:
+        return sorted(subscribers(uri, topic))
 
     try:
         talker("/old", "talker_old")
@@ -199,9 +197,9 @@ def test_ros1_nodes_register_nothing_again_after_a_restart(tmp_path: Path) -> No
         procs += [rec_all, rec_named]
         wait_for(
             lambda: (
-                "/rec_all" in subscribers("/old")
-                and subscribers("/named") == ["/rec_named"]
-                and any(n.startswith("/py_listener") for n in subscribers("/heard"))
+                "/rec_all" in subs("/old")
+                and subs("/named") == ["/rec_named"]
+                and any(n.startswith("/py_listener") for n in subs("/heard"))
             ),
             30,
             "the ROS 1 nodes registered",
@@ -214,15 +212,15 @@ def test_ros1_nodes_register_nothing_again_after_a_restart(tmp_path: Path) -> No
             talker(topic, name)
         later = talker("/old", "talker_old2")
         # rosbag record -a finds /new on its next poll: new registrations reach the new master
-        wait_for(lambda: subscribers("/new") == ["/rec_all"], 20, "rosbag record -a on /new")
+        wait_for(lambda: subs("/new") == ["/rec_all"], 20, "rosbag record -a on /new")
         later.expect(r"said hello 40", 20)  # 2 s of messages from the later publishers
 
         # what was registered before the restart was never registered again
-        assert registered(uri, "/old") == ["/talker_old2"]  # not the rospy talker_old
-        assert subscribers("/old") == []  # not rosbag record -a (roscpp)
+        assert publishers(uri, "/old") == ["/talker_old2"]  # not the rospy talker_old
+        assert subs("/old") == []  # not rosbag record -a (roscpp)
         # nor rosbag record /named (roscpp), nor the rospy listener; -a subscribed to both anew
-        assert subscribers("/named") == ["/rec_all"]
-        assert subscribers("/heard") == ["/rec_all"]
+        assert subs("/named") == ["/rec_all"]
+        assert subs("/heard") == ["/rec_all"]
         with pytest.raises(AssertionError):  # nothing it printed, nor prints now, says "got"
             listener.expect(r"^got ", 1.0)
         for rec in (rec_all, rec_named):

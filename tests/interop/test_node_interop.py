@@ -48,18 +48,21 @@ def hide_times(text: str) -> str:
     return "\n".join(line for line in text.splitlines() if not line.startswith("rosnode: node is"))
 
 
-def agree(info: MasterInfo, *args: str, tries: int = 4) -> str:
+def agree(info: MasterInfo, *args: str, timeout: float = 8.0) -> str:
     """Run ``rosnode ARGS`` and ``rostools node ARGS`` until their stdout agree; that text.
 
-    Retried because connections settle for a moment after nodes start (rosout connecting).
+    Retried, for up to ``timeout`` seconds, because connections settle for a moment after
+    nodes start (rosout connecting); each round of the two takes about a second itself.
     """
-    for _ in range(tries):
+    deadline = time.monotonic() + timeout
+    while True:
         theirs, mine = rosnode(info, *args), ours(info, *args)
         assert theirs.returncode == 0, theirs.stderr
         assert mine.returncode == 0, mine.stderr
         if hide_times(theirs.stdout) == hide_times(mine.stdout):
             return mine.stdout
-        time.sleep(1.0)
+        if time.monotonic() > deadline:
+            break
     assert hide_times(mine.stdout) == hide_times(theirs.stdout), args
     return mine.stdout
 

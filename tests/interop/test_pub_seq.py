@@ -8,12 +8,11 @@ sent seq 0, the number in the message as it was written.
 from __future__ import annotations
 
 import json
-import sys
 
 import pytest
 
 from tests.support.env import needs_ros1, run_cli
-from tests.support.procs import Proc, wait_for
+from tests.support.procs import Proc, start_cli, wait_for
 
 pytestmark = [pytest.mark.interop, needs_ros1]
 
@@ -29,8 +28,7 @@ def test_a_latched_pub_numbers_as_rostopic(rostools_master: str, cli_env: dict[s
     message = "{header: {frame_id: map}}"
     theirs = Proc(["rostopic", "pub", "/theirs", "geometry_msgs/PointStamped", message],
                   env=ros_env)  # fmt: skip
-    ours = Proc([sys.executable, "-m", "rostools", "topic", "pub", "/ours",
-                 "geometry_msgs/PointStamped", message], env=cli_env)  # fmt: skip
+    ours = start_cli("topic", "pub", "/ours", "geometry_msgs/PointStamped", message, env=cli_env)
     try:
         topics = lambda: run_cli("topic", "list", env=cli_env).stdout.split()  # noqa: E731
         wait_for(lambda: {"/ours", "/theirs"} <= set(topics()), 30, "both publishers")

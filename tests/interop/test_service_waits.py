@@ -8,14 +8,13 @@ by side here, against the same rospy server.
 from __future__ import annotations
 
 import subprocess
-import sys
 import time
 from pathlib import Path
 
 import pytest
 
 from tests.conftest import MasterInfo
-from tests.support.env import needs_ros1, run_cli
+from tests.support.env import CLI, needs_ros1, run_cli
 from tests.support.procs import ros_env, start_ros1_node, wait_for
 
 pytestmark = [pytest.mark.interop, needs_ros1]
@@ -27,7 +26,7 @@ WAITING = "rostools: waiting for service /slow to respond (3 s so far; Ctrl-C st
 
 def _both(info: MasterInfo, *argv: str) -> tuple[subprocess.Popen[str], subprocess.Popen[str]]:
     """``rostools service ARGV`` and ``rosservice ARGV``, started together."""
-    ours = subprocess.Popen([sys.executable, "-m", "rostools", "service", *argv],
+    ours = subprocess.Popen([*CLI, "service", *argv],
                             env=info.cli_env, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                             text=True)  # fmt: skip
     theirs = subprocess.Popen(["rosservice", *argv], env=info.ros_env, stdout=subprocess.PIPE,

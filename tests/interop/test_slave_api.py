@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import sys
 import xmlrpc.client
 from pathlib import Path
 from typing import Any
@@ -10,7 +9,7 @@ from typing import Any
 import pytest
 
 from tests.support.env import needs_ros1
-from tests.support.procs import Proc, ros_env, start_ros1_node, wait_for
+from tests.support.procs import ros_env, start_cli, start_ros1_node, wait_for
 
 pytestmark = [pytest.mark.interop, needs_ros1]
 
@@ -56,8 +55,9 @@ def test_malformed_slave_calls_get_rospys_answers(
 ) -> None:
     # the defect: publisherUpdate with a string for the URI list got a success from us
     talker = start_ros1_node("talker.py", ["/t", "5"], ros_env(rostools_master, tmp_path))
-    ours = Proc([sys.executable, "-m", "rostools", "topic", "pub", "-r", "5", "/t",
-                 "std_msgs/String", "data: x", "__name:=ours"], env=cli_env)  # fmt: skip
+    ours = start_cli(
+        "topic", "pub", "-r", "5", "/t", "std_msgs/String", "data: x", "__name:=ours", env=cli_env
+    )
     master = xmlrpc.client.ServerProxy(rostools_master, allow_none=True)
     try:
         wait_for(lambda: all(master.lookupNode("/c", n)[0] == 1 for n in ("/talker", "/ours")))

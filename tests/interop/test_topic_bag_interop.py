@@ -3,18 +3,15 @@
 from __future__ import annotations
 
 import re
-import signal
 import struct
 import subprocess
-import sys
-import time
 from pathlib import Path
 
 import pytest
 
 from rostools.bag.access import open_writer
 from tests.support.env import needs_ros1, run_cli
-from tests.support.procs import Proc, ros_env, wait_for
+from tests.support.procs import Proc, ros_env, start_cli, wait_for
 
 pytestmark = [pytest.mark.interop, needs_ros1]
 
@@ -93,29 +90,26 @@ def test_rates_follow_sim_time_from_clock(
             header = struct.pack("<III", i, t // 10**9, t % 10**9) + struct.pack("<I", 0)
             writer.write(conn, t, header + struct.pack("<3d", i, 0.0, 0.0))
     assert run_cli("param", "set", "/use_sim_time", "true", env=cli_env).returncode == 0
-    here = [sys.executable, "-m", "rostools"]
-    player = Proc([*here, "bag", "play", str(bag), "--clock", "-r", "2"], env=cli_env)
+    player = start_cli("bag", "play", str(bag), "--clock", "-r", "2", env=cli_env)
     meters: dict[str, Proc] = {}
+    out = {}
     try:
         wait_for(lambda: "/pose" in run_cli("topic", "list", env=cli_env).stdout, 15, "play")
         ros = ros_env(rostools_master, tmp_path / "ros_home")
         meters = {
-            "ours hz": Proc([*here, "topic", "hz", "/pose"], env=cli_env),
-            "ours wall hz": Proc([*here, "topic", "hz", "/pose", "--wall-time"], env=cli_env),
-            "ours delay": Proc([*here, "topic", "delay", "/pose"], env=cli_env),
+            "ours hz": start_cli("topic", "hz", "/pose", env=cli_env),
+            "ours wall hz": start_cli("topic", "hz", "/pose", "--wall-time", env=cli_env),
+            "ours delay": start_cli("topic", "delay", "/pose", env=cli_env),
             "rostopic hz": Proc(["rostopic", "hz", "/pose"], env=ros),
             "rostopic delay": Proc(["rostopic", "delay", "/pose"], env=ros),
         }
-        time.sleep(6)
+        for name, proc in meters.items():  # three each: the last two are checked
+            for _ in range(3):
+                proc.expect("^average (rate|delay): ", 20)
+            out[name] = "".join(proc.seen)
     finally:
-        out = {}
         for proc in meters.values():
-            proc.signal(signal.SIGINT)
-        for name, proc in meters.items():
-            try:
-                out[name] = proc.output()[0]
-            finally:
-                proc.stop()
+            proc.stop()
         player.stop()
     rates = {k: _averages(v, "rate")[-2:] for k, v in out.items() if "hz" in k}
     delays = {k: _averages(v, "delay")[-2:] for k, v in out.items() if "delay" in k}

@@ -6,20 +6,20 @@ import base64
 import hashlib
 import json
 import subprocess
-import sys
 from pathlib import Path
 
 import pytest
 
 from tests.conftest import MasterInfo
 from tests.support.env import needs_ros1, run_cli
-from tests.support.procs import Proc, start_ros1_node, wait_for
+from tests.support.procs import Proc, start_cli, start_ros1_node, wait_for
 
 pytestmark = [pytest.mark.interop, needs_ros1]
 
 
 def rostools(info: MasterInfo, *args: str) -> Proc:
-    return Proc([sys.executable, "-m", "rostools", *args], env=info.cli_env)
+    """``rostools ARGS`` on ``info``'s master."""
+    return start_cli(*args, env=info.cli_env)
 
 
 def ros(info: MasterInfo, *argv: str, timeout: float = 30) -> subprocess.CompletedProcess[str]:

@@ -185,3 +185,18 @@ def swap_spans(raw: bytes, first: tuple[int, int], second: tuple[int, int]) -> b
     """``raw`` with two byte ranges (first before second) swapped."""
     (a, b), (c, d) = first, second
     return raw[:a] + raw[c:d] + raw[b:c] + raw[a:b] + raw[d:]
+
+
+def recorded(path: Path, topic: str) -> int:
+    """How many messages on ``topic`` a file still being written holds on disk so far.
+
+    Read as a killed recorder's file is: a chunk that is not whole yet is skipped. 0 while
+    the file is missing or holds no whole header yet.
+    """
+    from rostools.errors import RostoolsError
+
+    try:
+        with open_bag(path) as reader:
+            return sum(1 for _ in reader.messages([topic]))
+    except (RostoolsError, OSError):
+        return 0

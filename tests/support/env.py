@@ -17,6 +17,8 @@ needs_corpus = pytest.mark.skipif(
     not (CORPUS / "MANIFEST.tsv").is_file(), reason=f"the shared corpus is not at {CORPUS}"
 )
 SYSTEM_PYTHON = "/usr/bin/python3"
+#: The command line of rostools as a user runs it, for ``run_cli`` and ``procs.start_cli``.
+CLI = [sys.executable, "-m", "rostools"]
 
 
 def ros1_missing() -> str | None:
@@ -46,7 +48,7 @@ def run_cli(
 ) -> subprocess.CompletedProcess[str]:
     """Run ``python -m rostools ARGS`` (in ``cwd``) and capture its output."""
     return subprocess.run(
-        [sys.executable, "-m", "rostools", *args],
+        [*CLI, *args],
         capture_output=True,
         text=True,
         env=env,

@@ -1,5 +1,8 @@
-"""A publisher that is not one: it registers, answers ``requestTopic``, and then sends each
-subscriber whatever the test says, so tests can play a hostile or broken peer.
+"""Peers that are not real nodes, so tests can play a hostile, broken or watched one.
+
+``FakeNode`` is a node's slave API that answers what the test says and records every call;
+``FakePublisher`` registers, answers ``requestTopic``, and then sends each subscriber whatever
+the test says.
 """
 
 from __future__ import annotations
@@ -8,9 +11,10 @@ import socket
 import struct
 import threading
 import xmlrpc.client
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from types import TracebackType
-from xmlrpc.server import SimpleXMLRPCServer
+from typing import Any
+from xmlrpc.server import SimpleXMLRPCRequestHandler, SimpleXMLRPCServer
 
 from rostools.wire.tcpros import publisher_header
 
@@ -36,6 +40,59 @@ def header_type_header(topic: str, name: str = "/fake") -> bytes:
     return publisher_header(name, topic, HEADER_MD5, "std_msgs/Header", definition, False)
 
 
+class _QuietHandler(SimpleXMLRPCRequestHandler):
+    """No log line on stderr for a client that hangs up or sends junk (tests do both)."""
+
+    def log_message(self, format: str, *args: Any) -> None:
+        pass
+
+
+class FakeNode:
+    """A slave API on loopback, served from a thread until ``close``; records every call.
+
+    ``answers`` maps a method to a function of the call's parameters that returns the answer;
+    any other method is a fault, as it is to ``SimpleXMLRPCServer``.
+    """
+
+    def __init__(self, answers: Mapping[str, Callable[..., Any]]) -> None:
+        self.answers = dict(answers)
+        #: (method, parameters) of each call, in the order they came.
+        self.calls: list[tuple[str, tuple[Any, ...]]] = []
+        self.server = SimpleXMLRPCServer(
+            ("127.0.0.1", 0), requestHandler=_QuietHandler, logRequests=False, allow_none=True
+        )
+        self.server.register_instance(self)  # every call goes through _dispatch
+        self.uri = f"http://127.0.0.1:{self.server.server_address[1]}/"
+        threading.Thread(target=self.server.serve_forever, daemon=True).start()
+
+    def _dispatch(self, method: str, params: tuple[Any, ...]) -> Any:
+        answer = self.answers.get(method)
+        if answer is None:
+            raise xmlrpc.client.Fault(1, f'method "{method}" is not supported')
+        self.calls.append((method, params))
+        return answer(*params)
+
+    def asked(self, method: str) -> int:
+        """How many times ``method`` has been called."""
+        return sum(1 for name, _ in self.calls if name == method)
+
+    def close(self) -> None:
+        """Stop serving and free the port."""
+        self.server.shutdown()
+        self.server.server_close()
+
+    def __enter__(self) -> FakeNode:
+        return self
+
+    def __exit__(
+        self,
+        exc_type: type[BaseException] | None,
+        exc: BaseException | None,
+        tb: TracebackType | None,
+    ) -> None:
+        self.close()
+
+
 class FakePublisher:
     """``with FakePublisher(master, "/t", send) as fake:``; ``send(sock)`` runs per subscriber.
 
@@ -54,17 +111,14 @@ class FakePublisher:
         self.master_uri, self.topic, self.send, self.name = master_uri, topic, send, name
         self.msg_type = msg_type
         self.tcp = socket.create_server(("127.0.0.1", 0))
-        self.rpc = SimpleXMLRPCServer(("127.0.0.1", 0), logRequests=False, allow_none=True)
         port = self.tcp.getsockname()[1]
-        self.rpc.register_function(
-            lambda caller, topic, protocols: [1, "", ["TCPROS", "127.0.0.1", port]], "requestTopic"
-        )
-        self.uri = f"http://127.0.0.1:{self.rpc.server_address[1]}/"
+        answer = [1, "", ["TCPROS", "127.0.0.1", port]]
+        self.rpc = FakeNode({"requestTopic": lambda caller, topic, protocols: answer})
+        self.uri = self.rpc.uri
         self.connections: list[socket.socket] = []
         self.stopped = threading.Event()
 
     def __enter__(self) -> FakePublisher:
-        threading.Thread(target=self.rpc.serve_forever, daemon=True).start()
         threading.Thread(target=self._accept, daemon=True).start()
         with xmlrpc.client.ServerProxy(self.master_uri) as master:
             code, message, _ = master.registerPublisher(
@@ -97,8 +151,7 @@ class FakePublisher:
         tb: TracebackType | None,
     ) -> None:
         self.stopped.set()
-        self.rpc.shutdown()
-        self.rpc.server_close()
+        self.rpc.close()
         self.tcp.close()
         for conn in self.connections:
             conn.close()

@@ -1,4 +1,5 @@
-"""Processes that tests start: masters, real ROS nodes, rostools commands.
+"""Processes that tests start: masters, real ROS nodes, rostools commands; and the waits on
+what they do (a line printed, a node subscribed, a connection up), so no test sleeps for them.
 
 Every process is started in its own session and stopped by its process group id, which is
 its own PID: nothing is ever killed by name, and children of a launcher (roscore starts
@@ -14,13 +15,14 @@ import re
 import signal
 import socket
 import subprocess
-import sys
 import threading
 import time
 import xmlrpc.client
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from pathlib import Path
-from typing import IO
+from typing import IO, Any
+
+from tests.support.env import CLI
 
 
 def free_port() -> int:
@@ -31,13 +33,28 @@ def free_port() -> int:
         return port
 
 
-def wait_for(predicate: Callable[[], bool], timeout: float = 10.0, what: str = "condition") -> None:
-    """Poll ``predicate`` until it is true; AssertionError after ``timeout`` seconds."""
+@contextlib.contextmanager
+def silent_port() -> Iterator[int]:
+    """A loopback port that accepts connections and never answers, while in the ``with``."""
+    with socket.socket() as sock:
+        sock.bind(("127.0.0.1", 0))
+        sock.listen(16)
+        port: int = sock.getsockname()[1]
+        yield port
+
+
+def wait_for(
+    predicate: Callable[[], object],
+    timeout: float = 10.0,
+    what: str = "condition",
+    interval: float = 0.05,
+) -> None:
+    """Poll ``predicate`` every ``interval`` s until true; AssertionError after ``timeout`` s."""
     deadline = time.monotonic() + timeout
     while time.monotonic() < deadline:
         if predicate():
             return
-        time.sleep(0.05)
+        time.sleep(interval)
     raise AssertionError(f"timed out after {timeout} s waiting for {what}")
 
 
@@ -62,6 +79,46 @@ def master_answers(uri: str) -> bool:
         return False
 
 
+def _graph(master_uri: str, kind: int, topic: str) -> list[str]:
+    with xmlrpc.client.ServerProxy(master_uri) as proxy:
+        state = proxy.getSystemState("/probe")[2][kind]
+    return next((list(names) for t, names in state if t == topic), [])
+
+
+def publishers(master_uri: str, topic: str) -> list[str]:
+    """The nodes the master lists as publishers of ``topic``."""
+    return _graph(master_uri, 0, topic)
+
+
+def subscribers(master_uri: str, topic: str) -> list[str]:
+    """The nodes the master lists as subscribers of ``topic``."""
+    return _graph(master_uri, 1, topic)
+
+
+def subscribed(master_uri: str, topic: str, prefix: str) -> bool:
+    """Whether a node whose name starts with ``prefix`` subscribes to ``topic``."""
+    return any(name.startswith(prefix) for name in subscribers(master_uri, topic))
+
+
+def linked(master_uri: str, node: str, topic: str) -> list[str]:
+    """The peers ``node`` has a live connection with on ``topic``, from its ``getBusInfo``.
+
+    A publisher names each subscriber (its caller id), a subscriber each publisher's URI. A
+    publisher lists a subscriber once its reply header is sent: what it publishes from then
+    on reaches that subscriber, which the master's lists alone do not tell.
+    """
+    try:
+        with xmlrpc.client.ServerProxy(master_uri) as master:
+            code, _, uri = master.lookupNode("/probe", node)
+        if code != 1:
+            return []
+        with xmlrpc.client.ServerProxy(uri) as peer:
+            entries: list[Any] = peer.getBusInfo("/probe")[2]
+    except (OSError, xmlrpc.client.Error):
+        return []  # gone, or not up yet
+    return [str(e[1]) for e in entries if e[4] == topic and e[5]]
+
+
 class Proc:
     """A child process in its own process group."""
 
@@ -84,32 +141,51 @@ class Proc:
             start_new_session=True,
         )
         self.pid = self.popen.pid
-        self._lines: queue.Queue[str] | None = None
+        #: Stream name -> the lines read from it and not yet looked at.
+        self._lines: dict[str, queue.Queue[str]] = {}
+        self._readers: list[threading.Thread] = []
+        #: The stdout lines ``expect`` has looked at, in order.
         self.seen: list[str] = []
+        #: The stderr lines ``expect(..., stderr=True)`` has looked at, in order.
+        self.seen_err: list[str] = []
 
-    def expect(self, pattern: str, timeout: float = 15.0) -> str:
-        """The next stdout line matching the regex ``pattern``; AssertionError on timeout."""
-        if self._lines is None:
-            self._lines = queue.Queue()
-            threading.Thread(target=self._read, daemon=True).start()
+    def expect(self, pattern: str, timeout: float = 15.0, *, stderr: bool = False) -> str:
+        """The next stdout (or stderr) line matching the regex ``pattern``.
+
+        AssertionError after ``timeout`` seconds without one.
+        """
+        self._start_readers()
+        name, seen = ("stderr", self.seen_err) if stderr else ("stdout", self.seen)
+        lines = self._lines[name]
         deadline = time.monotonic() + timeout
         while (left := deadline - time.monotonic()) > 0:
             try:
-                line = self._lines.get(timeout=left)
+                line = lines.get(timeout=left)
             except queue.Empty:
                 break
-            self.seen.append(line)
+            seen.append(line)
             if re.search(pattern, line):
                 return line
-        tail = "".join(self.seen[-10:])
+        tail = "".join(seen[-10:])
         raise AssertionError(
             f"{self.argv[:3]} printed no line matching {pattern!r}; last: {tail!r}"
         )
 
-    def _read(self) -> None:
-        assert self.popen.stdout is not None and self._lines is not None
-        for raw in self.popen.stdout:
-            self._lines.put(raw.decode(errors="replace"))
+    def _start_readers(self) -> None:
+        """Read both pipes in threads from now on (one read alone could fill the other)."""
+        if self._readers:
+            return
+        for name in ("stdout", "stderr"):
+            stream = getattr(self.popen, name)
+            if stream is not None:
+                self._lines[name] = queue.Queue()
+                reader = threading.Thread(target=self._read, args=(name, stream), daemon=True)
+                reader.start()
+                self._readers.append(reader)
+
+    def _read(self, name: str, stream: IO[bytes]) -> None:
+        for raw in stream:
+            self._lines[name].put(raw.decode(errors="replace"))
 
     def signal(self, sig: int) -> None:
         """Send ``sig`` to the process group."""
@@ -120,27 +196,51 @@ class Proc:
     stop_timeout = 5.0
 
     def stop(self, timeout: float | None = None) -> int:
-        """SIGINT, then SIGTERM, then SIGKILL, until it exits; its return code."""
+        """SIGINT, then SIGTERM, then SIGKILL, until it and its group exit; its return code.
+
+        A launcher's children finish after it: ``rosbag record`` (Python) exits before the
+        ``record`` it started has closed its file, and killing that one then left the file
+        ``.active`` (one run in six). So each signal waits for the whole group.
+        """
         timeout = self.stop_timeout if timeout is None else timeout
         for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGKILL):
-            if self.popen.poll() is not None:
+            if self.popen.poll() is not None:  # exited before: its group ends on its own
+                self._wait_group(timeout)
                 break
             self.signal(sig)
-            try:
-                self.popen.wait(timeout)
-            except subprocess.TimeoutExpired:
-                continue
+            if self._wait_group(timeout):
+                break
         self.signal(signal.SIGKILL)  # anything the launcher left behind in its group
         code = self.popen.wait()
+        for reader in self._readers:  # at the pipes' end by now; closed under it, it would raise
+            reader.join(1)
         for stream in (self.popen.stdout, self.popen.stderr):
             if stream is not None:
                 stream.close()
         return code
 
+    def _wait_group(self, timeout: float) -> bool:
+        """Whether it and every process of its group exit within ``timeout`` seconds."""
+        deadline = time.monotonic() + timeout
+        while self.popen.poll() is None or group_members(self.pid):
+            if time.monotonic() >= deadline:
+                return False
+            time.sleep(0.02)
+        return True
+
     def output(self) -> tuple[str, str]:
-        """Everything it wrote, once it has exited."""
-        out, err = self.popen.communicate(timeout=30)
-        return (out or b"").decode(errors="replace"), (err or b"").decode(errors="replace")
+        """Everything it wrote on stdout and stderr, once it has exited (``expect``'s lines too)."""
+        if not self._readers:
+            out, err = self.popen.communicate(timeout=30)
+            return (out or b"").decode(errors="replace"), (err or b"").decode(errors="replace")
+        self.popen.wait(30)
+        for reader in self._readers:
+            reader.join(30)
+        for name, seen in (("stdout", self.seen), ("stderr", self.seen_err)):
+            lines = self._lines.get(name)
+            while lines is not None and not lines.empty():
+                seen.append(lines.get_nowait())
+        return "".join(self.seen), "".join(self.seen_err)
 
 
 def ros_env(master_uri: str, home: Path) -> dict[str, str]:
@@ -156,9 +256,19 @@ def ros_env(master_uri: str, home: Path) -> dict[str, str]:
     return env
 
 
+def start_cli(
+    *args: str,
+    env: dict[str, str],
+    cwd: Path | None = None,
+    stdin: int | None = subprocess.DEVNULL,
+) -> Proc:
+    """``rostools ARGS`` as a child of its own, left running (``run_cli`` runs one to its end)."""
+    return Proc([*CLI, *args], env=env, cwd=cwd, stdin=stdin)
+
+
 def start_rostools_core(port: int, env: dict[str, str]) -> Proc:
     """``rostools core --port PORT``, once it answers."""
-    proc = Proc([sys.executable, "-m", "rostools", "core", "--port", str(port)], env=env)
+    proc = start_cli("core", "--port", str(port), env=env)
     uri = f"http://127.0.0.1:{port}/"
     wait_for(lambda: master_answers(uri) or proc.popen.poll() is not None, 15, "rostools core")
     if proc.popen.poll() is not None:
@@ -197,6 +307,18 @@ class Roscore(Proc):
             with contextlib.suppress(ProcessLookupError):
                 os.kill(pid, signal.SIGKILL)
         return code
+
+
+def group_members(group: int) -> list[int]:
+    """The PIDs of the live processes (zombies aside) in process group ``group`` (``/proc``)."""
+    members = []
+    for stat in Path("/proc").glob("[0-9]*/stat"):
+        with contextlib.suppress(OSError, IndexError, ValueError):
+            # after "(command)": state, the parent's PID, then the process group
+            fields = stat.read_text().rsplit(")", 1)[1].split()
+            if int(fields[2]) == group and fields[0] != "Z":
+                members.append(int(stat.parent.name))
+    return members
 
 
 def child_pids(parent: int) -> list[int]:

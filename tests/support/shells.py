@@ -7,6 +7,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import re
 import shutil
 import sys
@@ -83,13 +84,18 @@ class Shell:
         self.child.expect("READY> ")
         return clean(line).strip()
 
-    def offers(self, text: str) -> str:
-        """What the shell lists after ``text`` and two TABs (bash lists on the second)."""
-        self.child.send(text + "\t")
-        time.sleep(0.6)
-        self.child.send("\t")
-        time.sleep(0.8)
-        shown = self._drain()
+    def offers(self, text: str, *listed: str, timeout: float = 10) -> str:
+        """What the shell lists after ``text`` and two TABs (bash lists on the second), read
+        until every one of ``listed`` has shown, and then until the terminal is quiet."""
+        self.child.send(text + "\t\t")
+        seen = []
+        deadline = time.monotonic() + timeout
+        while not all(name in clean("".join(seen)) for name in listed):
+            if time.monotonic() > deadline:
+                raise AssertionError(f"{self.name} listed no {listed}: {clean(''.join(seen))!r}")
+            with contextlib.suppress(pexpect.TIMEOUT):
+                seen.append(self.child.read_nonblocking(65536, timeout=0.1))
+        shown = clean("".join(seen)) + self._drain()
         self.child.send("\x03")  # drop the line
         self._drain()
         return shown

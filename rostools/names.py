@@ -1,6 +1,6 @@
 """ROS graph resource names: canonical form, resolution, remapping, anonymous names.
 
-Pure functions over strings (ROS1_PROTOCOL.md §9): the standard library and our errors only.
+Pure functions over strings (wiki.ros.org/Names): the standard library and our errors only.
 """
 
 from __future__ import annotations

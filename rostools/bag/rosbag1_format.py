@@ -2,7 +2,7 @@
 
 Pure functions over bytes, shared by the reader, the writer and recovery. A record is
 ``u32 header_len, header, u32 data_len, data``; the header is ``u32 len; name=value`` fields
-with binary values (see ROS1_PROTOCOL.md section 12).
+with binary values (https://wiki.ros.org/Bags/Format/2.0).
 """
 
 from __future__ import annotations
@@ -243,7 +243,8 @@ def lz4_compress(data: bytes | bytearray | memoryview) -> bytes:
     """An LZ4 frame that roslz4 (``rosbag play``, ``rosbag.Bag``) can read.
 
     roslz4 accepts only independent 1 MB blocks with a content checksum and no stored size;
-    ``lz4.frame`` defaults give frames it rejects as "malformed data" (LIBRARIES.md 1.3).
+    ``lz4.frame`` defaults give frames it rejects as "malformed data" (rosbags' writer makes
+    such frames; a test plays ours with rosbag).
     """
     import lz4.frame
 

@@ -1,4 +1,4 @@
-"""YAML for parameters, with rosparam's conventions (ROS1_PROTOCOL.md §3.6).
+"""YAML for parameters, with rosparam's conventions (wiki.ros.org/rosparam).
 
 YAML 1.1 (``1e3`` stays a string), ``!!binary`` as XML-RPC binary, ``!degrees``/``!radians``
 and bare ``deg(...)``/``rad(...)`` as radians. Unlike rosparam, ``rad()`` expressions are

@@ -51,9 +51,10 @@ def choose_address(
 ) -> Address:
     """Apply ``--host``/``--port``, ``ROS_HOSTNAME``, ``ROS_IP`` and ``ROS_MASTER_URI``.
 
-    With none of them, loopback only, as DESIGN.md asks. Otherwise rosmaster's rules: the
-    name is given out as it is, and the master listens on every interface unless the name
-    is a loopback one. ``0.0.0.0`` listens everywhere and gives out this host's name.
+    With none of them, loopback only: nothing is reachable from other hosts unless asked.
+    Otherwise rosmaster's rules: the name is given out as it is, and the master listens on
+    every interface unless the name is a loopback one. ``0.0.0.0`` listens everywhere and
+    gives out this host's name.
     """
     if env is None:
         env = os.environ

@@ -3,7 +3,8 @@
 Sans-IO: ``MasterAPI.call(method, params)`` returns the XML-RPC result and queues the node
 calls the change requires (``publisherUpdate``, ``paramUpdate``, ``shutdown``) in
 ``outgoing``, for the server to send. Messages and error values follow rosmaster exactly
-(ROS1_PROTOCOL.md §§1.3, 2, 3).
+(https://wiki.ros.org/ROS/Master_API,
+https://wiki.ros.org/ROS/Parameter%20Server_API).
 """
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""The parameter tree, with rosmaster's semantics (ROS1_PROTOCOL.md §3).
+"""The parameter tree, with rosmaster's semantics (https://wiki.ros.org/ROS/Parameter%20Server).
 
 Setting a dict replaces the subtree; setting below a non-dict turns it into a dict; deleting
 a namespace deletes the subtree. Subscriptions are keyed by the canonical key with a trailing

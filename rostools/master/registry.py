@@ -1,7 +1,7 @@
 """Who publishes, subscribes, serves and watches what: rosmaster's registration model.
 
-Pure bookkeeping (ROS1_PROTOCOL.md §2.2). It never calls out; it returns the calls the master
-must make (``shutdown`` of a node replaced by a new one under the same name).
+Pure bookkeeping (https://wiki.ros.org/ROS/Master_API). It never calls out; it returns the
+calls the master must make (``shutdown`` of a node replaced by a new one under the same name).
 """
 
 from __future__ import annotations

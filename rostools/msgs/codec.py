@@ -3,7 +3,7 @@
 For each type we generate Python source: fixed-size runs of primitives, through nested
 messages, are read or written with one ``struct`` call, and nested messages are inlined. This
 is what makes ``echo`` of small high-rate topics fast (genpy does the same; rosbags' serde is
-2-3x slower for small messages, see LIBRARIES.md).
+2-3x slower for small messages; benchmarks/bench_msg.py).
 """
 
 from __future__ import annotations

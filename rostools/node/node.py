@@ -1,6 +1,6 @@
 """A ROS node on asyncio: its slave API, its TCPROS server, registration and clean exit.
 
-The node answers the whole slave API as rospy does (ROS1_PROTOCOL.md §4), accepts topic
+The node answers the whole slave API as rospy does (wiki.ros.org/ROS/Slave_API), accepts topic
 subscribers and service clients on one TCPROS port, and registers everything it offers
 with the master. ``close()`` unregisters all of it.
 """

@@ -1,4 +1,4 @@
-"""Services over TCPROS (ROS1_PROTOCOL.md §6): servers, clients, and the type probe.
+"""Services over TCPROS (wiki.ros.org/ROS/TCPROS): servers, clients, and the type probe.
 
 A client call never hangs: every step has a timeout, and a server that dies mid-call, refuses
 the request or answers garbage raises one of our errors with a one-line reason.

@@ -1,4 +1,4 @@
-"""Asking nodes themselves, over their slave API (ROS1_PROTOCOL.md §4): pids, bus info, shutdown.
+"""Asking nodes over their slave API (wiki.ros.org/ROS/Slave_API): pids, bus info, shutdown.
 
 Blocking. Every call to a node has a timeout: a node that does not answer in time raises
 ``TimeoutExpired``, one that cannot be reached (refused, reset, unknown host)

@@ -4,7 +4,7 @@
 ``BufferedProtocol`` shape (``get_buffer``/``buffer_updated``) without doing any IO: small
 frames are received many at a time into a scratch buffer and copied out once; a large
 frame gets a buffer of exactly its size, filled in place and handed over without a copy.
-That is what lets Python receive at the speed the socket allows (LIBRARIES.md §5).
+That is what lets Python receive at the speed the socket allows (benchmarks/bench_topic.py).
 
 The scratch buffer is not a connection's own: each thread that reads has one, lent to a
 connection for one read at a time. Between reads a connection holds only the part of a

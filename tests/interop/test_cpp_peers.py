@@ -373,7 +373,7 @@ def test_add_two_ints_server_with_real_rosservice(
     assert "responded with an error: b'add_two_ints_server was told to throw'" in thrown.stderr
 
 
-# A raw TCPROS service client (ROS1_PROTOCOL.md §6), to check bytes rosservice hides.
+# A raw TCPROS service client (wiki.ros.org/ROS/TCPROS), to check bytes rosservice hides.
 
 
 def encode_header(fields: dict[str, str]) -> bytes:

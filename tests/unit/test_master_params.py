@@ -1,4 +1,4 @@
-"""The parameter tree and its update notifications (ROS1_PROTOCOL.md §3)."""
+"""The parameter tree and its update notifications (wiki.ros.org/ROS/Parameter Server)."""
 
 from __future__ import annotations
 

@@ -73,7 +73,7 @@ def test_oversized_frame_is_refused() -> None:
 
 
 def test_rostopic_echo_header_bytes() -> None:
-    """The captured rospy subscriber header (ROS1_PROTOCOL.md §14.2), field for field."""
+    """The captured rospy subscriber header (captured from rospy), field for field."""
     raw = subscriber_header(
         "/rostopic_17831_1795329627298",
         "/chatter",
@@ -148,7 +148,7 @@ def test_service_response_reader_in_any_chunks() -> None:
 
 
 def test_captured_service_bytes() -> None:
-    """ROS1_PROTOCOL.md §14.5: empty success, roscpp false, rospy ServiceException."""
+    """Captured service replies: empty success, roscpp false, rospy ServiceException."""
     from rostools.wire.tcpros import FrameError, ResponseReader, service_response
 
     assert service_response(True, b"") == bytes.fromhex("0100000000")

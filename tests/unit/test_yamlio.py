@@ -25,7 +25,7 @@ def test_an_alias_bomb_is_refused_at_once() -> None:
     began = time.monotonic()
     with pytest.raises(UsageError, match=r"bad YAML in bomb.yaml: it expands to more than"):
         yamlio.load_all(BOMB, "bomb.yaml")
-    assert time.monotonic() - began < 1
+    assert time.monotonic() - began < 10  # expanding it would take hours
 
 
 @pytest.mark.parametrize(
@@ -46,12 +46,15 @@ def test_bad_yaml_is_one_line(text: str, problem: str) -> None:
     assert "\n" not in message
 
 
-def test_a_million_numbers_load_in_a_moment() -> None:
-    # the defect: pub -f with a million-element array was still running after 20 s
+def test_a_million_numbers_load_without_pyyaml(monkeypatch: pytest.MonkeyPatch) -> None:
+    # the defect: pub -f with a million-element array was still running after 20 s in PyYAML;
+    # a flow-style document is read as JSON (not a timing: that was flaky on a loaded machine)
+    def no_pyyaml(*_: object, **__: object) -> None:
+        raise AssertionError("PyYAML read a JSON document")
+
+    monkeypatch.setattr(yamlio.yaml, "load_all", no_pyyaml)
     text = "[" + ", ".join(str(i) for i in range(1_000_000)) + "]"
-    began = time.monotonic()
     assert yamlio.load(text, "big")[-1] == 999_999
-    assert time.monotonic() - began < 3
 
 
 @pytest.mark.parametrize(

@@ -307,7 +307,8 @@ def test_a_publisher_that_dies_is_named_without_asking_the_master(
         assert pub.popen.stdout.readline().strip() == b"ready"
 
         def kill_when_connected(subs: list[subscriber.Subscriber]) -> None:
-            wait_for(lambda: all(s.connections for s in subs), 30, "every topic connected")
+            # its name comes with its header: a connection that has none yet is not enough
+            wait_for(lambda: all(s.names for s in subs), 30, "every topic's header")
             pub.signal(signal.SIGKILL)  # it dies registered: the master still lists it
 
         notices, calls = _subscribe_all(master.uri, monkeypatch, kill_when_connected)

@@ -11,7 +11,7 @@ from rostools.bag.access import bag_info
 from tests.support.env import run_cli
 
 
-def test_demo_runs_the_main_job_in_under_ten_seconds(
+def test_demo_runs_the_main_job_and_leaves_nothing_running(
     cli_env: dict[str, str], tmp_path: Path
 ) -> None:
     env = {k: v for k, v in cli_env.items() if k != "ROS_MASTER_URI"}
@@ -19,7 +19,8 @@ def test_demo_runs_the_main_job_in_under_ten_seconds(
     done = run_cli("demo", env=env, cwd=tmp_path, timeout=60)
     took = time.monotonic() - started
     assert done.returncode == 0, done.stdout + done.stderr
-    assert took < 10, took
+    # about 8 s here; the bound tells a wait that never ends from a loaded machine
+    assert took < 30, took
     out = done.stdout
     for shown in (
         "$ rostools topic list\n/chatter",

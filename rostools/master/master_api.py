@@ -66,7 +66,7 @@ class MasterAPI:
     # dispatch -------------------------------------------------------------------------
 
     def call(self, method: str, params: tuple[Any, ...]) -> Any:
-        """Run one XML-RPC call; raises ``xmlrpc.client.Fault`` for an unknown method."""
+        """Run one XML-RPC call; raises ``Fault`` (``wire.xmlvalues``) for an unknown method."""
         if method == "system.multicall":
             return multicall(self.call, params)
         return check.dispatch(self.methods, method, params)

@@ -13,7 +13,7 @@ from typing import Any
 
 from rostools.master.master_api import MasterAPI
 from rostools.node.xmlrpc import Encoded, Notifier, XmlRpcServer
-from rostools.wire.xmlrpc import encode_result
+from rostools.wire.xmlvalues import dumps_response
 
 _READ_ONLY = frozenset(("getSystemState", "getTopicTypes", "getPublishedTopics", "getUri"))
 #: Calls that change nothing the cache holds (nodes poll lookupNode to notice a restart).
@@ -68,7 +68,7 @@ class Master:
             result = api.call(method, params)
             if result[0] != 1:
                 return result
-            cached = self._cache[key] = Encoded(encode_result(result))
+            cached = self._cache[key] = Encoded(dumps_response(result))
         return cached
 
     def _after_call(self) -> None:

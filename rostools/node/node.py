@@ -23,14 +23,13 @@ from rostools.node.service import ServiceHandler, ServiceServer, ServiceType
 from rostools.node.subscriber import FramesCallback, Subscriber
 from rostools.node.watch import MasterWatch
 from rostools.node.xmlrpc import XmlRpcServer, call
-from rostools.rosgraph.masterapi import faulted, master_timeout, no_answer, ros_value, unreachable
+from rostools.rosgraph.masterapi import call_error, master_timeout, ros_value
 from rostools.rosgraph.network import bind_address, host_name
 from rostools.wire import rosapi as check
 from rostools.wire.codes import ERROR, FAILURE, SUCCESS
 from rostools.wire.rosapi import Methods, Triple
 from rostools.wire.tcpros import error_header
 from rostools.wire.xmlrpc import multicall
-from rostools.wire.xmlvalues import Fault
 
 log = logging.getLogger(__name__)
 
@@ -161,12 +160,11 @@ class Node:
         timeout = master_timeout()
         try:
             answer = await call(self.master_uri, method, (self.name, *args), timeout=timeout)
-        except (TimeoutError, asyncio.TimeoutError) as err:
-            raise no_answer(self.master_uri, "master", method, timeout) from err
-        except OSError as err:
-            raise unreachable(err, self.master_uri, "master") from err
-        except Fault as fault:
-            raise faulted(fault, self.master_uri, "master", method) from fault
+        except Exception as err:
+            error = call_error(err, self.master_uri, "master", method, timeout)
+            if error is None:
+                raise
+            raise error from err
         return ros_value(answer, method, "master")
 
     async def advertise(

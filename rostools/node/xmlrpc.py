@@ -14,7 +14,6 @@ import email.utils
 import logging
 import socket
 import time
-import xmlrpc.client
 from collections.abc import Callable
 from typing import Any
 from urllib.parse import urlsplit
@@ -27,13 +26,12 @@ from rostools.wire.xmlrpc import (
     HttpError,
     HttpParser,
     Message,
+    answer_value,
     decode_call,
-    decode_response,
-    encode_fault,
-    encode_result,
     format_request,
     format_response,
 )
+from rostools.wire.xmlvalues import Fault, dumps_fault, dumps_response
 
 log = logging.getLogger(__name__)
 
@@ -71,10 +69,10 @@ def run_call(dispatch: Dispatch, method: str, params: tuple[Any, ...]) -> Any:
     """Run a decoded call: its result, or an encoded fault (every failure becomes one)."""
     try:
         return dispatch(method, params)
-    except xmlrpc.client.Fault as fault:
-        return Encoded(encode_fault(fault.faultCode, fault.faultString))
+    except Fault as fault:
+        return Encoded(dumps_fault(fault.faultCode, fault.faultString))
     except OverflowError:
-        return Encoded(encode_fault(1, "<class 'OverflowError'>:int exceeds XML-RPC limits"))
+        return Encoded(dumps_fault(1, "<class 'OverflowError'>:int exceeds XML-RPC limits"))
     except Exception as err:  # noqa: BLE001 - answered as a fault, logged in one line
         # the method's name and the error may be the caller's text: one line in the log
         log.warning(
@@ -82,7 +80,7 @@ def run_call(dispatch: Dispatch, method: str, params: tuple[Any, ...]) -> Any:
             one_line(method),
             one_line(f"{type(err).__name__}: {err}"),
         )
-        return Encoded(encode_fault(1, f"<class '{type(err).__name__}'>:{err}"))
+        return Encoded(dumps_fault(1, f"<class '{type(err).__name__}'>:{err}"))
 
 
 def encode_answer(result: Any) -> bytes:
@@ -90,11 +88,11 @@ def encode_answer(result: Any) -> bytes:
     if isinstance(result, Encoded):
         return result.body
     try:
-        return encode_result(result)
+        return dumps_response(result)
     except OverflowError:
-        return encode_fault(1, "<class 'OverflowError'>:int exceeds XML-RPC limits")
+        return dumps_fault(1, "<class 'OverflowError'>:int exceeds XML-RPC limits")
     except RecursionError:
-        return encode_fault(1, "<class 'RecursionError'>:value nested too deep to encode")
+        return dumps_fault(1, "<class 'RecursionError'>:value nested too deep to encode")
 
 
 def handle_body(dispatch: Dispatch, body: bytes | bytearray) -> bytes:
@@ -102,7 +100,7 @@ def handle_body(dispatch: Dispatch, body: bytes | bytearray) -> bytes:
     try:
         method, params = decode_call(body)
     except BadCall as err:
-        return encode_fault(1, str(err))
+        return dumps_fault(1, str(err))
     return encode_answer(run_call(dispatch, method, params))
 
 
@@ -193,7 +191,7 @@ class _Connection(asyncio.BufferedProtocol):
             method, params = await loop.run_in_executor(None, decode_call, message.body)
             result = await self.server.run(method, params)
         except BadCall as err:
-            result = Encoded(encode_fault(1, str(err)))
+            result = Encoded(dumps_fault(1, str(err)))
         finally:
             self._release()
         body = await loop.run_in_executor(None, encode_answer, result)
@@ -292,7 +290,12 @@ class XmlRpcServer:
 async def call(
     uri: str, method: str, params: tuple[Any, ...], timeout: float = CALL_TIMEOUT
 ) -> Any:
-    """One XML-RPC call on a fresh connection; raises OSError/TimeoutError/Fault."""
+    """One XML-RPC call on a fresh connection.
+
+    Raises what ``rosgraph.masterapi.call_error`` turns into our errors: ``TimeoutError``
+    (never asyncio's own, which differs before Python 3.11), ``OSError``, ``Fault``,
+    ``BadAnswer``, ``HttpError``.
+    """
     parts = urlsplit(uri)
     host, port = parts.hostname or "localhost", parts.port or 80
     request = format_request(parts.netloc, parts.path or "/", method, params)
@@ -310,13 +313,16 @@ async def call(
                 if not data:
                     raise ConnectionError(f"{uri} closed the connection")
                 parser.feed(data)
-            return decode_response(message.body)
+            return answer_value(message)
         finally:
             writer.close()
             with contextlib.suppress(OSError):
                 await writer.wait_closed()
 
-    return await asyncio.wait_for(exchange(), timeout)
+    try:
+        return await asyncio.wait_for(exchange(), timeout)
+    except asyncio.TimeoutError as err:
+        raise TimeoutError(f"{uri} did not answer {method} within {timeout} s") from err
 
 
 class Notifier:

@@ -13,7 +13,7 @@ import os
 
 from rostools.errors import NotFoundError, RostoolsError, TimeoutExpired, UnreachableError
 from rostools.wire import codes
-from rostools.wire.xmlrpc import HttpError, HttpParser, Message, decode_response, format_request
+from rostools.wire.xmlrpc import HttpError, HttpParser, Message, answer_value, format_request
 from rostools.wire.xmlvalues import BadAnswer, Fault
 
 TYPE_CHECKING = False  # ``typing`` is 5-10 ms of start-up; only annotations use it
@@ -161,6 +161,29 @@ def faulted(fault: Any, uri: str, what: str, method: str) -> RostoolsError:
     return RostoolsError(f"the {what} at {uri} failed {method}: {fault.faultString}")
 
 
+def call_error(
+    err: BaseException, uri: str, what: str, method: str, timeout: float
+) -> RostoolsError | None:
+    """The one answer policy: what a failed XML-RPC call of ``method`` at ``uri`` is to a user.
+
+    Every client of a master or a node, blocking or async, turns its failures into errors
+    here: no answer in time, no connection, a fault, a bad answer (a status other than 200,
+    XML that is no answer, a broken HTTP message), a value XML-RPC cannot carry. ``None``
+    for anything else, which is not the peer's doing.
+    """
+    if isinstance(err, TimeoutError):
+        return no_answer(uri, what, method, timeout)
+    if isinstance(err, OSError | EOFError):
+        return unreachable(err, uri, what)
+    if isinstance(err, Fault):
+        return faulted(err, uri, what, method)
+    if isinstance(err, OverflowError):
+        return RostoolsError("integers must fit in 32 bits (XML-RPC has no larger type)")
+    if isinstance(err, BadAnswer | HttpError):
+        return RostoolsError(f"bad answer from the {what} at {uri}: {err}")
+    return None
+
+
 def ros_value(answer: Any, method: str, what: str) -> Any:
     """The value of a ROS API answer ``[code, message, value]``; ``MasterError`` unless 1."""
     if not isinstance(answer, list | tuple) or len(answer) != 3:
@@ -189,26 +212,14 @@ class XmlRpcNode:
             request = format_request(
                 self.http.netloc, self.http.path, method, (self.caller_id, *args)
             )
-            message = self.http.post(request)
-            status = message.start_line.split(" ", 2)
-            if len(status) < 2 or status[1] != "200":
-                raise BadAnswer(f"HTTP {' '.join(status[1:]) or 'answer without a status'}")
-            return decode_response(message.body)
-        except TimeoutError as err:
-            self.http.close()
-            raise no_answer(self.uri, self.what, method, self.timeout) from err
-        except (OSError, EOFError) as err:
-            self.http.close()
-            raise unreachable(err, self.uri, self.what) from err
-        except Fault as fault:
-            raise faulted(fault, self.uri, self.what, method) from fault
-        except OverflowError as err:
-            raise RostoolsError(
-                "integers must fit in 32 bits (XML-RPC has no larger type)"
-            ) from err
-        except (BadAnswer, HttpError) as err:
-            self.http.close()
-            raise RostoolsError(f"bad answer from the {self.what} at {self.uri}: {err}") from err
+            return answer_value(self.http.post(request))
+        except Exception as err:
+            error = call_error(err, self.uri, self.what, method, self.timeout)
+            if error is None:
+                raise
+            if not isinstance(err, Fault | OverflowError):
+                self.http.close()  # the connection is in no state to carry another call
+            raise error from err
 
     def call(self, method: str, *args: Any) -> Any:
         """Call a ROS API method and return its value; a failure code raises ``MasterError``."""

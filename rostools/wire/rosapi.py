@@ -8,13 +8,13 @@ that raises is answered ``[0, "Internal failure: ..."]``, never with a traceback
 
 from __future__ import annotations
 
-import xmlrpc.client
 from collections.abc import Callable, Mapping
 from typing import Any
 from urllib.parse import urlsplit
 
 from rostools.names import ANYTYPE, GLOBAL_NS, resolve
 from rostools.wire.codes import ERROR, FAILURE
+from rostools.wire.xmlvalues import Fault
 
 Triple = tuple[int, str, Any]
 Check = Callable[[Any, str], Any]
@@ -153,15 +153,15 @@ def not_none(value: Any, caller_id: str) -> Any:
     return value
 
 
-def unsupported(method: str) -> xmlrpc.client.Fault:
+def unsupported(method: str) -> Fault:
     """The fault for a method the server does not have, as rosmaster words it."""
-    return xmlrpc.client.Fault(1, f"<class 'Exception'>:method \"{method}\" is not supported")
+    return Fault(1, f"<class 'Exception'>:method \"{method}\" is not supported")
 
 
 def checked(methods: Methods, method: str, params: tuple[Any, ...]) -> list[Any] | tuple[Any, ...]:
     """``[caller_id, *checked arguments]``, or the ``[-1, ...]`` answer for a bad call.
 
-    Raises ``xmlrpc.client.Fault`` for an unknown method.
+    Raises ``Fault`` for an unknown method.
     """
     entry = methods.get(method)
     if entry is None:

@@ -248,69 +248,6 @@ def decode_call(body: bytes | bytearray) -> tuple[str, tuple[Any, ...]]:
     return method, params
 
 
-class _NotPlain(Exception):  # noqa: N818 - a signal, never seen outside
-    """A value that ``_plain`` leaves to ``xmlrpc.client``."""
-
-
-_XML_ESCAPES = str.maketrans({"&": "&amp;", "<": "&lt;", ">": "&gt;"})
-
-
-def _plain(value: Any, out: list[str]) -> None:
-    """A value of the plain types, as ``xmlrpc.client``'s Marshaller writes it."""
-    kind = type(value)
-    if kind is str:
-        out.append(f"<value><string>{value.translate(_XML_ESCAPES)}</string></value>\n")
-    elif kind is int:
-        if not -(2**31) <= value <= 2**31 - 1:
-            raise _NotPlain  # for xmlrpc.client's OverflowError
-        out.append(f"<value><int>{value}</int></value>\n")
-    elif kind is list or kind is tuple:
-        out.append("<value><array><data>\n")
-        for item in value:
-            _plain(item, out)
-        out.append("</data></array></value>\n")
-    elif kind is bool:
-        out.append(f"<value><boolean>{int(value)}</boolean></value>\n")
-    elif kind is float:
-        out.append(f"<value><double>{value!r}</double></value>\n")
-    elif kind is dict:
-        out.append("<value><struct>\n")
-        for key, item in value.items():
-            if type(key) is not str:
-                raise _NotPlain
-            out.append(f"<member>\n<name>{key.translate(_XML_ESCAPES)}</name>\n")
-            _plain(item, out)
-            out.append("</member>\n")
-        out.append("</struct></value>\n")
-    else:
-        raise _NotPlain
-
-
-def encode_result(value: Any) -> bytes:
-    """An XML-RPC method response carrying ``value``.
-
-    Plain values (all the ROS APIs answer) are written here, byte for byte as
-    ``xmlrpc.client.dumps`` writes them in two thirds of its time; anything else, and what
-    ``dumps`` refuses (a big int, a cycle), goes to ``dumps``.
-    """
-    out = ["<?xml version='1.0'?>\n<methodResponse>\n<params>\n<param>\n"]
-    try:
-        _plain(value, out)
-    except (_NotPlain, RecursionError):
-        import xmlrpc.client  # servers only: commands never pay for it
-
-        return xmlrpc.client.dumps((value,), methodresponse=True, allow_none=False).encode()
-    out.append("</param>\n</params>\n</methodResponse>\n")
-    return "".join(out).encode()
-
-
-def encode_fault(code: int, message: str) -> bytes:
-    """An XML-RPC fault response."""
-    import xmlrpc.client  # servers only: commands never pay for it
-
-    return xmlrpc.client.dumps(xmlrpc.client.Fault(code, message), methodresponse=True).encode()
-
-
 def format_response(
     body: bytes, keep_alive: bool, status: str = "200 OK", date: str | None = None
 ) -> bytes:
@@ -357,12 +294,16 @@ def _percent(char: str) -> str:
     return "".join(f"%{byte:02X}" for byte in char.encode())
 
 
-def decode_response(body: bytes | bytearray) -> Any:
-    """The value of an XML-RPC response body.
+def answer_value(message: Message) -> Any:
+    """The value an HTTP answer to an XML-RPC call carries: the one reading of an answer.
 
-    Raises ``xmlvalues.Fault`` for a fault and ``xmlvalues.BadAnswer`` for anything else.
+    Raises ``xmlvalues.Fault`` for a fault and ``xmlvalues.BadAnswer`` for a status other
+    than 200 or a body that is not a method response.
     """
-    return xmlvalues.loads_response(body)
+    status = message.start_line.split(" ", 2)
+    if len(status) < 2 or status[1] != "200":
+        raise xmlvalues.BadAnswer(f"HTTP {' '.join(status[1:]) or 'answer without a status'}")
+    return xmlvalues.loads_response(message.body)
 
 
 def multicall(dispatch: Any, params: tuple[Any, ...]) -> list[Any]:
@@ -371,15 +312,13 @@ def multicall(dispatch: Any, params: tuple[Any, ...]) -> list[Any]:
     Each result is wrapped in a one-element list; a failing call becomes a fault struct.
     Other than one parameter is a fault, with the words of rosmaster's Python server.
     """
-    import xmlrpc.client  # servers only: commands never pay for it
-
     if len(params) != 1:
         why = (
             "missing 1 required positional argument: 'call_list'"
             if not params
             else f"takes 2 positional arguments but {len(params) + 1} were given"
         )
-        raise xmlrpc.client.Fault(1, f"<class 'TypeError'>:system_multicall() {why}")
+        raise xmlvalues.Fault(1, f"<class 'TypeError'>:system_multicall() {why}")
     calls = params[0]
     if not isinstance(calls, list):
         return [{"faultCode": 1, "faultString": "system.multicall expects a list"}]
@@ -387,13 +326,13 @@ def multicall(dispatch: Any, params: tuple[Any, ...]) -> list[Any]:
     for call in calls:
         try:
             if not isinstance(call, dict):
-                raise xmlrpc.client.Fault(1, "multicall entries must be structs")
+                raise xmlvalues.Fault(1, "multicall entries must be structs")
             method, args = call.get("methodName"), call.get("params", [])
             if method == "system.multicall":
-                raise xmlrpc.client.Fault(1, "recursive system.multicall forbidden")
+                raise xmlvalues.Fault(1, "recursive system.multicall forbidden")
             if not isinstance(args, list):
-                raise xmlrpc.client.Fault(1, "multicall params must be an array")
+                raise xmlvalues.Fault(1, "multicall params must be an array")
             results.append([dispatch(method, tuple(args))])
-        except xmlrpc.client.Fault as fault:
+        except xmlvalues.Fault as fault:
             results.append({"faultCode": fault.faultCode, "faultString": fault.faultString})
     return results

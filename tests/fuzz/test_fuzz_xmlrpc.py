@@ -18,8 +18,8 @@ from hypothesis import strategies as st
 from rostools.master.master_api import MasterAPI
 from rostools.node.node import Node
 from rostools.node.xmlrpc import encode_answer, run_call
-from rostools.wire.xmlrpc import BadCall, HttpError, HttpParser, decode_call, encode_result
-from rostools.wire.xmlvalues import BadAnswer, DoctypeRefused, loads_response
+from rostools.wire.xmlrpc import BadCall, HttpError, HttpParser, decode_call
+from rostools.wire.xmlvalues import BadAnswer, DoctypeRefused, dumps_response, loads_response
 from tests.fuzz.conftest import FUZZ, SEED
 
 #: Names as peers send them: good, relative, private, empty, illegal, huge.
@@ -210,10 +210,10 @@ def test_calls_read_as_xmlrpc_client_reads_them(
 def test_answers_are_written_as_xmlrpc_client_writes_them(value: Any) -> None:
     try:
         expected: Any = xmlrpc.client.dumps((value,), methodresponse=True).encode()
-    except Exception as err:  # noqa: BLE001 - encode_result must refuse it the same way
+    except Exception as err:  # noqa: BLE001 - dumps_response must refuse it the same way
         expected = type(err)
     try:
-        got: Any = encode_result(value)
+        got: Any = dumps_response(value)
     except Exception as err:  # noqa: BLE001
         got = type(err)
     assert got == expected

@@ -2,11 +2,10 @@
 
 from __future__ import annotations
 
-import xmlrpc.client
-
 import pytest
 
 from rostools.master.master_api import MasterAPI
+from rostools.wire.xmlvalues import Fault
 
 NODE_A = "http://127.0.0.1:40001/"
 NODE_B = "http://127.0.0.1:40002/"
@@ -36,7 +35,7 @@ def test_argument_checks(api: MasterAPI) -> None:
         "ERROR: parameter [topic] must be a non-empty string",
     ]
     assert api.call("shutdown", ("/a",)) == [-1, "Error: bad call arity", 0]
-    with pytest.raises(xmlrpc.client.Fault, match='method "nope" is not supported'):
+    with pytest.raises(Fault, match='method "nope" is not supported'):
         api.call("nope", ("/a",))
 
 

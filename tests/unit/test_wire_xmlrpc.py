@@ -11,11 +11,16 @@ from rostools.wire.xmlrpc import (
     HttpError,
     HttpParser,
     decode_call,
-    encode_result,
     format_request,
     format_response,
 )
-from rostools.wire.xmlvalues import BadAnswer, DoctypeRefused, loads_response
+from rostools.wire.xmlvalues import (
+    BadAnswer,
+    DoctypeRefused,
+    dumps_fault,
+    dumps_response,
+    loads_response,
+)
 
 ROSCPP_CALL = (
     b'<?xml version="1.0"?>\r\n<methodCall><methodName>registerPublisher</methodName>\r\n'
@@ -162,7 +167,7 @@ def test_a_big_body_is_handed_over_and_what_follows_it_kept() -> None:
 
 def test_big_ints_cannot_be_encoded() -> None:
     with pytest.raises(OverflowError):
-        encode_result([1, "", 2**40])
+        dumps_response([1, "", 2**40])
 
 
 def test_response_and_request_format() -> None:
@@ -206,4 +211,17 @@ def test_plain_answers_are_written_without_xmlrpc_client(monkeypatch: pytest.Mon
     answer = [1, "Registered [/a] as <publisher> & more", [["/t", ["/n"]], {"k": 1.5, "b": True}]]
     expected = xmlrpc.client.dumps((answer,), methodresponse=True).encode()
     monkeypatch.setattr(xmlrpc.client, "dumps", None)  # a third of encoding was its Marshaller
-    assert encode_result(answer) == expected
+    assert dumps_response(answer) == expected
+
+
+@pytest.mark.parametrize("message", ["", "no such method <&> here", "caf\u00e9\n\u2028"])
+@pytest.mark.parametrize("code", [-1, 0, 1, 2**31 - 1])
+def test_faults_are_written_as_xmlrpc_client_writes_them(code: int, message: str) -> None:
+    # servers wrote faults with xmlrpc.client and answers with their own writer; one writes both
+    import xmlrpc.client
+
+    expected = xmlrpc.client.dumps(xmlrpc.client.Fault(code, message), methodresponse=True)
+    assert dumps_fault(code, message) == expected.encode()
+    with pytest.raises(xmlrpc.client.Fault) as caught:
+        xmlrpc.client.loads(dumps_fault(code, message))
+    assert (caught.value.faultCode, caught.value.faultString) == (code, message)

@@ -177,7 +177,10 @@ class McapReader(BagReader):
                     yield rec, op, start, stop, True
                 return
             except fmt.McapFormatError as err:
-                resume = fmt.next_record(mm, nxt + 1, end, fmt.DATA_OPS)
+                chunk_end = None
+                if nxt + 9 <= end and mm[nxt] == fmt.OP_CHUNK:
+                    chunk_end = nxt + 9 + _PREFIX.unpack_from(mm, nxt)[1]
+                resume = self._next_top(nxt, end, chunk_end)
                 stop = end if resume is None else resume
                 if nxt + 9 + 40 <= stop and mm[nxt] == fmt.OP_CHUNK:
                     how = "is cut short" if resume is None else "does not fit its record"
@@ -190,6 +193,25 @@ class McapReader(BagReader):
                         f"{resume - nxt} bytes at {nxt} do not parse ({err}); read on at {resume}"
                     )
                 pos = stop
+
+    def _next_top(self, pos: int, end: int, chunk_end: int | None) -> int | None:
+        """The next plausible top-level record after the damage at ``pos``, or None.
+
+        Before ``chunk_end`` (the end a broken chunk at ``pos`` declares), schema, channel
+        and message records are the chunk's own content (the records of an uncompressed
+        chunk, or a zstd or lz4 block stored raw), not places to read on at: read on there,
+        a record with a block header inside it went out as a message. The search goes on
+        after each such record, so that a chunk of many records costs one pass.
+        """
+        start = pos + 1
+        while True:
+            resume = fmt.next_record(self._mm, start, end, fmt.DATA_OPS)
+            if resume is None or chunk_end is None or resume >= chunk_end:
+                return resume
+            op, length = _PREFIX.unpack_from(self._mm, resume)
+            if op not in fmt.CHUNK_OPS:
+                return resume
+            start = resume + 9 + length  # plausible, so it ends before ``end``
 
     def _scan(self) -> _Scan:
         """Walk the data section for schemas, channels, counts and times (no summary).
@@ -584,13 +606,13 @@ class McapReader(BagReader):
                             _PREFIX.unpack_from(buf, pos) if pos + 9 <= end else (0, 1 << 62)
                         )
                         if pos + 9 + length > end:
-                            raise fmt.McapFormatError(f"record at {pos} is cut short")
+                            raise _cut(pos, length, end)
                         pos += 9 + length
                         continue
                     op, length, channel_id, seq, log, pub = unpack(buf, pos)
                     nxt = pos + 9 + length
                     if nxt > end:
-                        raise fmt.McapFormatError(f"record at {pos} is cut short")
+                        raise _cut(pos, length, end)
                     if op == fmt.OP_MESSAGE:
                         if length < 22:
                             raise fmt.McapFormatError(f"message at {pos} is too short")
@@ -666,3 +688,13 @@ def channel_connection(channel: fmt.Channel, schemas: Mapping[int, fmt.Schema]) 
         encoding=channel.message_encoding,
         schema_encoding=schema.encoding if schema else "",
     )
+
+
+def _cut(pos: int, length: int, end: int) -> fmt.McapFormatError:
+    """A record that does not fit, said as ``fmt.records`` says it.
+
+    The scan before a read met it too, and the damage lists it once.
+    """
+    if pos + 9 > end:
+        return fmt.McapFormatError(f"record at {pos} is cut short")
+    return fmt.McapFormatError(f"record at {pos} ({length} bytes) is cut short or corrupt")

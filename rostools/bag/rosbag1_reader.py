@@ -257,12 +257,21 @@ class Bag1Reader(BagReader):
         A chunk whose header is whole but whose data runs past the next record (or the end
         of the file) is read as far as it decompresses.
         """
-        nxt = fmt.next_record(self._mm, pos + 1, self.size, _TOP_OPS)
+        head = self._chunk_head(pos)
+        nxt = self._next_top(pos, None if head is None else head[2])
         stop = self.size if nxt is None else nxt
         listed = sum(sum(c.values()) for p, _, _, c in self._infos if pos <= p < stop)
         lost = f"; the index lists {listed} messages in chunks there" if listed else ""
-        chunk = self._broken_chunk(pos, stop)
-        if chunk is not None:
+        if head is not None and head[1] <= stop:
+            fields, data, _ = head
+            chunk = Chunk(
+                pos=pos,
+                compression=fields.get("compression", b"none").decode("ascii", "replace"),
+                size=_u32_or(fields, "size", 0),
+                data_pos=data,
+                data_len=stop - data,
+                complete=False,
+            )
             self._add_scanned(chunk)
             got = sum(chunk.counts.values())
             if nxt is None:
@@ -281,26 +290,40 @@ class Bag1Reader(BagReader):
             self.damaged(f"{nxt - pos} bytes at {pos} do not parse ({err}){lost}; read on at {nxt}")
         return stop
 
-    def _broken_chunk(self, pos: int, stop: int) -> Chunk | None:
-        """The chunk at ``pos`` if its header parses, with its data up to ``stop``."""
+    def _chunk_head(self, pos: int) -> tuple[dict[str, bytes], int, int] | None:
+        """(fields, data start, declared data end) of the chunk at ``pos``, if it parses."""
         try:
             hlen = _U32.unpack_from(self._mm, pos)[0]
-            data = pos + 8 + hlen
-            if data > stop:
+            if hlen > fmt.MAX_RECORD_HEADER or pos + 8 + hlen > self.size:
                 return None
             fields = fmt.parse_header(self._mm, pos + 4, pos + 4 + hlen)
             if fmt.op_of(fields) != fmt.OP_CHUNK:
                 return None
+            (dlen,) = _U32.unpack_from(self._mm, pos + 4 + hlen)
         except (fmt.RecordError, struct.error):
             return None
-        return Chunk(
-            pos=pos,
-            compression=fields.get("compression", b"none").decode("ascii", "replace"),
-            size=_u32_or(fields, "size", 0),
-            data_pos=data,
-            data_len=stop - data,
-            complete=False,
-        )
+        data = pos + 8 + hlen
+        return fields, data, data + dlen
+
+    def _next_top(self, pos: int, chunk_end: int | None) -> int | None:
+        """The next whole top-level record after the damage at ``pos``, or None.
+
+        Before ``chunk_end`` (the end a broken chunk at ``pos`` declares), message and
+        connection records are the chunk's own content (the records of an uncompressed chunk,
+        or an lz4 block stored raw), not places to read on at: read on there, the chunk's
+        messages were taken for loose ones, and a record with an lz4 block header inside it
+        went out as a message. The search goes on after each such record, so that a chunk of
+        many records costs one pass.
+        """
+        start = pos + 1
+        while True:
+            nxt = fmt.next_record(self._mm, start, self.size, _TOP_OPS)
+            if nxt is None or chunk_end is None or nxt >= chunk_end:
+                return nxt
+            fields, data, dlen = fmt.read_record(self._mm, nxt, self.size)  # whole, as found
+            if fmt.op_of(fields) not in _CHUNK_OPS:
+                return nxt
+            start = data + dlen
 
     def _loose(self, pos: int) -> int:
         """Message records outside any chunk (its header lost): read them as one chunk."""

@@ -453,15 +453,22 @@ def service_response(ok: bool, payload: bytes) -> bytes:
 
 
 class ResponseReader:
-    """A service client's receive side: the reply header, then ``ok ; u32 len ; payload``."""
+    """A service client's receive side: the reply header, then ``ok ; u32 len ; payload``.
+
+    Bytes that are no response raise ``FrameError``; responses before them in the same bytes
+    are returned first, and the error is raised by the next ``feed``.
+    """
 
     def __init__(self, max_frame: int = MAX_FRAME) -> None:
         self.buffer = bytearray()
         self.max_frame = max_frame
         self.header: dict[str, str] | None = None
+        self._error: FrameError | None = None
 
     def feed(self, data: bytes | memoryview) -> list[tuple[bool, bytes]]:
         """Add received bytes; the responses now complete, as (ok, payload)."""
+        if self._error is not None:
+            raise self._error
         if not self.buffer and self.header is not None and len(data) >= 5:
             # The usual read: exactly one whole response, parsed without buffering it.
             ok = data[0]
@@ -486,11 +493,18 @@ class ResponseReader:
                 return out
             ok = self.buffer[0]
             if ok not in (0, 1):
-                raise FrameError(f"bad service response status byte {ok}")
+                return self._fail(out, f"bad service response status byte {ok}")
             (length,) = _U32.unpack_from(self.buffer, 1)
             if length > self.max_frame:
-                raise FrameError(f"service response of {length} bytes exceeds the limit")
+                return self._fail(out, f"service response of {length} bytes exceeds the limit")
             if len(self.buffer) < 5 + length:
                 return out
             out.append((ok == 1, bytes(self.buffer[5 : 5 + length])))
             del self.buffer[: 5 + length]
+
+    def _fail(self, out: list[tuple[bool, bytes]], reason: str) -> list[tuple[bool, bytes]]:
+        """Raise now, or once the responses before the bad bytes are handed over."""
+        self._error = FrameError(reason)
+        if not out:
+            raise self._error
+        return out

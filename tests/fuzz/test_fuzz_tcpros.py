@@ -2,6 +2,9 @@
 
 The invariant: bytes from a peer end in frames, a ``FrameError``, or a closed connection
 with a reason; never another exception, and never a buffer sized by what a prefix claims.
+What comes out is checked against a reading of the whole stream at once (``_expected``):
+every whole frame before the first one over its limit, byte for byte, in order, however
+the stream is cut; a refusal exactly when a frame is over its limit.
 """
 
 from __future__ import annotations
@@ -14,9 +17,10 @@ from hypothesis import given, seed
 from hypothesis import strategies as st
 
 from rostools.node.connection import InboundConnection, ServerConnection
-from rostools.wire.header import HeaderError, decode_fields, encode_header
+from rostools.wire.header import MAX_HEADER_LENGTH, HeaderError, decode_fields, encode_header
 from rostools.wire.tcpros import (
     GROW_FIRST,
+    MAX_FRAME,
     FrameError,
     FrameReader,
     ResponseReader,
@@ -26,9 +30,11 @@ from rostools.wire.tcpros import (
 )
 from tests.fuzz.conftest import FUZZ, SEED
 
-LENGTHS = st.sampled_from([0, 1, 3, 4, 100, 65536, 0x7FFFFFFF, 0xFFFFFFFF]) | st.integers(
-    0, 2**32 - 1
-)
+#: Length prefixes: small, big, huge, and each limit and one over it.
+LENGTHS = st.sampled_from(
+    [0, 1, 3, 4, 100, 65536, 0x7FFFFFFF, 0xFFFFFFFF]
+    + [n + d for n in (100_000, 1_000_000, MAX_HEADER_LENGTH, MAX_FRAME) for d in (0, 1)]
+) | st.integers(0, 2**32 - 1)
 FIELDS = st.dictionaries(
     st.sampled_from(["callerid", "topic", "md5sum", "type", "service", "error", "latching", "x"])
     | st.text(max_size=10),
@@ -53,12 +59,30 @@ def stream(draw_parts: list[Any]) -> bytes:
 PARTS = st.lists(st.binary(max_size=300) | FIELDS | LENGTHS, max_size=8)
 
 
+def _expected(data: bytes, max_frame: int, first_max: int) -> tuple[list[bytes], bool]:
+    """(every whole frame, in order; whether a frame over its limit stops the stream)."""
+    frames: list[bytes] = []
+    pos, limit = 0, first_max
+    while len(data) - pos >= 4:
+        (length,) = struct.unpack_from("<I", data, pos)
+        if length > limit:
+            return frames, True
+        if pos + 4 + length > len(data):
+            break
+        frames.append(data[pos + 4 : pos + 4 + length])
+        pos += 4 + length
+        limit = max_frame
+    return frames, False
+
+
 @seed(SEED)
 @FUZZ
 @given(PARTS, st.binary(max_size=50), st.lists(st.integers(1, 5000), max_size=10))
 def test_frame_reader_takes_any_stream(parts: list[Any], tail: bytes, cuts: list[int]) -> None:
     data = stream(parts) + tail
     reader = FrameReader(max_frame=1_000_000, first_max=100_000)
+    got: list[bytes] = []
+    refused = False
     pos = 0
     try:
         for cut in [*cuts, len(data)]:
@@ -69,9 +93,12 @@ def test_frame_reader_takes_any_stream(parts: list[Any], tail: bytes, cuts: list
                 buf[:n] = data[pos : pos + n]
                 pos, cut = pos + n, cut - n
                 del buf
-                reader.buffer_updated(n)
-    except FrameError:
-        pass
+                got += [bytes(f) for f in reader.buffer_updated(n)]
+    except FrameError as err:
+        refused = True
+        got += [bytes(f) for f in err.frames]  # the whole frames before the bad one
+        assert "exceeds the limit of" in str(err)
+    assert (got, refused) == _expected(data, 1_000_000, 100_000)
 
 
 @seed(SEED)
@@ -91,18 +118,66 @@ def test_headers_parse_or_refuse(data: bytes) -> None:
         raise AssertionError("parse_header accepted what decode_fields refuses") from None
 
 
+def _expected_responses(data: bytes) -> tuple[list[tuple[bool, bytes]], bool]:
+    """(every whole service response after the reply header; whether the bytes are refused)."""
+    if len(data) < 4:
+        return [], False
+    (length,) = struct.unpack_from("<I", data)
+    if length > MAX_FRAME:
+        return [], True
+    if len(data) < 4 + length:
+        return [], False
+    if _header(data[4 : 4 + length]) is None:
+        return [], True
+    out: list[tuple[bool, bytes]] = []
+    pos = 4 + length
+    while len(data) - pos >= 5:
+        if data[pos] not in (0, 1):  # the status byte
+            return out, True
+        (length,) = struct.unpack_from("<I", data, pos + 1)
+        if length > MAX_FRAME:
+            return out, True
+        if pos + 5 + length > len(data):
+            break
+        out.append((data[pos] == 1, data[pos + 5 : pos + 5 + length]))
+        pos += 5 + length
+    return out, False
+
+
+def _header(frame: bytes) -> dict[str, str] | None:
+    """A connection header's fields, or None when it does not parse."""
+    try:
+        return parse_header(frame)
+    except FrameError:
+        return None
+
+
+SERVICE_PARTS = st.lists(
+    FIELDS.map(encode_header)
+    | st.tuples(st.sampled_from([0, 1, 2, 255]), st.binary(max_size=100)).map(
+        lambda r: bytes([r[0]]) + struct.pack("<I", len(r[1])) + r[1]
+    )
+    | st.binary(max_size=20),
+    max_size=6,
+).map(b"".join)
+
+
 @seed(SEED)
 @FUZZ
-@given(st.binary(max_size=300), st.lists(st.integers(1, 64), max_size=6))
+@given(st.binary(max_size=300) | SERVICE_PARTS, st.lists(st.integers(1, 64), max_size=6))
 def test_service_responses_take_any_bytes(data: bytes, cuts: list[int]) -> None:
     reader = ResponseReader()
+    got: list[tuple[bool, bytes]] = []
+    refused = False
     pos = 0
     try:
         for cut in [*cuts, len(data)]:
-            reader.feed(data[pos : pos + cut])
+            got += reader.feed(data[pos : pos + cut])
             pos += cut
+        got += reader.feed(b"")  # bad bytes after a response in one read are said next
     except FrameError:
-        pass
+        refused = True
+    assert (got, refused) == _expected_responses(data)
 
 
 class _Transport(asyncio.Transport):
@@ -141,22 +216,42 @@ class _Subscriber:
     reuse_frames = False
 
     def __init__(self) -> None:
-        self.frames = 0
+        self.frames: list[bytes] = []
+        self.headers = 0
 
     def header_received(self, conn: Any) -> None:
-        pass
+        self.headers += 1
 
     def frames_received(self, frames: list[Any], conn: Any, now: float) -> None:
-        self.frames += len(frames)
+        self.frames += [bytes(f) for f in frames]
 
     def connection_closed(self, conn: Any) -> None:
+        pass
+
+
+class _Handler:
+    """A service's side of an accepted connection: the frames after the header."""
+
+    def __init__(self) -> None:
+        self.frames: list[bytes] = []
+
+    def frames_received(self, frames: list[Any]) -> None:
+        self.frames += [bytes(f) for f in frames]
+
+    def connection_lost(self) -> None:
+        pass
+
+    def pause_writing(self) -> None:
+        pass
+
+    def resume_writing(self) -> None:
         pass
 
 
 def _feed(protocol: Any, data: bytes, cuts: list[int]) -> None:
     pos = 0
     for cut in [*cuts, len(data)]:
-        while pos < len(data) and cut > 0:
+        while pos < len(data) and cut > 0 and not protocol.transport.closed:
             buf = protocol.get_buffer(-1)
             n = min(cut, len(buf), len(data) - pos)
             buf[:n] = data[pos : pos + n]
@@ -172,15 +267,46 @@ def test_connections_in_both_roles_take_any_bytes(parts: list[Any], cuts: list[i
     data = stream(parts)
 
     async def run() -> None:
+        # a node's TCPROS server: the header goes to accept, the frames after it to a handler
+        frames, refused = _expected(data, MAX_FRAME, MAX_HEADER_LENGTH)
         accepted: list[dict[str, str]] = []
-        server = ServerConnection(lambda fields, conn: accepted.append(fields))
-        server.connection_made(_Transport())
+        handler = _Handler()
+
+        def accept(fields: dict[str, str], conn: Any) -> _Handler:
+            accepted.append(fields)
+            return handler
+
+        server = ServerConnection(accept)
+        transport = _Transport()
+        server.connection_made(transport)
         _feed(server, data, cuts)
-        inbound = InboundConnection(_Subscriber(), "http://p:1/", 1, b"")  # type: ignore[arg-type]
+        header = _header(frames[0]) if frames else None
+        if refused:  # the frames of the read that refused are dropped with the connection
+            assert accepted == [header][: len(accepted)]
+        else:
+            assert accepted == ([] if header is None else [header])
+        if refused:
+            assert handler.frames == frames[1:][: len(handler.frames)]
+        else:
+            assert handler.frames == (frames[1:] if header is not None else [])
+        assert transport.closed == (refused or (bool(frames) and header is None))
+        server._handshake_over()  # the handshake timer must not outlive the loop
+
+        # a subscriber's connection to a publisher: the reply header, checked, then messages
+        frames, refused = _expected(data, 1_000_000, MAX_HEADER_LENGTH)
+        subscriber = _Subscriber()
+        inbound = InboundConnection(subscriber, "http://p:1/", 1, b"")
         transport = _Transport()
         inbound.connection_made(transport)
         _feed(inbound, data, cuts)
+        header = _header(frames[0]) if frames else None
+        good = header is not None and "error" not in header and {"md5sum", "type"} <= set(header)
+        assert subscriber.headers == int(good)
+        assert inbound.header == (header if good else None)
+        assert subscriber.frames == (frames[1:] if good else [])
+        assert transport.closed == (refused or (bool(frames) and not good))
         if transport.closed:
             assert inbound.failure is not None and inbound.failure.reason
+        inbound._handshake_over()
 
     asyncio.run(run())

@@ -1,8 +1,10 @@
 """Fuzz the XML-RPC side: the HTTP and XML parsers, every master and every slave method.
 
 The invariant: a bad request is an ``HttpError`` (a 4xx answer), a body that is no call is a
-``BadCall`` (rosmaster's fault), a bad call is a ROS triple or a fault, and any answer encodes;
-nothing else is ever raised. A DTD is never read.
+``BadCall`` (rosmaster's fault), and nothing else is ever raised. Every answer is read back by
+``xmlrpc.client`` and is what the call must get: a fault for an unknown method, a ROS triple
+for a known one (-1 when its arity or caller_id is wrong), one answer per multicall entry. A
+DTD is never read.
 """
 
 from __future__ import annotations
@@ -56,12 +58,90 @@ def _nest(depth: int) -> Any:
 
 
 PARAMS = st.lists(VALUES | DEEP, max_size=5).map(tuple)
-MASTER_METHODS = [*sorted(MasterAPI("http://m:1/").methods), "system.multicall", "nope"]
+
+#: The Master API and the parameter server, from the ROS wiki: each method's arguments,
+#: caller_id included. Any other method is a fault; a call of the wrong arity a -1 triple.
+MASTER_ARITY = {
+    "registerService": 4, "unregisterService": 3, "registerSubscriber": 4,
+    "unregisterSubscriber": 3, "registerPublisher": 4, "unregisterPublisher": 3,
+    "lookupNode": 2, "getPublishedTopics": 2, "getTopicTypes": 1, "getSystemState": 1,
+    "getUri": 1, "lookupService": 2, "getPid": 1, "shutdown": 2,
+    "deleteParam": 2, "setParam": 3, "getParam": 2, "searchParam": 2, "subscribeParam": 3,
+    "unsubscribeParam": 3, "hasParam": 2, "getParamNames": 1,
+}  # fmt: skip
+#: The Slave API (the ROS wiki), and rospy's getUri and getName.
+SLAVE_ARITY = {
+    "getBusStats": 1, "getBusInfo": 1, "getMasterUri": 1, "shutdown": 2, "getPid": 1,
+    "getSubscriptions": 1, "getPublications": 1, "paramUpdate": 3, "publisherUpdate": 3,
+    "requestTopic": 3, "getUri": 1, "getName": 1,
+}  # fmt: skip
+MASTER_METHODS = [*sorted(MASTER_ARITY), "system.multicall", "nope"]
 
 
-def _answer_ok(result: Any) -> None:
+def test_the_tables_name_every_method() -> None:
+    assert set(MasterAPI("http://m:1/").methods) == set(MASTER_ARITY)
+    assert set(Node("n", "http://m:1/", host="127.0.0.1")._methods) == set(SLAVE_ARITY)
+
+
+def _answer(result: Any) -> Any:
+    """What a client gets: the body read by the standard library, a ``Fault`` or the value."""
     body = encode_answer(result)
-    assert body.startswith(b"<?xml")
+    try:
+        (value,), method = xmlrpc.client.loads(body)
+    except xmlrpc.client.Fault as fault:
+        return fault
+    assert method is None  # a response, not a call
+    return value
+
+
+def _is_fault(answer: Any) -> bool:
+    """A fault as a client reads it: raised (a call) or a struct (an entry of a multicall)."""
+    if isinstance(answer, xmlrpc.client.Fault):
+        return isinstance(answer.faultCode, int) and isinstance(answer.faultString, str)
+    return (
+        isinstance(answer, dict)
+        and set(answer) == {"faultCode", "faultString"}
+        and isinstance(answer["faultCode"], int)
+        and isinstance(answer["faultString"], str)
+    )
+
+
+def _check_triple(answer: Any, args: Any, arity: int) -> None:
+    """A ROS triple; -1 when the call cannot be right (rospy's and rosmaster's checks)."""
+    assert isinstance(answer, list) and len(answer) == 3, answer
+    code, message, _ = answer
+    assert code in (-1, 0, 1) and isinstance(message, str), answer
+    if len(args) != arity or not isinstance(args[0], str):
+        assert code == -1, answer
+
+
+def _check_call(answer: Any, method: Any, args: Any, arity: dict[str, int]) -> None:
+    """``answer`` is what a call of ``method`` with ``args`` must get."""
+    if method == "system.multicall":
+        if len(args) != 1:
+            assert isinstance(answer, xmlrpc.client.Fault), answer
+        elif isinstance(args[0], list):
+            assert isinstance(answer, list) and len(answer) == len(args[0]), answer
+            for entry, got in zip(args[0], answer, strict=True):
+                _check_entry(got, entry, arity)
+        else:  # nothing to run: a fault, or a fault per entry it could make out
+            assert _is_fault(answer) or all(_is_fault(a) for a in answer), answer
+    elif isinstance(method, str) and method in arity:
+        _check_triple(answer, args, arity[method])
+    else:
+        assert isinstance(answer, xmlrpc.client.Fault), answer
+        assert answer.faultCode == 1 and "is not supported" in answer.faultString, answer
+
+
+def _check_entry(got: Any, entry: Any, arity: dict[str, int]) -> None:
+    """One answer of a multicall: ``[result]`` for a call that runs, else a fault struct."""
+    if isinstance(entry, dict):
+        method, params = entry.get("methodName"), entry.get("params", [])
+        if isinstance(params, list) and isinstance(method, str) and method in arity:
+            assert isinstance(got, list) and len(got) == 1, got
+            _check_triple(got[0], params, arity[method])
+            return
+    assert _is_fault(got), got
 
 
 @seed(SEED)
@@ -70,33 +150,35 @@ def _answer_ok(result: Any) -> None:
 def test_master_methods_answer_anything(method: str, before: tuple[Any, ...], params: Any) -> None:
     api = MasterAPI("http://m:1/")
     for args in (before, params):  # a call after another, as state changes the answers
-        result = run_call(api.call, method, args)
-        if method == "system.multicall" and args and isinstance(args[0], list):
-            assert isinstance(result, list)
-        _answer_ok(result)
-        if not isinstance(result, list) or method == "system.multicall":
-            continue
-        code, message, _ = result
-        assert code in (-1, 0, 1) and isinstance(message, str)
+        _check_call(_answer(run_call(api.call, method, args)), method, args, MASTER_ARITY)
 
 
 @seed(SEED)
 @FUZZ
-@given(st.lists(st.tuples(st.sampled_from(MASTER_METHODS[:-2]), PARAMS), max_size=6))
+@given(
+    st.lists(
+        st.tuples(st.sampled_from(MASTER_METHODS[:-2]), PARAMS | st.just(("/caller",))),
+        max_size=6,
+    )
+)
 def test_multicalls_of_anything(calls: list[tuple[str, tuple[Any, ...]]]) -> None:
     api = MasterAPI("http://m:1/")
     entries: list[Any] = [{"methodName": m, "params": list(p)} for m, p in calls]
-    entries += [5, {"methodName": "getPid", "params": 5}, {"params": []}]
-    result = run_call(api.call, "system.multicall", (entries,))
-    assert isinstance(result, list) and len(result) == len(entries)
-    _answer_ok(result)
+    entries += [
+        5,
+        {"methodName": "getPid", "params": 5},
+        {"params": []},
+        {"methodName": "nope", "params": ["/c"]},
+        {"methodName": "system.multicall", "params": [[]]},
+        {"methodName": "getPid", "params": ["/c"]},
+    ]
+    answer = _answer(run_call(api.call, "system.multicall", (entries,)))
+    _check_call(answer, "system.multicall", (entries,), MASTER_ARITY)
+    assert answer[-1] == [[1, "", api.pid]]  # a call that runs among those that do not
+    assert all(_is_fault(a) for a in answer[-6:-1])
 
 
-SLAVE_METHODS = [
-    "getBusStats", "getBusInfo", "getMasterUri", "shutdown", "getPid", "getSubscriptions",
-    "getPublications", "paramUpdate", "publisherUpdate", "requestTopic", "getUri", "getName",
-    "system.multicall", "nope",
-]  # fmt: skip
+SLAVE_METHODS = [*sorted(SLAVE_ARITY), "system.multicall", "nope"]
 
 
 @seed(SEED)
@@ -105,8 +187,7 @@ SLAVE_METHODS = [
 def test_slave_methods_answer_anything(method: str, params: tuple[Any, ...]) -> None:
     node = Node("fuzzed", "http://m:1/", host="127.0.0.1")
     node._xmlrpc = SimpleNamespace(port=1)  # type: ignore[assignment]  # no sockets here
-    result = run_call(node._dispatch, method, params)
-    _answer_ok(result)
+    _check_call(_answer(run_call(node._dispatch, method, params)), method, params, SLAVE_ARITY)
 
 
 @seed(SEED)

@@ -31,3 +31,10 @@ def test_elsewhere_it_skips_with_the_reason(tmp_path: Path) -> None:
     done = _doctor_tests(tmp_path, "")
     assert done.returncode == 0, done.stdout
     assert "1 skipped" in done.stdout
+
+
+def test_ci_runs_strict() -> None:
+    """``.ci/run`` sets ``CI=true`` before the README's test command."""
+    lines = (ROOT / ".ci" / "run").read_text().splitlines()
+    strict = lines.index("export CI=true")
+    assert any(line.endswith("&& pytest") for line in lines[strict + 1 :]), lines

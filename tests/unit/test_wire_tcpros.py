@@ -161,6 +161,21 @@ def test_captured_service_bytes() -> None:
         reader.feed(b"\x07\x00\x00\x00\x00")
 
 
+def test_a_response_before_bad_bytes_in_one_read_is_kept() -> None:
+    # the defect: the error raised for the bad bytes took the good response before them with
+    # it (found by the TCPROS fuzz suite once it checked what comes out); rospy returns it
+    from rostools.wire.tcpros import FrameError, ResponseReader, service_response
+
+    for bad in (b"\x07\x00\x00\x00\x00", b"\x01" + struct.pack("<I", 1001)):
+        reader = ResponseReader(max_frame=1000)
+        reader.header = {}
+        assert reader.feed(service_response(True, b"ok") + bad) == [(True, b"ok")]
+        with pytest.raises(FrameError, match=r"status byte|exceeds the limit"):
+            reader.feed(b"")
+        with pytest.raises(FrameError):  # and again: nothing follows
+            reader.feed(service_response(True, b"late"))
+
+
 def test_service_request_checks() -> None:
     from rostools.wire.tcpros import check_service_request
 

@@ -3,7 +3,9 @@
 from __future__ import annotations
 
 import os
+import random
 import signal
+import struct
 import subprocess
 import sys
 import textwrap
@@ -11,13 +13,19 @@ from pathlib import Path
 
 import pytest
 
-from rostools.bag.access import bag_info, open_bag
+from rostools.bag.access import bag_info, open_bag, open_writer
 from rostools.bag.mcap_reader import McapReader
 from rostools.bag.model import BagFormatError
 from rostools.bag.recover import recover, reindex
 from rostools.bag.rosbag1_reader import Bag1Reader
 from rostools.errors import DataLossError
-from tests.support.bagdata import first_chunk_data, read_stream, write_sample
+from tests.support.bagdata import (
+    STRING_MD5,
+    bag_records,
+    first_chunk_data,
+    read_stream,
+    write_sample,
+)
 from tests.support.env import ROOT
 
 CASES = [
@@ -55,24 +63,100 @@ def test_cut_files_recover_a_prefix(tmp_path: Path, name: str, compression: str)
     assert recovered_counts[-1] > 500
 
 
+#: Every chunk compression of both formats.
+MID_CHUNK = [
+    ("x.bag", "none"),
+    ("x.bag", "lz4"),
+    ("x.bag", "bz2"),
+    ("x.mcap", "none"),
+    ("x.mcap", "zstd"),
+    ("x.mcap", "lz4"),
+]
+#: Where in its chunk a cut first leaves something to salvage, and how many cuts: after the
+#: first compression block (bz2 900 kB, zstd 128 KiB of input), or the first record. bz2
+#: takes 0.4 s a read here.
+FIRST_CUT = {"bz2": (0.95, 2), "zstd": (0.2, 6)}
+
+
+def _one_chunk(path: Path, compression: str) -> tuple[list[tuple[str, str, int, bytes]], int, int]:
+    """50 messages of 20 kB of random bytes in one chunk: (stream, chunk start, chunk length).
+
+    Random bytes do not compress, so lz4 and zstd store their blocks raw: a chunk's records
+    then lie in the file as they are, with a block header inside some of them.
+    """
+    rng = random.Random(26)
+    stream = []
+    with open_writer(path, compression=compression, chunk_size=1 << 26) as writer:
+        conn = writer.add_connection(
+            "/blob", "std_msgs/String", STRING_MD5, "string data\n", callerid="/blobber"
+        )
+        for i in range(50):
+            text = rng.randbytes(20_000)
+            data = struct.pack("<I", len(text)) + text
+            writer.write(conn, i * 1000, data)
+            stream.append(("/blob", "/blobber", i * 1000, data))
+    with open_bag(path) as reader:
+        if isinstance(reader, McapReader):
+            [index] = reader.chunk_indexes
+            return stream, index.chunk_start_offset, index.chunk_length
+        assert isinstance(reader, Bag1Reader)
+        [chunk] = reader.chunks
+        return stream, chunk.data_pos, chunk.data_len
+
+
+@pytest.mark.parametrize(("name", "compression"), MID_CHUNK)
+def test_a_chunk_cut_in_the_middle_gives_what_it_holds(
+    tmp_path: Path, name: str, compression: str
+) -> None:
+    # the defects: a cut uncompressed chunk was read as loose records and said "0 messages
+    # salvaged from it"; an lz4 or zstd chunk of raw blocks was read the same way, and a
+    # message with a block header inside it came out as a message of 20 kB of wrong bytes
+    suffix = Path(name).suffix
+    stream, start, length = _one_chunk(tmp_path / name, compression)
+    raw = (tmp_path / name).read_bytes()
+    first, cuts = FIRST_CUT.get(compression, (0.05, 6))
+    salvaged = []
+    for k in range(cuts):
+        cut = start + int(length * (first + (0.995 - first) * k / (cuts - 1)))
+        (tmp_path / f"cut{suffix}").write_bytes(raw[:cut])
+        out = tmp_path / f"out{cut}{suffix}"
+        report = recover(tmp_path / f"cut{suffix}", out, compression="none")  # fast to write
+        got = read_stream(out)
+        assert len(got) > 0, f"nothing salvaged from a cut at {cut - start} of {length} bytes"
+        assert report.messages == len(got)
+        assert got == stream[: len(got)]  # byte for byte, in order
+        assert not report.complete
+        if suffix == ".bag":  # the damage line counts what the output holds
+            [line] = [x for x in report.lost if "cut short" in x and "salvaged" in x]
+            assert line.endswith(f"; {len(got)} messages salvaged from it")
+        if compression == "none":  # every message wholly before the cut, and no more
+            assert len(got) == sum(raw.find(m[3]) + len(m[3]) <= cut for m in stream)
+        salvaged.append(len(got))
+    assert salvaged == sorted(salvaged)  # more bytes never salvage less
+    assert salvaged[-1] >= 40
+
+
 def test_uncompressed_bag_cut_mid_chunk_keeps_every_whole_record(tmp_path: Path) -> None:
     sample = write_sample(tmp_path / "x.bag", 200)  # one chunk
     raw = sample.path.read_bytes()
-    whole = 0
+    data_at, data_len = first_chunk_data(raw)
+    records = bag_records(raw, data_at, data_at + data_len)  # the chunk's, read whole
+    ends = [data + n for _, op, _, data, n in records if op == 2]  # messages'
+    assert len(ends) == 200
     for cut in range(4200, len(raw), 211):
         (tmp_path / "cut.bag").write_bytes(raw[:cut])
+        whole = sum(end <= cut for end in ends)
         try:
             report = recover(tmp_path / "cut.bag", tmp_path / f"o{cut}.bag")
-        except BagFormatError:  # cut before the first whole message
-            assert whole == 0
+        except BagFormatError:  # only when the cut leaves no record whole after the header
+            assert cut < records[0][3] + records[0][4]
             continue
-        assert report.messages >= whole  # more bytes never salvage less
-        whole = report.messages
+        assert report.messages == len(read_stream(tmp_path / f"o{cut}.bag")) == whole
         if cut < len(raw) - 2000:
             assert not report.complete  # the record cut in two is reported lost
             with pytest.raises(DataLossError, match="lost"):
                 report.raise_if_lost()
-    assert whole > 190  # rosbag reindex salvages 0 here: its only chunk is unterminated
+    assert whole == 200  # rosbag reindex salvages 0 here: its only chunk is unterminated
 
 
 def test_lz4_bag_cut_mid_chunk_keeps_the_records_before_the_cut(tmp_path: Path) -> None:

@@ -7,7 +7,8 @@ Rows, each ours beside the library (``theirs``), in one process, runs interleave
   each reads of a file cut mid-chunk and of one still being written, and how many of the MCAP
   conformance suite's files each reads to the messages the suite expects;
 - .bag: our writer and reader beside ``rosbags.rosbag1``'s, uncompressed (its LZ4 chunks are
-  ones real ROS cannot read, so they are not a fair comparison).
+  ones real ROS cannot read, so they are not a fair comparison), and what each reads of a bag
+  still being written (no index yet) and of one cut short.
 
 If a library catches up, the reason for our own code is gone: these rows say when.
 """
@@ -268,9 +269,9 @@ def _salvaged(read: Callable[[], Iterator[Any]]) -> int:
 
 
 def _ours_iter(path: Path) -> Iterator[Any]:
-    from rostools.bag.mcap_reader import McapReader
+    from rostools.bag.access import open_bag
 
-    with McapReader(path) as reader:
+    with open_bag(path) as reader:
         yield from reader.messages()
 
 
@@ -357,6 +358,55 @@ def bench_mcap_salvage() -> list[Result]:
     return results
 
 
+def _rosbags_iter(path: Path) -> Iterator[Any]:
+    from rosbags.rosbag1 import Reader
+
+    with Reader(path) as reader:
+        yield from reader.messages()
+
+
+def bench_bag_salvage() -> list[Result]:
+    """Messages read from a .bag still being written (no index yet) and one cut at 60%."""
+    from rostools.bag.access import open_writer
+
+    BUILD.mkdir(parents=True, exist_ok=True)
+    open_file, full, cut = (BUILD / f"lib-{name}.bag" for name in ("open", "full", "cut"))
+    for path, close in ((open_file, False), (full, True)):
+        writer = open_writer(path, format="bag", chunk_size=64 * 1024, overwrite=True)
+        conn = writer.add_connection(
+            "/chatter", "std_msgs/String", STRING_MD5, STRING_DEF, callerid="/talker"
+        )
+        for i in range(SALVAGE_COUNT):
+            writer.write(conn, T0 + i, _small(i))
+        if close:
+            writer.close()
+        else:
+            writer.flush()  # what a reader sees mid-recording
+            open_copy = open_file.read_bytes()
+            writer.abort()
+            open_file.write_bytes(open_copy)
+    raw = full.read_bytes()
+    cut.write_bytes(raw[: len(raw) * 6 // 10])
+    results = []
+    for name, path in (("still being written", open_file), ("cut at 60%", cut)):
+        ours = _salvaged(lambda p=path: _ours_iter(p))
+        theirs = _salvaged(lambda p=path: _rosbags_iter(p))
+        results.append(
+            Result(
+                f".bag {name}: messages read, vs rosbags.rosbag1",
+                "msgs",
+                ours,
+                theirs,
+                "more than rosbags Reader",
+                ours > theirs,
+                f"{SALVAGE_COUNT} written by our writer in 64 KiB chunks",
+            )
+        )
+    for path in (open_file, full, cut):
+        path.unlink(missing_ok=True)
+    return results
+
+
 def _expected_messages(path: Path) -> list[tuple[int, bytes]]:
     """(log time, data) of the messages the conformance suite says a file holds."""
     records = json.loads(path.with_suffix(".json").read_text())["records"]
@@ -417,4 +467,5 @@ BENCHMARKS = {
     "lib_mcap_salvage": bench_mcap_salvage,
     "lib_mcap_conformance": bench_mcap_conformance,
     "lib_bag_speed": bench_bag_speed,
+    "lib_bag_salvage": bench_bag_salvage,
 }

@@ -196,3 +196,16 @@ def test_a_summary_that_fails_its_crc_is_not_trusted(tmp_path: Path) -> None:
     report = doctor(bad)
     assert any("summary" in f and "CRC" in f for f in report.findings)
     assert report.recover_helps
+
+
+def test_recover_and_merge_write_crcs(tmp_path: Path) -> None:
+    from rostools.bag.merge import merge
+    from rostools.bag.recover import recover
+
+    sample = write_sample(tmp_path / "open.mcap", 3000, chunk_size=9000, close=False)
+    recover(sample.path, tmp_path / "recovered.mcap", chunk_size=20_000)
+    other = write_sample(tmp_path / "x.bag", 500)
+    merge([tmp_path / "recovered.mcap", other.path], tmp_path / "merged.mcap", chunk_size=20_000)
+    for name, count in (("recovered.mcap", 3000), ("merged.mcap", 3500)):
+        assert check_crcs(tmp_path / name) > 2
+        assert len(_mcap_package_reads(tmp_path / name)) == count

@@ -22,6 +22,7 @@ MODULES = [
     "benchmarks.bench_service",
     "benchmarks.bench_bag",
     "benchmarks.bench_bag_live",
+    "benchmarks.bench_libraries",
     "benchmarks.bench_workbench",
     "benchmarks.bench_plot",
     "benchmarks.bench_completion",

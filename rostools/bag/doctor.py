@@ -4,9 +4,9 @@ What it checks: that the file opens and reads to the end (record lengths, bytes 
 parse and what the reader skipped, cut-short or unindexed tails, and whether ``bag recover``
 would help); the index against the records (each index entry's time and connection against
 its record, chunk time ranges, the message count of each connection against the messages
-read); MCAP chunk CRCs and the data section CRC; each ROS 1 connection's md5sum against its
-definition text, and that the text parses; and every message against its type (shorter or
-longer than it).
+read); MCAP CRCs: each chunk's, the data section's and the summary's; each ROS 1
+connection's md5sum against its definition text, and that the text parses; and every message
+against its type (shorter or longer than it).
 Messages out of time order within a chunk are a note, not a finding: the formats allow it.
 Library code: no printing.
 """
@@ -61,6 +61,11 @@ def doctor(path: str | Path, progress: Callable[[int, int], None] | None = None)
     except RostoolsError as err:
         report.findings.append(f"does not open: {err}")
         return report
+    from rostools.bag.mcap_reader import McapReader
+    from rostools.bag.rosbag1_reader import Bag1Reader
+
+    if isinstance(reader, McapReader):
+        reader.check_crcs = True  # every chunk's, as its messages are read
     with reader:
         _connections(reader, report)
         _messages(reader, report, progress)
@@ -70,9 +75,6 @@ def doctor(path: str | Path, progress: Callable[[int, int], None] | None = None)
         for damage in reader.damage:
             report.findings.append(damage)
             report.recover_helps = True
-        from rostools.bag.mcap_reader import McapReader
-        from rostools.bag.rosbag1_reader import Bag1Reader
-
         if isinstance(reader, McapReader):
             problems, report.notes = reader.chunk_checks()
             report.findings += problems

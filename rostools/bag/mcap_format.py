@@ -530,16 +530,18 @@ def encode_channel(
     return _record(OP_CHANNEL, content)
 
 
-def encode_chunk_head(start: int, end: int, size: int, compression: str, data_len: int) -> bytes:
+def encode_chunk_head(
+    start: int, end: int, size: int, compression: str, data_len: int, crc: int
+) -> bytes:
     """A Chunk record up to its records: append ``data_len`` bytes of (compressed) records.
 
-    The records' CRC is left 0 ("not computed"), as readers allow.
+    ``crc``: the CRC-32 of the uncompressed records (0 says "not computed").
     """
     content_head = (
         _U64.pack(start)
         + _U64.pack(end)
         + _U64.pack(size)
-        + _U32.pack(0)
+        + _U32.pack(crc)
         + _str(compression)
         + _U64.pack(data_len)
     )
@@ -628,7 +630,7 @@ def encode_summary_offset(opcode: int, start: int, length: int) -> bytes:
 
 
 def encode_data_end(crc: int = 0) -> bytes:
-    """A DataEnd record (CRC 0: not computed, as the mcap library's default)."""
+    """A DataEnd record; ``crc`` covers every byte before it, from the magic (0: not computed)."""
     return _record(OP_DATA_END, _U32.pack(crc))
 
 
@@ -637,6 +639,52 @@ def encode_footer(summary_start: int, summary_offset_start: int, summary: bytes)
     head = PREFIX.pack(OP_FOOTER, 20) + _U64.pack(summary_start) + _U64.pack(summary_offset_start)
     crc = zlib.crc32(head, zlib.crc32(summary)) if summary_start else 0
     return head + _U32.pack(crc) + MAGIC
+
+
+def _crc_times(a: int, b: int) -> int:
+    """The product of two polynomials modulo CRC-32's, both in its reflected bit order."""
+    product = 0
+    bit = 1 << 31
+    while a:
+        if a & bit:
+            product ^= b
+            a ^= bit
+        bit >>= 1
+        b = (b >> 1) ^ _CRC_POLY if b & 1 else b >> 1
+    return product
+
+
+#: CRC-32's polynomial, reflected.
+_CRC_POLY: Final = 0xEDB88320
+
+
+def _crc_squares() -> tuple[int, ...]:
+    """x^(2^k) modulo CRC-32's polynomial, k = 0..63 (reflected: x^0 is bit 31)."""
+    power, out = 1 << 30, []  # x^1
+    for _ in range(64):
+        out.append(power)
+        power = _crc_times(power, power)
+    return tuple(out)
+
+
+_CRC_SQUARES: Final = _crc_squares()
+
+
+def crc32_combine(crc1: int, crc2: int, len2: int) -> int:
+    """The CRC-32 of ``a + b`` from ``crc32(a)``, ``crc32(b)`` and ``len(b)``.
+
+    What zlib's ``crc32_combine`` does (Python's zlib lacks it): appending ``len2`` bytes
+    multiplies ``crc1`` by x^(8 * len2), so the writer need not pass over a chunk's bytes twice
+    for the data section's CRC when they are stored uncompressed. About 60 us per call.
+    """
+    shift = 1 << 31  # x^0
+    bits, k = len2 << 3, 0
+    while bits:
+        if bits & 1:
+            shift = _crc_times(_CRC_SQUARES[k], shift)
+        bits >>= 1
+        k += 1
+    return _crc_times(shift, crc1) ^ crc2
 
 
 def parse_footer(tail: Buffer) -> Footer | None:

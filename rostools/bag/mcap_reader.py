@@ -11,12 +11,19 @@ Damage never comes out silently wrong: times come from the message records; a re
 does not parse, at the top level or inside a chunk, is skipped to the next plausible record
 (``mcap_format.next_record``) and listed in ``damage``, as is a chunk that does not
 decompress; a chunk whose header's time range disagrees with its messages is noted.
+
+CRCs: a summary that fails its CRC is not trusted (noted; the data section is read instead).
+A chunk's CRC is checked when ``check_crcs`` is set, as ``bag doctor`` sets it; a mismatch is
+damage, and the chunk's messages are still given. Reads leave it off: the check is a pass of
+``zlib.crc32`` (about 1 GB/s here) over every chunk, which made reading big messages 2.5 times
+slower and reading a few small topics out of a file of images 16 times slower (measured).
 """
 
 from __future__ import annotations
 
 import mmap
 import struct
+import zlib
 from bisect import bisect_left
 from collections.abc import Iterator, Mapping
 from dataclasses import dataclass, field
@@ -63,6 +70,8 @@ class McapReader(BagReader):
     """An MCAP file; see the module docstring."""
 
     format = "mcap"
+    #: Check each chunk's CRC as it is read (a mismatch goes into ``damage``).
+    check_crcs = False
 
     def __init__(self, path: str | Path) -> None:
         super().__init__(path)
@@ -120,6 +129,12 @@ class McapReader(BagReader):
         end = footer.summary_offset_start or self._data_end
         if not (self._data_start <= footer.summary_start <= end <= self._data_end):
             self.note("the footer points outside the file; summary ignored")
+            return
+        crc_end = self.size - len(fmt.MAGIC) - 4  # through the footer's offsets
+        if footer.summary_crc and footer.summary_crc != zlib.crc32(
+            memoryview(self._mm)[footer.summary_start : crc_end]
+        ):
+            self.note("the summary does not match its CRC; scanned the data section")
             return
         try:
             for _, op, start, stop in fmt.records(self._mm, footer.summary_start, end):
@@ -280,25 +295,21 @@ class McapReader(BagReader):
     def chunk_checks(self) -> tuple[list[str], list[str]]:
         """(problems, notes) of the chunks and the data section.
 
-        Problems: records or bytes that fail their CRC (0: none was written). Notes: chunks whose
-        messages are out of time order, which is legal (readers sort them).
+        Problems: chunks that do not decompress, a data section that fails its CRC (0: none was
+        written; a chunk's CRC is checked by a read with ``check_crcs``, into ``damage``).
+        Notes: chunks whose messages are out of time order, which is legal (readers sort them).
         """
-        import zlib
-
         found: list[str] = []
         notes: list[str] = []
         mm = self._mm
         for rec, op, start, stop, complete in self._top(self._data_start, self._data_end):
             if op == fmt.OP_CHUNK and complete:
                 try:
-                    crc = _CHUNK_HEAD.unpack_from(mm, start)[3]
                     compression, size, data_start, dlen = self._chunk_fields(rec, start, stop)
                     buf, pos, end = self._chunk_data(compression, size, data_start, dlen, True)
                 except fmt.McapFormatError as err:
                     found.append(f"chunk at {rec}: {err}")
                     continue
-                if crc and zlib.crc32(memoryview(buf)[pos:end]) != crc:
-                    found.append(f"chunk at {rec}: its CRC does not match its records")
                 late = self._out_of_order(buf, pos, end)
                 if late:
                     notes.append(f"chunk at {rec}: {late} message(s) out of time order")
@@ -595,6 +606,12 @@ class McapReader(BagReader):
             self.damaged(f"{what}chunk at {rec} is unreadable ({err}); its messages are left out")
             return []
         view = memoryview(buf)
+        crc = _CHUNK_HEAD.unpack_from(self._mm, start)[3]
+        if crc and complete and self.check_crcs and zlib.crc32(view[pos:end]) != crc:
+            self.damaged(
+                f"chunk at {rec}: its CRC does not match its records; its messages are given"
+                " as they are"
+            )
         out: list[Entry] = []
         append = out.append
         unpack = _MSG.unpack_from

@@ -9,10 +9,17 @@ Chunked (zstd, lz4 or none), with message indexes after every chunk and a summar
 channels, statistics and chunk indexes plus summary offsets. Schemas and channels go outside
 the chunks as soon as they are declared, and every chunk goes to the OS when it closes, so a
 killed writer leaves everything but the open chunk recoverable.
+
+Every CRC the format has is written: each chunk's (over its uncompressed records), the data
+section's (in DataEnd) and the summary's (in the footer), so ``bag doctor`` and other readers
+can tell a flipped bit. They cost one pass of ``zlib.crc32`` over what is written; a chunk
+stored uncompressed is passed over once, its CRC folded into the data section's
+(``crc32_combine``).
 """
 
 from __future__ import annotations
 
+import zlib
 from array import array
 from collections.abc import Callable, Mapping
 from pathlib import Path
@@ -79,9 +86,10 @@ class McapWriter(BagWriter):
         self._metadata_indexes: list[bytes] = []
         self._start = _MAX_TIME
         self._end = 0
+        self._data_crc = 0  # of every byte written so far, for DataEnd
         try:
-            self._sink.write(fmt.MAGIC)
-            self._sink.write(fmt.encode_header(profile, library))
+            self._write(fmt.MAGIC)
+            self._write(fmt.encode_header(profile, library))
             self._sink.flush()
         except BaseException:
             self.abort()  # a disk already full: no file, and no open descriptor
@@ -100,11 +108,11 @@ class McapWriter(BagWriter):
             definition = conn.definition.encode()
             record = fmt.encode_schema(schema_id, conn.type, conn.schema_encoding, definition)
             self._schema_records.append(record)
-            self._sink.write(record)
+            self._write(record)
         meta = channel_metadata(conn)
         record = fmt.encode_channel(conn.id, schema_id, conn.topic, conn.encoding, meta)
         self._channel_records.append(record)
-        self._sink.write(record)
+        self._write(record)
         self._counts.append(0)
 
     def _store(self, cid: int, t_ns: int, data: bytes | bytearray | memoryview) -> None:
@@ -196,7 +204,7 @@ class McapWriter(BagWriter):
             self._metadata_indexes.append(
                 fmt.encode_metadata_index(fmt.MetadataIndex(pos, len(raw), record.name))
             )
-        self._sink.write(raw)
+        self._write(raw)
 
     def flush(self) -> None:
         """Close the open chunk and hand everything to the OS."""
@@ -212,7 +220,7 @@ class McapWriter(BagWriter):
         try:
             if self._chunk_len:
                 self._close_chunk()
-            self._sink.write(fmt.encode_data_end())
+            self._sink.write(fmt.encode_data_end(self._data_crc))
             summary_start = self._sink.tell()
             summary = bytearray()
             offsets = bytearray()
@@ -241,6 +249,11 @@ class McapWriter(BagWriter):
 
     # -- internals -------------------------------------------------------------------------
 
+    def _write(self, data: _Chunk) -> None:
+        """Append bytes of the data section, counting them into its CRC."""
+        self._data_crc = zlib.crc32(data, self._data_crc)
+        self._sink.write(data)
+
     def _statistics(self) -> fmt.Statistics:
         total = sum(self._counts)
         return fmt.Statistics(
@@ -266,18 +279,26 @@ class McapWriter(BagWriter):
         compression = "" if self.compression == "none" else self.compression
         sink = self._sink
         chunk_pos = sink.tell()
+        crc = 0
+        for piece in pieces:
+            crc = zlib.crc32(piece, crc)
         stored_pieces = self._compress(pieces)
         stored = sum(len(p) for p in stored_pieces)
-        sink.write(fmt.encode_chunk_head(start, end, size, compression, stored))
-        for piece in stored_pieces:
-            sink.write(piece)
+        self._write(fmt.encode_chunk_head(start, end, size, compression, stored, crc))
+        if compression:
+            for piece in stored_pieces:
+                self._write(piece)
+        else:  # the records as they are: their CRC is known, fold it in
+            for piece in stored_pieces:
+                sink.write(piece)
+            self._data_crc = fmt.crc32_combine(self._data_crc, crc, size)
         index_start = sink.tell()
         offsets: dict[int, int] = {}
         if packed is None:
             packed = {cid: self._packed_index(cid) for cid in self._index}
         for cid in sorted(packed):
             offsets[cid] = sink.tell()
-            sink.write(fmt.encode_message_index(cid, packed[cid]))
+            self._write(fmt.encode_message_index(cid, packed[cid]))
         self._chunk_indexes.append(
             fmt.ChunkIndex(
                 message_start_time=start,

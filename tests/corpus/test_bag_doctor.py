@@ -8,9 +8,9 @@ from pathlib import Path
 
 import pytest
 
-from rostools.bag.access import open_bag
 from rostools.bag.doctor import doctor
 from rostools.bag.mcap_reader import McapReader
+from rostools.bag.ops import convert
 from tests.support.env import CORPUS, needs_corpus, run_cli
 
 #: The corpus files that are damaged, or not bags at all: each must have findings.
@@ -74,18 +74,8 @@ def _mutants(data: bytes, rng: random.Random, lo: int, hi: int) -> list[tuple[st
 
 
 def _mcap_with_crcs(src: Path, dst: Path) -> Path:
-    from mcap.writer import CompressionType, Writer
-
-    with open_bag(src) as bag, dst.open("wb") as f:
-        writer = Writer(f, chunk_size=64 * 1024, compression=CompressionType.ZSTD)
-        writer.start("ros1", "doctor test")
-        ids: dict[int, int] = {}
-        for c in bag.connections:
-            schema = writer.register_schema(c.type, "ros1msg", c.definition.encode())
-            ids[c.id] = writer.register_channel(c.topic, "ros1", schema, {"md5sum": c.md5sum})
-        for seq, (c, t, data) in enumerate(bag.messages()):
-            writer.add_message(ids[c.id], t, bytes(data), t, seq)
-        writer.finish()
+    """``src`` as MCAP, written by our writer (which writes every CRC), in small chunks."""
+    convert(src, dst, compression="zstd", chunk_size=64 * 1024)
     return dst
 
 
@@ -94,7 +84,7 @@ def _mcap_with_crcs(src: Path, dst: Path) -> Path:
 def test_mutated_copies_never_crash_it(tmp_path: Path, suffix: str) -> None:
     """A cut file is always named; in MCAP, any change to a chunk's bytes is (its CRC)."""
     src = CORPUS / "ros1" / "roswire" / "example.bag"
-    if suffix == "mcap":  # written by the mcap library, which writes CRCs (ours leaves them 0)
+    if suffix == "mcap":
         src = _mcap_with_crcs(src, tmp_path / "x.mcap")
         with McapReader(src) as reader:
             first = min(reader.chunk_indexes, key=lambda c: c.chunk_start_offset)

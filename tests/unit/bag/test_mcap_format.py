@@ -130,3 +130,16 @@ def test_unknown_chunk_compression_is_unsupported() -> None:
 
     with pytest.raises(UnsupportedBagError):
         fmt.decompress("brotli", b"", 0)
+
+
+@given(st.binary(max_size=3000), st.binary(max_size=3000), st.integers(0, 2**32 - 1))
+def test_crc32_combine_is_the_crc_of_the_concatenation(a: bytes, b: bytes, seed: int) -> None:
+    assert fmt.crc32_combine(zlib.crc32(a, seed), zlib.crc32(b), len(b)) == zlib.crc32(
+        b, zlib.crc32(a, seed)
+    )
+
+
+def test_crc32_combine_over_a_long_stretch() -> None:
+    """A chunk's length in bits needs many of the squares (x^(2^k)), not only the first few."""
+    a, b = b"head", bytes(range(256)) * 40_000
+    assert fmt.crc32_combine(zlib.crc32(a), zlib.crc32(b), len(b)) == zlib.crc32(a + b)

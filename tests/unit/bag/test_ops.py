@@ -192,7 +192,10 @@ def test_mcap_extras_follow_filter_recover_and_compress(tmp_path: Path) -> None:
     ops.compress(src, tmp_path / "lz4.mcap", "lz4")
     assert names(tmp_path / "lz4.mcap") == names(src)
     raw = src.read_bytes()
-    (tmp_path / "unfinished.mcap").write_bytes(raw[: raw.rindex(fmt.encode_data_end())])
+    footer = fmt.parse_footer(raw)
+    assert footer is not None
+    data_end = footer.summary_start - len(fmt.encode_data_end())  # the summary follows it
+    (tmp_path / "unfinished.mcap").write_bytes(raw[:data_end])
     recover(tmp_path / "unfinished.mcap", tmp_path / "recovered.mcap")
     assert names(tmp_path / "recovered.mcap") == names(src)
 

@@ -27,8 +27,7 @@ from rostools.node.notice import Notice
 from rostools.node.publisher import Publisher as CorePublisher
 from rostools.node.service import ServiceClient, ServiceServer, ServiceType
 from rostools.node.subscriber import Subscriber as CoreSubscriber
-from rostools.rosgraph.masterapi import SERVICE_TIMEOUT, MasterError
-from rostools.wire import codes
+from rostools.rosgraph.masterapi import SERVICE_TIMEOUT
 
 log = logging.getLogger("rostools")
 
@@ -368,7 +367,7 @@ class AsyncNode:
         return pub
 
     async def _topic_type(self, name: str) -> str:
-        types = dict(await self.core.master_call("getTopicTypes"))
+        types = await self.core.master.topic_types()
         found = types.get(name)
         if not isinstance(found, str) or found == "*":
             raise UsageError(
@@ -425,7 +424,7 @@ class AsyncNode:
             await core.close()
         if not self.closed:
             try:
-                await self.core.master_call("unregisterSubscriber", shared.name, self.core.uri)
+                await self.core.master.unregister_subscriber(shared.name, self.core.uri)
             except RostoolsError as err:
                 log.debug("unregistering %s: %s", shared.name, err)
 
@@ -513,11 +512,10 @@ class AsyncNode:
         deadline = None if timeout is None else time.monotonic() + timeout
         while True:
             try:
-                await self.core.master_call("lookupService", name)
+                await self.core.master.lookup_service(name)
                 return
-            except MasterError as err:
-                if err.code != codes.ERROR:
-                    raise
+            except NotFoundError:
+                pass
             if deadline is not None and time.monotonic() >= deadline:
                 raise TimeoutExpired(f"service {name} did not appear within {timeout:g} s")
             await asyncio.sleep(0.05)
@@ -531,31 +529,23 @@ class AsyncNode:
         self._check_open()
         name = self.resolve(key)
         try:
-            return await self.core.master_call("getParam", name)
-        except MasterError as err:
-            if err.code != codes.ERROR:
-                raise
+            return await self.core.master.get_param(name)
+        except NotFoundError:
             if default is not AsyncNode._MISSING:
                 return default
-            raise NotFoundError(f"parameter {name} is not set") from err
+            raise
 
     async def set_param(self, key: str, value: Any) -> None:
         """Set a parameter (a dict sets a tree)."""
         self._check_open()
-        await self.core.master_call("setParam", self.resolve(key), value)
+        await self.core.master.set_param(self.resolve(key), value)
 
     async def has_param(self, key: str) -> bool:
         """Whether a parameter is set."""
         self._check_open()
-        return bool(await self.core.master_call("hasParam", self.resolve(key)))
+        return await self.core.master.has_param(self.resolve(key))
 
     async def delete_param(self, key: str) -> None:
         """Delete a parameter; ``NotFoundError`` when unset."""
         self._check_open()
-        name = self.resolve(key)
-        try:
-            await self.core.master_call("deleteParam", name)
-        except MasterError as err:
-            if err.code == codes.ERROR:
-                raise NotFoundError(f"parameter {name} is not set") from err
-            raise
+        await self.core.master.delete_param(self.resolve(key))

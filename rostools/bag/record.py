@@ -34,7 +34,6 @@ from rostools.node.clock import RosClock
 from rostools.node.connection import Frame, InboundConnection
 from rostools.node.node import Node
 from rostools.node.publisher import Publisher
-from rostools.wire.codes import SUCCESS
 
 log = logging.getLogger(__name__)
 
@@ -393,13 +392,13 @@ class Recorder:
         if self.opts.node is not None:
             candidates = await self._node_topics(self.opts.node)
         elif self.selection.everything or self.selection.patterns or self.selection.types:
-            pubs, _, _ = await self.node.master_call("getSystemState")
+            pubs, _, _ = await self.node.master.system_state()
             candidates = [topic for topic, _ in pubs]
         else:
             candidates = sorted(self.selection.names)  # subscribed before anyone publishes
         types: dict[str, str] = {}
         if self.selection.by_type:
-            types = dict(await self.node.master_call("getTopicTypes"))
+            types = await self.node.master.topic_types()
         for topic in candidates:
             if not self.selection.wants(topic, types.get(topic)):
                 continue
@@ -414,7 +413,7 @@ class Recorder:
                 )
         if any(not s.type for s in self.stats.values()):
             # a topic with no message yet shows the type the master knows (it showed "?")
-            known = types or dict(await self.node.master_call("getTopicTypes"))
+            known = types or await self.node.master.topic_types()
             for topic, stats in self.stats.items():
                 if not stats.type and known.get(topic, "*") != "*":
                     stats.type = known[topic]
@@ -430,15 +429,15 @@ class Recorder:
 
     async def _node_topics(self, name: str) -> list[str]:
         """The topics node ``name`` subscribes to (rosbag record --node)."""
-        from rostools.node.xmlrpc import call
+        from rostools.node.mastercalls import peer_value
 
         try:
-            uri = await self.node.master_call("lookupNode", self.node.resolve(name))
-            code, _, subs = await call(str(uri), "getSubscriptions", (self.node.name,))
+            uri = await self.node.master.lookup_node(self.node.resolve(name))
+            subs = await peer_value(uri, self.node.name, "getSubscriptions")
         except (RostoolsError, OSError) as err:
             log.debug("node %s: %s", name, err)
             return []
-        return [topic for topic, _ in subs] if code == SUCCESS else []
+        return [topic for topic, _ in subs]
 
     def _finished(self) -> bool:
         """A count, a size or a duration without --split, or the writer failed."""

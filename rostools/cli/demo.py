@@ -90,7 +90,7 @@ class Graph:
             pub = await talker.advertise("/chatter", TopicType.of(store, "std_msgs/String"))
             await server.advertise_service("/add_two_ints", srv_type, add)
             params = {"robot_name": "demo_bot", "max_speed": 0.5, "sensors": ["lidar", "imu"]}
-            await server.master_call("setParam", "/demo", params)
+            await server.master.set_param("/demo", params)
             self.ready.set()
             n = 0
             while not self.stop.is_set():

@@ -28,9 +28,9 @@ TIME = struct.Struct("<II")
 
 async def uses_sim_time(node: Node) -> bool:
     """Whether the parameter ``/use_sim_time`` is true."""
-    if not await node.master_call("hasParam", "/use_sim_time"):
+    if not await node.master.has_param("/use_sim_time"):
         return False
-    value = await node.master_call("getParam", "/use_sim_time")
+    value = await node.master.get_param("/use_sim_time")
     return value is True or str(value).lower() == "true"
 
 

@@ -9,9 +9,12 @@ package run one way: the node imports its parts.
 from __future__ import annotations
 
 from collections.abc import Callable
-from typing import Any, Protocol
+from typing import TYPE_CHECKING, Protocol
 
 from rostools.node.notice import Notice
+
+if TYPE_CHECKING:
+    from rostools.node.mastercalls import LiveMaster
 
 
 class Owner(Protocol):
@@ -37,6 +40,5 @@ class Owner(Protocol):
         """A number for a new connection, unique in this node (``getBusInfo``)."""
         ...
 
-    async def master_call(self, method: str, *args: Any) -> Any:
-        """Call the master as this node (see ``Node.master_call``)."""
-        ...
+    #: The master, typed (``node.mastercalls.LiveMaster``).
+    master: LiveMaster

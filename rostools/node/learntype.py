@@ -30,4 +30,4 @@ async def learn_topic_type(node: Node, topic: str, timeout: float) -> TopicType:
     finally:
         await sub.close()
         node.subscribers.pop(sub.topic, None)
-        await node.master_call("unregisterSubscriber", sub.topic, node.uri)
+        await node.master.unregister_subscriber(sub.topic, node.uri)

@@ -17,13 +17,13 @@ from rostools.msgs.topictype import ANY, TopicType
 from rostools.names import anonymous, canonicalize, make_global_ns, resolve, ros_namespace
 from rostools.node.connection import ConnectionHandler, Pending, ServerConnection
 from rostools.node.listen import Listener, listen
+from rostools.node.mastercalls import LiveMaster
 from rostools.node.notice import Notice, to_stderr
 from rostools.node.publisher import Publisher
 from rostools.node.service import ServiceHandler, ServiceServer, ServiceType
 from rostools.node.subscriber import FramesCallback, Subscriber
 from rostools.node.watch import MasterWatch
-from rostools.node.xmlrpc import XmlRpcServer, call
-from rostools.rosgraph.masterapi import call_error, master_timeout, ros_value
+from rostools.node.xmlrpc import XmlRpcServer
 from rostools.rosgraph.network import bind_address, host_name
 from rostools.wire import rosapi as check
 from rostools.wire.codes import ERROR, FAILURE, SUCCESS
@@ -65,6 +65,8 @@ class Node:
             canonicalize(ns + "/" + base) if not name.startswith("/") else canonicalize(name)
         )
         self.master_uri = master_uri
+        #: The master, typed: every call this node makes to it.
+        self.master = LiveMaster(master_uri, self.name)
         # by rosgraph's rules: a __hostname:=/__ip:= argument, the given host, then the environment
         self.host = host_name(remappings=given) if given or not host else host
         #: ``_param:=value`` arguments, set as private parameters when the node starts.
@@ -105,7 +107,7 @@ class Node:
 
             for key, text in self.private_params.items():
                 value = yamlio.load(text, f"_{key}:=") if text else ""
-                await self.master_call("setParam", f"{self.name}/{key}", value)
+                await self.master.set_param(f"{self.name}/{key}", value)
         self._watch = MasterWatch(self)
         self._watch.start()
         return self
@@ -131,15 +133,14 @@ class Node:
             self._watch.stop()
         calls: list[tuple[str, tuple[Any, ...]]] = []
         for topic in self.publishers:
-            calls.append(("unregisterPublisher", (self.name, topic, self.uri)))
+            calls.append(("unregisterPublisher", (topic, self.uri)))
         for topic in self.subscribers:
-            calls.append(("unregisterSubscriber", (self.name, topic, self.uri)))
+            calls.append(("unregisterSubscriber", (topic, self.uri)))
         for service, server in self.services.items():
-            calls.append(("unregisterService", (self.name, service, server.uri)))
+            calls.append(("unregisterService", (service, server.uri)))
         if calls:
-            multi = [{"methodName": m, "params": list(p)} for m, p in calls]
             try:
-                await call(self.master_uri, "system.multicall", (multi,), master_timeout())
+                await self.master.multicall(calls)
             except Exception as err:  # noqa: BLE001 - leaving anyway; the master may be gone
                 log.debug("unregistering from %s failed: %s", self.master_uri, err)
         for sub in list(self.subscribers.values()):
@@ -155,18 +156,6 @@ class Node:
 
     # master calls ---------------------------------------------------------------------
 
-    async def master_call(self, method: str, *args: Any) -> Any:
-        """Call the master as this node; errors as every master client gives them."""
-        timeout = master_timeout()
-        try:
-            answer = await call(self.master_uri, method, (self.name, *args), timeout=timeout)
-        except Exception as err:
-            error = call_error(err, self.master_uri, "master", method, timeout)
-            if error is None:
-                raise
-            raise error from err
-        return ros_value(answer, method, "master")
-
     async def advertise(
         self, topic: str, topic_type: TopicType, latch: bool = False, queue_size: int = 100
     ) -> Publisher:
@@ -175,8 +164,7 @@ class Node:
         pub = self.publishers.get(topic)
         if pub is None:
             pub = self.publishers[topic] = Publisher(self, topic, topic_type, latch, queue_size)
-            uris = await self.master_call("registerPublisher", topic, topic_type.type, self.uri)
-            pub.reported = [u for u in uris if isinstance(u, str)] if isinstance(uris, list) else []
+            pub.reported = await self.master.register_publisher(topic, topic_type.type, self.uri)
         return pub
 
     async def subscribe(
@@ -200,8 +188,7 @@ class Node:
         sub.on_header = on_header
         sub.coalesce, sub.reuse_frames = coalesce, reuse_frames
         self.subscribers[topic] = sub
-        uris = await self.master_call("registerSubscriber", topic, topic_type.type, self.uri)
-        sub.update(list(uris))
+        sub.update(await self.master.register_subscriber(topic, topic_type.type, self.uri))
         return sub
 
     async def advertise_service(
@@ -210,7 +197,7 @@ class Node:
         """Serve ``name`` (registered with the master)."""
         name = self.resolve(name)
         server = self.services[name] = ServiceServer(self, name, srv_type, handler)
-        await self.master_call("registerService", name, server.uri, self.uri)
+        await self.master.register_service(name, server.uri, self.uri)
         return server
 
     # TCPROS ---------------------------------------------------------------------------

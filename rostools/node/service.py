@@ -16,7 +16,6 @@ from typing import TYPE_CHECKING, NamedTuple
 from urllib.parse import urlsplit
 
 from rostools.errors import (
-    NotFoundError,
     RostoolsError,
     ServiceError,
     TimeoutExpired,
@@ -24,8 +23,7 @@ from rostools.errors import (
 )
 from rostools.msgs.store import TypeStore
 from rostools.node.connection import Frame, ServerConnection, set_nodelay
-from rostools.rosgraph.masterapi import SERVICE_TIMEOUT, MasterError
-from rostools.wire import codes
+from rostools.rosgraph.masterapi import SERVICE_TIMEOUT
 from rostools.wire.tcpros import (
     FrameError,
     ResponseReader,
@@ -321,12 +319,7 @@ async def _open_connection(host: str, port: int) -> _ClientProtocol:
 
 async def lookup_service(node: Owner, name: str) -> tuple[str, int]:
     """Host and port of a service's provider."""
-    try:
-        uri = await node.master_call("lookupService", name)
-    except MasterError as err:
-        if err.code == codes.ERROR:
-            raise NotFoundError(f"service {name} is not available") from err
-        raise
+    uri = await node.master.lookup_service(name)
     parts = urlsplit(str(uri))
     if parts.scheme != "rosrpc" or not parts.hostname or not parts.port:
         raise RostoolsError(f"the master gave {name} a bad URI: {uri}")

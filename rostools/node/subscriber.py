@@ -17,11 +17,11 @@ from typing import TYPE_CHECKING, Any
 
 from rostools.msgs.topictype import TopicType
 from rostools.node.connection import Frame, InboundConnection
+from rostools.node.mastercalls import peer_value
 from rostools.node.notice import Notice
-from rostools.node.xmlrpc import call
-from rostools.rosgraph.masterapi import master_timeout
+from rostools.node.xmlrpc import CALL_TIMEOUT
+from rostools.rosgraph.masterapi import MasterError
 from rostools.rosgraph.network import Failure, explain, uri_host
-from rostools.wire.codes import SUCCESS
 from rostools.wire.tcpros import MAX_FRAME, subscriber_header
 
 if TYPE_CHECKING:
@@ -156,17 +156,22 @@ class Subscriber:
     async def _connect(self, uri: str) -> InboundConnection | Failure:
         host = uri_host(uri)
         try:
-            code, message, proto = await call(
-                uri, "requestTopic", (self.node.name, self.topic, [["TCPROS"]])
+            proto = await peer_value(
+                uri, self.node.name, "requestTopic", self.topic, [["TCPROS"]], timeout=CALL_TIMEOUT
             )
+        except MasterError as err:
+            refused = str(err)
         except Exception as err:  # noqa: BLE001 - any failure means: report, try again later
             log.debug("requestTopic %s at %s failed: %s", self.topic, uri, err)
             return explain(err, host)
-        if code != SUCCESS or not isinstance(proto, list) or len(proto) < 3 or proto[0] != "TCPROS":
-            log.debug("requestTopic %s at %s: %s %s", self.topic, uri, code, message)
+        else:
+            ok = isinstance(proto, list) and len(proto) >= 3 and proto[0] == "TCPROS"
+            refused = "" if ok else f"no TCPROS in {proto!r}"
+        if refused:
+            log.debug("requestTopic %s at %s: %s", self.topic, uri, refused)
             # a node on its way out refuses the topics it already dropped (roscpp does, for
             # each of its topics): said only if it lasts
-            return Failure(f"it refused the topic: {message}", lasting=False)
+            return Failure(f"it refused the topic: {refused}", lasting=False)
         if type(proto[2]) is not int or not 0 < proto[2] < 65536:
             return Failure(f"it gave no port to connect to: {proto!r}")
         host, port = str(proto[1]), proto[2]
@@ -268,17 +273,10 @@ async def publisher_names(node: Owner) -> dict[str, str]:
     multicall.
     """
     try:
-        _, _, state = await call(node.master_uri, "getSystemState", (node.name,), master_timeout())
-        names = sorted({str(n) for _, nodes in state[0] for n in nodes})
-        calls = [{"methodName": "lookupNode", "params": [node.name, n]} for n in names]
-        answers = await call(node.master_uri, "system.multicall", (calls,), master_timeout())
+        pubs, _, _ = await node.master.system_state()
+        names = sorted({str(n) for _, nodes in pubs for n in nodes})
+        answers = await node.master.multicall([("lookupNode", (n,)) for n in names])
     except Exception as err:  # noqa: BLE001 - the names only decorate messages
         log.debug("finding the publishers' names: %s", err)
         return {}
-    found: dict[str, str] = {}
-    for name, answer in zip(names, answers, strict=False):
-        if isinstance(answer, list) and answer and isinstance(answer[0], list):
-            code, _, uri = (answer[0] + [None, None, None])[:3]
-            if code == SUCCESS and isinstance(uri, str):
-                found[uri] = str(name)
-    return found
+    return {uri: name for name, uri in zip(names, answers, strict=False) if isinstance(uri, str)}

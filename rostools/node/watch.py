@@ -13,10 +13,10 @@ import time
 from collections.abc import Mapping
 from typing import TYPE_CHECKING, Any, Protocol
 
+from rostools.errors import NotFoundError
 from rostools.node.notice import Notice
-from rostools.node.xmlrpc import call
+from rostools.rosgraph.masterapi import MasterError
 from rostools.rosgraph.network import explain, uri_host
-from rostools.wire.codes import SUCCESS
 
 if TYPE_CHECKING:
     from rostools.node.endpoint import Owner
@@ -98,12 +98,14 @@ class MasterWatch:
         node = self.node
         # -1 means this master never heard of us. Another URI under our name means we were
         # replaced; then the master shuts us down itself.
-        code, _, _ = await call(
-            node.master_uri, "lookupNode", (node.name, node.name), WATCH_TIMEOUT
-        )
+        try:
+            await node.master.lookup_node(node.name, timeout=WATCH_TIMEOUT)
+            known = True
+        except (NotFoundError, MasterError):  # -1: unknown here; another code: as unknown
+            known = False
         if self.stopped:
             return
-        if code != SUCCESS:
+        if not known:
             await self.register_again()
         elif node.master_lost:
             node.notify(Notice("master_back", f"the master at {node.master_uri} is back"))
@@ -114,7 +116,8 @@ class MasterWatch:
             return
         self.node.master_lost = True
         uri = self.node.master_uri
-        reason = explain(err, uri_host(uri), peer=False).reason
+        # our errors are raised from the transport's, which says why
+        reason = explain(err.__cause__ or err, uri_host(uri), peer=False).reason
         self.node.notify(
             Notice(
                 "master_lost",
@@ -135,12 +138,11 @@ class MasterWatch:
         calls += [("registerService", (n, v.uri, node.uri)) for n, v in node.services.items()]
         for sub in subs:
             sub.master_restarted()
-        multi = [{"methodName": m, "params": [node.name, *p]} for m, p in calls]
-        results = await call(node.master_uri, "system.multicall", (multi,), WATCH_TIMEOUT * 5)
+        results = await node.master.multicall(calls, WATCH_TIMEOUT * 5)
         first_sub = len(node.publishers)
         for sub, result in zip(subs, results[first_sub : first_sub + len(subs)], strict=True):
-            if isinstance(result, list) and result and result[0][0] == SUCCESS:
-                sub.update([u for u in result[0][2] if isinstance(u, str)])
+            if isinstance(result, list):
+                sub.update([u for u in result if isinstance(u, str)])
         node.notify(
             Notice(
                 "master_restarted",
@@ -154,7 +156,7 @@ class MasterWatch:
     async def _check_subscribers(self) -> None:
         """Say once of each subscriber the master lists for our topics that never reached us."""
         node = self.node
-        _, _, state = await call(node.master_uri, "getSystemState", (node.name,), WATCH_TIMEOUT)
+        state = await node.master.system_state(WATCH_TIMEOUT)
         now = time.monotonic()
         listed: set[tuple[str, str]] = set()
         for topic, names in state[1]:

@@ -184,13 +184,30 @@ def call_error(
     return None
 
 
-def ros_value(answer: Any, method: str, what: str) -> Any:
-    """The value of a ROS API answer ``[code, message, value]``; ``MasterError`` unless 1."""
+#: The master's methods whose ERROR code means "no such thing", and how to say it of the
+#: name asked for: every client, blocking or async, says it so.
+MISSING = {
+    "getParam": "parameter {} is not set",
+    "deleteParam": "parameter {} is not set",
+    "lookupNode": "unknown node {}",
+    "lookupService": "unknown service {}",
+}
+
+
+def ros_value(answer: Any, method: str, what: str, args: tuple[Any, ...] = ()) -> Any:
+    """The value of a ROS API answer ``[code, message, value]``: the one reading of a triple.
+
+    A failure code is a ``MasterError``, or a ``NotFoundError`` (raised from it) where
+    ``MISSING`` says the code means the name in ``args[0]`` does not exist.
+    """
     if not isinstance(answer, list | tuple) or len(answer) != 3:
         raise RostoolsError(f"bad answer from the {what} to {method}: {answer!r}")
     code, message, value = answer
     if code != codes.SUCCESS:
-        raise MasterError(method, code, message)
+        failure = MasterError(method, code, message)
+        if code == codes.ERROR and method in MISSING and args and what == "master":
+            raise NotFoundError(MISSING[method].format(args[0])) from failure
+        raise failure
     return value
 
 
@@ -222,8 +239,8 @@ class XmlRpcNode:
             raise error from err
 
     def call(self, method: str, *args: Any) -> Any:
-        """Call a ROS API method and return its value; a failure code raises ``MasterError``."""
-        return ros_value(self.raw(method, *args), method, self.what)
+        """Call a ROS API method and return its value (``ros_value`` reads the answer)."""
+        return ros_value(self.raw(method, *args), method, self.what, args)
 
 
 class MasterProxy(XmlRpcNode):
@@ -234,12 +251,7 @@ class MasterProxy(XmlRpcNode):
 
     def get_param(self, key: str) -> Any:
         """A parameter's value; NotFoundError when unset."""
-        try:
-            return self.call("getParam", key)
-        except MasterError as err:
-            if err.code == codes.ERROR:
-                raise NotFoundError(f"parameter {key} is not set") from err
-            raise
+        return self.call("getParam", key)
 
     def set_param(self, key: str, value: Any) -> None:
         """Set a parameter."""
@@ -247,12 +259,7 @@ class MasterProxy(XmlRpcNode):
 
     def delete_param(self, key: str) -> None:
         """Delete a parameter; NotFoundError when unset."""
-        try:
-            self.call("deleteParam", key)
-        except MasterError as err:
-            if err.code == codes.ERROR:
-                raise NotFoundError(f"parameter {key} is not set") from err
-            raise
+        self.call("deleteParam", key)
 
     def param_names(self) -> list[str]:
         """Every parameter name."""
@@ -270,22 +277,12 @@ class MasterProxy(XmlRpcNode):
 
     def lookup_node(self, name: str) -> str:
         """A node's XML-RPC URI; NotFoundError for an unknown node."""
-        try:
-            uri: str = self.call("lookupNode", name)
-        except MasterError as err:
-            if err.code == codes.ERROR:
-                raise NotFoundError(f"unknown node {name}") from err
-            raise
+        uri: str = self.call("lookupNode", name)
         return uri
 
     def lookup_service(self, name: str) -> str:
         """A service's rosrpc URI; NotFoundError for an unknown service."""
-        try:
-            uri: str = self.call("lookupService", name)
-        except MasterError as err:
-            if err.code == codes.ERROR:
-                raise NotFoundError(f"unknown service {name}") from err
-            raise
+        uri: str = self.call("lookupService", name)
         return uri
 
 

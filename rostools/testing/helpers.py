@@ -45,7 +45,7 @@ def _matches(msg: Message, predicate: Predicate) -> bool:
 def _publishers(topic: str) -> list[str]:
     node = default_node()
     try:
-        state = loop.run(node.aio.core.master_call("getSystemState"), timeout=5)
+        state = loop.run(node.aio.core.master.system_state(), timeout=5)
     except Exception:  # noqa: BLE001 - only decorates the failure message
         return []
     name = node.resolve(topic)

@@ -22,7 +22,7 @@ import pytest
 from rostools.master.server import MasterThread
 from rostools.msgs.store import BuiltinSource, TypeStore
 from rostools.msgs.topictype import TopicType
-from rostools.node import connection, subscriber
+from rostools.node import connection, mastercalls, subscriber
 from rostools.node.node import Node
 from rostools.node.notice import Notice
 from rostools.wire.tcpros import subscriber_header
@@ -266,13 +266,13 @@ def _subscribe_all(
 ) -> tuple[list[Notice], collections.Counter[str]]:
     """Subscribe to every /many_N; the notices until each topic has one, and the calls made."""
     calls: collections.Counter[str] = collections.Counter()
-    real = subscriber.call
+    real = mastercalls.call
 
     async def counted(uri: str, method: str, params: tuple[object, ...], *more: float) -> object:
         calls[method] += 1
         return await real(uri, method, params, *more)
 
-    monkeypatch.setattr(subscriber, "call", counted)
+    monkeypatch.setattr(mastercalls, "call", counted)
 
     async def main() -> list[Notice]:
         node = await Node("/watcher", master_uri).start()

@@ -22,9 +22,9 @@ class _Owner:
     def __init__(self, port: int) -> None:
         self.name = "/tester"
         self.port = port
+        self.master = self
 
-    async def master_call(self, method: str, *args: Any) -> Any:
-        assert method == "lookupService"
+    async def lookup_service(self, name: str) -> str:
         return f"rosrpc://127.0.0.1:{self.port}"
 
 

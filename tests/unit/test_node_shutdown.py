@@ -10,7 +10,7 @@ from typing import Any
 
 import pytest
 
-from rostools.node import watch
+from rostools.node import mastercalls, watch
 from rostools.node.session import run_bounded
 
 
@@ -44,6 +44,7 @@ def test_a_stopped_watch_never_registers_again(monkeypatch: pytest.MonkeyPatch) 
         name="/n", master_uri="http://127.0.0.1:1/", uri="http://127.0.0.1:2/",
         publishers={"/t": SimpleNamespace(type=SimpleNamespace(type="std_msgs/String"))},
         subscribers={}, services={}, master_lost=False, notify=lambda notice: None,
+        master=mastercalls.LiveMaster("http://127.0.0.1:1/", "/n"),
     )  # fmt: skip
     w = watch.MasterWatch(node)
 
@@ -56,7 +57,7 @@ def test_a_stopped_watch_never_registers_again(monkeypatch: pytest.MonkeyPatch) 
             return [-1, "unknown node [/n]", ""]  # the node has just unregistered
         return [[1, "", 1]]
 
-    monkeypatch.setattr(watch, "call", fake_call)
+    monkeypatch.setattr(mastercalls, "call", fake_call)
     monkeypatch.setattr(watch, "WATCH_PERIOD", 0.0)
 
     async def main() -> None:

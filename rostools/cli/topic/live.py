@@ -57,7 +57,7 @@ async def wait_for_topic(
     name = node.resolve(name)  # command-line remappings apply
     warned = False
     while True:
-        types = dict(await node.master_call("getTopicTypes"))
+        types = await node.master.topic_types()
         ref = split_field(name, types, store)
         if ref is not None:
             return ref

@@ -211,7 +211,7 @@ def pub(
         from rostools.msgs.text import formatter, message_type
         from rostools.node.session import first
 
-        known = dict(await node.master_call("getTopicTypes"))  # before ours replaces it
+        known = await node.master.topic_types()  # before ours replaces it
         publisher = await node.advertise(name, ttype, latch=latched, queue_size=1000)
         refused = _watch_types(known.get(name), publisher, name, ttype)
         show = formatter(codec, message_type(msg_type)) if verbose else None

@@ -63,6 +63,7 @@ GROUPS: dict[str, Group] = {
             "tests/unit/test_coalesce.py",
             "tests/unit/test_wire_header.py",
             "tests/unit/test_wire_edges.py",
+            "tests/unit/test_xmlvalues_edges.py",
             # rosapi's checks are reached through the Master API
             "tests/unit/test_master_api.py",
             "tests/unit/test_rosapi_checks.py",

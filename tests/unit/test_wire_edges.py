@@ -222,7 +222,10 @@ SCALARS: list[Any] = ["/a", "", "a b", 7, -(2**31), 2**31 - 1, True, False, 1.5,
 
 
 @pytest.mark.parametrize("count", range(9))
-def test_calls_of_scalars_take_the_fast_path_and_read_as_loads(count: int) -> None:
+def test_calls_of_scalars_take_the_fast_path_and_read_as_loads(
+    count: int, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    monkeypatch.setattr(wx, "_simple_calls", [])  # the patterns, built afresh by this call
     params = tuple(SCALARS[i % len(SCALARS)] for i in range(count))
     body = xmlrpc.client.dumps(params, "someMethod").encode()
     fast = wx._decode_simple_call(body)
@@ -232,7 +235,8 @@ def test_calls_of_scalars_take_the_fast_path_and_read_as_loads(count: int) -> No
     assert [type(v) for v in fast[1]] == [type(v) for v in loaded]
 
 
-def test_the_captured_roscpp_call_takes_the_fast_path() -> None:
+def test_the_captured_roscpp_call_takes_the_fast_path(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setattr(wx, "_simple_calls", [])
     expected = xmlrpc.client.loads(ROSCPP_CALL)
     assert wx._decode_simple_call(ROSCPP_CALL) == (expected[1], expected[0])
     typed = ROSCPP_CALL.replace(b"<value>/rosout</value>", b"<value><i4>5</i4></value>")

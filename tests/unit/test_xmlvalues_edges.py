@@ -1,0 +1,84 @@
+"""``wire/xmlvalues.py`` beside the standard library's ``xmlrpc.client``, byte for byte."""
+
+from __future__ import annotations
+
+import xmlrpc.client
+from typing import Any
+
+import pytest
+
+from rostools.wire import xmlvalues
+
+NESTED: list[tuple[Any, ...]] = [
+    ({"a": [1, "s"], "b": {"c": True}},),
+    ([[]], [], {}),
+    ("x<&>", -1.5, False, [1, [2, [3]]]),
+    (xmlrpc.client.DateTime("20261125T04:00:00"),),
+]
+
+
+@pytest.mark.parametrize("params", NESTED)
+def test_calls_are_written_as_xmlrpc_client_writes_them(params: tuple[Any, ...]) -> None:
+    assert xmlvalues.dumps_call("m", params) == xmlrpc.client.dumps(params, "m").encode()
+
+
+def test_binaries_read_back_as_xmlrpc_client_reads_them() -> None:
+    # the standard library wraps base64 text in newlines; the value is what counts
+    body = xmlvalues.dumps_call("m", (b"ab", xmlrpc.client.Binary(b"cd")))
+    params, method = xmlrpc.client.loads(body)
+    assert method == "m"
+    assert [p.data for p in params] == [b"ab", b"cd"]
+
+
+@pytest.mark.parametrize("value", [2**31, -(2**31) - 1, {1: 2}, object()])
+def test_what_cannot_be_written_fails_as_in_xmlrpc_client(value: Any) -> None:
+    with pytest.raises((OverflowError, TypeError)) as theirs:
+        xmlrpc.client.dumps((value,), "m")
+    with pytest.raises(type(theirs.value)) as ours:
+        xmlvalues.dumps_call("m", (value,))
+    assert str(ours.value) == str(theirs.value)
+
+
+ANSWERS = [
+    # XmlRpc++ style: untyped strings, whitespace between values that belongs to no value
+    b"<?xml version='1.0'?><methodResponse><params><param><value><array><data>\n  "
+    b"<value>x</value>\n  <value><i4>1</i4></value>\n  <value></value>\n</data></array>"
+    b"</value></param></params></methodResponse>",
+    b"<methodResponse><params><param><value><struct><member><name>a</name>"
+    b"<value><dateTime.iso8601>20261125T04:00:00</dateTime.iso8601></value></member>"
+    b"<member><name>b</name><value><base64>YWI=</base64></value></member>"
+    b"<member><name>c</name><value><string>s</string></value></member>"
+    b"</struct></value></param></params></methodResponse>",
+]
+
+
+@pytest.mark.parametrize("body", ANSWERS)
+def test_answers_read_as_xmlrpc_client_reads_them(body: bytes) -> None:
+    (theirs,), _ = xmlrpc.client.loads(body)
+    assert xmlvalues.loads_response(body) == theirs
+
+
+def test_a_fault_reads_as_xmlrpc_client_reads_it() -> None:
+    body = xmlrpc.client.dumps(xmlrpc.client.Fault(3, "no"), methodresponse=True).encode()
+    with pytest.raises(xmlvalues.Fault) as caught:
+        xmlvalues.loads_response(body)
+    assert (caught.value.faultCode, caught.value.faultString) == (3, "no")
+    assert str(caught.value) == str(xmlrpc.client.Fault(3, "no"))
+
+
+@pytest.mark.parametrize(
+    ("body", "why"),
+    [
+        (b"<methodResponse><fault><value><string>x</string></value></fault></methodResponse>",
+         "a fault that is not a struct"),
+        (b"<methodResponse><params><param><value><struct><value><int>1</int></value></struct>"
+         b"</value></param></params></methodResponse>", "a struct member without a name"),
+        (b"<methodResponse><params></params></methodResponse>", "an answer with 0 values, not 1"),
+        (b"<methodResponse><params><param><value><boolean>2</boolean></value></param></params>"
+         b"</methodResponse>", "bad boolean value '2'"),
+        (b"<methodResponse><params><param><value><int>1</int>", "malformed XML-RPC answer"),
+    ],
+)  # fmt: skip
+def test_what_is_not_an_answer_says_why(body: bytes, why: str) -> None:
+    with pytest.raises(xmlvalues.BadAnswer, match=why):
+        xmlvalues.loads_response(body)

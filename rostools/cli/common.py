@@ -23,7 +23,7 @@ if TYPE_CHECKING:
 try:
     from typer._click.types import FloatRange
 except ImportError:  # pragma: no cover - older typer uses the click package
-    from click.types import FloatRange  # type: ignore[no-redef,import-not-found,unused-ignore]
+    from click.types import FloatRange  # type: ignore[no-redef,import-not-found,assignment,unused-ignore]
 
 
 class FiniteFloat(FloatRange):  # type: ignore[misc,unused-ignore]

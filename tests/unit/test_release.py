@@ -66,13 +66,14 @@ def test_readme_links_work_on_a_package_index() -> None:
 
 def test_every_document_the_code_cites_exists() -> None:
     # seven modules cited two design notes that were never in the repository
+    ours = {p.name for p in ROOT.rglob("*.md") if ".venv" not in p.parts}
     missing = []
     for folder in ("rostools", "tests", "benchmarks", "scripts"):
         for path in (ROOT / folder).rglob("*.py"):
             if ".venv" in path.parts or "build" in path.parts or path.name == Path(__file__).name:
                 continue
             for name in CITED.findall(path.read_text()):
-                if not (ROOT / name).is_file():
+                if Path(name).name not in ours:
                     missing.append(f"{path.relative_to(ROOT)}: {name}")
     assert missing == []
 

@@ -1,6 +1,7 @@
 """The wire at its edges: what mutation testing found unchecked (``python -m benchmarks.mutation``).
 
-Expected values come from ROS1_PROTOCOL.md's captures (§6, §14.5, §14.6), from the standard
+Expected values come from captures of rospy and roscpp (services, faults, roscpp's untyped
+strings), from the standard
 library (``xmlrpc.client``, ``http.client``, ``http.HTTPStatus``) and from the byte layout of a
 connection header, written out here independently of ``wire/header.py``.
 """
@@ -17,6 +18,7 @@ from typing import Any
 import pytest
 
 from rostools.wire import xmlrpc as wx
+from rostools.wire import xmlvalues as xv
 from rostools.wire.header import MAX_HEADER_LENGTH
 from rostools.wire.tcpros import (
     Failed,
@@ -204,7 +206,7 @@ def test_service_limits_are_inclusive() -> None:
 
 
 def test_a_fault_is_a_fault_to_xmlrpc_client() -> None:
-    body = wx.encode_fault(1, "<class 'Exception'>:method \"nope\" is not supported")
+    body = xv.dumps_fault(1, "<class 'Exception'>:method \"nope\" is not supported")
     with pytest.raises(xmlrpc.client.Fault) as caught:
         xmlrpc.client.loads(body)
     assert caught.value.faultCode == 1
@@ -253,32 +255,32 @@ def test_what_the_fast_path_leaves_to_loads() -> None:
         wx.decode_call(odd)  # not an XML character: loads says so
 
 
-def test_answers_that_do_not_fit_32_bits_go_to_dumps() -> None:
+def test_answers_that_do_not_fit_32_bits_are_refused_as_dumps_refuses_them() -> None:
     for value in (2**31 - 1, -(2**31)):
         assert (
-            wx.encode_result(value) == xmlrpc.client.dumps((value,), methodresponse=True).encode()
+            xv.dumps_response(value) == xmlrpc.client.dumps((value,), methodresponse=True).encode()
         )
     for value in (2**31, -(2**31) - 1):
         with pytest.raises(OverflowError):
-            wx.encode_result(value)
+            xv.dumps_response(value)
     odd = object()
     with pytest.raises(TypeError):
-        wx.encode_result(odd)
+        xv.dumps_response(odd)
 
 
 def test_multicall_as_the_python_server_answers() -> None:
     def dispatch(method: str, params: tuple[Any, ...]) -> Any:
         if method == "boom":
-            raise xmlrpc.client.Fault(7, "boom")
+            raise xv.Fault(7, "boom")
         return [method, list(params)]
 
-    with pytest.raises(xmlrpc.client.Fault) as none:
+    with pytest.raises(xv.Fault) as none:
         wx.multicall(dispatch, ())
     assert none.value.faultCode == 1
     assert none.value.faultString == (
         "<class 'TypeError'>:system_multicall() missing 1 required positional argument: 'call_list'"
     )
-    with pytest.raises(xmlrpc.client.Fault) as two:
+    with pytest.raises(xv.Fault) as two:
         wx.multicall(dispatch, ([], []))
     assert two.value.faultString == (
         "<class 'TypeError'>:system_multicall() takes 2 positional arguments but 3 were given"

@@ -2,8 +2,8 @@
 
 The rules are rospy's (``rosgraph.network.decode_ros_handshake_header``: a zero-length field
 is refused, a field is split at its first ``=``, the key is stripped and the value is not)
-and roscpp's (``Header::parse``: a field over 1,000,000 bytes is refused); ROS1_PROTOCOL.md
-§5.1.
+and roscpp's (``Header::parse``: a field over 1,000,000 bytes is refused); wiki.ros.org's
+ROS/Connection Header.
 """
 
 from __future__ import annotations
@@ -76,6 +76,6 @@ def test_text_that_is_not_utf8_is_replaced_not_refused() -> None:
 
 
 def test_binary_values_are_written_as_they_are() -> None:
-    # bag record headers carry binary values (ROS1_PROTOCOL.md §12): u32 length, key=value
+    # bag record headers carry binary values (wiki.ros.org/Bags/Format/2.0): u32 length, key=value
     assert encode_fields({"op": b"\x02", "a": "1"}) == b"\x03\x00\x00\x00a=1\x04\x00\x00\x00op=\x02"
     assert encode_header({"op": b"\x02"}) == b"\x08\x00\x00\x00\x04\x00\x00\x00op=\x02"

@@ -10,7 +10,7 @@ from __future__ import annotations
 from typing import Any
 
 from rostools.errors import RostoolsError
-from rostools.node.xmlrpc import call
+from rostools.node.xmlrpc import CALL_TIMEOUT, call
 from rostools.rosgraph.masterapi import MasterError, call_error, master_timeout, ros_value
 
 
@@ -19,10 +19,11 @@ async def peer_value(
 ) -> Any:
     """The value of a node's slave API ``method``; ``MasterError`` for a failure code.
 
-    Transport errors stay as they are (``OSError``, ``TimeoutError``, ``Fault``): a caller
-    that tells a user why a peer failed reads them with ``network.explain``.
+    The call has ``CALL_TIMEOUT`` unless ``timeout`` says otherwise. Transport errors stay
+    as they are (``OSError``, ``TimeoutError``, ``Fault``): a caller that tells a user why a
+    peer failed reads them with ``network.explain``.
     """
-    limit = master_timeout() if timeout is None else timeout
+    limit = CALL_TIMEOUT if timeout is None else timeout
     return ros_value(await call(uri, method, (caller_id, *args), limit), method, "node")
 
 

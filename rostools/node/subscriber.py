@@ -19,7 +19,6 @@ from rostools.msgs.topictype import TopicType
 from rostools.node.connection import Frame, InboundConnection
 from rostools.node.mastercalls import peer_value
 from rostools.node.notice import Notice
-from rostools.node.xmlrpc import CALL_TIMEOUT
 from rostools.rosgraph.masterapi import MasterError
 from rostools.rosgraph.network import Failure, explain, uri_host
 from rostools.wire.tcpros import MAX_FRAME, subscriber_header
@@ -156,9 +155,7 @@ class Subscriber:
     async def _connect(self, uri: str) -> InboundConnection | Failure:
         host = uri_host(uri)
         try:
-            proto = await peer_value(
-                uri, self.node.name, "requestTopic", self.topic, [["TCPROS"]], timeout=CALL_TIMEOUT
-            )
+            proto = await peer_value(uri, self.node.name, "requestTopic", self.topic, [["TCPROS"]])
         except MasterError as err:
             refused = str(err)
         except Exception as err:  # noqa: BLE001 - any failure means: report, try again later

@@ -23,7 +23,7 @@ from rostools.bag.model import (
 )
 from rostools.bag.ordering import Block, Entry, RawMessage, ordered
 from rostools.bag.sink import Sink
-from rostools.errors import InvalidDataError
+from rostools.errors import InvalidDataError, cannot_write
 
 if TYPE_CHECKING:
     from rostools.bag.rename import Renames
@@ -238,7 +238,11 @@ class BagWriter(ABC):
         except FileExistsError:
             raise BagUsageError(f"{self.path} exists; refusing to overwrite it") from None
         except OSError as err:
-            raise InvalidDataError(f"cannot create {self.path}: {err.strerror or err}") from err
+            # The path is the user's to fix (a missing folder, no permission): exit 2, as
+            # every command's unwritable output
+            folder = self.path.parent
+            why = "no such folder" if not folder.is_dir() else err.strerror or str(err)
+            raise cannot_write(self.path, f"{folder}: {why}") from err
         self._closed = False
         self._sink = Sink(self._fd, str(self.path))
         self._connections: list[Connection] = []

@@ -30,6 +30,7 @@ from rostools.bag.model import (
     BagInfo,
     Connection,
     compression_rows,
+    counted,
     summarize,
 )
 from rostools.bag.ordering import Block, Entry, out_of_order
@@ -279,7 +280,7 @@ class McapReader(BagReader):
                     found.append(f"chunk at {rec}: its CRC does not match its records")
                 late = self._out_of_order(buf, pos, end)
                 if late:
-                    notes.append(f"chunk at {rec}: {late} message(s) out of time order")
+                    notes.append(f"chunk at {rec}: {counted(late, 'message')} out of time order")
             elif op == fmt.OP_DATA_END:
                 (crc,) = _U32.unpack_from(mm, start)
                 if crc and zlib.crc32(memoryview(mm)[:rec]) != crc:

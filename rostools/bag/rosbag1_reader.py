@@ -34,6 +34,7 @@ from rostools.bag.model import (
     UnsupportedBagError,
     compression_rows,
     connection_from_header,
+    counted,
     summarize,
 )
 from rostools.bag.ordering import Block, Entry, RawMessage, ordered, out_of_order
@@ -260,7 +261,7 @@ class Bag1Reader(BagReader):
         nxt = fmt.next_record(self._mm, pos + 1, self.size, _TOP_OPS)
         stop = self.size if nxt is None else nxt
         listed = sum(sum(c.values()) for p, _, _, c in self._infos if pos <= p < stop)
-        lost = f"; the index lists {listed} messages in chunks there" if listed else ""
+        lost = f"; the index lists {counted(listed, 'message')} in chunks there" if listed else ""
         chunk = self._broken_chunk(pos, stop)
         if chunk is not None:
             self._add_scanned(chunk)
@@ -268,12 +269,12 @@ class Bag1Reader(BagReader):
             if nxt is None:
                 self.damaged(
                     f"chunk at {pos} is cut short ({self.size - chunk.data_pos} of its bytes"
-                    f" are in the file); {got} messages salvaged from it"
+                    f" are in the file); {counted(got, 'message')} salvaged from it"
                 )
             else:
                 self.damaged(
-                    f"chunk at {pos} does not fit its record ({err}); {got} messages salvaged"
-                    f" from it, read on at {nxt}"
+                    f"chunk at {pos} does not fit its record ({err});"
+                    f" {counted(got, 'message')} salvaged from it, read on at {nxt}"
                 )
         elif nxt is None:
             self.damaged(f"{self.size - pos} bytes at {pos} do not parse ({err}){lost}")
@@ -333,7 +334,8 @@ class Bag1Reader(BagReader):
             if orphans:
                 lost = sum(chunk.counts.pop(c) for c in orphans)
                 self.damaged(
-                    f"chunk at {chunk.pos}: {lost} messages of connections whose record is lost"
+                    f"chunk at {chunk.pos}: {counted(lost, 'message')} of connections"
+                    " whose record is lost"
                 )
         self.chunks = [c for c in self.chunks if c.counts]
 
@@ -366,7 +368,7 @@ class Bag1Reader(BagReader):
                 continue
             late = out_of_order(t for t, _, _ in self._walk(chunk, buf, base, end))
             if late:
-                found.append(f"chunk at {chunk.pos}: {late} message(s) out of time order")
+                found.append(f"chunk at {chunk.pos}: {counted(late, 'message')} out of time order")
         return found
 
     def _walk(
@@ -546,7 +548,8 @@ class Bag1Reader(BagReader):
         except BagFormatError as err:
             listed = sum(chunk.counts.values())
             self.damaged(
-                f"chunk at {chunk.pos} is unreadable ({err}); its {listed} messages are lost"
+                f"chunk at {chunk.pos} is unreadable ({err}); its {counted(listed, 'message')}"
+                f" {'is' if listed == 1 else 'are'} lost"
             )
             return []
         out = None
@@ -609,7 +612,8 @@ class Bag1Reader(BagReader):
             out.append((t, item[0], off, item[1], view[q : q + dlen]))
         if orphans:
             self.damaged(
-                f"chunk at {chunk.pos}: {orphans} messages of connections whose record is lost"
+                f"chunk at {chunk.pos}: {counted(orphans, 'message')} of connections"
+                " whose record is lost"
             )
         out.sort()
         return out

@@ -14,6 +14,7 @@ from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
+from rostools.bag.model import counted
 from rostools.cli import output
 from rostools.cli.bag.group import app
 from rostools.cli.common import FINITE, FormatOpt, output_format
@@ -193,13 +194,13 @@ def _report(fmt: Format, report: CopyReport) -> None:
         data.update(notes=list(report.notes), lost=list(report.lost))
     if fmt is Format.text:
         sys.stderr.write(
-            f"wrote {report.messages_written} of {report.messages_read} messages to "
+            f"wrote {report.messages_written} of {counted(report.messages_read, 'message')} to "
             f"{report.output} ({report.format}, {report.compression})\n"
         )
         say_notes(report.notes)
         if report.extras_left_out:
             sys.stderr.write(
-                f"left out {report.extras_left_out} MCAP attachment/metadata record(s): "
+                f"left out {counted(report.extras_left_out, 'MCAP attachment/metadata record')}: "
                 + (
                     "a .bag has no place for them\n"
                     if report.format == "bag"
@@ -350,7 +351,7 @@ def _in_place(
         from rostools.bag.model import lost_data
 
         kept = "" if output_dir else " (each original is kept as NAME.orig.bag)"
-        raise lost_data(f"{label}ed {len(bags)} bag(s){kept}", lost)
+        raise lost_data(f"{label}ed {counted(len(bags), 'bag')}{kept}", lost)
 
 
 def _targets(
@@ -511,4 +512,4 @@ def _recover_report(fmt: Format, report: RecoverReport, quiet: bool = False) -> 
     elif not quiet:
         for note in report.notes:
             sys.stderr.write(f"note: {one_line(note)}\n")  # may quote the file's names
-        sys.stderr.write(f"recovered {report.messages} messages into {report.output}\n")
+        sys.stderr.write(f"recovered {counted(report.messages, 'message')} into {report.output}\n")

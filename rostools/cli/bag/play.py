@@ -11,6 +11,7 @@ from typing import TYPE_CHECKING, Annotated
 
 import typer
 
+from rostools.bag.model import counted
 from rostools.cli.bag.files import check_read
 from rostools.cli.bag.group import app
 from rostools.cli.common import FINITE, FormatOpt, node_session, output_format
@@ -208,7 +209,7 @@ def play(
         sys.stderr.write("\nDone.\n")
     elif out is not Format.text:
         sys.stdout.write(render(out, {"published": sent}) + "\n")
-    check_read(readers, f"published {sent} messages")
+    check_read(readers, f"published {counted(sent, 'message')}")
 
 
 def _show(status: Status) -> None:

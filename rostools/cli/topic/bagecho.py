@@ -17,6 +17,7 @@ def echo_bag(path: Path, name: str | None, store: TypeStore, opts: EchoOptions) 
     """Print the messages of ``name`` (a topic, maybe with a field path), or of every topic."""
     from rostools.bag.access import open_bag, require_ros1
     from rostools.bag.base import after_reading
+    from rostools.bag.model import counted
     from rostools.cli.topic.printing import Echo
     from rostools.errors import InvalidDataError
     from rostools.rosgraph.topics import split_field
@@ -42,4 +43,6 @@ def echo_bag(path: Path, name: str | None, store: TypeStore, opts: EchoOptions) 
                 raise InvalidDataError(f"{path}: message at {t_ns / 1e9:.9f} s: {err}") from err
             printed += 1
     # A damaged bag: every message that reads was printed; say what was left out (exit 6).
-    after_reading([bag], f"printed {printed} messages", lambda n: sys.stderr.write(f"note: {n}\n"))
+    after_reading(
+        [bag], f"printed {counted(printed, 'message')}", lambda n: sys.stderr.write(f"note: {n}\n")
+    )

@@ -103,7 +103,14 @@ def info(
 ) -> None:
     """Summarise bags from their index alone (rosbag info); exit 6 if a bag is damaged."""
     from rostools.bag.access import open_bag, topic_frequencies
-    from rostools.cli.bag.infotext import info_data, info_key, info_text
+    from rostools.cli.bag.infotext import (
+        as_rosbag_reads,
+        info_data,
+        info_key,
+        info_text,
+        info_yaml,
+        key_yaml,
+    )
 
     fmt = Format.yaml if yaml_ and fmt is None else output_format(ctx, fmt)
     if key is not None and fmt is Format.text:
@@ -118,6 +125,13 @@ def info(
         readers.append(reader)
     if fmt is Format.text:
         sys.stdout.write("\n---\n".join(info_text(*r) for r in results) + "\n")
+    elif fmt is Format.yaml:  # rosbag's text, one document per bag
+        data = [info_data(*r) for r in results]
+        if key is None:
+            docs = [info_yaml(d) + "\n" for d in data]
+        else:
+            docs = [key_yaml(info_key(as_rosbag_reads(d), key)) for d in data]
+        sys.stdout.write("---\n".join(docs))
     else:
         data = [info_data(*r) for r in results]
         if key is not None:

@@ -1,0 +1,132 @@
+"""What breaks a script that swaps rosbag for rostools (issue 25), set beside real rosbag.
+
+``bag info -y`` and ``-y -k`` print rosbag's YAML scalars; ``info`` of an unindexed bag;
+``compress``, ``decompress`` and ``reindex`` of several files where some are bad.
+"""
+
+from __future__ import annotations
+
+import re
+import shutil
+import subprocess
+from pathlib import Path
+
+import pytest
+
+from tests.support.bagdata import write_sample
+from tests.support.env import CORPUS, needs_corpus, needs_ros1, run_cli, run_system_python
+
+pytestmark = [pytest.mark.interop, needs_ros1]
+
+#: Keys that rostools adds to rosbag's (a superset, documented in the README)
+OURS_ONLY = ("format", "profile", "library", "chunks", "attachments", "metadata")
+
+
+def rosbag(*argv: str, cwd: Path | None = None) -> subprocess.CompletedProcess[str]:
+    """The real ``rosbag``, run to its end."""
+    return subprocess.run(
+        ["rosbag", *argv], cwd=cwd, capture_output=True, text=True, timeout=120, check=False
+    )
+
+
+def without_keys(text: str, keys: set[str]) -> str:
+    """``text`` (info -y) less the top-level keys in ``keys``, with their indented lines."""
+    out, skipping = [], False
+    for line in text.split("\n"):
+        top = re.match(r"^([A-Za-z_]+):", line)
+        if top is not None:
+            skipping = top.group(1) in keys
+        if not skipping or not line:
+            out.append(line)
+    return "\n".join(out)
+
+
+@pytest.fixture(scope="module")
+def info_bags(tmp_path_factory: pytest.TempPathFactory) -> list[Path]:
+    """Bags rosbag info describes in each of its ways: compressed or not, two connections on
+    a topic, a relative topic name, an empty bag written by rosbag itself."""
+    tmp = tmp_path_factory.mktemp("info")
+    write_sample(tmp / "sample.bag", 300)  # /chatter has two connections
+    write_sample(tmp / "lz4.bag", 300, compression="lz4", chunk_size=4000)
+    run_system_python(
+        "import rosbag, sys; rosbag.Bag(sys.argv[1], 'w').close()", str(tmp / "empty.bag")
+    )
+    names = [tmp / "sample.bag", tmp / "lz4.bag", tmp / "empty.bag"]
+    if (CORPUS / "ros1").is_dir():
+        for rel in ("embag/test_2.bag", "frost/compressed_lz4.bag"):  # relative topic, lz4
+            shutil.copy(CORPUS / "ros1" / rel, tmp / rel.replace("/", "-"))
+            names.append(tmp / rel.replace("/", "-"))
+    return names
+
+
+def rosbags_part(ours: str, theirs: str, empty: bool = False) -> str:
+    """Our ``info -y`` document less the keys rosbag's lacks (ours only; an empty bag's)."""
+    keys = set(re.findall(r"(?m)^([A-Za-z_]+):", ours))
+    extra = keys - set(re.findall(r"(?m)^([A-Za-z_]+):", theirs))
+    if not empty:
+        assert extra == set(OURS_ONLY) & keys, extra
+    return without_keys(ours, extra)
+
+
+def test_info_yaml_is_rosbags_plus_our_keys(info_bags: list[Path]) -> None:
+    """``info -y``: rosbag's text byte for byte (``version: 2.0``, ``indexed: True``, 4-space
+    lists, the blank line at the end), with our own keys beside; one bag and several."""
+    for path in info_bags:
+        theirs = rosbag("info", "-y", str(path))
+        ours = run_cli("bag", "info", "-y", str(path))
+        assert theirs.returncode == 0 == ours.returncode, ours.stderr
+        empty = path.name == "empty.bag"
+        assert rosbags_part(ours.stdout, theirs.stdout, empty) == theirs.stdout
+    many = [str(p) for p in info_bags]
+    theirs, ours = rosbag("info", "-y", *many), run_cli("bag", "info", "-y", *many)
+    pairs = zip(ours.stdout.split("---\n"), theirs.stdout.split("---\n"), strict=True)
+    assert "---\n".join(rosbags_part(a, b, True) for a, b in pairs) == theirs.stdout
+
+
+def test_info_yaml_with_frequencies(info_bags: list[Path]) -> None:
+    theirs = rosbag("info", "-y", "--freq", str(info_bags[0]))
+    ours = run_cli("bag", "info", "-y", "--freq", str(info_bags[0]))
+    assert "frequency: " in theirs.stdout
+    assert without_keys(ours.stdout, set(OURS_ONLY)) == theirs.stdout
+
+
+ROSBAG_KEYS = [
+    "path", "version", "duration", "start", "end", "size", "messages", "indexed",
+    "compression", "uncompressed", "compressed", "types", "topics", "topics[0]",
+    "topics[1].connections", "types[0].md5", "topics[0].messages",
+]  # fmt: skip
+
+
+def test_info_key_prints_rosbags_scalars(info_bags: list[Path]) -> None:
+    """``-y -k KEY`` for every key rosbag has: ``2.0`` (not ``'2.0'``), ``True`` (not
+    ``true``), ``False`` for an empty bag, ``1e-06``, a list with rosbag's blank line after."""
+    compared = 0
+    for key in ROSBAG_KEYS:
+        theirs = rosbag("info", "-y", "-k", key, *map(str, info_bags))
+        docs = theirs.stdout.split("---\n")  # nothing for a bag without the key
+        assert len(docs) == len(info_bags), theirs.stdout
+        having = [str(p) for p, doc in zip(info_bags, docs, strict=True) if doc]
+        ours = run_cli("bag", "info", "-y", "-k", key, *having)
+        assert ours.stdout == "---\n".join(d for d in docs if d), (key, ours.stderr)
+        compared += len(having)
+    assert compared > 50
+    empty = [p for p in info_bags if p.name == "empty.bag"][0]
+    assert run_cli("bag", "info", "-y", "-k", "indexed", str(empty)).stdout == "False\n"
+    two = [str(p) for p in info_bags[:2]]
+    theirs, ours = rosbag("info", "-y", "-k", "topics", *two), run_cli(
+        "bag", "info", "-y", "-k", "topics", *two
+    )
+    assert ours.stdout == theirs.stdout and ours.stdout.endswith("\n\n")
+
+
+@needs_corpus
+def test_info_text_of_the_unsorted_bag_differs_only_as_documented() -> None:
+    """example-unsorted-chunks.bag: rosbag takes start from its first chunk and end from its
+    last, and prints a negative duration; ours gives the true ones (README). Every other line
+    is rosbag's."""
+    bag = CORPUS / "ros1" / "rosbag.js" / "example-unsorted-chunks.bag"
+    theirs, ours = rosbag("info", str(bag)), run_cli("bag", "info", str(bag))
+    assert re.search(r"(?m)^duration:\s+-1\.0s$", theirs.stdout)
+    assert re.search(r"(?m)^duration:\s+2\.0s$", ours.stdout)
+    times = re.compile(r"(?m)^(duration|start|end):.*$")
+    assert times.sub("", ours.stdout) == times.sub("", theirs.stdout)

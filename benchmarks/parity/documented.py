@@ -244,7 +244,8 @@ ONE_LINE_ERROR = D(
 )
 #: The README's row for each exit code an error case may give.
 EXIT_ROWS = {
-    1: "| 1 | error | the operation failed, or the input data is malformed |",
+    1: "| 1 | error | the operation failed, or the input data is malformed (`bag info`: the bag "
+    "is unindexed) |",
     2: "| 2 | usage | bad arguments or values: unknown option, wrong field type, bad YAML |",
     3: "| 3 | not found | unknown topic, type, service, parameter, node or file |",
     4: "| 4 | unreachable | the master or a peer node could not be contacted |",

@@ -106,7 +106,7 @@ class McapReader(BagReader):
         self._data_end = size
         footer = fmt.parse_footer(mm[max(0, size - fmt.FOOTER_SIZE - len(fmt.MAGIC)) :])
         if footer is None:
-            self.note("no footer: the file is unfinished or cut short")
+            self.read_unindexed("no footer (unfinished or cut short)")
         else:
             self._data_end = size - fmt.FOOTER_SIZE - len(fmt.MAGIC)
             if footer.summary_start:
@@ -120,7 +120,7 @@ class McapReader(BagReader):
     def _read_summary(self, footer: fmt.Footer) -> None:
         end = footer.summary_offset_start or self._data_end
         if not (self._data_start <= footer.summary_start <= end <= self._data_end):
-            self.note("the footer points outside the file; summary ignored")
+            self.read_unindexed("its footer points outside the file")
             return
         try:
             for _, op, start, stop in fmt.records(self._mm, footer.summary_start, end):
@@ -138,7 +138,7 @@ class McapReader(BagReader):
                 elif isinstance(record, fmt.MetadataIndex):
                     self.metadata_indexes.append(record)
         except fmt.McapFormatError as err:
-            self.note(f"damaged summary ({err}); scanned the data section")
+            self.read_unindexed(f"its summary is damaged ({err})")
             self.statistics, self.chunk_indexes = None, []
             return
         self._data_end = footer.summary_start

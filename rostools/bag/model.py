@@ -210,6 +210,10 @@ class BagDataLossError(DataLossError):
     """Recovery could not salvage everything; the report says what was lost."""
 
 
+class BagUnindexedError(InvalidDataError):
+    """``bag info`` of a bag read without its index (exit 1, as rosbag info's "unindexed")."""
+
+
 #: A data-loss error lists this many of the problems found; ``bag doctor`` lists them all.
 LISTED = 5
 

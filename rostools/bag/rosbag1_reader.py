@@ -50,6 +50,8 @@ _TOP_OPS = frozenset(
 _CHUNK_OPS = frozenset((fmt.OP_MSG_DATA, fmt.OP_CONNECTION))
 #: The op field of an INDEX_DATA record header, as stored.
 _INDEX_OP = b"\x04\x00\x00\x00op=\x04"
+#: What an unindexed bag is read by.
+_CHUNKS = "its chunks"
 
 
 @dataclass
@@ -122,14 +124,13 @@ class Bag1Reader(BagReader):
                 self.indexed = True
                 return
             except (fmt.RecordError, HeaderError, struct.error) as err:
-                self.note(f"index at {index_pos} is damaged ({err}); scanned chunks")
+                self.read_unindexed(f"its index at {index_pos} is damaged ({err})", _CHUNKS)
                 self.connections, self.chunks, self._by_id = [], [], {}
         elif index_pos == 0:
-            self.note("bag is not indexed (an unclosed recording); scanned chunks")
+            self.read_unindexed("an unclosed recording", _CHUNKS)
         else:
-            self.note(
-                f"the index at {index_pos} is past the end of the file ({self.size} bytes):"
-                " the file is cut short; scanned chunks"
+            self.read_unindexed(
+                f"cut short (its index at {index_pos} is past the end, {self.size} bytes)", _CHUNKS
             )
         self._scan()
         if not self.chunks and not self.connections:

@@ -110,11 +110,12 @@ def test_info_key_prints_rosbags_scalars(info_bags: list[Path]) -> None:
         assert ours.stdout == "---\n".join(d for d in docs if d), (key, ours.stderr)
         compared += len(having)
     assert compared > 50
-    empty = [p for p in info_bags if p.name == "empty.bag"][0]
+    empty = next(p for p in info_bags if p.name == "empty.bag")
     assert run_cli("bag", "info", "-y", "-k", "indexed", str(empty)).stdout == "False\n"
     two = [str(p) for p in info_bags[:2]]
-    theirs, ours = rosbag("info", "-y", "-k", "topics", *two), run_cli(
-        "bag", "info", "-y", "-k", "topics", *two
+    theirs, ours = (
+        rosbag("info", "-y", "-k", "topics", *two),
+        run_cli("bag", "info", "-y", "-k", "topics", *two),
     )
     assert ours.stdout == theirs.stdout and ours.stdout.endswith("\n\n")
 
@@ -130,3 +131,50 @@ def test_info_text_of_the_unsorted_bag_differs_only_as_documented() -> None:
     assert re.search(r"(?m)^duration:\s+2\.0s$", ours.stdout)
     times = re.compile(r"(?m)^(duration|start|end):.*$")
     assert times.sub("", ours.stdout) == times.sub("", theirs.stdout)
+
+
+HINT = "`bag reindex` or `bag recover` makes it whole"
+
+
+def test_info_of_an_unindexed_bag_is_exit_1_in_one_line(tmp_path: Path) -> None:
+    """rosbag info says "ERROR bag unindexed ... Run rosbag reindex." and exits 1, which a
+    script uses to find crashed recordings. We still summarise the bag (on stdout), and say
+    it in one line, exit 1; -y says ``indexed: False``."""
+    bag = write_sample(tmp_path / "open.bag", 40, close=False).path  # a killed recorder's
+    theirs = rosbag("info", str(bag))
+    assert theirs.returncode == 1 and "ERROR bag unindexed" in theirs.stderr
+    ours = run_cli("bag", "info", str(bag))
+    assert ours.returncode == 1, ours.stderr
+    assert re.search(r"(?m)^messages:\s+40$", ours.stdout)
+    assert ours.stderr == (
+        f"rostools: {bag}: unindexed: an unclosed recording; read by scanning its chunks; {HINT}\n"
+    )
+    as_yaml = run_cli("bag", "info", "-y", "-k", "indexed", str(bag))
+    assert as_yaml.returncode == 1 and as_yaml.stdout == "False\n"
+
+
+def test_echo_of_an_unindexed_bag_prints_and_says_so_once(tmp_path: Path) -> None:
+    """rostopic echo -b refuses an unindexed bag (exit 1); we print its messages, exit 0,
+    with one line on stderr, also when -n stops before the end."""
+    bag = write_sample(tmp_path / "open.bag", 40, close=False).path
+    theirs = subprocess.run(["rostopic", "echo", "-b", str(bag), "-n", "2", "/count"],
+                            capture_output=True, text=True, timeout=60, check=False)  # fmt: skip
+    assert theirs.returncode == 1 and "Unindexed bag" in theirs.stderr
+    for extra in ([], ["-n", "2"]):
+        ours = run_cli("topic", "echo", "-b", str(bag), *extra, "/count")
+        assert ours.returncode == 0, ours.stderr
+        assert ours.stdout.count("---") == (2 if extra else 10)
+        assert ours.stderr == (
+            f"note: {bag}: unindexed: an unclosed recording; read by scanning its chunks; {HINT}\n"
+        )
+
+
+@needs_corpus
+def test_info_of_a_cut_bag_that_lost_data_is_exit_6() -> None:
+    """Unindexed and cut mid-chunk: the unindexed line is a note, the loss exit 6."""
+    bag = CORPUS / "ros1-derived" / "test1_cut_at_60pct.bag"
+    ours = run_cli("bag", "info", str(bag))
+    assert ours.returncode == 6
+    note, error = ours.stderr.splitlines()
+    assert note.startswith(f"note: {bag}: unindexed: cut short") and note.endswith(HINT)
+    assert error.startswith("rostools: summarised ") and "left out" in error

@@ -137,7 +137,7 @@ def info(
         if key is not None:
             data = [info_key(d, key) for d in data]
         emit(fmt, data[0] if len(data) == 1 else data)
-    check_read(readers, "summarised " + ", ".join(bags))
+    check_read(readers, "summarised " + ", ".join(bags), unindexed_fails=True)
 
 
 def say_note(note: str) -> None:
@@ -151,14 +151,15 @@ def say_notes(notes: Iterable[str]) -> None:
         say_note(note)
 
 
-def check_read(readers: Sequence[BagReader], done: str) -> None:
+def check_read(readers: Sequence[BagReader], done: str, unindexed_fails: bool = False) -> None:
     """After a command read these bags: say their notes, and exit 6 if anything was left out.
 
-    ``done`` says what the command did, for the error line.
+    ``done`` says what the command did, for the error line. With ``unindexed_fails``, a bag
+    read without its index is exit 1 (``bag info``, as rosbag info).
     """
     from rostools.bag.base import after_reading
 
-    after_reading(readers, done, say_note)
+    after_reading(readers, done, say_note, unindexed_fails=unindexed_fails)
 
 
 class Progress:

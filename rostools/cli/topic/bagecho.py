@@ -34,19 +34,20 @@ def echo_bag(path: Path, name: str | None, store: TypeStore, opts: EchoOptions) 
             topics = [t for t, full in resolved.items() if full == ref.topic]
         require_ros1(bag, "topic echo -b", topics)
         echo = Echo(store, opts)
-        printed = 0
         for conn, t_ns, data in bag.messages(topics=topics):
             try:
                 topic = resolved[conn.topic]
                 printer = echo.printer(conn.type, conn.md5sum, conn.definition, topic)
                 if not echo.emit(printer, [data], t_ns):
-                    return
+                    break  # -n reached; still say how the bag was read
             except InvalidDataError as err:  # a bad definition or message: say where
                 raise InvalidDataError(f"{path}: message at {t_ns / 1e9:.9f} s: {err}") from err
-            printed += 1
-    # A damaged bag: every message that reads was printed; say what was left out (exit 6).
+    # An unindexed bag: one line saying so. A damaged one: every message that reads was
+    # printed; say what was left out (exit 6).
     after_reading(
-        [bag], f"printed {counted(printed, 'message')}", lambda n: sys.stderr.write(f"note: {n}\n")
+        [bag],
+        f"printed {counted(echo.printed, 'message')}",
+        lambda n: sys.stderr.write(f"note: {n}\n"),
     )
 
 

@@ -178,3 +178,45 @@ def test_info_of_a_cut_bag_that_lost_data_is_exit_6() -> None:
     note, error = ours.stderr.splitlines()
     assert note.startswith(f"note: {bag}: unindexed: cut short") and note.endswith(HINT)
     assert error.startswith("rostools: summarised ") and "left out" in error
+
+
+def _several(folder: Path) -> list[str]:
+    """a.bag (its backup a.orig.bag exists), b.bag (not a bag), nope.bag (missing), then two
+    good bags: what ``rosbag compress *.bag``-style scripts meet."""
+    folder.mkdir()
+    for name in ("a", "c", "d"):
+        write_sample(folder / f"{name}.bag", 60)
+    shutil.copy(folder / "a.bag", folder / "a.orig.bag")
+    (folder / "b.bag").write_text("not a bag\n")
+    return ["a.bag", "b.bag", "nope.bag", "c.bag", "d.bag"]
+
+
+def _files(folder: Path) -> list[str]:
+    return sorted(p.name for p in folder.iterdir())
+
+
+@pytest.mark.parametrize("verb", ["compress", "decompress", "reindex"])
+def test_a_bad_file_among_several_does_not_stop_the_run(tmp_path: Path, verb: str) -> None:
+    """rosbag goes on past each bad file: "Skipping a.bag. Backup path a.orig.bag already
+    exists.", an ERROR line for the others, and exit 0. We go on too, say "Skipping" for
+    each, the backup line word for word, and exit with the worst file's code (3 here: a file
+    not found; 0 when only backups were in the way, as rosbag)."""
+    names = _several(tmp_path / "ros1")
+    theirs = rosbag(verb, *names, cwd=tmp_path / "ros1")
+    assert theirs.returncode == 0, theirs.stderr
+    names = _several(tmp_path / "ours")
+    ours = run_cli("bag", verb, *names, cwd=tmp_path / "ours")
+    assert _files(tmp_path / "ours") == _files(tmp_path / "ros1")  # c and d done, with backups
+    assert "c.orig.bag" in _files(tmp_path / "ours")
+    assert ours.returncode == 3, ours.stderr
+    skipped = [line for line in ours.stderr.splitlines() if line.startswith("Skipping ")]
+    assert skipped[0] == "Skipping a.bag. Backup path a.orig.bag already exists."
+    assert skipped[0] in theirs.stderr.splitlines()
+    assert [s.split(":")[0] for s in skipped[1:]] == ["Skipping b.bag", "Skipping nope.bag"]
+    last = ours.stderr.splitlines()[-1]
+    assert last.startswith(f"rostools: {verb}ed 2 of 5 bags") and "b.bag, nope.bag" in last
+    # Only a backup in the way: skipped, exit 0, as rosbag
+    again = run_cli("bag", verb, "a.bag", cwd=tmp_path / "ours")
+    assert again.returncode == 0, again.stderr
+    assert again.stderr == "Skipping a.bag. Backup path a.orig.bag already exists.\n"
+    assert run_cli("bag", verb, "-q", "a.bag", cwd=tmp_path / "ours").stderr == ""

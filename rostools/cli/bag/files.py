@@ -19,7 +19,7 @@ from rostools.cli import output
 from rostools.cli.bag.group import app
 from rostools.cli.common import FINITE, FormatOpt, output_format
 from rostools.cli.output import Format, emit, render
-from rostools.errors import DataLossError, UsageError, one_line
+from rostools.errors import UsageError, one_line
 
 if TYPE_CHECKING:
     from rostools.bag.base import BagReader
@@ -346,59 +346,22 @@ def _in_place(
     label: str,
     run: Callable[[Path, Path, Any], CopyReport],
 ) -> None:
-    """rosbag compress's way: write beside, keep the original as ``x.orig.bag``.
+    """rosbag compress's way: write beside, keep the original as ``x.orig.bag`` (``inplace``).
 
     A damaged bag is rewritten with what reads (the original is kept all the same); exit 6
     at the end, naming what was left out.
     """
-    lost: list[str] = []
-    for path, dst, keep in _targets(bags, output_dir, force):
+    from rostools.cli.bag.inplace import each_in_place, swap
 
-        def step(
-            progress: Any, src: Path = path, dst: Path = dst, out: Path = keep or dst
-        ) -> CopyReport:
-            return dataclasses.replace(run(src, dst, progress), output=out)
+    def one(path: Path, dst: Path, keep: Path | None) -> list[str]:
+        def step(progress: Any) -> CopyReport:
+            return dataclasses.replace(run(path, dst, progress), output=keep or dst)
 
         report = copy_command(ctx, fmt, quiet, label, step, check=False)
-        _swap(path, dst, keep)
-        lost += report.lost
-    if lost:
-        from rostools.bag.model import lost_data
+        swap(path, dst, keep)
+        return list(report.lost)
 
-        kept = "" if output_dir else " (each original is kept as NAME.orig.bag)"
-        raise lost_data(f"{label}ed {counted(len(bags), 'bag')}{kept}", lost)
-
-
-def _targets(
-    bags: list[Path], output_dir: Path | None, force: bool
-) -> list[tuple[Path, Path, Path | None]]:
-    """For each bag: where to write, and the bag to replace (None with --output-dir).
-
-    Checked for every bag before any is touched, so a refusal leaves them all as they were.
-    """
-    if output_dir is not None and not output_dir.is_dir():
-        raise UsageError(f"--output-dir {output_dir} is not a folder")
-    out: list[tuple[Path, Path, Path | None]] = []
-    for path in bags:
-        if output_dir is not None:
-            out.append((path, output_dir / path.name, None))
-            continue
-        backup = _backup_name(path)
-        if backup.exists() and not force:
-            raise UsageError(f"{backup} exists; use --force to replace it")
-        out.append((path, path.with_name(path.name + ".tmp"), path))
-    return out
-
-
-def _backup_name(path: Path) -> Path:
-    return path.with_name(path.stem + ".orig" + path.suffix)
-
-
-def _swap(path: Path, written: Path, keep: Path | None) -> None:
-    """Move the original to ``x.orig.bag`` and the new file into its place."""
-    if keep is not None:
-        path.replace(_backup_name(path))
-        written.replace(path)
+    each_in_place(bags, output_dir, force, quiet, label, one)
 
 
 OutputDirOpt = Annotated[
@@ -502,17 +465,17 @@ def reindex(
     anything was lost.
     """
     from rostools.bag.recover import recover as run_recover
+    from rostools.cli.bag.inplace import each_in_place, swap
 
     fmt = output_format(ctx, fmt)
-    lost: list[str] = []
-    for path, dst, keep in _targets(bags, output_dir, force):
+
+    def one(path: Path, dst: Path, keep: Path | None) -> list[str]:
         report = run_recover(path, dst, overwrite=True)
-        _swap(path, dst, keep)
-        report = dataclasses.replace(report, output=keep or dst)
-        _recover_report(fmt, report, quiet)
-        lost += [f"{path}: {what}" for what in report.lost]
-    if lost:
-        raise DataLossError("lost data: " + "; ".join(lost))
+        swap(path, dst, keep)
+        _recover_report(fmt, dataclasses.replace(report, output=keep or dst), quiet)
+        return [f"{path}: {what}" for what in report.lost]
+
+    each_in_place(bags, output_dir, force, quiet, "reindex", one)
 
 
 def _recover_report(fmt: Format, report: RecoverReport, quiet: bool = False) -> None:

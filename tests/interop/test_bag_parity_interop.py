@@ -220,3 +220,52 @@ def test_a_bad_file_among_several_does_not_stop_the_run(tmp_path: Path, verb: st
     assert again.returncode == 0, again.stderr
     assert again.stderr == "Skipping a.bag. Backup path a.orig.bag already exists.\n"
     assert run_cli("bag", verb, "-q", "a.bag", cwd=tmp_path / "ours").stderr == ""
+
+
+STATUS = re.compile(r"^ \[(RUNNING|DONE   )\]  Bag Time: +[\d.]+   Duration: ([\d.]+) / ([\d.]+)$")
+
+
+def test_play_off_a_terminal_says_what_rosbag_play_says(
+    tmp_path: Path, rostools_master: str, cli_env: dict[str, str]
+) -> None:
+    """Into a pipe, rosbag play prints "Opening", the waiting line, status lines and "Done.";
+    ours printed nothing. Now the same, on stderr, a status line a second ending in a newline
+    (rosbag's end in \\r, one per message). Under --topics, the duration is that of what is
+    played, as rosbag's: 2 s of /a, not the bag's 6 s."""
+    from rostools.bag.access import open_writer
+    from tests.support.procs import ros_env
+
+    bag = tmp_path / "p.bag"
+    string_md5 = "992ce8a1687cec8c8bd883ec73ca41d1"
+    with open_writer(bag) as writer:
+        a, b = (writer.add_connection(t, "std_msgs/String", string_md5, "string data\n")
+                for t in ("/a", "/b"))  # fmt: skip
+        for i in range(61):  # /a from 101 s to 103 s, /b from 100 s to 106 s
+            if 10 <= i <= 30:
+                writer.write(a, 100 * 10**9 + i * 10**8, b"\x01\x00\x00\x00a")
+            writer.write(b, 100 * 10**9 + i * 10**8, b"\x01\x00\x00\x00b")
+    theirs = subprocess.run(
+        ["rosbag", "play", "--topics", "/a", "-d", "0.3", str(bag)],
+        env=ros_env(rostools_master, tmp_path / "home"), capture_output=True, text=True,
+        timeout=60, check=False,
+    )  # fmt: skip
+    assert theirs.returncode == 0, theirs.stderr
+    said = theirs.stdout.replace("\r", "\n")
+    assert "Waiting 0.3 seconds after advertising topics... done." in said
+    assert "Done." in said and f"Opening {bag}" in said
+    rows = [line.rstrip() for line in said.splitlines()]
+    assert {m[3] for m in map(STATUS.match, rows) if m} == {"2.000000"}
+    ours = run_cli("bag", "play", "--topics", "/a", "-d", "0.3", str(bag), env=cli_env)
+    assert ours.returncode == 0, ours.stderr
+    assert ours.stdout == "" and "\r" not in ours.stderr
+    lines = ours.stderr.splitlines()
+    assert lines[:2] == [
+        f"Opening {bag}",
+        "Waiting 0.3 seconds after advertising topics... done.",
+    ]
+    assert lines[-1] == "Done."
+    status = [m for m in map(STATUS.match, lines[2:-1]) if m]
+    assert len(status) == len(lines) - 3 and 2 <= len(status) <= 5, lines  # about 1 a second
+    assert {m[3] for m in status} == {"2.000000"}
+    assert status[-1][2] == "2.000000" and status[-1][1] == "DONE   "
+    assert "Bag Time:    103.000000" in status[-1][0]  # the last /a, not the bag's end

@@ -531,6 +531,36 @@ UNSORTED_CHUNKS = D(
 )
 
 
+def _messages(text: str) -> tuple[str, list[str]]:
+    """An echo's output as (CSV header or "", the messages): YAML documents or CSV rows."""
+    if text.startswith("%time"):
+        head, _, rows = text.partition("\n")
+        return head, rows.splitlines()
+    return "", text.split("---\n")
+
+
+def _time_order(a: Output, b: Output, _: Expect) -> tuple[Output, Output]:
+    """The same messages, ours in time order, rosbag's in the order of the file's chunks."""
+    head_a, theirs = _messages(a.stdout)
+    head_b, ours = _messages(b.stdout)
+    if head_a != head_b or theirs == ours or sorted(theirs) != sorted(ours):
+        return a, b
+    if head_b:
+        stamps = [int(row.split(",", 1)[0]) for row in ours]
+        if stamps != sorted(stamps):
+            return a, b
+    return a.but(stdout=b.stdout), b
+
+
+TIME_ORDER = D(
+    "time-order",
+    "a bag whose chunks are out of time order is read in time order; rosbag yields it in "
+    "the order of its chunks",
+    "A bag whose chunks are out of time order is read in time order by every command",
+    _time_order,
+)
+
+
 def _unindexed_info(a: Output, b: Output, _: Expect) -> tuple[Output, Output]:
     """rosbag info refuses an unindexed bag, exit 1; ours summarises it and says so, exit 1
     (6 when data was lost too)."""
@@ -575,6 +605,7 @@ ALL = (
     PUB_FILE_QUIET,
     UNSORTED_CHUNKS,
     UNINDEXED_INFO,
+    TIME_ORDER,
 )
 
 

@@ -256,6 +256,22 @@ def test_info_of_unsorted_chunks_and_of_unindexed_bags() -> None:
     )
 
 
+def test_a_bag_with_unsorted_chunks_is_echoed_in_time_order() -> None:
+    ros1, ours = (
+        out('data: "2"\n---\ndata: "3"\n---\ndata: "1"\n---\n'),
+        out('data: "1"\n---\ndata: "2"\n---\ndata: "3"\n---\n'),
+    )
+    _only_with(d.TIME_ORDER, ros1, ours)
+    csv = "%time,field.data\n{}000,2\n{}000,3\n{}000,1\n"
+    _only_with(d.TIME_ORDER, out(csv.format(2, 3, 1)), out(csv.format(2, 3, 1).replace(
+        "2000,2\n3000,3\n1000,1", "1000,1\n2000,2\n3000,3")))  # fmt: skip
+    # other messages, or ours out of time order, are defects
+    pairing = Pairing(rules=(d.TIME_ORDER,))
+    assert judge(ros1, out('data: "1"\n---\ndata: "4"\n---\n'), pairing).verdict is (Verdict.DEFECT)
+    backwards = out("%time,field.data\n3000,3\n2000,2\n1000,1\n")
+    assert judge(out(csv.format(2, 3, 1)), backwards, pairing).verdict is Verdict.DEFECT
+
+
 def test_a_case_is_as_bad_as_its_worst_run() -> None:
     assert worst([Verdict.IDENTICAL, Verdict.DOCUMENTED]) is Verdict.DOCUMENTED
     assert worst([Verdict.DEFECT, Verdict.ROS1_FAILURE, Verdict.IDENTICAL]) is Verdict.DEFECT

@@ -101,7 +101,7 @@ def info(
     ] = None,
     fmt: FormatOpt = None,
 ) -> None:
-    """Summarise bags from their index alone (rosbag info); exit 6 if a bag is damaged."""
+    """Summarise bags from their index alone (rosbag info); exit 1 if unindexed, 6 if damaged."""
     from rostools.bag.access import open_bag, topic_frequencies
     from rostools.cli.bag.infotext import (
         as_rosbag_reads,

@@ -159,6 +159,7 @@ BUILTIN_SERVICE_PACKAGES = (
     "diagnostic_msgs",
     "dynamic_reconfigure",
     "rospy_tutorials",
+    "roscpp_tutorials",
 )
 
 

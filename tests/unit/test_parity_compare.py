@@ -155,10 +155,12 @@ def test_get_p_of_a_mapping_is_documented_only_for_what_valid_yaml_needs() -> No
 def test_builtin_types_may_only_add_what_the_readme_names() -> None:
     ros1 = out("diagnostic_msgs map_msgs std_srvs\n")
     named = out("diagnostic_msgs dynamic_reconfigure map_msgs std_srvs\n")
-    unnamed = out("diagnostic_msgs map_msgs roscpp_tutorials std_srvs\n")
+    unnamed = out("diagnostic_msgs map_msgs std_srvs turtlesim\n")
+    tutorials = out("diagnostic_msgs map_msgs roscpp_tutorials std_srvs\n")  # TwoInts
     srv = Pairing(rules=(d.BUILTIN_TYPES,), expect=Expect(kind="srv"))
     assert judge(ros1, named, srv).verdict is Verdict.DOCUMENTED
     assert judge(ros1, unnamed, srv).verdict is Verdict.DEFECT
+    assert judge(ros1, tutorials, srv).verdict is Verdict.DOCUMENTED  # README names TwoInts
     # ours must keep everything ROS 1 lists
     assert judge(ros1, out("dynamic_reconfigure map_msgs std_srvs\n"), srv).verdict is (
         Verdict.DEFECT

@@ -111,7 +111,11 @@ EXIT_CODES: tuple[tuple[int, str, str], ...] = (
         "success; also Ctrl-C on a command that runs until stopped (echo, hz, pub, ...), "
         "or its reader closing the pipe (`| head`)",
     ),
-    (1, "error", "the operation failed, or the input data is malformed"),
+    (
+        1,
+        "error",
+        "the operation failed, or the input data is malformed (`bag info`: the bag is unindexed)",
+    ),
     (2, "usage", "bad arguments or values: unknown option, wrong field type, bad YAML"),
     (3, "not found", "unknown topic, type, service, parameter, node or file"),
     (4, "unreachable", "the master or a peer node could not be contacted"),

@@ -56,6 +56,11 @@ def usage(streams: str = "code") -> Pairing:
     return error(2, streams=streams)
 
 
+def verb_usage() -> Pairing:
+    """A group without a verb, or with one it lacks: ROS 1 prints its verbs (exit 0 or 64)."""
+    return error(2, d.VERB_USAGE, streams="code")
+
+
 def reset(graph: Graph | None, _cwd: Path) -> Callable[[], None]:
     """Parameters as the graph started, before each side of a case that changes them and
     after it, so that no later case sees what this one changed."""
@@ -94,6 +99,7 @@ def topic_cases() -> list[Case]:
     rate = rules(d.STATUS_STDERR, rates=("average",))
     table = rules(d.STATUS_STDERR, rates=("/point", "/joints"))
     pub = rules(d.STATUS_STDERR, d.ANON_NAMES)
+    pub_file = rules(d.PUB_FILE_QUIET, d.STATUS_STDERR, d.ANON_NAMES)
     return [
         case("topic-list", "rostopic list"),
         case("topic-list-ns", "rostopic list /chatter"),
@@ -242,14 +248,14 @@ def topic_cases() -> list[Case]:
             "rostopic pub /pub_stdin std_msgs/String",
             # rostopic drops a last document that no --- ends (so does rosservice)
             stdin="data: one\n---\ndata: two\n---\n",
-            pairing=pub,
+            pairing=pub_file,
             observe="rostopic echo -n 2 /pub_stdin",
         ),
         case(
             "topic-pub-file",
             "rostopic pub /pub_file std_msgs/String -f msgs.yaml",
             files=("msgs.yaml",),
-            pairing=pub,
+            pairing=pub_file,
             observe="rostopic echo -n 2 /pub_file",
         ),
         case(
@@ -279,8 +285,8 @@ def topic_cases() -> list[Case]:
             "rostopic pub -1 /pub_bad_yaml std_msgs/String '{data: [}'",
             pairing=error(2),
         ),
-        case("topic-none", "rostopic", "topic", pairing=usage()),
-        case("topic-bogus", "rostopic bogus", pairing=usage()),
+        case("topic-none", "rostopic", "topic", pairing=verb_usage()),
+        case("topic-bogus", "rostopic bogus", pairing=verb_usage()),
         case("topic-bad-option", "rostopic list --bogus", pairing=usage()),
     ]
 
@@ -309,7 +315,11 @@ def service_cases() -> list[Case]:
         case("service-args-loggers", "rosservice args /talker/set_logger_level"),
         case("service-args-custom", "rosservice args /add_two_ints", pairing=peer),
         case("service-args-unknown", "rosservice args /nope", pairing=error(3)),
-        case("service-find", "rosservice find std_srvs/Trigger"),
+        case(
+            "service-find",
+            "rosservice find std_srvs/Trigger",
+            pairing=rules(d.SERVICE_FIND_SORTED),
+        ),
         case("service-find-one", "rosservice find std_srvs/SetBool"),
         case("service-find-none", "rosservice find nope/Nope"),
         case("service-call-trigger", "rosservice call /slow"),
@@ -332,8 +342,8 @@ def service_cases() -> list[Case]:
         case("service-call-bad-field", "rosservice call /set_bool '{nope: 1}'", pairing=error(2)),
         case("service-call-unknown", "rosservice call /nope", pairing=error(3)),
         case("service-call-missing", "rosservice call", pairing=usage()),
-        case("service-none", "rosservice", "service", pairing=usage()),
-        case("service-bogus", "rosservice bogus", pairing=usage()),
+        case("service-none", "rosservice", "service", pairing=verb_usage()),
+        case("service-bogus", "rosservice bogus", pairing=verb_usage()),
     ]
 
 
@@ -468,8 +478,8 @@ def param_cases() -> list[Case]:
             pairing=error(2),
             checks=("rosparam get /scratch",),
         ),
-        case("param-none", "rosparam", "param", pairing=usage()),
-        case("param-bogus", "rosparam bogus", pairing=usage()),
+        case("param-none", "rosparam", "param", pairing=verb_usage()),
+        case("param-bogus", "rosparam bogus", pairing=verb_usage()),
     ]
     return got
 
@@ -490,7 +500,7 @@ def node_cases() -> list[Case]:
         case("node-info-unknown", "rosnode info /nope", pairing=error(3)),
         case("node-ping", "rosnode ping -c 2 /talker"),
         case("node-ping-rosout", "rosnode ping -c 1 /rosout"),
-        case("node-ping-all", "rosnode ping -a"),
+        case("node-ping-all", "rosnode ping -a", pairing=rules(d.PING_ALL_SORTED)),
         case("node-info-relative", "rosnode info -q talker"),
         case("node-ping-unknown", "rosnode ping -c 1 /nope", pairing=error(3)),
         case("node-ping-missing", "rosnode ping", pairing=usage()),
@@ -512,9 +522,10 @@ def node_cases() -> list[Case]:
             setup=victim(True),
             checks=("rosnode list",),
             limit=30.0,
+            pairing=rules(d.CLEANUP_OUTPUT),
         ),
-        case("node-none", "rosnode", "node", pairing=usage()),
-        case("node-bogus", "rosnode bogus", pairing=usage()),
+        case("node-none", "rosnode", "node", pairing=verb_usage()),
+        case("node-bogus", "rosnode bogus", pairing=verb_usage()),
     ]
 
 

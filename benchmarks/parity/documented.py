@@ -159,6 +159,7 @@ BUILTIN_SERVICE_PACKAGES = (
     "diagnostic_msgs",
     "dynamic_reconfigure",
     "rospy_tutorials",
+    "roscpp_tutorials",
 )
 
 
@@ -244,7 +245,8 @@ ONE_LINE_ERROR = D(
 )
 #: The README's row for each exit code an error case may give.
 EXIT_ROWS = {
-    1: "| 1 | error | the operation failed, or the input data is malformed |",
+    1: "| 1 | error | the operation failed, or the input data is malformed (`bag info`: the bag "
+    "is unindexed) |",
     2: "| 2 | usage | bad arguments or values: unknown option, wrong field type, bad YAML |",
     3: "| 3 | not found | unknown topic, type, service, parameter, node or file |",
     4: "| 4 | unreachable | the master or a peer node could not be contacted |",
@@ -403,6 +405,179 @@ CSV_BYTES = D(
     _csv_keeps_bytes,
 )
 
+SERVICE_FIND_SORTED = D(
+    "service-find-sorted",
+    "service find sorts; rosservice keeps the master's order",
+    "`rostools service find TYPE` (sorted)",
+    _sorted_lines,
+)
+
+
+def _ping_blocks(text: str) -> str:
+    """``rosnode ping -a``'s output with its list and its pings each in name order."""
+    head, sep, pings = _sort_blocks(text).partition("\n\n")
+    blocks = re.split(r"(?m)^(?=pinging )", pings)
+    return head + sep + "".join(blocks[:1] + sorted(blocks[1:]))
+
+
+def _ping_all_sorted(a: Output, b: Output, _: Expect) -> tuple[Output, Output]:
+    return a.but(stdout=_ping_blocks(a.stdout)), b
+
+
+PING_ALL_SORTED = D(
+    "ping-all-sorted",
+    "node ping -a lists and pings the nodes in sorted order; rosnode in the master's",
+    "(`-a` pings in sorted order)",
+    _ping_all_sorted,
+)
+
+#: rosnode cleanup's question, which rostools asks on stderr.
+CLEANUP_QUESTION = re.compile(
+    r"(?m)^(Warning: these might include .*|Cleanup will purge .*|"
+    r"Please type y or n to continue: ?)(\n|$)"
+)
+
+
+def _cleanup_reasons(a: Output, b: Output, _: Expect) -> tuple[Output, Output]:
+    """Ours names why each node is unreachable and asks on stderr; rosnode prints a
+    connection error on stderr and asks on stdout."""
+    if not CLEANUP_QUESTION.search(a.stdout) or not CLEANUP_QUESTION.search(b.stderr):
+        return a, b
+    errors = re.sub(r"(?m)^ERROR: connection refused to \[.*\]\n", "", a.stderr)
+    theirs = a.but(stdout=CLEANUP_QUESTION.sub("", a.stdout), stderr=errors)
+    reasons = re.sub(r"(?m)^( \* \S+) \(.*\)$", r"\1", b.stdout)
+    return theirs, b.but(stdout=reasons, stderr=CLEANUP_QUESTION.sub("", b.stderr))
+
+
+CLEANUP_OUTPUT = D(
+    "cleanup-output",
+    "node cleanup gives each unreachable node's reason and asks on stderr",
+    "(each unreachable node with the reason; the question on stderr)",
+    _cleanup_reasons,
+)
+
+
+def _verb_usage(a: Output, b: Output, _: Expect) -> tuple[Output, Output]:
+    """No verb or an unknown one: ROS 1 prints its verbs and exits 0 (or 64); ours exit 2."""
+    if b.code == 2 and a.code in (0, 64) and (a.stdout or a.stderr):
+        return a.but(code=2), b
+    return a, b
+
+
+VERB_USAGE = D(
+    "verb-usage",
+    "a missing or unknown verb is a usage error, exit 2; rosparam, rosmsg and rosbag exit 0",
+    "A group named without a verb, or with one it lacks (`rostools param`, `rostools param "
+    "bogus`), is a usage error, exit 2, with the list of verbs (rosparam, rosmsg and rosbag "
+    "print it and exit 0; rostopic, rosservice and rosnode exit 64).",
+    _verb_usage,
+)
+
+
+def _silent_ros1_then_one_line(a: Output, b: Output, e: Expect) -> tuple[Output, Output]:
+    """ROS 1 printed nothing and exited 0; ours is a one-line error with the expected code."""
+    quiet = a.code == 0 and not a.stdout.strip() and not a.stderr.strip()
+    lines = b.stderr.splitlines()
+    one_line = not b.stdout and len(lines) == 1 and lines[0].startswith("rostools: ")
+    if quiet and one_line and e.error is not None and b.code == e.error:
+        return b, b
+    return a, b
+
+
+SHOW_BAG_LACKS_TYPE = D(
+    "show-bag-lacks-type",
+    "msg show -b of a type the bag lacks is exit 3; rosmsg prints nothing and exits 0",
+    "a type the bag lacks is exit 3, where rosmsg prints nothing and exits 0",
+    _silent_ros1_then_one_line,
+)
+
+PUBLISHING_LINE = re.compile(r"(?m)^publishing and latching message for [\d.]+ seconds\n")
+
+
+def _pub_file_quiet(a: Output, b: Output, _: Expect) -> tuple[Output, Output]:
+    if PUBLISHING_LINE.search(b.stdout + b.stderr):
+        return a, b
+    return a.but(
+        stdout=PUBLISHING_LINE.sub("", a.stdout), stderr=PUBLISHING_LINE.sub("", a.stderr)
+    ), b
+
+
+PUB_FILE_QUIET = D(
+    "pub-file-quiet",
+    "pub from a file or stdin says nothing per message; rostopic prints a line for each",
+    '`pub` from a file or stdin says nothing per message, where rostopic prints "publishing '
+    'and latching message for 3.0 seconds" for each',
+    _pub_file_quiet,
+)
+
+INFO_TIMES = re.compile(r"(?m)^(duration|start|end):.*\n")
+
+
+def _unsorted_chunks(a: Output, b: Output, _: Expect) -> tuple[Output, Output]:
+    """rosbag info of a bag whose chunks are out of time order: a negative duration."""
+    if not re.search(r"(?m)^duration:\s+-", a.stdout) or a.code != b.code:
+        return a, b
+    if INFO_TIMES.sub("", a.stdout) != INFO_TIMES.sub("", b.stdout):
+        return a, b
+    return a.but(stdout=b.stdout), b
+
+
+UNSORTED_CHUNKS = D(
+    "unsorted-chunks-info",
+    "bag info of a bag whose chunks are out of time order gives its true start and end; "
+    "rosbag takes them from the first and last chunk and prints a negative duration",
+    "rosbag takes the start from the first chunk in the file and the end from the last, and "
+    "prints a negative duration (`-1.0s`); ours gives the bag's first and last times",
+    _unsorted_chunks,
+)
+
+
+def _messages(text: str) -> tuple[str, list[str]]:
+    """An echo's output as (CSV header or "", the messages): YAML documents or CSV rows."""
+    if text.startswith("%time"):
+        head, _, rows = text.partition("\n")
+        return head, rows.splitlines()
+    return "", text.split("---\n")
+
+
+def _time_order(a: Output, b: Output, _: Expect) -> tuple[Output, Output]:
+    """The same messages, ours in time order, rosbag's in the order of the file's chunks."""
+    head_a, theirs = _messages(a.stdout)
+    head_b, ours = _messages(b.stdout)
+    if head_a != head_b or theirs == ours or sorted(theirs) != sorted(ours):
+        return a, b
+    if head_b:
+        stamps = [int(row.split(",", 1)[0]) for row in ours]
+        if stamps != sorted(stamps):
+            return a, b
+    return a.but(stdout=b.stdout), b
+
+
+TIME_ORDER = D(
+    "time-order",
+    "a bag whose chunks are out of time order is read in time order; rosbag yields it in "
+    "the order of its chunks",
+    "A bag whose chunks are out of time order is read in time order by every command",
+    _time_order,
+)
+
+
+def _unindexed_info(a: Output, b: Output, _: Expect) -> tuple[Output, Output]:
+    """rosbag info refuses an unindexed bag, exit 1; ours summarises it and says so, exit 1
+    (6 when data was lost too)."""
+    refused = a.code == 1 and not a.stdout and "ERROR bag unindexed" in a.stderr
+    said = b.code in (1, 6) and "unindexed: " in b.stderr and b.stdout.startswith("path:")
+    return (b, b) if refused and said else (a, b)
+
+
+UNINDEXED_INFO = D(
+    "unindexed-info",
+    "bag info of an unindexed bag prints the summary and says so in one line, exit 1 as "
+    "rosbag (6 if data was lost)",
+    "`info` prints the summary and makes that line its error, exit 1 as rosbag info",
+    _unindexed_info,
+)
+
 ALL = (
     STATUS_STDERR,
     ANON_NAMES,
@@ -423,6 +598,15 @@ ALL = (
     MORE_SALVAGED,
     REINDEX_SAYS,
     CSV_BYTES,
+    SERVICE_FIND_SORTED,
+    PING_ALL_SORTED,
+    CLEANUP_OUTPUT,
+    VERB_USAGE,
+    SHOW_BAG_LACKS_TYPE,
+    PUB_FILE_QUIET,
+    UNSORTED_CHUNKS,
+    UNINDEXED_INFO,
+    TIME_ORDER,
 )
 
 

@@ -16,6 +16,7 @@ from rostools.bag.model import (
     BagFormatError,
     BagInfo,
     BagNotFoundError,
+    BagUnindexedError,
     BagUsageError,
     Connection,
     connection_from_header,
@@ -23,7 +24,7 @@ from rostools.bag.model import (
 )
 from rostools.bag.ordering import Block, Entry, RawMessage, ordered
 from rostools.bag.sink import Sink
-from rostools.errors import InvalidDataError
+from rostools.errors import InvalidDataError, cannot_write
 
 if TYPE_CHECKING:
     from rostools.bag.rename import Renames
@@ -107,11 +108,18 @@ class BagReader(ABC):
         self.indexed = False
         self.notes: list[str] = []
         self.damage: list[str] = []
+        #: Why the file was read without its index (rosbag's "unindexed"): its note, or None
+        self.unindexed: str | None = None
 
     def note(self, text: str) -> None:
         """Record how the file had to be read (no data lost)."""
         if text not in self.notes:
             self.notes.append(text)
+
+    def read_unindexed(self, why: str, scanned: str = "it") -> None:
+        """The index (MCAP: summary) cannot be used, for this reason: the file is scanned."""
+        self.unindexed = f"unindexed: {why}; read by scanning {scanned}"
+        self.note(self.unindexed)
 
     def damaged(self, text: str) -> None:
         """Record data that could not be read (reading a chunk twice records it once)."""
@@ -207,17 +215,36 @@ def problems(readers: Sequence[BagReader]) -> tuple[tuple[str, ...], tuple[str, 
     return notes, tuple(f"{r.path}: {d}" for r in readers for d in r.damage)
 
 
-def after_reading(readers: Sequence[BagReader], done: str, say: Callable[[str], object]) -> None:
+#: What makes a file read without its index whole again, said with its note.
+REBUILD_HINT = "`bag reindex` or `bag recover` makes it whole"
+
+
+def after_reading(
+    readers: Sequence[BagReader],
+    done: str,
+    say: Callable[[str], object],
+    *,
+    unindexed_fails: bool = False,
+) -> None:
     """Hand each note of these readers to ``say``; raise if they left anything out.
 
     What a command does once it has read its bags: the error is ``BagDataLossError`` (exit
-    code 6) naming what was left out; ``done`` says what the command did, for its line.
+    code 6) naming what was left out; ``done`` says what the command did, for its line. A
+    file read without its index is said in one line with ``REBUILD_HINT``; with
+    ``unindexed_fails`` (``bag info``, as rosbag info) that line is a ``BagUnindexedError``
+    (exit 1), unless data was lost too (exit 6).
     """
     notes, lost = problems(readers)
+    cut = [f"{r.path}: {r.unindexed}" for r in readers if r.unindexed is not None]
     for note in notes:
-        say(note)
+        if note not in cut:
+            say(note)
+        elif lost or not unindexed_fails:
+            say(f"{note}; {REBUILD_HINT}")
     if lost:
         raise lost_data(done, lost)
+    if cut and unindexed_fails:
+        raise BagUnindexedError("; ".join(cut) + f"; {REBUILD_HINT}")
 
 
 class BagWriter(ABC):
@@ -238,7 +265,11 @@ class BagWriter(ABC):
         except FileExistsError:
             raise BagUsageError(f"{self.path} exists; refusing to overwrite it") from None
         except OSError as err:
-            raise InvalidDataError(f"cannot create {self.path}: {err.strerror or err}") from err
+            # The path is the user's to fix (a missing folder, no permission): exit 2, as
+            # every command's unwritable output
+            folder = self.path.parent
+            why = "no such folder" if not folder.is_dir() else err.strerror or str(err)
+            raise cannot_write(self.path, f"{folder}: {why}") from err
         self._closed = False
         self._sink = Sink(self._fd, str(self.path))
         self._connections: list[Connection] = []

@@ -19,6 +19,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from rostools.bag.model import counted
 from rostools.errors import RostoolsError
 
 if TYPE_CHECKING:
@@ -160,12 +161,13 @@ def _messages(
         report.findings.append(f"reading stops: {err}")
         report.recover_helps = True
     report.messages = sum(counts.values())
-    for cid, n in short.items():
-        c = conns[cid]
-        report.findings.append(f"{n} message(s) on {c.topic} are shorter than {c.type} says")
-    for cid, n in long.items():
-        c = conns[cid]
-        report.findings.append(f"{n} message(s) on {c.topic} are longer than {c.type} says")
+    for sizes, how in ((short, "shorter"), (long, "longer")):
+        for cid, n in sizes.items():
+            c = conns[cid]
+            verb = "is" if n == 1 else "are"
+            report.findings.append(
+                f"{counted(n, 'message')} on {c.topic} {verb} {how} than {c.type} says"
+            )
     if progress is not None:
         progress(done, done)
     try:
@@ -177,7 +179,8 @@ def _messages(
         return  # the summary is not the file's own index: the notes say why
     if info.message_count != report.messages:
         report.findings.append(
-            f"the index counts {info.message_count} messages but {report.messages} were read"
+            f"the index counts {counted(info.message_count, 'message')} but {report.messages}"
+            f" {'was' if report.messages == 1 else 'were'} read"
         )
     by_id = {c.id: c for c in reader.connections}
     for cid in sorted(info.connection_counts.keys() | counts.keys()):
@@ -185,8 +188,8 @@ def _messages(
         if listed != read:
             topic = by_id[cid].topic if cid in by_id else "?"
             report.findings.append(
-                f"the index counts {listed} messages of connection {cid} ({topic}) but"
-                f" {read} were read"
+                f"the index counts {counted(listed, 'message')} of connection {cid} ({topic})"
+                f" but {read} {'was' if read == 1 else 'were'} read"
             )
 
 

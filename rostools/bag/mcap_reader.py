@@ -37,6 +37,7 @@ from rostools.bag.model import (
     BagInfo,
     Connection,
     compression_rows,
+    counted,
     summarize,
 )
 from rostools.bag.ordering import Block, Entry, out_of_order
@@ -114,7 +115,7 @@ class McapReader(BagReader):
         self._data_end = size
         footer = fmt.parse_footer(mm[max(0, size - fmt.FOOTER_SIZE - len(fmt.MAGIC)) :])
         if footer is None:
-            self.note("no footer: the file is unfinished or cut short")
+            self.read_unindexed("no footer (unfinished or cut short)")
         else:
             self._data_end = size - fmt.FOOTER_SIZE - len(fmt.MAGIC)
             if footer.summary_start:
@@ -128,7 +129,7 @@ class McapReader(BagReader):
     def _read_summary(self, footer: fmt.Footer) -> None:
         end = footer.summary_offset_start or self._data_end
         if not (self._data_start <= footer.summary_start <= end <= self._data_end):
-            self.note("the footer points outside the file; summary ignored")
+            self.read_unindexed("its footer points outside the file")
             return
         crc_end = self.size - len(fmt.MAGIC) - 4  # through the footer's offsets
         if footer.summary_crc and footer.summary_crc != zlib.crc32(
@@ -152,7 +153,7 @@ class McapReader(BagReader):
                 elif isinstance(record, fmt.MetadataIndex):
                     self.metadata_indexes.append(record)
         except fmt.McapFormatError as err:
-            self.note(f"damaged summary ({err}); scanned the data section")
+            self.read_unindexed(f"its summary is damaged ({err})")
             self.statistics, self.chunk_indexes = None, []
             return
         self._data_end = footer.summary_start
@@ -312,7 +313,7 @@ class McapReader(BagReader):
                     continue
                 late = self._out_of_order(buf, pos, end)
                 if late:
-                    notes.append(f"chunk at {rec}: {late} message(s) out of time order")
+                    notes.append(f"chunk at {rec}: {counted(late, 'message')} out of time order")
             elif op == fmt.OP_DATA_END:
                 (crc,) = _U32.unpack_from(mm, start)
                 if crc and zlib.crc32(memoryview(mm)[:rec]) != crc:

@@ -16,6 +16,12 @@ from rostools.errors import DataLossError, InvalidDataError, NotFoundError, Usag
 NS_PER_SEC = 1_000_000_000
 
 
+def counted(n: int, noun: str, many: str | None = None, *, grouped: bool = False) -> str:
+    """``1 message``, ``0 messages``, ``2 messages`` (``grouped``: ``1,000 messages``)."""
+    number = f"{n:,}" if grouped else str(n)
+    return f"{number} {noun if n == 1 else many or noun + 's'}"
+
+
 @dataclass(frozen=True)
 class Connection:
     """One recorded connection: a publisher's topic, type and connection header.
@@ -202,6 +208,10 @@ class BagUsageError(UsageError):
 
 class BagDataLossError(DataLossError):
     """Recovery could not salvage everything; the report says what was lost."""
+
+
+class BagUnindexedError(InvalidDataError):
+    """``bag info`` of a bag read without its index (exit 1, as rosbag info's "unindexed")."""
 
 
 #: A data-loss error lists this many of the problems found; ``bag doctor`` lists them all.

@@ -25,7 +25,13 @@ from rostools.bag.access import (
     require_ros1,
 )
 from rostools.bag.base import BagReader, BagWriter, Targets, problems
-from rostools.bag.model import BagUsageError, Connection, UnsupportedBagError, lost_data
+from rostools.bag.model import (
+    BagUsageError,
+    Connection,
+    UnsupportedBagError,
+    counted,
+    lost_data,
+)
 from rostools.bag.ordering import RawMessage
 from rostools.errors import RostoolsError
 from rostools.msgs.expr import Expression, compile_expression
@@ -62,7 +68,9 @@ class CopyReport:
     def raise_if_lost(self) -> None:
         """Raise ``BagDataLossError`` (exit code 6) naming what was left out, if anything."""
         if self.lost:
-            raise lost_data(f"wrote {self.messages_written} messages to {self.output}", self.lost)
+            raise lost_data(
+                f"wrote {counted(self.messages_written, 'message')} to {self.output}", self.lost
+            )
 
 
 def convert(

@@ -116,7 +116,28 @@ class Player:
         self.until_ns = self.bag_end
         if opts.duration is not None:
             self.until_ns = min(self.bag_end, self.from_ns + round(opts.duration * NS_PER_SEC))
+        # The span of bag time the status line shows
+        self.shown_from, self.shown_until = self.from_ns, self.until_ns
         self.status.total = max(self.until_ns - self.from_ns, 0) / NS_PER_SEC
+
+    def measure_topics(self) -> None:
+        """Under ``--topics``, the status line's times span the messages played, as rosbag's.
+
+        It reads the index entries of those topics (about 2 us each), so only a caller that
+        shows the status asks for it.
+        """
+        topics = self._topics()
+        if topics is None:
+            return
+        first = last = None
+        for reader in self.readers:
+            for _, t, _ in reader.times(topics):
+                if self.from_ns <= t <= self.until_ns:
+                    first = t if first is None else min(first, t)
+                    last = t if last is None else max(last, t)
+        if first is not None and last is not None:
+            self.shown_from, self.shown_until = first, last
+            self.status.total = (last - first) / NS_PER_SEC
 
     # controls ---------------------------------------------------------------------------
 
@@ -182,20 +203,34 @@ class Player:
 
     # playing ----------------------------------------------------------------------------
 
-    async def run(self, stop: asyncio.Event, show: Callable[[Status], None] | None = None) -> int:
-        """Advertise, wait ``-d``, play (looping if asked); the number of messages sent."""
+    async def run(
+        self,
+        stop: asyncio.Event,
+        show: Callable[[Status], None] | None = None,
+        say: Callable[[str], None] | None = None,
+    ) -> int:
+        """Advertise, wait ``-d``, play (looping if asked); the number of messages sent.
+
+        ``say`` gets rosbag play's lines about waiting (each ends in a newline).
+        """
         tighten_timer_slack()
         await self.advertise()
         advertised = time.monotonic()
         await self._until_connected(stop, advertised + CONNECT_GRACE)
         if self.opts.wait_for_subscribers:
+            if say is not None:
+                say("Waiting for subscribers.\n")
             while not stop.is_set() and any(
                 p.subscriber_count == 0 for p in self.publishers.values()
             ):
                 await first(stop.wait(), timeout=0.05)
+            if say is not None:
+                say("Finished waiting for subscribers.\n")
         rest = advertised + self.opts.delay - time.monotonic()
         if rest > 0:
             await first(stop.wait(), timeout=rest)
+        if say is not None:
+            say(f"Waiting {self.opts.delay:g} seconds after advertising topics... done.\n")
         if self.from_ns > self.bag_start:  # -s: what a late subscriber would still get
             for conn, _, data in latched_before(self.readers, self._topics(), self.from_ns):
                 self._publish(conn, data)
@@ -248,7 +283,7 @@ class Player:
                 self._yielded = time.monotonic()
         if self.clock is not None:
             self._publish_clock(self.until_ns)
-        self.status.bag_time = self.until_ns
+        self.status.bag_time = self.shown_until
         self.status.elapsed = self.status.total
 
     async def _wait_for(
@@ -267,7 +302,7 @@ class Player:
             if show is not None and now >= self._next_show:
                 self._next_show = now + 0.1
                 self.status.bag_time = self._bag_time(now, t)
-                self.status.elapsed = (self.status.bag_time - self.from_ns) / NS_PER_SEC
+                self.status.elapsed = (self.status.bag_time - self.shown_from) / NS_PER_SEC
                 show(self.status)
             if self.status.state is State.PAUSED:
                 if self.steps:

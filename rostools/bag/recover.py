@@ -20,7 +20,7 @@ from rostools.bag.access import (
     require_ros1,
 )
 from rostools.bag.base import Targets
-from rostools.bag.model import BagDataLossError, BagUsageError, CompressionStats
+from rostools.bag.model import BagDataLossError, BagUsageError, CompressionStats, counted
 
 
 @dataclass(frozen=True)
@@ -49,7 +49,7 @@ class RecoverReport:
         """Raise ``DataLossError`` (exit code 6) naming the damage, if any."""
         if self.lost:
             raise BagDataLossError(
-                f"recovered {self.messages} messages into {self.output}, but lost data: "
+                f"recovered {counted(self.messages, 'message')} into {self.output}, but lost data: "
                 + "; ".join(self.lost)
             )
 

@@ -34,6 +34,7 @@ from rostools.bag.model import (
     UnsupportedBagError,
     compression_rows,
     connection_from_header,
+    counted,
     summarize,
 )
 from rostools.bag.ordering import Block, Entry, RawMessage, ordered, out_of_order
@@ -49,6 +50,8 @@ _TOP_OPS = frozenset(
 _CHUNK_OPS = frozenset((fmt.OP_MSG_DATA, fmt.OP_CONNECTION))
 #: The op field of an INDEX_DATA record header, as stored.
 _INDEX_OP = b"\x04\x00\x00\x00op=\x04"
+#: What an unindexed bag is read by.
+_CHUNKS = "its chunks"
 
 
 @dataclass
@@ -121,14 +124,13 @@ class Bag1Reader(BagReader):
                 self.indexed = True
                 return
             except (fmt.RecordError, HeaderError, struct.error) as err:
-                self.note(f"index at {index_pos} is damaged ({err}); scanned chunks")
+                self.read_unindexed(f"its index at {index_pos} is damaged ({err})", _CHUNKS)
                 self.connections, self.chunks, self._by_id = [], [], {}
         elif index_pos == 0:
-            self.note("bag is not indexed (an unclosed recording); scanned chunks")
+            self.read_unindexed("an unclosed recording", _CHUNKS)
         else:
-            self.note(
-                f"the index at {index_pos} is past the end of the file ({self.size} bytes):"
-                " the file is cut short; scanned chunks"
+            self.read_unindexed(
+                f"cut short (its index at {index_pos} is past the end, {self.size} bytes)", _CHUNKS
             )
         self._scan()
         if not self.chunks and not self.connections:
@@ -261,7 +263,7 @@ class Bag1Reader(BagReader):
         nxt = self._next_top(pos, None if head is None else head[2])
         stop = self.size if nxt is None else nxt
         listed = sum(sum(c.values()) for p, _, _, c in self._infos if pos <= p < stop)
-        lost = f"; the index lists {listed} messages in chunks there" if listed else ""
+        lost = f"; the index lists {counted(listed, 'message')} in chunks there" if listed else ""
         if head is not None and head[1] <= stop:
             fields, data, _ = head
             chunk = Chunk(
@@ -277,12 +279,12 @@ class Bag1Reader(BagReader):
             if nxt is None:
                 self.damaged(
                     f"chunk at {pos} is cut short ({self.size - chunk.data_pos} of its bytes"
-                    f" are in the file); {got} messages salvaged from it"
+                    f" are in the file); {counted(got, 'message')} salvaged from it"
                 )
             else:
                 self.damaged(
-                    f"chunk at {pos} does not fit its record ({err}); {got} messages salvaged"
-                    f" from it, read on at {nxt}"
+                    f"chunk at {pos} does not fit its record ({err});"
+                    f" {counted(got, 'message')} salvaged from it, read on at {nxt}"
                 )
         elif nxt is None:
             self.damaged(f"{self.size - pos} bytes at {pos} do not parse ({err}){lost}")
@@ -356,7 +358,8 @@ class Bag1Reader(BagReader):
             if orphans:
                 lost = sum(chunk.counts.pop(c) for c in orphans)
                 self.damaged(
-                    f"chunk at {chunk.pos}: {lost} messages of connections whose record is lost"
+                    f"chunk at {chunk.pos}: {counted(lost, 'message')} of connections"
+                    " whose record is lost"
                 )
         self.chunks = [c for c in self.chunks if c.counts]
 
@@ -389,7 +392,7 @@ class Bag1Reader(BagReader):
                 continue
             late = out_of_order(t for t, _, _ in self._walk(chunk, buf, base, end))
             if late:
-                found.append(f"chunk at {chunk.pos}: {late} message(s) out of time order")
+                found.append(f"chunk at {chunk.pos}: {counted(late, 'message')} out of time order")
         return found
 
     def _walk(
@@ -569,7 +572,8 @@ class Bag1Reader(BagReader):
         except BagFormatError as err:
             listed = sum(chunk.counts.values())
             self.damaged(
-                f"chunk at {chunk.pos} is unreadable ({err}); its {listed} messages are lost"
+                f"chunk at {chunk.pos} is unreadable ({err}); its {counted(listed, 'message')}"
+                f" {'is' if listed == 1 else 'are'} lost"
             )
             return []
         out = None
@@ -632,7 +636,8 @@ class Bag1Reader(BagReader):
             out.append((t, item[0], off, item[1], view[q : q + dlen]))
         if orphans:
             self.damaged(
-                f"chunk at {chunk.pos}: {orphans} messages of connections whose record is lost"
+                f"chunk at {chunk.pos}: {counted(orphans, 'message')} of connections"
+                " whose record is lost"
             )
         out.sort()
         return out

@@ -22,7 +22,7 @@ from rostools.bag.access import (
     require_ros1,
 )
 from rostools.bag.base import BagWriter, Targets, problems
-from rostools.bag.model import BagUsageError, Connection, lost_data
+from rostools.bag.model import BagUsageError, Connection, counted, lost_data
 from rostools.bag.ops import PROGRESS_EVERY, Progress
 
 if TYPE_CHECKING:
@@ -53,7 +53,10 @@ class SplitReport:
         """Raise ``BagDataLossError`` (exit code 6) naming what was left out, if anything."""
         if self.lost:
             written = sum(p.messages for p in self.parts)
-            raise lost_data(f"wrote {written} messages in {len(self.parts)} parts", self.lost)
+            raise lost_data(
+                f"wrote {counted(written, 'message')} in {counted(len(self.parts), 'part')}",
+                self.lost,
+            )
 
 
 @dataclass(frozen=True)

@@ -31,7 +31,7 @@ def test_the_corpus_is_clean_but_for_its_damaged_files() -> None:
     # Out of time order within a chunk is legal (rosbag.js's example.bag, MCAP's TenMessages):
     # a note, and the file stays clean.
     unsorted = doctor(CORPUS / "ros1" / "rosbag.js" / "example.bag")
-    assert unsorted.clean and unsorted.notes == ["chunk at 4117: 33 message(s) out of time order"]
+    assert unsorted.clean and unsorted.notes == ["chunk at 4117: 33 messages out of time order"]
     ten = next((CORPUS / "mcap" / "conformance" / "TenMessages").glob("*-ch.mcap"))
     assert doctor(ten).clean and "out of time order" in doctor(ten).notes[0]
 

@@ -1,7 +1,8 @@
 """An output that cannot be written is exit 2 in every command, with one line naming it.
 
-It was 2 for ``record -O``, 1 for convert, filter, recover and ``node graph -o x.svg``, 3 for
-``bag plot -o`` and ``node graph -o x.dot``, and an internal error for ``param dump``.
+It was 2 for ``record -O``, 1 for convert, filter, recover, split, merge and ``node graph -o
+x.svg``, 3 for ``bag plot -o`` and ``node graph -o x.dot``, and an internal error for ``param
+dump``.
 """
 
 from __future__ import annotations
@@ -16,6 +17,11 @@ from tests.support.env import run_cli
 #: command, with ``{out}`` where the output goes and ``{bag}`` for an input bag
 OFFLINE = [
     ["bag", "plot", "{bag}", "/point/x", "-o", "{out}.png"],
+    ["bag", "convert", "{bag}", "{out}.mcap"],
+    ["bag", "filter", "{bag}", "{out}.bag", "topic == '/point'"],
+    ["bag", "recover", "{bag}", "{out}.bag"],
+    ["bag", "split", "{bag}", "--count", "10", "-o", "{out}.bag"],
+    ["bag", "merge", "{out}.bag", "{bag}"],
 ]
 LIVE = [
     ["bag", "record", "-a", "-O", "{out}.bag"],

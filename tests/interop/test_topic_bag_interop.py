@@ -117,3 +117,35 @@ def test_rates_follow_sim_time_from_clock(
     assert all(9.0 < r < 11.0 for r in rates["rostopic hz"] + rates["ours hz"]), rates
     assert all(18.0 < r < 22.0 for r in rates["ours wall hz"]), rates
     assert all(abs(d) < 0.5 for d in delays["rostopic delay"] + delays["ours delay"]), delays
+
+
+@pytest.mark.parametrize(
+    ("name", "namespace"),
+    [("chatter", ""), ("/chatter", ""), ("chatter/data", ""), ("chatter", "/ns")],
+)
+def test_relative_names_in_a_bag_resolve_as_rostopics(
+    tmp_path: Path, cli_env: dict[str, str], name: str, namespace: str
+) -> None:
+    """A bag's relative topic (``chatter``) and a relative name typed (``chatter``) both
+    resolve, as rostopic resolves them, to ``/chatter`` (``/ns/chatter`` in ROS_NAMESPACE
+    /ns). It was "topic /chatter is not in BAG" (corpus embag/test_2.bag)."""
+    bag = tmp_path / "rel.bag"
+    string_md5 = "992ce8a1687cec8c8bd883ec73ca41d1"
+    with open_writer(bag) as writer:
+        conns = [
+            writer.add_connection(t, "std_msgs/String", string_md5, "string data\n")
+            for t in ("chatter", "/other", "/ns/chatter")
+        ]
+        for i in range(9):
+            text = f"{conns[i % 3].topic} {i}".encode()
+            writer.write(conns[i % 3], 10**9 + i, struct.pack("<I", len(text)) + text)
+    env = {**cli_env, "ROS_NAMESPACE": namespace} if namespace else cli_env
+    argv = ["echo", "-b", str(bag), name]
+    ours = run_cli("topic", *argv, env=env)
+    theirs = subprocess.run(["rostopic", *argv], env=env, capture_output=True, text=True,
+                            timeout=60, check=False)  # fmt: skip
+    assert theirs.returncode == 0, theirs.stderr
+    assert ours.returncode == 0, ours.stderr
+    assert ours.stdout == theirs.stdout
+    # /ns/chatter is the bag's chatter too in /ns: both connections, in time order
+    assert ours.stdout.count("---") == (6 if namespace else 3)

@@ -10,6 +10,7 @@ from __future__ import annotations
 import os
 import sys
 from pathlib import Path
+from typing import Any
 
 import pytest
 
@@ -154,10 +155,12 @@ def test_get_p_of_a_mapping_is_documented_only_for_what_valid_yaml_needs() -> No
 def test_builtin_types_may_only_add_what_the_readme_names() -> None:
     ros1 = out("diagnostic_msgs map_msgs std_srvs\n")
     named = out("diagnostic_msgs dynamic_reconfigure map_msgs std_srvs\n")
-    unnamed = out("diagnostic_msgs map_msgs roscpp_tutorials std_srvs\n")
+    unnamed = out("diagnostic_msgs map_msgs std_srvs turtlesim\n")
+    tutorials = out("diagnostic_msgs map_msgs roscpp_tutorials std_srvs\n")  # TwoInts
     srv = Pairing(rules=(d.BUILTIN_TYPES,), expect=Expect(kind="srv"))
     assert judge(ros1, named, srv).verdict is Verdict.DOCUMENTED
     assert judge(ros1, unnamed, srv).verdict is Verdict.DEFECT
+    assert judge(ros1, tutorials, srv).verdict is Verdict.DOCUMENTED  # README names TwoInts
     # ours must keep everything ROS 1 lists
     assert judge(ros1, out("dynamic_reconfigure map_msgs std_srvs\n"), srv).verdict is (
         Verdict.DEFECT
@@ -171,6 +174,104 @@ def test_bag_info_yaml_may_add_keys_not_change_values() -> None:
     pairing = Pairing(rules=(d.INFO_YAML,))
     assert judge(ros1, more, pairing).verdict is Verdict.DOCUMENTED
     assert judge(ros1, changed, pairing).verdict is Verdict.DEFECT
+
+
+def _only_with(rule: d.Difference, ros1: Output, ours: Output, **kw: Any) -> None:
+    """Documented with ``rule`` (and only it), a defect without it."""
+    with_rule = judge(ros1, ours, Pairing(rules=(rule,), **kw))
+    assert with_rule.verdict is Verdict.DOCUMENTED and with_rule.rules == (rule.key,)
+    without = judge(ros1, ours, Pairing(**kw))
+    assert without.verdict is Verdict.DEFECT
+
+
+def test_service_find_and_ping_all_sort() -> None:
+    _only_with(d.SERVICE_FIND_SORTED, out("/trigger\n/slow\n"), out("/slow\n/trigger\n"))
+    ping = "pinging {0} with a timeout of 3.0s\nxmlrpc reply from http://h:{1}/\ttime=MS\n"
+    head = "Will ping the following nodes: \n * {0}\n * {1}\n\n"
+    ros1 = out(head.format("/rosout", "/add") + ping.format("/rosout", 1) + ping.format("/add", 2))
+    ours = out(head.format("/add", "/rosout") + ping.format("/add", 2) + ping.format("/rosout", 1))
+    _only_with(d.PING_ALL_SORTED, ros1, ours)
+    # the same nodes, but a reply from another port: still a defect
+    moved = ours.but(stdout=ours.stdout.replace("h:2", "h:3"))
+    assert judge(ros1, moved, Pairing(rules=(d.PING_ALL_SORTED,))).verdict is Verdict.DEFECT
+
+
+def test_cleanup_gives_reasons_and_asks_on_stderr() -> None:
+    question = (
+        "Warning: these might include alive and functioning nodes, e.g. in unstable networks.\n"
+        "Cleanup will purge all information about these nodes from the master.\n"
+        "Please type y or n to continue:"
+    )
+    ros1 = out(
+        f"Unable to contact the following nodes:\n * /victim\n{question}\n"
+        "Unregistering /victim\ndone\n",
+        "ERROR: connection refused to [http://127.0.0.1:43271/]\n",
+    )
+    ours = out(
+        "Unable to contact the following nodes:\n * /victim (cannot reach the node /victim at "
+        "http://127.0.0.1:3/: Connection refused)\nUnregistering /victim\ndone\n",
+        question + " ",
+    )
+    _only_with(d.CLEANUP_OUTPUT, ros1, ours)
+    other = ours.but(stdout=ours.stdout.replace("Unregistering /victim", "Kept /victim"))
+    assert judge(ros1, other, Pairing(rules=(d.CLEANUP_OUTPUT,))).verdict is Verdict.DEFECT
+
+
+def test_a_missing_verb_is_exit_2() -> None:
+    pairing: dict[str, Any] = {"streams": "code", "expect": Expect(error=2)}
+    _only_with(d.VERB_USAGE, out("Commands:\n\trosparam set\n"), out("", "usage\n", code=2),
+               **pairing)  # fmt: skip
+    # ROS 1 printing nothing at all is no list of verbs
+    quiet = judge(out(""), out("", "x\n", code=2), Pairing(rules=(d.VERB_USAGE,), **pairing))
+    assert quiet.verdict is Verdict.DEFECT
+
+
+def test_show_bag_of_a_type_it_lacks_is_exit_3() -> None:
+    ours = out("", "rostools: no connection of type nope/Nope in graph.bag\n", code=3)
+    _only_with(d.SHOW_BAG_LACKS_TYPE, out(""), ours, expect=Expect(error=3))
+    two_lines = ours.but(stderr=ours.stderr * 2)
+    pairing = Pairing(rules=(d.SHOW_BAG_LACKS_TYPE,), expect=Expect(error=3))
+    assert judge(out(""), two_lines, pairing).verdict is Verdict.DEFECT
+
+
+def test_pub_from_a_file_says_nothing_per_message() -> None:
+    line = "publishing and latching message for 3.0 seconds\n"
+    _only_with(d.PUB_FILE_QUIET, out(line * 2), out(""))
+    # other status lines are still compared
+    assert judge(out(line + "x\n"), out(""), Pairing(rules=(d.PUB_FILE_QUIET,))).verdict is (
+        Verdict.DEFECT
+    )
+
+
+def test_info_of_unsorted_chunks_and_of_unindexed_bags() -> None:
+    table = "path: u.bag\nversion: 2.0\nduration: {}\nstart: {}\nend: {}\nmessages: 3\n"
+    ros1 = out(table.format("-1.0s", "2.00", "1.00"))
+    ours = out(table.format("2.0s", "1.00", "3.00"))
+    _only_with(d.UNSORTED_CHUNKS, ros1, ours)
+    more = ours.but(stdout=ours.stdout.replace("messages: 3", "messages: 4"))
+    assert judge(ros1, more, Pairing(rules=(d.UNSORTED_CHUNKS,))).verdict is Verdict.DEFECT
+    refused = out("", "ERROR bag unindexed: c.bag.  Run rosbag reindex.\n", code=1)
+    said = out("path: c.bag\n", "rostools: c.bag: unindexed: an unclosed recording; ...\n", 1)
+    _only_with(d.UNINDEXED_INFO, refused, said)
+    assert judge(refused, said.but(code=0), Pairing(rules=(d.UNINDEXED_INFO,))).verdict is (
+        Verdict.DEFECT
+    )
+
+
+def test_a_bag_with_unsorted_chunks_is_echoed_in_time_order() -> None:
+    ros1, ours = (
+        out('data: "2"\n---\ndata: "3"\n---\ndata: "1"\n---\n'),
+        out('data: "1"\n---\ndata: "2"\n---\ndata: "3"\n---\n'),
+    )
+    _only_with(d.TIME_ORDER, ros1, ours)
+    csv = "%time,field.data\n{}000,2\n{}000,3\n{}000,1\n"
+    _only_with(d.TIME_ORDER, out(csv.format(2, 3, 1)), out(csv.format(2, 3, 1).replace(
+        "2000,2\n3000,3\n1000,1", "1000,1\n2000,2\n3000,3")))  # fmt: skip
+    # other messages, or ours out of time order, are defects
+    pairing = Pairing(rules=(d.TIME_ORDER,))
+    assert judge(ros1, out('data: "1"\n---\ndata: "4"\n---\n'), pairing).verdict is (Verdict.DEFECT)
+    backwards = out("%time,field.data\n3000,3\n2000,2\n1000,1\n")
+    assert judge(out(csv.format(2, 3, 1)), backwards, pairing).verdict is Verdict.DEFECT
 
 
 def test_a_case_is_as_bad_as_its_worst_run() -> None:

@@ -19,6 +19,7 @@ from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
+from rostools.bag.model import counted
 from rostools.cli.bag.files import EndOpt, FilterExprOpt, StartOpt, check_read, time_window
 from rostools.cli.bag.group import app
 from rostools.errors import InvalidDataError, UsageError
@@ -160,7 +161,7 @@ def cat(
         if expression and any(cdr):
             raise UsageError("--filter reads ROS 1 messages only; this selection has ROS 2 ones")
         printed = _print(readers, cdr, topics, lo, hi, keeps, fmt, raw, count)
-        check_read(readers, f"printed {printed} messages")
+        check_read(readers, f"printed {counted(printed, 'message')}")
 
 
 def _cdr_connections(

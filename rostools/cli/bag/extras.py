@@ -11,6 +11,7 @@ from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
+from rostools.bag.model import counted
 from rostools.cli.bag.files import BagArg, ForceOpt, Progress, QuietOpt
 from rostools.cli.bag.group import app
 from rostools.cli.common import FormatOpt, output_format
@@ -127,7 +128,7 @@ def doctor(
         for r in reports:  # a finding may quote the file's names: one line each, escaped
             shown = one_line(r.path)
             if r.clean:
-                sys.stdout.write(f"{shown}: clean ({r.messages} messages)\n")
+                sys.stdout.write(f"{shown}: clean ({counted(r.messages, 'message')})\n")
             for finding in r.findings:
                 sys.stdout.write(f"{shown}: {one_line(finding)}\n")
             for note in r.notes:

@@ -14,11 +14,12 @@ from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
+from rostools.bag.model import counted
 from rostools.cli import output
 from rostools.cli.bag.group import app
 from rostools.cli.common import FINITE, FormatOpt, output_format
 from rostools.cli.output import Format, emit, render
-from rostools.errors import DataLossError, UsageError, one_line
+from rostools.errors import UsageError, one_line
 
 if TYPE_CHECKING:
     from rostools.bag.base import BagReader
@@ -100,9 +101,16 @@ def info(
     ] = None,
     fmt: FormatOpt = None,
 ) -> None:
-    """Summarise bags from their index alone (rosbag info); exit 6 if a bag is damaged."""
+    """Summarise bags from their index alone (rosbag info); exit 1 if unindexed, 6 if damaged."""
     from rostools.bag.access import open_bag, topic_frequencies
-    from rostools.cli.bag.infotext import info_data, info_key, info_text
+    from rostools.cli.bag.infotext import (
+        as_rosbag_reads,
+        info_data,
+        info_key,
+        info_text,
+        info_yaml,
+        key_yaml,
+    )
 
     fmt = Format.yaml if yaml_ and fmt is None else output_format(ctx, fmt)
     if key is not None and fmt is Format.text:
@@ -117,12 +125,19 @@ def info(
         readers.append(reader)
     if fmt is Format.text:
         sys.stdout.write("\n---\n".join(info_text(*r) for r in results) + "\n")
+    elif fmt is Format.yaml:  # rosbag's text, one document per bag
+        data = [info_data(*r) for r in results]
+        if key is None:
+            docs = [info_yaml(d) + "\n" for d in data]
+        else:
+            docs = [key_yaml(info_key(as_rosbag_reads(d), key)) for d in data]
+        sys.stdout.write("---\n".join(docs))
     else:
         data = [info_data(*r) for r in results]
         if key is not None:
             data = [info_key(d, key) for d in data]
         emit(fmt, data[0] if len(data) == 1 else data)
-    check_read(readers, "summarised " + ", ".join(bags))
+    check_read(readers, "summarised " + ", ".join(bags), unindexed_fails=True)
 
 
 def say_note(note: str) -> None:
@@ -136,14 +151,15 @@ def say_notes(notes: Iterable[str]) -> None:
         say_note(note)
 
 
-def check_read(readers: Sequence[BagReader], done: str) -> None:
+def check_read(readers: Sequence[BagReader], done: str, unindexed_fails: bool = False) -> None:
     """After a command read these bags: say their notes, and exit 6 if anything was left out.
 
-    ``done`` says what the command did, for the error line.
+    ``done`` says what the command did, for the error line. With ``unindexed_fails``, a bag
+    read without its index is exit 1 (``bag info``, as rosbag info).
     """
     from rostools.bag.base import after_reading
 
-    after_reading(readers, done, say_note)
+    after_reading(readers, done, say_note, unindexed_fails=unindexed_fails)
 
 
 class Progress:
@@ -193,13 +209,13 @@ def _report(fmt: Format, report: CopyReport) -> None:
         data.update(notes=list(report.notes), lost=list(report.lost))
     if fmt is Format.text:
         sys.stderr.write(
-            f"wrote {report.messages_written} of {report.messages_read} messages to "
+            f"wrote {report.messages_written} of {counted(report.messages_read, 'message')} to "
             f"{report.output} ({report.format}, {report.compression})\n"
         )
         say_notes(report.notes)
         if report.extras_left_out:
             sys.stderr.write(
-                f"left out {report.extras_left_out} MCAP attachment/metadata record(s): "
+                f"left out {counted(report.extras_left_out, 'MCAP attachment/metadata record')}: "
                 + (
                     "a .bag has no place for them\n"
                     if report.format == "bag"
@@ -330,59 +346,22 @@ def _in_place(
     label: str,
     run: Callable[[Path, Path, Any], CopyReport],
 ) -> None:
-    """rosbag compress's way: write beside, keep the original as ``x.orig.bag``.
+    """rosbag compress's way: write beside, keep the original as ``x.orig.bag`` (``inplace``).
 
     A damaged bag is rewritten with what reads (the original is kept all the same); exit 6
     at the end, naming what was left out.
     """
-    lost: list[str] = []
-    for path, dst, keep in _targets(bags, output_dir, force):
+    from rostools.cli.bag.inplace import each_in_place, swap
 
-        def step(
-            progress: Any, src: Path = path, dst: Path = dst, out: Path = keep or dst
-        ) -> CopyReport:
-            return dataclasses.replace(run(src, dst, progress), output=out)
+    def one(path: Path, dst: Path, keep: Path | None) -> list[str]:
+        def step(progress: Any) -> CopyReport:
+            return dataclasses.replace(run(path, dst, progress), output=keep or dst)
 
         report = copy_command(ctx, fmt, quiet, label, step, check=False)
-        _swap(path, dst, keep)
-        lost += report.lost
-    if lost:
-        from rostools.bag.model import lost_data
+        swap(path, dst, keep)
+        return list(report.lost)
 
-        kept = "" if output_dir else " (each original is kept as NAME.orig.bag)"
-        raise lost_data(f"{label}ed {len(bags)} bag(s){kept}", lost)
-
-
-def _targets(
-    bags: list[Path], output_dir: Path | None, force: bool
-) -> list[tuple[Path, Path, Path | None]]:
-    """For each bag: where to write, and the bag to replace (None with --output-dir).
-
-    Checked for every bag before any is touched, so a refusal leaves them all as they were.
-    """
-    if output_dir is not None and not output_dir.is_dir():
-        raise UsageError(f"--output-dir {output_dir} is not a folder")
-    out: list[tuple[Path, Path, Path | None]] = []
-    for path in bags:
-        if output_dir is not None:
-            out.append((path, output_dir / path.name, None))
-            continue
-        backup = _backup_name(path)
-        if backup.exists() and not force:
-            raise UsageError(f"{backup} exists; use --force to replace it")
-        out.append((path, path.with_name(path.name + ".tmp"), path))
-    return out
-
-
-def _backup_name(path: Path) -> Path:
-    return path.with_name(path.stem + ".orig" + path.suffix)
-
-
-def _swap(path: Path, written: Path, keep: Path | None) -> None:
-    """Move the original to ``x.orig.bag`` and the new file into its place."""
-    if keep is not None:
-        path.replace(_backup_name(path))
-        written.replace(path)
+    each_in_place(bags, output_dir, force, quiet, label, one)
 
 
 OutputDirOpt = Annotated[
@@ -486,17 +465,17 @@ def reindex(
     anything was lost.
     """
     from rostools.bag.recover import recover as run_recover
+    from rostools.cli.bag.inplace import each_in_place, swap
 
     fmt = output_format(ctx, fmt)
-    lost: list[str] = []
-    for path, dst, keep in _targets(bags, output_dir, force):
+
+    def one(path: Path, dst: Path, keep: Path | None) -> list[str]:
         report = run_recover(path, dst, overwrite=True)
-        _swap(path, dst, keep)
-        report = dataclasses.replace(report, output=keep or dst)
-        _recover_report(fmt, report, quiet)
-        lost += [f"{path}: {what}" for what in report.lost]
-    if lost:
-        raise DataLossError("lost data: " + "; ".join(lost))
+        swap(path, dst, keep)
+        _recover_report(fmt, dataclasses.replace(report, output=keep or dst), quiet)
+        return [f"{path}: {what}" for what in report.lost]
+
+    each_in_place(bags, output_dir, force, quiet, "reindex", one)
 
 
 def _recover_report(fmt: Format, report: RecoverReport, quiet: bool = False) -> None:
@@ -511,4 +490,4 @@ def _recover_report(fmt: Format, report: RecoverReport, quiet: bool = False) -> 
     elif not quiet:
         for note in report.notes:
             sys.stderr.write(f"note: {one_line(note)}\n")  # may quote the file's names
-        sys.stderr.write(f"recovered {report.messages} messages into {report.output}\n")
+        sys.stderr.write(f"recovered {counted(report.messages, 'message')} into {report.output}\n")

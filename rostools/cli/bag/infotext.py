@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import re
 import time
 from typing import Any
@@ -148,7 +149,11 @@ def _table(rows: list[tuple[str, str]]) -> str:
 def info_data(
     info: BagInfo, frequencies: dict[str, float] | None = None, name: str | None = None
 ) -> dict[str, Any]:
-    """``rosbag info --yaml``'s keys (times in seconds, sizes in bytes), plus ours."""
+    """``rosbag info --yaml``'s keys (times in seconds, sizes in bytes), plus ours.
+
+    ``indexed`` is rosbag's: False for a bag read without its index, and for a bag without
+    chunks (an empty one).
+    """
     data: dict[str, Any] = {
         "path": name or str(info.path),
         "version": info.version,
@@ -159,7 +164,8 @@ def info_data(
     if info.start_ns is not None and info.end_ns is not None:
         start, end = info.start_ns / _NS, info.end_ns / _NS
         data |= {"duration": _micro(end - start), "start": _micro(start), "end": _micro(end)}
-    data |= {"size": info.size, "messages": info.message_count, "indexed": info.indexed}
+    indexed = info.indexed and bool(info.chunk_count or info.message_count)
+    data |= {"size": info.size, "messages": info.message_count, "indexed": indexed}
     data["compression"] = info.compression[0].compression if info.compression else "none"
     if any(c.compression != "none" for c in info.compression):
         data |= {"uncompressed": info.uncompressed_size, "compressed": info.compressed_size}
@@ -170,13 +176,90 @@ def info_data(
     topics = []
     for t in info.topics:
         row: dict[str, Any] = {"topic": t.topic, "type": t.type, "messages": t.messages}
-        if frequencies and t.topic in frequencies:
-            row["frequency"] = frequencies[t.topic]
         if t.connections > 1:
             row["connections"] = t.connections
+        if frequencies and t.topic in frequencies:
+            row["frequency"] = frequencies[t.topic]
         topics.append(row)
     data["topics"] = topics
     return data
+
+
+#: How rosbag's YAML writes these numbers.
+_FIXED = {"duration": "%.6f", "start": "%.6f", "end": "%.6f", "frequency": "%.4f"}
+
+
+def info_yaml(data: dict[str, Any]) -> str:
+    """``info_data`` as ``rosbag info -y`` writes it, our own keys where they fit.
+
+    ``version: 2.0``, ``indexed: True``, times with 6 decimals, lists indented by 4. A name
+    that YAML would read as something else (``a: b``, ``true``) is quoted.
+    """
+    lines = []
+    for key, value in data.items():
+        if isinstance(value, list):
+            if not value:
+                lines.append(f"{key}: []")
+                continue
+            lines.append(f"{key}:")
+            for row in value:
+                for i, (k, v) in enumerate(row.items()):
+                    lines.append(f"{'    - ' if i == 0 else '      '}{k}: {_scalar(k, v)}")
+        elif key == "version" and data.get("format") == "bag":
+            lines.append(f"version: {value}")  # a number, as rosbag's 2.0
+        else:
+            lines.append(f"{key}: {_scalar(key, value)}")
+    return "\n".join(lines) + "\n"
+
+
+def _scalar(key: str, value: Any) -> str:
+    if isinstance(value, bool):
+        return str(value)  # True, as rosbag's Python prints it
+    if isinstance(value, float) and key in _FIXED:
+        return _FIXED[key] % value
+    if isinstance(value, int | float):
+        return str(value)
+    text = str(value)
+    return text if _plain(text) else json.dumps(text, ensure_ascii=False)
+
+
+def _plain(text: str) -> bool:
+    """Whether YAML reads ``text``, unquoted, back as the same string."""
+    import yaml
+
+    if not text or text != text.strip() or not text.isprintable():
+        return False
+    try:
+        return bool(yaml.safe_load(text) == text)
+    except yaml.YAMLError:
+        return False
+
+
+def key_yaml(value: Any) -> str:
+    """One value of ``info -y -k`` as rosbag prints it.
+
+    Python's ``str`` of each scalar read back from its YAML (``2.0``, ``True``, ``1e-06``), a
+    mapping as ``key: value`` lines, a list as ``- `` items, each ending its line (so a list
+    ends in a blank line).
+    """
+    return _rosbag_value(value, 0) + "\n"
+
+
+def _rosbag_value(value: Any, indent: int) -> str:
+    pad = "  " * indent
+    if isinstance(value, list):
+        return "".join(f"{pad}- {_rosbag_value(item, indent + 1)}\n" for item in value)
+    if isinstance(value, dict):
+        return "\n".join(f"{pad if i else ''}{k}: {v}" for i, (k, v) in enumerate(value.items()))
+    return pad + str(value)
+
+
+def as_rosbag_reads(data: dict[str, Any]) -> dict[str, Any]:
+    """``data`` as rosbag's ``-k`` sees it: its YAML text, read back."""
+    import yaml
+
+    loaded: dict[str, Any] = yaml.safe_load(info_yaml(data))
+    return loaded
 
 
 def _micro(seconds: float) -> float:

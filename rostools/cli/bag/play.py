@@ -11,6 +11,7 @@ from typing import TYPE_CHECKING, Annotated
 
 import typer
 
+from rostools.bag.model import counted
 from rostools.cli.bag.files import check_read
 from rostools.cli.bag.group import app
 from rostools.cli.common import FINITE, FormatOpt, node_session, output_format
@@ -183,7 +184,8 @@ def play(
         rate_control_topic=rate_control_topic, rate_control_max_delay=rate_control_max_delay,
     )  # fmt: skip
     out = output_format(ctx, fmt)
-    show_status = not quiet and out is Format.text and sys.stderr.isatty()
+    show_status = not quiet and out is Format.text
+    terminal = sys.stderr.isatty()
     with contextlib.ExitStack() as stack:
         readers = [stack.enter_context(open_bag(p)) for p in paths]
         for reader in readers:
@@ -194,6 +196,7 @@ def play(
 
             player = Player(node, readers, opts)
             if show_status:
+                player.measure_topics()
                 for path in paths:
                     sys.stderr.write(f"Opening {one_line(path)}\n")
             with keyboard(player, asyncio.get_running_loop()) as keys:
@@ -201,16 +204,49 @@ def play(
                     sys.stderr.write("Hit space to toggle paused, or 's' to step.\n")
                     if opts.pause_topics:
                         sys.stderr.write("Hit 't' to toggle pausing on --pause-topics.\n")
-                return await player.run(stop, _show if show_status else None)
+                if not show_status:
+                    return await player.run(stop)
+                return await player.run(stop, StatusLines(terminal), _say)
 
         sent = node_session(ctx, main, "rostools_play")
     if show_status:
-        sys.stderr.write("\nDone.\n")
+        sys.stderr.write("\nDone.\n" if terminal else "Done.\n")
     elif out is not Format.text:
         sys.stdout.write(render(out, {"published": sent}) + "\n")
-    check_read(readers, f"published {sent} messages")
+    check_read(readers, f"published {counted(sent, 'message')}")
 
 
-def _show(status: Status) -> None:
-    sys.stderr.write(status_line(status))
+def _say(text: str) -> None:
+    sys.stderr.write(text)
     sys.stderr.flush()
+
+
+class StatusLines:
+    """The status line on stderr: redrawn in place on a terminal, else one line a second.
+
+    On a terminal it is redrawn each time the player calls (every 0.1 s). Elsewhere one line
+    a second ends in a newline, and so does the last: rosbag play writes its line, ended by a
+    carriage return, for every message, even into a pipe.
+    """
+
+    PERIOD = 1.0  # s between lines off a terminal
+
+    def __init__(self, terminal: bool) -> None:
+        self.terminal = terminal
+        self.due = 0.0  # monotonic time of the next line off a terminal
+
+    def __call__(self, status: Status) -> None:
+        """Show ``status``."""
+        import time
+
+        from rostools.bag.play import State
+
+        if self.terminal:
+            sys.stderr.write(status_line(status))
+        else:
+            now = time.monotonic()
+            if now < self.due and status.state is not State.DONE:
+                return
+            self.due = now + self.PERIOD
+            sys.stderr.write(status_line(status).rstrip("\r").rstrip() + "\n")
+        sys.stderr.flush()

@@ -14,11 +14,12 @@ from typing import TYPE_CHECKING, Annotated
 
 import typer
 
+from rostools.bag.model import counted
 from rostools.cli.bag.files import EndOpt, StartOpt, check_read, time_window
 from rostools.cli.bag.group import app
 from rostools.cli.common import FormatOpt, output_format
 from rostools.cli.output import Format
-from rostools.errors import InvalidDataError, NotFoundError
+from rostools.errors import InvalidDataError, NotFoundError, one_line
 
 if TYPE_CHECKING:
     from rostools.bag.base import BagReader
@@ -77,7 +78,7 @@ def plot_cmd(
         count = _read(reader, samplers, lo, hi)
         begin = lo if lo is not None else (reader.info().start_ns or 0)
     _draw(plot, bag, fields, fmt, out, stamp, begin, count)
-    check_read([reader], f"plotted {count:,} messages")
+    check_read([reader], f"plotted {counted(count, 'message', grouped=True)}")
 
 
 def _draw(
@@ -106,6 +107,7 @@ def _draw(
         plotting.write_image(
             plot, out, origin=origin, title=bag.name, xlabel=xlabel, command="bag plot"
         )
+        sys.stderr.write(f"wrote {one_line(out)}: {_status(count, plot)}\n")
         return
     picture = plotting.frame(
         plot, origin=origin, title=bag.name, xlabel=xlabel, color=plotting.use_color(),
@@ -178,4 +180,4 @@ def _status(count: int, plot: SeriesSet) -> str:
     span = f" over {held[1] - held[0]:,.1f} s" if held else ""
     thinned = [label for label, s in plot.series.items() if s.thinned]
     note = f"; thinned (min and max kept): {', '.join(thinned)}" if thinned else ""
-    return f"{count:,} messages{span}{note}"
+    return f"{counted(count, 'message', grouped=True)}{span}{note}"

@@ -11,6 +11,7 @@ from typing import TYPE_CHECKING, Annotated, Any
 import typer
 
 from rostools.bag.access import WRITE_COMPRESSIONS
+from rostools.bag.model import counted
 from rostools.cli.bag.group import app
 from rostools.cli.common import FormatOpt, node_session, output_format
 from rostools.cli.output import Format, check_writable, render
@@ -112,8 +113,8 @@ def summary_data(rec: Recorder) -> dict[str, Any]:
 def summary_text(data: dict[str, Any]) -> str:
     """The end-of-recording summary for people."""
     lines = [
-        f"recorded {data['messages']} messages ({_size(data['bytes'])}) on "
-        f"{len(data['topics'])} topic{'' if len(data['topics']) == 1 else 's'} into "
+        f"recorded {counted(data['messages'], 'message')} ({_size(data['bytes'])}) on "
+        f"{counted(len(data['topics']), 'topic')} into "
         f"{', '.join(data['files']) or 'no file'}"
     ]
     for topic, t in data["topics"].items():
@@ -339,7 +340,10 @@ def record(
     else:
         sys.stdout.write(render(out, data) + "\n")
     if rec.drops:
-        raise DataLossError(f"{rec.drops} messages were dropped: the buffer (-b) was full")
+        were = "was" if rec.drops == 1 else "were"
+        raise DataLossError(
+            f"{counted(rec.drops, 'message')} {were} dropped: the buffer (-b) was full"
+        )
 
 
 def _say_subscribing(topic: str) -> None:

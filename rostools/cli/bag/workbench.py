@@ -11,6 +11,7 @@ from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
+from rostools.bag.model import counted
 from rostools.cli import output
 from rostools.cli.bag.files import (
     CompressionOpt,
@@ -77,7 +78,7 @@ def _split_report(fmt: Format, report: SplitReport) -> None:
         data.update(notes=list(report.notes), lost=list(report.lost))
     if fmt is Format.text:
         for p in report.parts:
-            sys.stderr.write(f"wrote {p.messages} messages to {p.path}\n")
+            sys.stderr.write(f"wrote {counted(p.messages, 'message')} to {p.path}\n")
         say_notes(report.notes)
     elif fmt is Format.json:
         output.write(fmt, data)  # the last record of the NDJSON progress stream

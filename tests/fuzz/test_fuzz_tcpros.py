@@ -29,6 +29,7 @@ from rostools.wire.tcpros import (
     parse_header,
 )
 from tests.fuzz.conftest import FUZZ, SEED
+from tests.support.fakeconn import FakeTransport, FrameHandler
 
 #: Length prefixes: small, big, huge, and each limit and one over it.
 LENGTHS = st.sampled_from(
@@ -180,33 +181,6 @@ def test_service_responses_take_any_bytes(data: bytes, cuts: list[int]) -> None:
     assert (got, refused) == _expected_responses(data)
 
 
-class _Transport(asyncio.Transport):
-    """Enough of a transport to feed a protocol bytes and see it close."""
-
-    def __init__(self) -> None:
-        super().__init__()
-        self.closed = False
-        self.written = b""
-
-    def write(self, data: Any) -> None:
-        self.written += bytes(data)
-
-    def close(self) -> None:
-        self.closed = True
-
-    def abort(self) -> None:
-        self.closed = True
-
-    def is_closing(self) -> bool:
-        return self.closed
-
-    def get_extra_info(self, name: str, default: Any = None) -> Any:
-        return ("127.0.0.1", 1) if name == "peername" else default
-
-    def set_write_buffer_limits(self, high: Any = None, low: Any = None) -> None:
-        pass
-
-
 class _Subscriber:
     """What an inbound connection reports to."""
 
@@ -226,25 +200,6 @@ class _Subscriber:
         self.frames += [bytes(f) for f in frames]
 
     def connection_closed(self, conn: Any) -> None:
-        pass
-
-
-class _Handler:
-    """A service's side of an accepted connection: the frames after the header."""
-
-    def __init__(self) -> None:
-        self.frames: list[bytes] = []
-
-    def frames_received(self, frames: list[Any]) -> None:
-        self.frames += [bytes(f) for f in frames]
-
-    def connection_lost(self) -> None:
-        pass
-
-    def pause_writing(self) -> None:
-        pass
-
-    def resume_writing(self) -> None:
         pass
 
 
@@ -270,14 +225,14 @@ def test_connections_in_both_roles_take_any_bytes(parts: list[Any], cuts: list[i
         # a node's TCPROS server: the header goes to accept, the frames after it to a handler
         frames, refused = _expected(data, MAX_FRAME, MAX_HEADER_LENGTH)
         accepted: list[dict[str, str]] = []
-        handler = _Handler()
+        handler = FrameHandler()
 
-        def accept(fields: dict[str, str], conn: Any) -> _Handler:
+        def accept(fields: dict[str, str], conn: Any) -> FrameHandler:
             accepted.append(fields)
             return handler
 
         server = ServerConnection(accept)
-        transport = _Transport()
+        transport = FakeTransport()
         server.connection_made(transport)
         _feed(server, data, cuts)
         header = _header(frames[0]) if frames else None
@@ -296,7 +251,7 @@ def test_connections_in_both_roles_take_any_bytes(parts: list[Any], cuts: list[i
         frames, refused = _expected(data, 1_000_000, MAX_HEADER_LENGTH)
         subscriber = _Subscriber()
         inbound = InboundConnection(subscriber, "http://p:1/", 1, b"")
-        transport = _Transport()
+        transport = FakeTransport()
         inbound.connection_made(transport)
         _feed(inbound, data, cuts)
         header = _header(frames[0]) if frames else None

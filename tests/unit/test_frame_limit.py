@@ -35,6 +35,7 @@ from rostools.wire.tcpros import (
     publisher_header,
     service_reply_header,
 )
+from tests.support.fakeconn import FakeTransport, FrameHandler
 
 _U32 = struct.Struct("<I")
 REPLY = publisher_header("/talker", "/chatter", "m" * 32, "std_msgs/String", "string data", False)
@@ -112,32 +113,6 @@ def test_a_subscription_fails_on_a_frame_one_over_max_frame() -> None:
     assert events[2].reason == f"frame of {MAX_FRAME + 1} bytes exceeds the limit of {MAX_FRAME}"
 
 
-class _Transport(asyncio.Transport):
-    """Enough of a transport for a protocol to write to and close."""
-
-    def __init__(self) -> None:
-        super().__init__()
-        self.closed = False
-
-    def write(self, data: Any) -> None:
-        pass
-
-    def close(self) -> None:
-        self.closed = True
-
-    def abort(self) -> None:
-        self.closed = True
-
-    def is_closing(self) -> bool:
-        return self.closed
-
-    def get_extra_info(self, name: str, default: Any = None) -> Any:
-        return ("127.0.0.1", 1) if name == "peername" else default
-
-    def set_write_buffer_limits(self, high: Any = None, low: Any = None) -> None:
-        pass
-
-
 class _Receiver:
     """A subscriber with the default limit, recording what reaches it."""
 
@@ -161,10 +136,10 @@ class _Receiver:
 
 @pytest.mark.parametrize("length", [MAX_FRAME, MAX_FRAME + 1])
 def test_an_inbound_connection_drops_only_a_frame_over_max_frame(length: int) -> None:
-    async def run() -> tuple[InboundConnection, _Transport, _Receiver]:
+    async def run() -> tuple[InboundConnection, FakeTransport, _Receiver]:
         receiver = _Receiver()
         conn = InboundConnection(receiver, "http://p:1/", 1, b"")
-        transport = _Transport()
+        transport = FakeTransport()
         conn.connection_made(transport)
         _feed(conn, REPLY + _U32.pack(4) + b"kept" + _U32.pack(length) + b"x" * 10)
         conn._handshake_over()  # the handshake timer must not outlive the loop
@@ -183,33 +158,14 @@ def test_an_inbound_connection_drops_only_a_frame_over_max_frame(length: int) ->
 # --- a connection a node's TCPROS server accepted (a service client's requests) ---------------
 
 
-class _Handler:
-    """A service's side of an accepted connection: the frames after the header."""
-
-    def __init__(self) -> None:
-        self.frames: list[bytes] = []
-
-    def frames_received(self, frames: list[Any]) -> None:
-        self.frames += [bytes(f) for f in frames]
-
-    def connection_lost(self) -> None:
-        pass
-
-    def pause_writing(self) -> None:
-        pass
-
-    def resume_writing(self) -> None:
-        pass
-
-
 @pytest.mark.parametrize("length", [MAX_FRAME, MAX_FRAME + 1])
 def test_a_server_connection_closes_only_on_a_frame_over_max_frame(length: int) -> None:
-    handler = _Handler()
+    handler = FrameHandler()
     request = encode_header({"callerid": "/c", "service": "/s", "md5sum": "*"})
 
-    async def run() -> _Transport:
+    async def run() -> FakeTransport:
         conn = ServerConnection(lambda fields, conn: handler)
-        transport = _Transport()
+        transport = FakeTransport()
         conn.connection_made(transport)
         _feed(conn, request + _U32.pack(3) + b"req")
         _feed(conn, _U32.pack(length) + b"x" * 10)

@@ -55,7 +55,7 @@ def test_bad_input_is_one_line(
 @pytest.mark.parametrize(
     ("flip", "code", "said"),
     [
-        (5036, 1, "message at 1550219983.835047007 s: a message on text does not decode as"),
+        (5036, 1, "message at 1550219983.835047007 s: a message on /text does not decode as"),
         (5379, 1, "message at 1550219977.520894051 s: std_msgs/Int32: line 1:"),
         # A record that does not parse is skipped, the rest printed, and exit 6 (issue 24).
         (4662, 6, "chunk at 4117: 50 bytes at offset 462 do not parse (record header at 4628:"),

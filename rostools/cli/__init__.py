@@ -83,9 +83,26 @@ def main(argv: Sequence[str] | None = None) -> None:
     except BrokenPipeError as err:
         if _reader_gone():
             _quiet_exit()
-        sys.exit(report(err, "--debug" in args))  # a socket's, not our reader's
+        sys.exit(report(err, _debug(args)))  # a socket's, not our reader's
     except Exception as err:  # noqa: BLE001 - the one place every error is turned into an exit code
-        sys.exit(report(err, "--debug" in args))
+        sys.exit(report(err, _debug(args)))
+
+
+def _debug(args: list[str]) -> bool:
+    """Whether ``--debug`` was given as the root option: before the group name.
+
+    After it, ``--debug`` is a command's value (``param set /x --debug``), not a request for
+    tracebacks.
+    """
+    values = iter(args)
+    for arg in values:
+        if arg == "--debug":
+            return True
+        if arg in ("--master-uri", "--format"):  # the root options that take a value
+            next(values, None)
+        elif not arg.startswith("-"):
+            return False  # the group's name
+    return False
 
 
 def _reader_gone() -> bool:

@@ -81,3 +81,13 @@ def test_interrupted_wait_is_130(cli_env: dict[str, str]) -> None:
             assert "Traceback" not in err
         finally:
             waiting.stop()
+
+
+def test_a_value_that_reads_debug_is_a_value(cli_env: dict[str, str]) -> None:
+    # the defect (found by the long fuzz run, seed 710018): 'param set /x --debug' with no
+    # master printed a traceback, as though --debug had been given before the group name
+    done = run_cli("param", "set", "/fuzzed", "--debug", env=cli_env)
+    assert done.returncode == 4, done.stderr
+    assert "Traceback" not in done.stderr and done.stderr.count("\n") == 1, done.stderr
+    debug = run_cli("--debug", "param", "set", "/fuzzed", "1", env=cli_env)
+    assert debug.returncode == 4 and "Traceback" in debug.stderr

@@ -13,7 +13,7 @@ import re
 import sys
 from collections.abc import Iterable, Set
 from functools import cache
-from importlib.metadata import packages_distributions
+from importlib.metadata import distributions
 from pathlib import Path
 from typing import Any
 
@@ -45,11 +45,20 @@ def dist_name(requirement: str) -> str:
 
 @cache
 def import_names() -> dict[str, set[str]]:
-    """Installed distributions (normalized names) -> the top-level modules each provides."""
+    """Installed distributions (normalized names) -> the top-level modules each provides.
+
+    From each one's files, as 3.11's ``packages_distributions`` does: 3.10's reads only
+    ``top_level.txt``, which wheels built by hatch or meson (typer, rich, numpy) lack.
+    """
     names: dict[str, set[str]] = {}
-    for module, dists in packages_distributions().items():
-        for dist in dists:
-            names.setdefault(dist_name(dist), set()).add(module)
+    for dist in distributions():
+        modules = names.setdefault(dist_name(dist.metadata["Name"]), set())
+        for file in dist.files or ():
+            top = file.parts[0]
+            if top.endswith(".py"):
+                modules.add(top[:-3])
+            elif len(file.parts) > 1 and not top.endswith((".dist-info", ".data")):
+                modules.add(top)
     return names
 
 

@@ -111,6 +111,14 @@ def publisher(rostools_master: str, cli_env: dict[str, str]) -> Iterator[Proc]:
         pub.stop()
 
 
+def _said_once(code: int, err: str, active: str, why: str) -> None:
+    """A write that failed: exit 6, one line naming the file, ``why``, and the recover command."""
+    assert code == 6, err
+    assert "Traceback" not in err
+    assert err.count("\n") == 1 and err.startswith(f"rostools: cannot write {active}: "), err
+    assert why in err and f"rostools bag recover {active}" in err, err
+
+
 def _record_until_it_stops(argv: list[str], env: dict[str, str]) -> tuple[int, str]:
     """Run a recorder that is expected to stop by itself; its exit code and stderr."""
     rec = Proc(argv, env=env)
@@ -153,10 +161,7 @@ def test_a_full_disk_stops_with_one_line_and_exit_6(
         cli_env,
     )  # fmt: skip
     active = f"{out}.active"
-    assert code == 6, err
-    assert "Traceback" not in err
-    assert err.count("\n") == 1 and err.startswith(f"rostools: cannot write {active}: "), err
-    assert "the disk is full" in err and f"rostools bag recover {active}" in err, err
+    _said_once(code, err, active, "the disk is full")
     assert [p.name for p in kept.iterdir()] == [f"x.{fmt}.active"]
     messages = _recovered_messages(kept / f"x.{fmt}.active", cli_env)
     assert messages and all(
@@ -209,10 +214,7 @@ def test_a_file_size_limit_stops_with_one_line_and_exit_6(
         cli_env,
     )  # fmt: skip
     active = f"{out}.active"
-    assert code == 6, err
-    assert "Traceback" not in err
-    assert err.count("\n") == 1 and err.startswith(f"rostools: cannot write {active}: "), err
-    assert "size limit" in err and f"rostools bag recover {active}" in err, err
+    _said_once(code, err, active, "size limit")
     assert Path(active).stat().st_size == limit
     assert _recovered_messages(Path(active), cli_env)
 

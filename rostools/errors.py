@@ -94,6 +94,18 @@ class GoalPreempted(RostoolsError):  # noqa: N818
     exit_code = 9
 
 
+class QuietExit(RostoolsError):  # noqa: N818 - not a failure of its own: an ending
+    """A command that has already said all there is to say ends with ``exit_code``, no line.
+
+    ``bag doctor`` with findings (1), ``msg proto -s`` (its error's code, silently),
+    ``action send-goal``/``cancel`` on Ctrl-C once the goal is canceled (130).
+    """
+
+    def __init__(self, exit_code: int) -> None:
+        super().__init__("")
+        self.exit_code = exit_code
+
+
 def cannot_write(path: object, why: str) -> UsageError:
     """An output the user named that cannot be created: exit 2 in every command.
 

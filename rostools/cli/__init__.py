@@ -15,8 +15,10 @@ if TYPE_CHECKING:
 
 def report(err: BaseException, debug: bool) -> int:
     """Print ``err`` as one line on stderr (a traceback with ``--debug``); its exit code."""
-    from rostools.errors import RostoolsError
+    from rostools.errors import QuietExit, RostoolsError
 
+    if isinstance(err, QuietExit):
+        return err.exit_code
     if debug:
         import traceback
 

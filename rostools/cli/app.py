@@ -15,7 +15,7 @@ from rostools.cli.settings import Settings
 #: ``name:=value`` arguments that ``rostools.cli.main`` took off the command line.
 REMAPPINGS: dict[str, str] = {}
 
-#: name -> one-line help. Each group is the Typer app ``rostools.cli.<name>.app``.
+#: name -> one-line help. Each group's Typer app is ``group_app(name)``.
 GROUPS: dict[str, str] = {
     "topic": "Topics: list, info, type, find, echo, hz, bw, delay, pub, plot.",
     "service": "Services: list, info, type, find, uri, args, call.",
@@ -31,6 +31,19 @@ GROUPS: dict[str, str] = {
 }
 
 
+def group_app(name: str) -> typer.Typer:
+    """The Typer app of group ``name``.
+
+    ``rostools.cli.<name>.group.app`` for a package (whose ``__init__`` stays free of Typer),
+    ``rostools.cli.<name>.app`` for a module.
+    """
+    module = importlib.import_module(f"rostools.cli.{name}")
+    if hasattr(module, "__path__"):
+        module = importlib.import_module(f"rostools.cli.{name}.group")
+    app: typer.Typer = module.app
+    return app
+
+
 class LazyGroup(TyperGroup):
     """A group whose subcommands are loaded from their module on first use."""
 
@@ -42,8 +55,7 @@ class LazyGroup(TyperGroup):
         """Import ``rostools.cli.<name>`` and convert its Typer app."""
         if cmd_name not in GROUPS:
             return None
-        module = importlib.import_module(f"rostools.cli.{cmd_name}")
-        command = typer.main.get_command(module.app)
+        command = typer.main.get_command(group_app(cmd_name))
         command.name = cmd_name
         return command
 

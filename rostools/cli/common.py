@@ -1,14 +1,24 @@
-"""What every command shares: global settings, common options and output helpers."""
+"""What every command shares on the Typer side.
+
+The common options, the settings of an invocation, and ``add``, which turns declared commands
+(``rostools.cli.declare``) into a group's Typer commands.
+"""
 
 from __future__ import annotations
 
+import ast
+import functools
+import inspect
 import math
+import sys
+import typing
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated, Any, TypeVar
 
 import typer
 
 from rostools.cli import output
+from rostools.cli.declare import declared
 from rostools.cli.output import Format
 from rostools.cli.settings import Settings
 
@@ -48,6 +58,66 @@ def settings(ctx: typer.Context) -> Settings:
     if not isinstance(root.obj, Settings):
         root.obj = Settings()
     return root.obj
+
+
+def add(app: typer.Typer, *commands: Callable[..., Any]) -> None:
+    """Add declared commands (``rostools.cli.declare``) to a group's app, in ``--help`` order.
+
+    A quick command is marked ``rostools_quick`` for ``quick.json``: the launcher may call
+    the function itself.
+    """
+    for function in commands:
+        found = declared(function)
+        callback = _callback(function)
+        if found.quick:
+            callback.__dict__["rostools_quick"] = f"{function.__module__}:{function.__name__}"
+        app.command(found.name, **found.settings)(callback)
+
+
+def alias(app: typer.Typer, name: str, function: Callable[..., Any], help: str) -> None:
+    """Add a declared command a second time, as ``name`` (``msg info`` is ``msg show``)."""
+    app.command(name, help=help, **declared(function).settings)(_callback(function))
+
+
+def _callback(function: Callable[..., Any]) -> Callable[..., Any]:
+    """``function`` as Typer calls it: a ``Settings`` first parameter becomes Typer's context.
+
+    A function that takes the context itself is Typer's as it is.
+    """
+    first, *params = inspect.signature(function).parameters.values()
+    if first.annotation not in ("Settings", Settings):
+        return function
+    names = _annotation_names(function.__module__)
+    hints = typing.get_type_hints(function, names, include_extras=True)
+    params = [p.replace(annotation=hints[p.name]) for p in params]
+
+    def callback(ctx: typer.Context, **values: Any) -> Any:
+        return function(settings(ctx), **values)
+
+    context = inspect.Parameter(
+        "ctx", inspect.Parameter.POSITIONAL_OR_KEYWORD, annotation=typer.Context
+    )
+    callback.__signature__ = inspect.Signature([context, *params])  # type: ignore[attr-defined]
+    callback.__annotations__ = {"ctx": typer.Context} | {p.name: p.annotation for p in params}
+    for attribute in ("__name__", "__qualname__", "__module__", "__doc__"):
+        setattr(callback, attribute, getattr(function, attribute))
+    return callback
+
+
+@functools.cache
+def _annotation_names(module_name: str) -> dict[str, Any]:
+    """The names a module's annotations may use.
+
+    Its own, and those it imports under ``if TYPE_CHECKING:`` (Typer and the option aliases,
+    kept off the quick path), imported now.
+    """
+    module = sys.modules[module_name]
+    names = dict(vars(module))
+    for statement in ast.parse(inspect.getsource(module)).body:
+        if isinstance(statement, ast.If) and ast.unparse(statement.test) == "TYPE_CHECKING":
+            code = compile(ast.Module(statement.body, []), module.__name__, "exec")
+            exec(code, names)  # noqa: S102 - the module's own import statements
+    return names
 
 
 def output_format(ctx: typer.Context, local: Format | None) -> Format:

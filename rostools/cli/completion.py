@@ -9,7 +9,6 @@ the bash, zsh and fish glue that hands the command line to ``rostools __complete
 
 from __future__ import annotations
 
-import importlib
 import json
 import sys
 from pathlib import Path
@@ -113,7 +112,7 @@ def _command(group: str, name: str, cmd: Any) -> dict[str, Any]:
 
 def build_tree() -> dict[str, Any]:
     """The command tree of the app, as ``rostools.cli.completer`` reads it."""
-    from rostools.cli.app import GROUPS
+    from rostools.cli.app import GROUPS, group_app
     from rostools.cli.app import app as root_app
 
     root = typer.main.get_command(root_app)
@@ -121,7 +120,7 @@ def build_tree() -> dict[str, Any]:
     tree["options"] = _options("", "", root.params)
     tree["options"] |= {"-h": {"help": "Show help.", "value": ""}}
     for group, help_text in GROUPS.items():
-        cmd = typer.main.get_command(importlib.import_module(f"rostools.cli.{group}").app)
+        cmd = typer.main.get_command(group_app(group))
         subcommands = getattr(cmd, "commands", None)
         if subcommands is None:  # a group of one command (core, demo)
             node = _command(group, group, cmd)
@@ -162,14 +161,14 @@ def quick_specs() -> dict[str, Any]:
 
     Written from the Typer app, so both read one command line the same way.
     """
-    from rostools.cli.app import GROUPS
+    from rostools.cli.app import GROUPS, group_app
     from rostools.cli.app import app as root_app
 
     root = typer.main.get_command(root_app)
     specs: dict[str, Any] = {"": _quick_spec(root, "")}
 
     for group in GROUPS:
-        cmd = typer.main.get_command(importlib.import_module(f"rostools.cli.{group}").app)
+        cmd = typer.main.get_command(group_app(group))
         for name, sub in getattr(cmd, "commands", {}).items():
             target = getattr(sub.callback, "rostools_quick", None)
             if target is not None:

@@ -9,7 +9,6 @@ in the usual output formats. Both plot commands share it; neither imports the ot
 from __future__ import annotations
 
 import os
-import re
 import shutil
 import sys
 import time
@@ -38,18 +37,6 @@ IMAGE_COLUMNS: Final = 2000
 
 #: What the x axis is: the time a message was received, its header.stamp, or its bag time.
 TIME_KINDS: Final = {"receive": "receive time", "stamp": "header.stamp", "bag": "bag time"}
-
-_DURATION = re.compile(r"^\s*([0-9]*\.?[0-9]+)\s*(ms|s|min|m|h)?\s*$")
-_UNITS: Final = {"ms": 1e-3, "s": 1.0, "min": 60.0, "m": 60.0, "h": 3600.0, None: 1.0}
-
-
-def parse_duration(text: str, option: str) -> float:
-    """``10``, ``10s``, ``500ms``, ``2m`` or ``1h`` as seconds (more than zero)."""
-    found = _DURATION.match(text)
-    seconds = float(found.group(1)) * _UNITS[found.group(2)] if found else 0.0
-    if not found or seconds <= 0:
-        raise UsageError(f"{option} {text!r} is not a duration", hint="for example 10s, 500ms, 2m")
-    return seconds
 
 
 def image_format(path: Path) -> str:

@@ -8,9 +8,12 @@ from rostools.cli.output import Format
 
 TYPE_CHECKING = False  # ``typing`` is 5-10 ms of start-up; only annotations use it
 if TYPE_CHECKING:
+    import asyncio
     from pathlib import Path
 
     from rostools.msgs.store import TypeStore
+    from rostools.msgs.topictype import TopicType
+    from rostools.node.node import Node
     from rostools.rosgraph.masterapi import MasterProxy
 
 DEFAULT_MASTER_URI = "http://localhost:11311"
@@ -98,3 +101,22 @@ def type_store(msg_paths: list[Path] | None = None) -> TypeStore:
     from rostools.msgs.store import TypeStore
 
     return TypeStore.default(msg_paths or [])
+
+
+def learn_type(s: Settings, topic: str, store: TypeStore) -> TypeStore:
+    """``store`` plus the definition a publisher of ``topic`` sends, asked as a short node.
+
+    The publisher's header is waited for as long as a service server's (``PROBE_TIMEOUT``).
+    """
+    from rostools.node.learntype import learn_topic_type
+    from rostools.node.notice import to_stderr
+    from rostools.node.session import run_node
+    from rostools.rosgraph.masterapi import PROBE_TIMEOUT
+
+    async def main(node: Node, stop: asyncio.Event) -> TopicType:
+        return await learn_topic_type(node, topic, PROBE_TIMEOUT)
+
+    learnt = run_node(
+        main, s.resolved_master_uri(), "rostools_probe", remappings=s.remappings, notify=to_stderr
+    )
+    return store.with_definition(learnt.type, learnt.definition)

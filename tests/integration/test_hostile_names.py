@@ -91,7 +91,7 @@ def test_parameter_values_are_data_and_stay_as_they_are(
 ) -> None:
     # a URDF's line breaks are its own: param get prints the value's YAML, and -p the text
     # as it is, as rosparam -p does
-    from rostools.cli.paramdump import dump
+    from rostools.cli.param.plainyaml import dump
 
     done = run_cli("param", "get", "/urdf", env=cli_env)
     assert done.returncode == 0, done.stderr

@@ -6,19 +6,17 @@ Docstrings use ``code`` marks, but Typer prints a command's docstring as it is: 
 
 from __future__ import annotations
 
-import importlib
 from collections.abc import Iterator
 from typing import Any
 
 import typer
 
-from rostools.cli.app import GROUPS
+from rostools.cli.app import GROUPS, group_app
 
 
 def _helps() -> Iterator[tuple[str, str]]:
     for group in GROUPS:
-        app = importlib.import_module(f"rostools.cli.{group}").app
-        root = typer.main.get_command(app)
+        root = typer.main.get_command(group_app(group))
         commands: dict[str, Any] = getattr(root, "commands", {}) or {group: root}
         for name, cmd in commands.items():
             yield f"{group} {name}", cmd.help or ""

@@ -11,7 +11,8 @@ import pytest
 from rostools.cli.node.graph import graph_dot, graph_text
 from rostools.cli.node.kill import unreachable_text
 from rostools.cli.node.ping import reply_text
-from rostools.cli.quick.node import failure_class, info_text
+from rostools.cli.node.query import info_text
+from rostools.cli.node.shared import failure_class
 from rostools.errors import NotFoundError, TimeoutExpired, UnreachableError
 from rostools.rosgraph.nodeapi import BusConnection, NodeInfo, Probe
 from rostools.rosgraph.snapshot import SystemState, build_graph

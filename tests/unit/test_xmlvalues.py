@@ -70,7 +70,7 @@ def test_xmlrpcpp_forms_faults_and_garbage() -> None:
 def test_a_master_client_imports_no_xmlrpc_client() -> None:
     """The 30 ms of ``xmlrpc.client``, ``http.client`` and ``email`` are not paid by commands."""
     code = (
-        "import sys, rostools.rosgraph.masterapi, rostools.cli.paramyaml\n"
+        "import sys, rostools.rosgraph.masterapi, rostools.cli.param.paramyaml\n"
         "print(sorted(m for m in ('xmlrpc.client', 'http.client', 'email.parser')"
         " if m in sys.modules))"
     )

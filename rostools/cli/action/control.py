@@ -8,12 +8,13 @@ from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
-from rostools.cli.action.group import app
-from rostools.cli.action.shared import SERVER_WAIT, ActionArg, WaitOpt, action_types, find_action
+from rostools.cli.action.options import ActionArg, WaitOpt
+from rostools.cli.action.shared import SERVER_WAIT, action_types, find_action
 from rostools.cli.common import FormatOpt, master, node_session, output_format
+from rostools.cli.declare import command
 from rostools.cli.output import Format, emit, lines, write
 from rostools.cli.settings import type_store
-from rostools.errors import NotFoundError, TimeoutExpired, UsageError, one_line
+from rostools.errors import NotFoundError, QuietExit, TimeoutExpired, UsageError, one_line
 
 if TYPE_CHECKING:
     import asyncio
@@ -47,7 +48,7 @@ def _table_text(rows: list[dict[str, Any]]) -> str:
     return "\n".join(table)
 
 
-@app.command()
+@command()
 def cancel(
     ctx: typer.Context,
     action: ActionArg,
@@ -107,7 +108,7 @@ def cancel(
 
     rows = node_session(ctx, main, "rostools_action", fmt)
     if rows is None:
-        raise typer.Exit(130)
+        raise QuietExit(130)
     emit(
         fmt,
         rows,
@@ -115,7 +116,7 @@ def cancel(
     )
 
 
-@app.command()
+@command()
 def status(
     ctx: typer.Context,
     action: ActionArg,

@@ -13,15 +13,17 @@ from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
-from rostools.cli.action.group import app
-from rostools.cli.action.shared import SERVER_WAIT, ActionArg, WaitOpt, find_action, plain, text
+from rostools.cli.action.options import ActionArg, WaitOpt
+from rostools.cli.action.shared import SERVER_WAIT, find_action, plain, text
 from rostools.cli.common import FormatOpt, MsgPathOpt, master, node_session, output_format
+from rostools.cli.declare import command
 from rostools.cli.output import Format, write
 from rostools.cli.settings import type_store
 from rostools.errors import (
     GoalAborted,
     GoalPreempted,
     GoalRejected,
+    QuietExit,
     TimeoutExpired,
     UnreachableError,
     UsageError,
@@ -148,7 +150,7 @@ def _outcome(event: GoalEvent, name: str) -> None:
     raise UnreachableError(f"{what} ended in an unknown state {event.status}")
 
 
-@app.command("send-goal", context_settings={"ignore_unknown_options": True})
+@command("send-goal", context_settings={"ignore_unknown_options": True})
 def send_goal(
     ctx: typer.Context,
     action: ActionArg,
@@ -187,7 +189,7 @@ def send_goal(
         wait_until = deadline if deadline is not None else time.monotonic() + SERVER_WAIT
         while not client.server_connected():
             if stop.is_set():
-                raise typer.Exit(130)
+                raise QuietExit(130)
             if time.monotonic() >= wait_until:
                 limit = timeout if timeout is not None else SERVER_WAIT
                 raise TimeoutExpired(
@@ -226,7 +228,7 @@ def send_goal(
                 break
         await client.close()
         if reason == "interrupted":
-            raise typer.Exit(130)
+            raise QuietExit(130)
         raise TimeoutExpired(
             f"goal {handle.id} of {info.name} did not finish within {timeout:g} s; canceled it"
         )

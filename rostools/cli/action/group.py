@@ -1,8 +1,11 @@
-"""The ``rostools action`` group, to which its modules add their commands."""
+"""The ``rostools action`` group: its Typer app, with its commands in ``--help`` order."""
 
 from __future__ import annotations
 
 import typer
+
+from rostools.cli.action import control, goal, query
+from rostools.cli.common import add
 
 app = typer.Typer(
     name="action",
@@ -10,3 +13,4 @@ app = typer.Typer(
     no_args_is_help=True,
     add_completion=False,
 )
+add(app, query.list_actions, query.info, goal.send_goal, control.cancel, control.status)

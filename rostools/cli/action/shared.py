@@ -1,33 +1,19 @@
-"""What the action commands share: the action argument, finding an action, its types."""
+"""What the action commands share, without Typer: finding an action, its types, its text."""
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Annotated, Any
-
-import typer
-
-from rostools.cli.common import FINITE
 from rostools.errors import NotFoundError
 from rostools.names import script_resolve
 
+TYPE_CHECKING = False  # ``typing`` is 5-10 ms of start-up; only annotations use it
 if TYPE_CHECKING:
+    from typing import Any
+
     from rostools.action.graph import ActionInfo
     from rostools.action.types import ActionTypes
     from rostools.msgs.store import TypeStore
     from rostools.rosgraph.masterapi import MasterProxy
 
-ActionArg = Annotated[
-    str, typer.Argument(help="Action name (its topics are NAME/goal, NAME/status, ...).")
-]
-WaitOpt = Annotated[
-    float | None,
-    typer.Option(
-        "--timeout",
-        click_type=FINITE,
-        help="Give up after this many seconds (exit 5).",
-        show_default=False,
-    ),
-]
 #: How long a command waits for the server to connect when no --timeout is given (s).
 SERVER_WAIT = 10.0
 

@@ -20,8 +20,9 @@ from typing import TYPE_CHECKING, Annotated, Any
 import typer
 
 from rostools.bag.model import counted
-from rostools.cli.bag.files import EndOpt, FilterExprOpt, StartOpt, check_read, time_window
-from rostools.cli.bag.group import app
+from rostools.cli.bag.options import EndOpt, FilterExprOpt, StartOpt
+from rostools.cli.bag.shared import check_read, time_window
+from rostools.cli.declare import command
 from rostools.errors import InvalidDataError, UsageError
 
 if TYPE_CHECKING:
@@ -119,7 +120,7 @@ def _entries(
     return heapq.merge(*(tagged(i, r) for i, r in enumerate(readers)), key=itemgetter(0, 1))
 
 
-@app.command()
+@command()
 def cat(
     args: Annotated[
         list[str], typer.Argument(help="Bags (.bag, .mcap), then topics (default: all).")

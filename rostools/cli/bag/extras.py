@@ -12,11 +12,12 @@ from typing import TYPE_CHECKING, Annotated, Any
 import typer
 
 from rostools.bag.model import counted
-from rostools.cli.bag.files import BagArg, ForceOpt, Progress, QuietOpt
-from rostools.cli.bag.group import app
+from rostools.cli.bag.options import BagArg, ForceOpt, QuietOpt
+from rostools.cli.bag.shared import Progress
 from rostools.cli.common import FormatOpt, output_format
+from rostools.cli.declare import command
 from rostools.cli.output import Format, emit
-from rostools.errors import NotFoundError, UsageError, one_line
+from rostools.errors import NotFoundError, QuietExit, UsageError, one_line
 
 if TYPE_CHECKING:
     from rostools.bag import mcap_format as fmt_
@@ -52,7 +53,7 @@ def _attachments_text(rows: list[dict[str, Any]]) -> str:
                      for row in table)  # fmt: skip
 
 
-@app.command()
+@command()
 def attachments(
     ctx: typer.Context,
     bag: BagArg,
@@ -93,7 +94,7 @@ def attachments(
     out.write_bytes(data)
 
 
-@app.command()
+@command()
 def metadata(ctx: typer.Context, bag: BagArg, fmt: FormatOpt = None) -> None:
     """An MCAP file's metadata records, as JSON (or YAML with -F yaml), in file order."""
     from rostools.bag.mcap_format import Metadata
@@ -107,7 +108,7 @@ def metadata(ctx: typer.Context, bag: BagArg, fmt: FormatOpt = None) -> None:
     emit(Format.json if chosen is Format.text else chosen, records)
 
 
-@app.command()
+@command()
 def doctor(
     ctx: typer.Context,
     bags: Annotated[list[Path], typer.Argument(help="One or more .bag or .mcap files.")],
@@ -141,4 +142,4 @@ def doctor(
         ]  # fmt: skip
         emit(out, data[0] if len(data) == 1 else data)
     if not all(r.clean for r in reports):
-        raise typer.Exit(1)
+        raise QuietExit(1)

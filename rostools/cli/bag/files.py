@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import dataclasses
 import sys
-from collections.abc import Callable, Iterable, Sequence
+from collections.abc import Callable
 from functools import partial
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated, Any
@@ -16,80 +16,32 @@ import typer
 
 from rostools.bag.model import counted
 from rostools.cli import output
-from rostools.cli.bag.group import app
-from rostools.cli.common import FINITE, FormatOpt, output_format
+from rostools.cli.bag.options import (
+    BagArg,
+    CompressionOpt,
+    DstOpt,
+    EndOpt,
+    ForceOpt,
+    OutArg,
+    OutputDirOpt,
+    QuietOpt,
+    RenameOpt,
+    RenameTypeOpt,
+    StartOpt,
+    TopicsOpt,
+)
+from rostools.cli.bag.shared import check_read, copy_command, recovered_name, renames, time_window
+from rostools.cli.common import FormatOpt, output_format
+from rostools.cli.declare import command
 from rostools.cli.output import Format, emit, render
 from rostools.errors import UsageError, one_line
 
 if TYPE_CHECKING:
-    from rostools.bag.base import BagReader
     from rostools.bag.ops import CopyReport
     from rostools.bag.recover import RecoverReport
-    from rostools.bag.rename import Renames
 
 
-BagArg = Annotated[Path, typer.Argument(help="A .bag or .mcap file.")]
-OutArg = Annotated[Path, typer.Argument(help="The file to write; its name picks the format.")]
-ForceOpt = Annotated[bool, typer.Option("--force", "-f", help="Overwrite an existing output file.")]
-QuietOpt = Annotated[bool, typer.Option("--quiet", "-q", help="No progress bar.")]
-CompressionOpt = Annotated[
-    str | None,
-    typer.Option(
-        "--compression",
-        "-c",
-        help="Chunk compression: none, bz2 or lz4 (.bag); zstd, lz4 or none (MCAP).",
-    ),
-]
-TopicsOpt = Annotated[list[str] | None, typer.Option("--topics", "-t", help="Only these topics.")]
-StartOpt = Annotated[
-    float | None,
-    typer.Option("--start", click_type=FINITE, help="Seconds from the (earliest) bag's start."),
-]
-EndOpt = Annotated[
-    float | None,
-    typer.Option("--end", click_type=FINITE, help="Seconds from the (earliest) bag's start."),
-]
-FilterExprOpt = Annotated[
-    str | None,
-    typer.Option("--filter", help="Only messages for which this is true (as bag filter)."),
-]
-
-
-def time_window(
-    paths: list[Path], start: float | None, end: float | None
-) -> tuple[int | None, int | None]:
-    """``--start``/``--end`` as ns bounds, counted from the earliest start among ``paths``."""
-    if start is None and end is None:
-        return None, None
-    from rostools.bag.access import bag_info
-
-    begin = min(bag_info(p).start_ns or 0 for p in paths)
-    lo = None if start is None else begin + (seconds_to_ns(start) or 0)
-    hi = None if end is None else begin + (seconds_to_ns(end) or 0)
-    return lo, hi
-
-
-RenameOpt = Annotated[
-    list[str] | None,
-    typer.Option("--rename", help="Write topic OLD as NEW (/old:=/new, as play); repeatable."),
-]
-RenameTypeOpt = Annotated[
-    list[str] | None,
-    typer.Option(
-        "--rename-type",
-        help="Rename a type (pkg/Old:=pkg/New) where its md5sum stays the same; repeatable.",
-    ),
-]
-
-
-def renames(topics: list[str] | None, types: list[str] | None) -> Renames | None:
-    """The rules of ``--rename`` and ``--rename-type``, or None when there are none."""
-    from rostools.bag.rename import Renames
-
-    return Renames.parse(topics or [], types or []) or None
-
-
-@app.command()
+@command()
 def info(
     ctx: typer.Context,
     bags: Annotated[list[str], typer.Argument(help="One or more .bag or .mcap files.")],
@@ -140,124 +92,7 @@ def info(
     check_read(readers, "summarised " + ", ".join(bags), unindexed_fails=True)
 
 
-def say_note(note: str) -> None:
-    """How an input had to be read (an index that disagrees, a scan): a ``note:`` line."""
-    sys.stderr.write(f"note: {note}\n")
-
-
-def say_notes(notes: Iterable[str]) -> None:
-    """``say_note`` for each."""
-    for note in notes:
-        say_note(note)
-
-
-def check_read(readers: Sequence[BagReader], done: str, unindexed_fails: bool = False) -> None:
-    """After a command read these bags: say their notes, and exit 6 if anything was left out.
-
-    ``done`` says what the command did, for the error line. With ``unindexed_fails``, a bag
-    read without its index is exit 1 (``bag info``, as rosbag info).
-    """
-    from rostools.bag.base import after_reading
-
-    after_reading(readers, done, say_note, unindexed_fails=unindexed_fails)
-
-
-class Progress:
-    """A progress bar on a terminal (stderr), NDJSON with ``--format json``, else nothing."""
-
-    def __init__(self, label: str, fmt: Format, quiet: bool) -> None:
-        self.label = label
-        self.json = fmt is Format.json
-        self.bar = not quiet and not self.json and sys.stderr.isatty()
-        self.last = -1
-
-    def __call__(self, done: int, total: int) -> None:
-        """Messages copied so far, of ``total``."""
-        percent = int(100 * done / total) if total else 100
-        if percent == self.last:
-            return
-        self.last = percent
-        if self.json:
-            output.write(Format.json, {"progress": self.label, "done": done, "total": total})
-        elif self.bar:
-            width = 30
-            filled = width * percent // 100
-            sys.stderr.write(
-                f"\r{self.label} [{'#' * filled}{'.' * (width - filled)}] {percent:3d}%"
-            )
-            sys.stderr.flush()
-
-    def done(self) -> None:
-        """End the bar's line."""
-        if self.bar:
-            sys.stderr.write("\n")
-
-
-def _report(fmt: Format, report: CopyReport) -> None:
-    data = {
-        "source": str(report.source),
-        "output": str(report.output),
-        "format": report.format,
-        "compression": report.compression,
-        "messages_read": report.messages_read,
-        "messages_written": report.messages_written,
-        "connections": report.connections,
-        "extras_copied": report.extras_copied,
-        "extras_left_out": report.extras_left_out,
-    }
-    if report.notes or report.lost:
-        data.update(notes=list(report.notes), lost=list(report.lost))
-    if fmt is Format.text:
-        sys.stderr.write(
-            f"wrote {report.messages_written} of {counted(report.messages_read, 'message')} to "
-            f"{report.output} ({report.format}, {report.compression})\n"
-        )
-        say_notes(report.notes)
-        if report.extras_left_out:
-            sys.stderr.write(
-                f"left out {counted(report.extras_left_out, 'MCAP attachment/metadata record')}: "
-                + (
-                    "a .bag has no place for them\n"
-                    if report.format == "bag"
-                    else "outside the time range\n"
-                )
-            )
-    elif fmt is Format.json:
-        output.write(fmt, data)  # the last record of the NDJSON progress stream
-    else:
-        emit(fmt, data)
-
-
-def copy_command(
-    ctx: typer.Context,
-    fmt: Format | None,
-    quiet: bool,
-    label: str,
-    run: Callable[[Any], CopyReport],
-    check: bool = True,
-) -> CopyReport:
-    """Run a copying command with a progress bar, then report what it wrote.
-
-    With ``check``, exit 6 if the input had damage that was left out.
-    """
-    fmt = output_format(ctx, fmt)
-    progress = Progress(label, fmt, quiet)
-    try:
-        report = run(progress)
-    finally:
-        progress.done()
-    _report(fmt, report)
-    if check:
-        report.raise_if_lost()
-    return report
-
-
-def seconds_to_ns(value: float | None) -> int | None:
-    """Seconds as ns, rounded (None stays None)."""
-    return None if value is None else round(value * 1e9)
-
-
-@app.command("filter")
+@command("filter")
 def filter_(
     ctx: typer.Context,
     src: BagArg,
@@ -297,9 +132,10 @@ def filter_(
     from rostools.bag.ops import filter_bag
 
     lo, hi = time_window([src], start, end)
-    show = None if print_ is None else (print_, partial(_say, output_format(ctx, fmt)))
+    out = output_format(ctx, fmt)
+    show = None if print_ is None else (print_, partial(_say, out))
     rules = renames(rename, rename_type)
-    copy_command(ctx, fmt, quiet or show is not None, "filter", lambda progress: filter_bag(
+    copy_command(out, quiet or show is not None, "filter", lambda progress: filter_bag(
         src, dst, topics=topics or None, start=lo, end=hi, expression=expression,
         compression=compression, progress=progress, overwrite=force, show=show, latched=latched,
         renames=rules,
@@ -312,7 +148,7 @@ def _say(fmt: Format, matched: bool, value: Any) -> None:
     output.write(fmt, {"match": matched, "print": value}, lambda _: text)
 
 
-@app.command()
+@command()
 def convert(
     ctx: typer.Context,
     src: BagArg,
@@ -330,7 +166,7 @@ def convert(
 
     size = chunk_size * 1024 if chunk_size else None
     rules = renames(rename, rename_type)
-    copy_command(ctx, fmt, quiet, "convert", lambda progress: run_convert(
+    copy_command(output_format(ctx, fmt), quiet, "convert", lambda progress: run_convert(
         src, dst, compression=compression, chunk_size=size, progress=progress, overwrite=force,
         renames=rules,
     ))  # fmt: skip
@@ -357,19 +193,14 @@ def _in_place(
         def step(progress: Any) -> CopyReport:
             return dataclasses.replace(run(path, dst, progress), output=keep or dst)
 
-        report = copy_command(ctx, fmt, quiet, label, step, check=False)
+        report = copy_command(output_format(ctx, fmt), quiet, label, step, check=False)
         swap(path, dst, keep)
         return list(report.lost)
 
     each_in_place(bags, output_dir, force, quiet, label, one)
 
 
-OutputDirOpt = Annotated[
-    Path | None, typer.Option("--output-dir", help="Write here instead of replacing the bag.")
-]
-
-
-@app.command()
+@command()
 def compress(
     ctx: typer.Context,
     bags: Annotated[list[Path], typer.Argument(help="Bags to compress.")],
@@ -396,7 +227,7 @@ def compress(
     _in_place(ctx, bags, output_dir, force, fmt, quiet, "compress", run)
 
 
-@app.command()
+@command()
 def decompress(
     ctx: typer.Context,
     bags: Annotated[list[Path], typer.Argument(help="Bags to decompress.")],
@@ -414,25 +245,7 @@ def decompress(
     _in_place(ctx, bags, output_dir, force, fmt, quiet, "decompress", run)
 
 
-def recovered_name(src: Path) -> Path:
-    """Where ``recover`` writes by default.
-
-    ``x.bag.active`` becomes ``x.bag`` (the name the recorder would have given it), ``x.bag``
-    becomes ``x.recovered.bag`` and ``x.mcap`` becomes ``x.recovered.mcap``.
-    """
-    if src.name.endswith(".active"):
-        final = src.with_name(src.name.removesuffix(".active"))
-        if not final.exists():
-            return final
-        src = final
-    suffix = src.suffix or ".bag"
-    return src.with_name(src.name.removesuffix(suffix) + ".recovered" + suffix)
-
-
-DstOpt = Annotated[Path | None, typer.Argument(help="Output (default: NAME.recovered.bag|mcap).")]
-
-
-@app.command()
+@command()
 def recover(
     ctx: typer.Context,
     src: BagArg,
@@ -448,7 +261,7 @@ def recover(
     report.raise_if_lost()
 
 
-@app.command()
+@command()
 def reindex(
     ctx: typer.Context,
     bags: Annotated[list[Path], typer.Argument(help="Bags to reindex.")],

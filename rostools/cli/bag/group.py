@@ -1,8 +1,11 @@
-"""The ``rostools bag`` group, to which its modules add their commands."""
+"""The ``rostools bag`` group: its Typer app, with its commands in ``--help`` order."""
 
 from __future__ import annotations
 
 import typer
+
+from rostools.cli.bag import cat, extras, files, play, plot, record, workbench
+from rostools.cli.common import add
 
 app = typer.Typer(
     name="bag",
@@ -13,3 +16,6 @@ app = typer.Typer(
     no_args_is_help=True,
     add_completion=False,
 )
+add(app, files.info, files.filter_, files.convert, files.compress, files.decompress)
+add(app, files.recover, files.reindex, workbench.merge, workbench.split, cat.cat, plot.plot_cmd)
+add(app, play.play, record.record, extras.attachments, extras.metadata, extras.doctor)

@@ -12,9 +12,9 @@ from typing import TYPE_CHECKING, Annotated
 import typer
 
 from rostools.bag.model import counted
-from rostools.cli.bag.files import check_read
-from rostools.cli.bag.group import app
+from rostools.cli.bag.shared import check_read
 from rostools.cli.common import FINITE, FormatOpt, node_session, output_format
+from rostools.cli.declare import command
 from rostools.cli.output import Format, render
 from rostools.errors import UsageError, one_line
 
@@ -82,7 +82,7 @@ def keyboard(player: Player, loop: asyncio.AbstractEventLoop) -> Iterator[bool]:
         termios.tcsetattr(fd, termios.TCSADRAIN, saved)
 
 
-@app.command()
+@command()
 def play(
     ctx: typer.Context,
     bags: Annotated[

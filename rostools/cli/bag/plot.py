@@ -15,9 +15,10 @@ from typing import TYPE_CHECKING, Annotated
 import typer
 
 from rostools.bag.model import counted
-from rostools.cli.bag.files import EndOpt, StartOpt, check_read, time_window
-from rostools.cli.bag.group import app
+from rostools.cli.bag.options import EndOpt, StartOpt
+from rostools.cli.bag.shared import check_read, time_window
 from rostools.cli.common import FormatOpt, output_format
+from rostools.cli.declare import command
 from rostools.cli.output import Format
 from rostools.errors import InvalidDataError, NotFoundError, one_line
 
@@ -28,7 +29,7 @@ if TYPE_CHECKING:
     from rostools.series import SeriesSet
 
 
-@app.command("plot")
+@command("plot")
 def plot_cmd(
     ctx: typer.Context,
     bag: Annotated[Path, typer.Argument(help="A .bag or .mcap file.")],

@@ -12,9 +12,10 @@ import typer
 
 from rostools.bag.access import WRITE_COMPRESSIONS
 from rostools.bag.model import counted
-from rostools.cli.bag.group import app
 from rostools.cli.common import FormatOpt, node_session, output_format
+from rostools.cli.declare import command
 from rostools.cli.output import Format, check_writable, render
+from rostools.cli.units import parse_duration, parse_size
 from rostools.errors import DataLossError, UsageError, one_line
 
 if TYPE_CHECKING:
@@ -22,33 +23,6 @@ if TYPE_CHECKING:
 
     from rostools.bag.record import Recorder
     from rostools.node.node import Node
-
-_UNITS = {"s": 1.0, "m": 60.0, "h": 3600.0}
-
-
-def parse_duration(text: str) -> float:
-    """``30``, ``30s``, ``5m`` or ``2h`` in seconds (rosbag record --duration)."""
-    unit = _UNITS.get(text[-1:])
-    number = text[:-1] if unit is not None else text
-    try:
-        value = float(number) * (unit or 1.0)
-    except ValueError:
-        raise UsageError(f"bad duration {text!r} (examples: 30, 30s, 5m, 2h)") from None
-    if value <= 0:
-        raise UsageError(f"the duration must be positive, not {text!r}")
-    return value
-
-
-def parse_space(text: str) -> int:
-    """``1G``, ``500M``, ``64k`` or a plain number of bytes (rosbag record -L)."""
-    scale = {"g": 1024**3, "m": 1024**2, "k": 1024}.get(text[-1:].lower())
-    try:
-        value = int(text[:-1] if scale else text) * (scale or 1)
-    except ValueError:
-        raise UsageError(f"bad size {text!r} for -L (examples: 1G, 500M, 64K, 0)") from None
-    if value < 0:
-        raise UsageError(f"-L cannot be negative, not {text!r}")
-    return value
 
 
 def output_name(
@@ -196,7 +170,7 @@ class LiveTable:
         return table
 
 
-@app.command()
+@command()
 def record(
     ctx: typer.Context,
     topics: Annotated[list[str] | None, typer.Argument(help="Topics (regexes with -e).")] = None,
@@ -308,9 +282,10 @@ def record(
         format=kind, compression=compression_choice(kind, bz2, lz4, compression),
         chunk_size=chunk_size * 1024 if chunk_size else None, split=split,
         size=size * 1024 * 1024 if size else None,
-        duration=parse_duration(duration) if duration else None, max_splits=max_splits,
+        duration=parse_duration(duration, "--duration") if duration else None,
+        max_splits=max_splits,
         repeat_latched=repeat_latched, limit=limit, tcp_nodelay=tcp_nodelay,
-        buffer_bytes=max(buffer, 0) * 1024 * 1024, min_space=parse_space(min_space),
+        buffer_bytes=max(buffer, 0) * 1024 * 1024, min_space=parse_size(min_space, "-L"),
         publish=publish,
     )  # fmt: skip
     opts.check()

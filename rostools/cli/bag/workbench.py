@@ -13,25 +13,21 @@ import typer
 
 from rostools.bag.model import counted
 from rostools.cli import output
-from rostools.cli.bag.files import (
+from rostools.cli.bag.options import (
     CompressionOpt,
     EndOpt,
     FilterExprOpt,
     ForceOpt,
     OutArg,
-    Progress,
     QuietOpt,
     RenameOpt,
     RenameTypeOpt,
     StartOpt,
     TopicsOpt,
-    copy_command,
-    renames,
-    say_notes,
-    time_window,
 )
-from rostools.cli.bag.group import app
+from rostools.cli.bag.shared import Progress, copy_command, renames, say_notes, time_window
 from rostools.cli.common import FormatOpt, output_format
+from rostools.cli.declare import command
 from rostools.cli.output import Format, emit
 from rostools.errors import UsageError
 
@@ -39,7 +35,7 @@ if TYPE_CHECKING:
     from rostools.bag.split import SplitReport
 
 
-@app.command()
+@command()
 def merge(
     ctx: typer.Context,
     dst: OutArg,
@@ -60,7 +56,7 @@ def merge(
 
     lo, hi = time_window(sources, start, end)
     rules = renames(rename, rename_type)
-    copy_command(ctx, fmt, quiet, "merge", lambda progress: run_merge(
+    copy_command(output_format(ctx, fmt), quiet, "merge", lambda progress: run_merge(
         sources, dst, topics=topics or None, start=lo, end=hi, expression=expression,
         compression=compression, progress=progress, overwrite=force, renames=rules,
     ))  # fmt: skip
@@ -86,7 +82,7 @@ def _split_report(fmt: Format, report: SplitReport) -> None:
         emit(fmt, data)
 
 
-@app.command()
+@command()
 def split(
     ctx: typer.Context,
     src: Annotated[Path, typer.Argument(help="The .bag or .mcap file to split.")],
@@ -120,7 +116,7 @@ def split(
     from rostools.bag.access import bag_info
     from rostools.bag.split import Cut
     from rostools.bag.split import split as run_split
-    from rostools.cli.bag.record import parse_duration
+    from rostools.cli.units import parse_duration
 
     times: list[int] = []
     if at is not None:
@@ -132,7 +128,7 @@ def split(
                 f"--at takes seconds from the start, e.g. 10,20.5; not {at!r}"
             ) from None
     cut = Cut(
-        duration_ns=round(parse_duration(duration) * 1e9) if duration else None,
+        duration_ns=round(parse_duration(duration, "--duration") * 1e9) if duration else None,
         size=size * 1_000_000 if size is not None else None,
         count=count,
         at_ns=times,

@@ -16,6 +16,7 @@ from typing import TYPE_CHECKING, Annotated, Final
 import typer
 
 from rostools.cli.common import master, settings
+from rostools.cli.declare import command
 from rostools.cli.output import Format, check_writable, emit
 from rostools.errors import (
     NotFoundError,
@@ -30,8 +31,7 @@ if TYPE_CHECKING:
     from rostools.rosgraph.snapshot import RosGraph
 
 
-from rostools.cli.node.group import app, warn
-from rostools.cli.quick.node import TOOL
+from rostools.cli.node.shared import TOOL, warn
 
 #: Pictures ``-o`` asks ``dot`` for, by file suffix; ``.dot`` and ``.gv`` are written as DOT.
 DOT_FORMATS: Final = ("svg", "png", "pdf")
@@ -114,7 +114,7 @@ def graph_dot(graph: RosGraph) -> str:
     return "\n".join(lines)
 
 
-@app.command("graph")
+@command("graph")
 def graph_cmd(
     ctx: typer.Context,
     all_: Annotated[

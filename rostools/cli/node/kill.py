@@ -8,6 +8,7 @@ from typing import TYPE_CHECKING, Annotated, Any
 import typer
 
 from rostools.cli.common import FormatOpt, output_format, settings
+from rostools.cli.declare import command
 from rostools.cli.output import Format, emit, lines
 from rostools.errors import (
     NotFoundError,
@@ -19,13 +20,9 @@ if TYPE_CHECKING:
     from rostools.rosgraph.nodeapi import Probe
 
 
-from rostools.cli.node.group import (
-    TimeoutOpt,
-    app,
-    node_graph,
-    warn,
-)
-from rostools.cli.quick.node import resolve_node, worst
+from rostools.cli.node.options import TimeoutOpt
+from rostools.cli.node.shared import graph as node_graph
+from rostools.cli.node.shared import resolve_node, warn, worst
 from rostools.rosgraph.masterapi import NODE_TIMEOUT
 
 
@@ -45,7 +42,7 @@ def _choose(known: list[str]) -> list[str]:
         print(f"ERROR: enter a number from 1 to {len(known)} (Ctrl-C to cancel)")
 
 
-@app.command()
+@command()
 def kill(
     ctx: typer.Context,
     nodes: Annotated[
@@ -66,7 +63,7 @@ def kill(
     menu = not all_ and not nodes
     if menu and not (sys.stdin.isatty() and sys.stdout.isatty()):
         raise UsageError("give the nodes to kill, or -a/--all to kill every node")
-    graph = node_graph(ctx, timeout)
+    graph = node_graph(settings(ctx), timeout)
     known = graph.state().nodes()
     if menu:
         names = _choose(sorted(known))
@@ -124,7 +121,7 @@ def unreachable_text(dead: list[Probe]) -> str:
     )
 
 
-@app.command()
+@command()
 def cleanup(
     ctx: typer.Context,
     yes: Annotated[bool, typer.Option("-y", "--yes", help="Purge without asking.")] = False,
@@ -138,7 +135,7 @@ def cleanup(
     from rostools.rosgraph.cleanup import apply_cleanup, plan_cleanup, service_apis
     from rostools.rosgraph.nodeapi import probe_nodes
 
-    graph = node_graph(ctx, timeout)
+    graph = node_graph(settings(ctx), timeout)
     state = graph.state()
     dead = [p for p in probe_nodes(graph, state.nodes()) if not p.alive]
     fmt = output_format(ctx, fmt)

@@ -8,7 +8,8 @@ from typing import TYPE_CHECKING, Annotated
 
 import typer
 
-from rostools.cli.common import FormatOpt, output_format
+from rostools.cli.common import FormatOpt, output_format, settings
+from rostools.cli.declare import command
 from rostools.cli.output import Format
 from rostools.errors import (
     NotFoundError,
@@ -23,15 +24,13 @@ if TYPE_CHECKING:
     from rostools.rosgraph.nodeapi import Graph
 
 
-from rostools.cli.node.group import (
-    PING_INTERVAL,
-    TimeoutOpt,
-    app,
-    node_graph,
-    warn,
-)
-from rostools.cli.quick.node import failure_class, resolve_node
+from rostools.cli.node.options import TimeoutOpt
+from rostools.cli.node.shared import failure_class, resolve_node, warn
+from rostools.cli.node.shared import graph as node_graph
 from rostools.rosgraph.masterapi import NODE_TIMEOUT
+
+#: Seconds between two pings of one node, as rosnode.
+PING_INTERVAL = 1.0
 
 
 def reply_text(uri: str, ms: float) -> str:
@@ -66,7 +65,7 @@ def _ping_replies(graph: Graph, node: str, count: int | None) -> Iterator[tuple[
         yield uri, pid, ms
 
 
-@app.command()
+@command()
 def ping(
     ctx: typer.Context,
     node: Annotated[str | None, typer.Argument(help="Node name.", show_default=False)] = None,
@@ -88,7 +87,7 @@ def ping(
     if not all_ and not node:
         raise UsageError("give a node name, or -a/--all to ping every node")
     fmt = output_format(ctx, fmt)
-    graph = node_graph(ctx, timeout)
+    graph = node_graph(settings(ctx), timeout)
     if all_:
         _ping_all(graph, fmt)
         return

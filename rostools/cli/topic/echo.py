@@ -9,8 +9,8 @@ from typing import TYPE_CHECKING, Annotated
 import typer
 
 from rostools.cli.common import FormatOpt, MsgPathOpt, node_session, output_format
+from rostools.cli.declare import command
 from rostools.cli.settings import type_store
-from rostools.cli.topic.group import app
 from rostools.cli.topic.live import (
     CountOpt,
     FilterOpt,
@@ -32,7 +32,7 @@ if TYPE_CHECKING:
     from rostools.node.node import Node
 
 
-@app.command()
+@command()
 def echo(
     ctx: typer.Context,
     topic: Annotated[

@@ -1,8 +1,11 @@
-"""The ``rostools topic`` group, to which its modules add their commands."""
+"""The ``rostools topic`` group: its Typer app, with its commands in ``--help`` order."""
 
 from __future__ import annotations
 
 import typer
+
+from rostools.cli.common import add
+from rostools.cli.topic import echo, plot, pub, query, rates
 
 app = typer.Typer(
     name="topic",
@@ -10,3 +13,5 @@ app = typer.Typer(
     no_args_is_help=True,
     add_completion=False,
 )
+add(app, query.list_topics, query.info, query.find, query.type_)
+add(app, echo.echo, pub.pub, rates.hz, rates.bw, rates.delay, plot.plot)

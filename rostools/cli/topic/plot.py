@@ -16,9 +16,9 @@ from typing import TYPE_CHECKING, Annotated
 import typer
 
 from rostools.cli.common import FormatOpt, MsgPathOpt, node_session, output_format
+from rostools.cli.declare import command
 from rostools.cli.output import Format
 from rostools.cli.settings import type_store
-from rostools.cli.topic.group import app
 from rostools.cli.topic.live import (
     CountOpt,
     FilterOpt,
@@ -133,7 +133,7 @@ class _Live:
         return line
 
 
-@app.command()
+@command()
 def plot(
     ctx: typer.Context,
     fields: Annotated[
@@ -157,7 +157,7 @@ def plot(
     msg_path: MsgPathOpt = None,
 ) -> None:
     """Plot fields of topics live in the terminal (rqt_plot); -n or --timeout ends it."""
-    from rostools.cli.plotting import parse_duration
+    from rostools.cli.units import parse_duration
     from rostools.series import SeriesSet
 
     fmt = output_format(ctx, fmt)

@@ -11,9 +11,9 @@ from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
-from rostools.cli.common import FINITE, MsgPathOpt, node_session
+from rostools.cli.common import FINITE, MsgPathOpt, node_session, settings
+from rostools.cli.declare import command
 from rostools.cli.settings import type_store
-from rostools.cli.topic.group import app
 from rostools.cli.topic.live import TimeoutOpt, TopicArg
 from rostools.errors import NotFoundError, RostoolsError, UsageError, one_line
 from rostools.names import script_resolve
@@ -130,7 +130,7 @@ async def _ros_now(node: Node, stop: asyncio.Event, limit: float | None) -> Call
     return lambda: Time(*divmod(clock.now(), 1_000_000_000))
 
 
-@app.command(context_settings={"ignore_unknown_options": True})
+@command(context_settings={"ignore_unknown_options": True})
 def pub(
     ctx: typer.Context,
     topic: TopicArg,
@@ -184,10 +184,10 @@ def pub(
     name = script_resolve(topic, "rostopic")
     store = type_store(msg_path)
     if not store.has_msg(msg_type):
-        from rostools.cli.topic.learntype import learn_type
+        from rostools.cli.settings import learn_type
 
         try:
-            store = learn_type(ctx, name, store)
+            store = learn_type(settings(ctx), name, store)
         except Exception:  # noqa: BLE001 - no publisher to learn from: the type is unknown
             raise NotFoundError(
                 f"invalid message type: {msg_type}", hint="add it with --msg-path"

@@ -12,8 +12,8 @@ import typer
 
 from rostools.cli import output
 from rostools.cli.common import FormatOpt, node_session, output_format
+from rostools.cli.declare import command
 from rostools.cli.output import Format
-from rostools.cli.topic.group import app
 from rostools.cli.topic.live import FilterOpt, StrictOpt, TimeoutOpt, Undecodable, wait_for_topic
 from rostools.errors import NotFoundError, TimeoutExpired, UsageError, one_line
 from rostools.names import script_resolve
@@ -172,7 +172,7 @@ def _run(ctx: typer.Context, meter: Meter, sink: Any, report: Any) -> None:
         raise TimeoutExpired(f"no message on {', '.join(meter.topics)} within {meter.timeout:g} s")
 
 
-@app.command()
+@command()
 def hz(
     ctx: typer.Context,
     topics: Annotated[list[str], typer.Argument(help="One or more topics.")],
@@ -260,7 +260,7 @@ def _filter(
     return keep
 
 
-@app.command()
+@command()
 def bw(
     ctx: typer.Context,
     topic: Annotated[str, typer.Argument(help="A topic.")],
@@ -290,7 +290,7 @@ def bw(
     _run(ctx, runner, sink, report)
 
 
-@app.command()
+@command()
 def delay(
     ctx: typer.Context,
     topic: Annotated[str, typer.Argument(help="A topic whose messages start with a Header.")],

@@ -1,4 +1,4 @@
-"""``paramdump``: the YAML ``param get`` prints without PyYAML is PyYAML's, byte for byte."""
+"""``plainyaml``: the YAML ``param get`` prints without PyYAML is PyYAML's, byte for byte."""
 
 from __future__ import annotations
 
@@ -9,7 +9,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from rostools.cli import paramdump, paramyaml
+from rostools.cli.param import paramyaml, plainyaml
 
 TRICKY_STRINGS = [
     "", " ", " x", "x ", "a b", "a: b", "a:b", "#", "a #b", "a#b", "-", "- x", "-x", "--", "---",
@@ -34,14 +34,14 @@ TRICKY_VALUES: list[Any] = [
 
 
 def same(value: Any, pretty: bool = False) -> None:
-    """``paramdump.dump`` prints what ``paramyaml.dump`` prints, or PyYAML's error."""
+    """``plainyaml.dump`` prints what ``paramyaml.dump`` prints, or PyYAML's error."""
     try:
         expected = paramyaml.dump(value, pretty=pretty)
     except Exception as err:  # noqa: BLE001 - whatever PyYAML raises, plain must not print
-        assert paramdump.plain(value) is None, (value, err)
+        assert plainyaml.plain(value) is None, (value, err)
         return
-    assert paramdump.dump(value, pretty=pretty) == expected, value
-    text = paramdump.plain(value)
+    assert plainyaml.dump(value, pretty=pretty) == expected, value
+    text = plainyaml.plain(value)
     assert text is None or text == expected, value
 
 
@@ -64,13 +64,13 @@ def test_values(value: Any) -> None:
 def test_common_values_do_not_need_pyyaml() -> None:
     """The values most parameters hold are printed without PyYAML."""
     for value in (1, 2.5, True, "text", "/ns/name", [1.5, 2.5], {"d": [1.5, 2.5], "e": True}):
-        assert paramdump.plain(value) is not None, value
+        assert plainyaml.plain(value) is not None, value
 
 
 def test_an_object_met_twice_is_left_to_pyyaml() -> None:
     """PyYAML anchors a list met twice (``&id001``); plain must not print it without."""
     shared = [1, 2]
-    assert paramdump.plain({"a": shared, "b": shared}) is None
+    assert plainyaml.plain({"a": shared, "b": shared}) is None
     same({"a": shared, "b": shared})
 
 

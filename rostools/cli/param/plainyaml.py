@@ -4,7 +4,7 @@ PyYAML is 20 ms of imports, as much as the rest of ``param get``. Most parameter
 numbers, booleans, names and lists or dicts of them, which PyYAML prints in a fixed block
 layout: ``plain`` writes exactly that. Anything it is not sure to print as PyYAML would (a
 string to quote, a float's special form, a binary, a repeated object that PyYAML would
-anchor) makes it give up, and ``dump`` asks ``paramyaml``. ``tests/unit/test_paramdump.py``
+anchor) makes it give up, and ``dump`` asks ``paramyaml``. ``tests/unit/test_plainyaml.py``
 compares the two on many values.
 """
 
@@ -41,7 +41,7 @@ def dump(value: Any, *, pretty: bool = False) -> str:
     text = plain(value)
     if text is not None:
         return text  # strings with line breaks, the only ones -p changes, are not plain
-    from rostools.cli import paramyaml
+    from rostools.cli.param import paramyaml
 
     return paramyaml.dump(value, pretty=pretty)
 

@@ -1,32 +1,26 @@
-"""``rostools param``: rosparam's list, get, set, delete, load and dump."""
+"""``rostools param set|delete|load|dump``: change the parameter server, or save it."""
 
 from __future__ import annotations
 
 import sys
 from pathlib import Path
-from typing import Annotated, Any
 
-import typer
-
-from rostools.cli import paramyaml
-from rostools.cli.common import FormatOpt, master, output_format, settings
+from rostools.cli.declare import command
 from rostools.cli.output import Format, render
-from rostools.cli.quick import param as quick
-from rostools.cli.quick import runs
+from rostools.cli.param import paramyaml
+from rostools.cli.param.shared import TOOL, say
 from rostools.errors import NotFoundError, UsageError, cannot_write
 from rostools.names import GLOBAL_NS, join, make_global_ns, script_resolve
 
-app = typer.Typer(
-    name="param",
-    help="The parameter server: list, get, set, delete, load, dump.",
-    no_args_is_help=True,
-    add_completion=False,
-)
+TYPE_CHECKING = False  # ``typing`` is 5-10 ms of start-up; only annotations use it
+if TYPE_CHECKING:
+    from typing import Annotated, Any
 
-VerboseOpt = Annotated[
-    bool, typer.Option("-v", "--verbose", help="Say what is done, as rosparam -v (stdout).")
-]
-NameArg = Annotated[str, typer.Argument(help="Parameter name; relative names join ROS_NAMESPACE.")]
+    import typer
+
+    from rostools.cli.common import FormatOpt
+    from rostools.cli.param.options import NameArg, VerboseOpt
+    from rostools.cli.settings import Settings
 
 
 def _print_params(params: Any, ns: str) -> None:
@@ -50,43 +44,12 @@ def _set_tree(proxy: Any, name: str, value: Any, verbose: bool) -> None:
             _set_tree(proxy, join(name if name.endswith("/") else name + "/", key), item, verbose)
         return
     proxy.set_param(name, value)
-    quick.say(verbose, f"set parameter [{name}] to [{value}]")
+    say(verbose, f"set parameter [{name}] to [{value}]")
 
 
-@app.command("list")
-@runs(quick.list_params)
-def list_params(
-    ctx: typer.Context,
-    namespace: Annotated[str, typer.Argument(help="Only names under this namespace.")] = "/",
-    fmt: FormatOpt = None,
-) -> None:
-    """List parameter names, sorted."""
-    quick.list_params(settings(ctx), namespace, fmt)
-
-
-@app.command()
-@runs(quick.get)
-def get(
-    ctx: typer.Context,
-    name: NameArg,
-    pretty: Annotated[
-        bool,
-        typer.Option(
-            "-p",
-            "--pretty",
-            help="As rosparam -p: text as it is, multi-line text in mappings as blocks.",
-        ),
-    ] = False,
-    verbose: VerboseOpt = False,
-    fmt: FormatOpt = None,
-) -> None:
-    """Print a parameter, or a whole namespace, as YAML."""
-    quick.get(settings(ctx), name, pretty, verbose, fmt)
-
-
-@app.command(context_settings={"ignore_unknown_options": True})
+@command(context_settings={"ignore_unknown_options": True})
 def set(
-    ctx: typer.Context,
+    s: Settings,
     name: NameArg,
     value: Annotated[
         str | None,
@@ -105,7 +68,7 @@ def set(
     """Set a parameter from YAML (negative numbers need no '--')."""
     import xmlrpc.client
 
-    key = script_resolve(name, "rosparam")
+    key = script_resolve(name, TOOL)
     given = [v is not None for v in (value, textfile, binfile)]
     if sum(given) != 1:
         raise UsageError("give exactly one of a value, --textfile or --binfile")
@@ -117,7 +80,7 @@ def set(
         assert value is not None
         parsed = "" if value == "" else paramyaml.load(value)
     paramyaml.check_value(parsed, key)
-    _set_tree(master(ctx, "rosparam"), key, parsed, verbose)
+    _set_tree(s.master(TOOL), key, parsed, verbose)
 
 
 def _read(path: Path) -> bytes:
@@ -129,31 +92,31 @@ def _read(path: Path) -> bytes:
         raise UsageError(f"cannot read {path}: {err.strerror}") from err
 
 
-@app.command()
-def delete(ctx: typer.Context, name: NameArg, verbose: VerboseOpt = False) -> None:
+@command()
+def delete(s: Settings, name: NameArg, verbose: VerboseOpt = False) -> None:
     """Delete a parameter or a namespace; '/' empties the whole server."""
-    key = script_resolve(name, "rosparam")
-    proxy = master(ctx, "rosparam")
+    key = script_resolve(name, TOOL)
+    proxy = s.master(TOOL)
     if key == GLOBAL_NS:
         proxy.set_param(GLOBAL_NS, {})
-        quick.say(verbose, "deleted ENTIRE parameter server")
+        say(verbose, "deleted ENTIRE parameter server")
     else:
         proxy.delete_param(key)
-        quick.say(verbose, f"deleted parameter [{key}]")
+        say(verbose, f"deleted parameter [{key}]")
 
 
-@app.command()
+@command()
 def load(
-    ctx: typer.Context,
+    s: Settings,
     file: Annotated[str, typer.Argument(help="A YAML file; - reads stdin.")],
     namespace: Annotated[str, typer.Argument(help="Load under this namespace.")] = "",
     verbose: VerboseOpt = False,
 ) -> None:
     """Load parameters from a YAML file (every document; a '_ns' key picks a namespace)."""
     text = sys.stdin.read() if file == "-" else _read(Path(file)).decode("utf-8", "replace")
-    quick.say(verbose, "reading parameters from " + ("stdin" if file == "-" else f"[{file}]"))
-    base = script_resolve(namespace, "rosparam")
-    proxy = master(ctx, "rosparam")
+    say(verbose, "reading parameters from " + ("stdin" if file == "-" else f"[{file}]"))
+    base = script_resolve(namespace, TOOL)
+    proxy = s.master(TOOL)
     loaded: list[tuple[Any, str]] = []
     for doc in paramyaml.load_all(text, "stdin" if file == "-" else file):
         if doc is None:
@@ -161,7 +124,7 @@ def load(
         ns = base
         if isinstance(doc, dict) and "_ns" in doc:
             ns = join(make_global_ns(base), str(doc.pop("_ns")))
-            quick.say(verbose, f"reading parameters into namespace [{ns}]")
+            say(verbose, f"reading parameters into namespace [{ns}]")
         if ns == GLOBAL_NS and not isinstance(doc, dict):
             raise UsageError("a document loaded into / must be a mapping")
         paramyaml.check_value(doc, ns)
@@ -172,9 +135,9 @@ def load(
         _set_tree(proxy, ns, doc, False)
 
 
-@app.command()
+@command()
 def dump(
-    ctx: typer.Context,
+    s: Settings,
     file: Annotated[
         str | None, typer.Argument(help="Write here; stdout when omitted or -.")
     ] = None,
@@ -183,12 +146,12 @@ def dump(
     fmt: FormatOpt = None,
 ) -> None:
     """Write parameters as YAML, to a file or stdout."""
-    key = script_resolve(namespace, "rosparam")
-    quick.say(verbose, f"dumping namespace [{namespace}] to file [{file}]")  # as given
-    value = master(ctx, "rosparam").get_param(key)
+    key = script_resolve(namespace, TOOL)
+    say(verbose, f"dumping namespace [{namespace}] to file [{file}]")  # as given
+    value = s.master(TOOL).get_param(key)
     if verbose:
         _print_params(value, key)
-    fmt = output_format(ctx, fmt)
+    fmt = s.output_format(fmt)
     if fmt is Format.text:
         text = paramyaml.dump(value)
     else:

@@ -1,43 +1,31 @@
-"""``rostools msg``: rosmsg, rossrv and rosmsg-proto in one group; actions too."""
+"""``rostools msg show|list|package|packages|proto``: message, service and action types."""
 
 from __future__ import annotations
 
 import sys
 from pathlib import Path
-from typing import Annotated, Any
 
-import typer
-
-from rostools.cli.common import FormatOpt, MsgPathOpt, output_format, settings
-from rostools.cli.lookup import Kind, matches, read_type
+from rostools.cli.declare import command
+from rostools.cli.msg.lookup import Kind, matches, read_type
 from rostools.cli.output import Format, emit
-from rostools.cli.quick import msg as quick
-from rostools.cli.quick import runs
 from rostools.cli.settings import type_store
-from rostools.errors import NotFoundError, RostoolsError, UsageError
-from rostools.msgs.store import TypeStore
+from rostools.errors import NotFoundError, QuietExit, RostoolsError, UsageError
 
-app = typer.Typer(
-    name="msg",
-    help="Message and service types: show, md5, list, package, packages, proto.",
-    no_args_is_help=True,
-    add_completion=False,
-)
+TYPE_CHECKING = False  # ``typing`` is 5-10 ms of start-up; only annotations use it
+if TYPE_CHECKING:
+    from typing import Annotated, Any
 
-TypeArg = Annotated[
-    str | None,
-    typer.Argument(
-        help="pkg/Type, or a bare Type to search every package; read from stdin when omitted.",
-        show_default=False,
-    ),
-]
-SrvOpt = Annotated[bool, typer.Option("--srv", help="Services instead of messages.")]
-OneLineOpt = Annotated[bool, typer.Option("-s", help="All on one line, space-separated.")]
+    import typer
+
+    from rostools.cli.common import FormatOpt, MsgPathOpt
+    from rostools.cli.msg.options import OneLineOpt, SrvOpt, TypeArg
+    from rostools.cli.settings import Settings
+    from rostools.msgs.store import TypeStore
 
 
-@app.command()
+@command()
 def show(
-    ctx: typer.Context,
+    s: Settings,
     type_name: TypeArg = None,
     raw: Annotated[
         bool, typer.Option("--raw", "-r", help="The file text, comments included.")
@@ -53,7 +41,7 @@ def show(
     from rostools.msgs import describe
 
     name = read_type(type_name)
-    fmt = output_format(ctx, fmt)
+    fmt = s.output_format(fmt)
     store = type_store(msg_path)
     if bag is not None:
         store, name = _store_from_bag(store, bag, name)
@@ -99,37 +87,22 @@ def _store_from_bag(store: TypeStore, bag: Path, name: str) -> tuple[TypeStore, 
     raise NotFoundError(f"no connection of type {name} in {bag}")
 
 
-app.command("info", help="The same as show (rosmsg info).")(show)
+def _emit_names(fmt: Format, names: list[str], one_line: bool) -> None:
+    emit(fmt, names, lambda n: (" " if one_line else "\n").join(n))
 
 
-@app.command()
-@runs(quick.md5)
-def md5(
-    ctx: typer.Context,
-    type_name: TypeArg = None,
-    fmt: FormatOpt = None,
-    msg_path: MsgPathOpt = None,
-) -> None:
-    """Print the md5sum of a message or service type (rosmsg/rossrv md5)."""
-    quick.md5(settings(ctx), type_name, fmt, msg_path)
-
-
-def _emit_names(ctx: typer.Context, fmt: Format | None, names: list[str], one_line: bool) -> None:
-    emit(output_format(ctx, fmt), names, lambda n: (" " if one_line else "\n").join(n))
-
-
-@app.command("list")
+@command("list")
 def list_types(
-    ctx: typer.Context, srv: SrvOpt = False, fmt: FormatOpt = None, msg_path: MsgPathOpt = None
+    s: Settings, srv: SrvOpt = False, fmt: FormatOpt = None, msg_path: MsgPathOpt = None
 ) -> None:
     """List every message type (or service type with --srv), by package."""
     store = type_store(msg_path)
-    _emit_names(ctx, fmt, store.types("srv" if srv else "msg"), False)
+    _emit_names(s.output_format(fmt), store.types("srv" if srv else "msg"), False)
 
 
-@app.command()
+@command()
 def package(
-    ctx: typer.Context,
+    s: Settings,
     name: Annotated[str, typer.Argument(help="A package name.")],
     one_line: OneLineOpt = False,
     srv: SrvOpt = False,
@@ -143,22 +116,22 @@ def package(
         raise NotFoundError(f"no package named {name} holds message or service types")
     # a package of the other kind only (std_srvs for messages): an empty list, as rosmsg
     types = store.types(kind, name) if name in store.packages(kind) else []
-    _emit_names(ctx, fmt, types, one_line)
+    _emit_names(s.output_format(fmt), types, one_line)
 
 
-@app.command()
+@command()
 def packages(
-    ctx: typer.Context, one_line: OneLineOpt = False, srv: SrvOpt = False, fmt: FormatOpt = None,
+    s: Settings, one_line: OneLineOpt = False, srv: SrvOpt = False, fmt: FormatOpt = None,
     msg_path: MsgPathOpt = None,
 ) -> None:  # fmt: skip
     """List the packages that hold message (or service) types."""
     store = type_store(msg_path)
-    _emit_names(ctx, fmt, store.packages("srv" if srv else "msg"), one_line)
+    _emit_names(s.output_format(fmt), store.packages("srv" if srv else "msg"), one_line)
 
 
-@app.command()
+@command()
 def proto(
-    ctx: typer.Context,
+    s: Settings,
     type_name: TypeArg = None,
     flow_style: Annotated[
         int | None,
@@ -203,9 +176,9 @@ def proto(
         text = _proto_text(type_name, msg_path, flow_style, empty_arrays, exclude)
     except RostoolsError as exc:
         if silent:
-            raise typer.Exit(exc.exit_code) from None
+            raise QuietExit(exc.exit_code) from None
         raise
-    fmt = output_format(ctx, fmt)
+    fmt = s.output_format(fmt)
     if fmt is not Format.text:
         import yaml
 

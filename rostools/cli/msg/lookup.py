@@ -1,7 +1,4 @@
-"""Finding types by the names users type, shared by the msg commands and their fast path.
-
-Kept free of typer so that ``rostools.cli.fast`` can use it without paying for typer.
-"""
+"""Finding types by the names users type, shared by the msg commands (Typer-free)."""
 
 from __future__ import annotations
 

@@ -1,0 +1,5 @@
+"""``rostools service``: all of rosservice, with timeouts and one set of exit codes.
+
+Its Typer app is ``group.app``. This ``__init__`` imports nothing, so that the launcher's
+quick commands (``query.py``) start without Typer.
+"""

@@ -80,28 +80,73 @@ def alias(app: typer.Typer, name: str, function: Callable[..., Any], help: str) 
 
 
 def _callback(function: Callable[..., Any]) -> Callable[..., Any]:
-    """``function`` as Typer calls it: a ``Settings`` first parameter becomes Typer's context.
+    """``function`` as Typer calls it.
 
-    A function that takes the context itself is Typer's as it is.
+    A ``Settings`` first parameter becomes Typer's context, and a parameter that is an
+    options record (a dataclass of options that several commands take) becomes its fields,
+    gathered into the record again for the call. Anything else is Typer's as it is.
     """
     first, *params = inspect.signature(function).parameters.values()
-    if first.annotation not in ("Settings", Settings):
+    try:
+        hints = typing.get_type_hints(function, include_extras=True)
+    except NameError:  # it names what its module imports for annotations only
+        names = _annotation_names(function.__module__)
+        hints = typing.get_type_hints(function, names, include_extras=True)
+    wants_settings = hints[first.name] is Settings
+    if not wants_settings and not any(_is_record(hints[p.name]) for p in params):
         return function
-    names = _annotation_names(function.__module__)
-    hints = typing.get_type_hints(function, names, include_extras=True)
-    params = [p.replace(annotation=hints[p.name]) for p in params]
+    flat: list[inspect.Parameter] = []
+    gathered: dict[str, tuple[type[Any], list[str]]] = {}
+    for p in params:
+        if _is_record(hints[p.name]):
+            kind = hints[p.name]
+            fields = _record_fields(kind)
+            gathered[p.name] = (kind, [f.name for f in fields])
+            flat += fields
+        else:  # Typer passes every value by name
+            flat.append(p.replace(annotation=hints[p.name], kind=inspect.Parameter.KEYWORD_ONLY))
 
     def callback(ctx: typer.Context, **values: Any) -> Any:
-        return function(settings(ctx), **values)
+        for name, (kind, members) in gathered.items():
+            values[name] = kind(**{m: values.pop(m) for m in members})
+        return function(settings(ctx) if wants_settings else ctx, **values)
 
     context = inspect.Parameter(
         "ctx", inspect.Parameter.POSITIONAL_OR_KEYWORD, annotation=typer.Context
     )
-    callback.__signature__ = inspect.Signature([context, *params])  # type: ignore[attr-defined]
-    callback.__annotations__ = {"ctx": typer.Context} | {p.name: p.annotation for p in params}
+    callback.__signature__ = inspect.Signature([context, *flat])  # type: ignore[attr-defined]
+    callback.__annotations__ = {"ctx": typer.Context} | {p.name: p.annotation for p in flat}
     for attribute in ("__name__", "__qualname__", "__module__", "__doc__"):
         setattr(callback, attribute, getattr(function, attribute))
     return callback
+
+
+def options_record(kind: type[T]) -> type[T]:
+    """Mark a dataclass of options as a record that commands take as one parameter.
+
+    Its fields are ``Annotated`` options, each declared once for every command that takes
+    the record (``bag record`` and ``bag snapshot`` share what to record and where).
+    """
+    kind.rostools_options = True  # type: ignore[attr-defined]
+    return kind
+
+
+def _is_record(hint: object) -> bool:
+    """Whether a parameter's type is an options record (``options_record``)."""
+    return isinstance(hint, type) and getattr(hint, "rostools_options", False) is True
+
+
+def _record_fields(kind: type[Any]) -> list[inspect.Parameter]:
+    """The fields of an options record, as keyword parameters with their options."""
+    import dataclasses
+
+    hints = typing.get_type_hints(kind, include_extras=True)
+    return [
+        inspect.Parameter(
+            f.name, inspect.Parameter.KEYWORD_ONLY, annotation=hints[f.name], default=f.default
+        )
+        for f in dataclasses.fields(kind)
+    ]
 
 
 @functools.cache

@@ -7,6 +7,7 @@ a lazy import is still a dependency, and a circle of them is still a circle.
 from __future__ import annotations
 
 import ast
+import json
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[2] / "rostools"
@@ -38,17 +39,46 @@ def _layer(unit: str) -> int:
     raise AssertionError(f"rostools/{unit} is on no layer: add it to LAYERS and ARCHITECTURE.md")
 
 
-def _imports() -> dict[str, set[str]]:
-    """Module -> the rostools modules it imports."""
+def _nodes(tree: ast.AST, at_run_time: bool, on_import: bool) -> list[ast.AST]:
+    """Every node of ``tree``; with ``at_run_time``, not those under ``if TYPE_CHECKING:``;
+    with ``on_import``, not those in functions either (what importing the module runs)."""
+    if not at_run_time:
+        return list(ast.walk(tree))
+    skipped = {
+        id(n)
+        for block in ast.walk(tree)
+        if (isinstance(block, ast.If) and ast.unparse(block.test) == "TYPE_CHECKING")
+        or (on_import and isinstance(block, ast.FunctionDef | ast.AsyncFunctionDef))
+        for statement in (block.body if isinstance(block, ast.If) else [block])
+        for n in ast.walk(statement)
+    }
+    return [n for n in ast.walk(tree) if id(n) not in skipped]
+
+
+def _imports(
+    at_run_time: bool = False, outside: tuple[str, ...] = (), on_import: bool = False
+) -> dict[str, set[str]]:
+    """Module -> the rostools modules it imports, and those of ``outside`` packages it names.
+
+    ``at_run_time`` leaves out what is imported for annotations only, ``on_import`` also
+    what functions import when they run.
+    """
     graph: dict[str, set[str]] = {}
     for path in ROOT.rglob("*.py"):
         parts = path.relative_to(ROOT.parent).with_suffix("").parts
         module = ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
         package = module if path.name == "__init__.py" else module.rpartition(".")[0]
         found: set[str] = set()
-        for node in ast.walk(ast.parse(path.read_text(), str(path))):
+        for node in _nodes(ast.parse(path.read_text(), str(path)), at_run_time, on_import):
             if isinstance(node, ast.Import):
-                found |= {a.name for a in node.names if a.name.startswith("rostools")}
+                found |= {a.name for a in node.names if a.name.startswith(("rostools", *outside))}
+            elif (
+                isinstance(node, ast.ImportFrom)
+                and node.module
+                and not node.level
+                and (node.module.split(".")[0] in outside)
+            ):
+                found.add(node.module)
             elif isinstance(node, ast.ImportFrom):
                 base = node.module or ""
                 if node.level:  # relative: from the package, up level - 1
@@ -118,3 +148,88 @@ def test_no_module_imports_across_its_own_layer() -> None:
         and _layer(_unit(target)) == _layer(_unit(module))
     ]
     assert not sideways, "\n".join(sorted(sideways))
+
+
+def _group_of(module: str) -> str | None:
+    """``topic`` for ``rostools.cli.topic.echo``; None for a module of ``cli`` itself."""
+    parts = module.split(".")
+    if parts[:2] != ["rostools", "cli"] or len(parts) < 3:
+        return None
+    return parts[2] if (ROOT / "cli" / parts[2]).is_dir() else None
+
+
+def test_no_cli_group_imports_another() -> None:
+    """A group (cli/topic, cli/bag, ...) imports its own modules and cli's shared ones only."""
+    across = [
+        f"{module} imports {target}"
+        for module, targets in _imports().items()
+        if _group_of(module)
+        for target in targets
+        if _group_of(target) not in (None, _group_of(module))
+    ]
+    assert not across, "\n".join(sorted(across))
+
+
+def _verbs() -> set[str]:
+    """The modules of cli that declare commands (``@command(...)``) and are no group's app."""
+    verbs = set()
+    for path in (ROOT / "cli").rglob("*.py"):
+        tree = ast.parse(path.read_text())
+        declares = any(
+            isinstance(d, ast.Call) and ast.unparse(d.func) in ("command", "app.command")
+            for f in tree.body
+            if isinstance(f, ast.FunctionDef)
+            for d in f.decorator_list
+        )
+        if declares:
+            verbs.add(".".join(path.relative_to(ROOT.parent).with_suffix("").parts))
+    return verbs
+
+
+def test_no_verb_imports_a_verb() -> None:
+    """What two commands share lives in a module no command owns (a group's shared.py)."""
+    verbs = _verbs()
+    assert {"rostools.cli.topic.echo", "rostools.cli.bag.record"} <= verbs, verbs
+    found = [
+        f"{module} imports {target}"
+        for module, targets in _imports().items()
+        if module in verbs
+        for target in targets & verbs
+    ]
+    assert not found, "\n".join(sorted(found))
+
+
+def test_group_packages_start_empty() -> None:
+    """A group's ``__init__`` imports nothing: its Typer app is in ``group.py``."""
+    for package in (p for p in (ROOT / "cli").iterdir() if (p / "__init__.py").exists()):
+        tree = ast.parse((package / "__init__.py").read_text())
+        assert not [n for n in ast.walk(tree) if isinstance(n, ast.Import | ast.ImportFrom)], (
+            package.name
+        )
+
+
+def test_quick_commands_reach_no_typer() -> None:
+    """What the launcher runs imports no Typer or Click at run time, however deep or lazily.
+
+    Importing a module imports its packages first, so ``rostools.cli.topic``'s ``__init__``
+    counts for ``rostools.cli.topic.query`` (but not what the functions of a package run:
+    ``rostools.cli.main`` hands over to Typer when the launcher does not run a command).
+    """
+    specs = json.loads((ROOT / "cli" / "quick.json").read_text())
+    graph = _imports(at_run_time=True, outside=("typer", "click"))
+    packages = _imports(at_run_time=True, outside=("typer", "click"), on_import=True)
+    todo = [
+        "rostools.cli.launch",
+        *(s["target"].partition(":")[0] for s in specs.values() if s["target"]),
+    ]
+    seen: set[str] = set()
+    while todo:
+        module = todo.pop()
+        parents = [".".join(module.split(".")[:i]) for i in range(2, module.count(".") + 1)]
+        for name in (module, *parents):
+            if name not in seen:
+                seen.add(name)
+                todo += (graph if name == module else packages).get(name, set())
+    assert not {m for m in seen if m.split(".")[0] in ("typer", "click")}, sorted(
+        m for m in seen if m.startswith("rostools")
+    )

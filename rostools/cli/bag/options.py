@@ -5,12 +5,18 @@ Typer's: the commands import them for their annotations.
 
 from __future__ import annotations
 
+import time
+from dataclasses import dataclass
 from pathlib import Path
-from typing import Annotated
+from typing import TYPE_CHECKING, Annotated
 
 import typer
 
-from rostools.cli.common import FINITE
+from rostools.cli.common import FINITE, options_record
+from rostools.errors import UsageError
+
+if TYPE_CHECKING:
+    from rostools.bag.play import PlayOptions
 
 BagArg = Annotated[Path, typer.Argument(help="A .bag or .mcap file.")]
 OutArg = Annotated[Path, typer.Argument(help="The file to write; its name picks the format.")]
@@ -58,3 +64,223 @@ OutputDirOpt = Annotated[
 
 
 DstOpt = Annotated[Path | None, typer.Argument(help="Output (default: NAME.recovered.bag|mcap).")]
+
+
+@options_record
+@dataclass
+class TopicChoice:
+    """Which topics a recorder takes besides those it names (bag record, bag snapshot)."""
+
+    all_: Annotated[bool, typer.Option("--all", "-a", help="Record every topic.")] = False
+    regex: Annotated[
+        bool, typer.Option("--regex", "-e", help="The topics are regexes (full match).")
+    ] = False
+    exclude: Annotated[
+        list[str] | None,
+        typer.Option("--exclude", "-x", help="Leave out topics matching this regex (repeatable)."),
+    ] = None
+    node: Annotated[
+        str | None, typer.Option("--node", help="Record what this node subscribes to.")
+    ] = None
+    types: Annotated[
+        list[str] | None,
+        typer.Option("--topic-types", help="Also topics of these types (globs: sensor_msgs/*)."),
+    ] = None
+    exclude_types: Annotated[
+        list[str] | None,
+        typer.Option("--exclude-topic-types", help="Never topics of these types (globs)."),
+    ] = None
+
+    def check(self, topics: list[str]) -> None:
+        """Refuse a choice of nothing, or of everything and some."""
+        if not (topics or self.all_ or self.node or self.types):
+            hint = "-x subtracts from -a or -e" if self.exclude else None
+            raise UsageError(
+                "give topics to record, or -a, -e REGEX, --topic-types or --node NAME", hint=hint
+            )
+        if self.all_ and topics:
+            raise UsageError("-a records every topic; do not also name topics")
+
+
+@options_record
+@dataclass
+class OutputFile:
+    """The file a recorder writes: its name, format and chunks (bag record, bag snapshot)."""
+
+    output_name: Annotated[
+        str | None, typer.Option("--output-name", "-O", help="The file name (.bag added).")
+    ] = None
+    output_prefix: Annotated[
+        str | None, typer.Option("--output-prefix", "-o", help="A prefix for a dated file name.")
+    ] = None
+    storage: Annotated[
+        str | None,
+        typer.Option(
+            "--storage", "-s", help="File format: bag or mcap (default: from -O, else bag)."
+        ),
+    ] = None
+    bz2: Annotated[bool, typer.Option("--bz2", "-j", help="bz2 chunks (.bag).")] = False
+    lz4: Annotated[bool, typer.Option("--lz4", help="lz4 chunks (.bag or MCAP).")] = False
+    compression: Annotated[
+        str | None,
+        typer.Option("--compression", help="none, bz2, lz4 (.bag); zstd, lz4, none (MCAP)."),
+    ] = None
+    chunk_size: Annotated[
+        int | None, typer.Option("--chunksize", help="Chunk size in KB (default 768).")
+    ] = None
+
+    def path(self, now: float | None = None) -> tuple[Path, str]:
+        """The file to write and its format, from ``-O``, ``-o`` and ``--storage``.
+
+        As rosbag: ``-O x`` writes ``x.bag``; ``-o p`` writes ``p_<date-time>.bag``; neither
+        writes ``<date-time>.bag``. A name ending in ``.mcap`` means MCAP, as ``--storage
+        mcap`` does.
+        """
+        name, prefix = self.output_name, self.output_prefix
+        if name is not None and prefix is not None:
+            raise UsageError("-O and -o cannot be combined")
+        given = name if name is not None else prefix
+        suffix = Path(given).suffix.lower() if given else ""
+        storage = self.storage or ("mcap" if suffix == ".mcap" else "bag")
+        if storage not in ("bag", "mcap"):
+            raise UsageError(f"unknown --storage {storage!r} (bag or mcap)")
+        ext = "." + storage
+        if suffix in (".bag", ".mcap"):
+            given = given[: -len(suffix)] if given else given
+        if name is not None:
+            return Path(name if suffix == ext else f"{given}{ext}"), storage
+        stamp = time.strftime("%Y-%m-%d-%H-%M-%S", time.localtime(now))
+        if prefix is not None:
+            return Path(f"{given}_{stamp}{ext}"), storage
+        return Path(stamp + ext), storage
+
+    def chunk_compression(self, storage: str) -> str | None:
+        """The chunk compression from ``--bz2``/``--lz4``/``--compression`` (None: default)."""
+        from rostools.bag.access import WRITE_COMPRESSIONS
+
+        picked = (("bz2", self.bz2), ("lz4", self.lz4), (self.compression, self.compression))
+        chosen = [c for c, on in picked if on]
+        if len(set(chosen)) > 1:
+            raise UsageError("give one compression: --bz2, --lz4 or --compression")
+        allowed = WRITE_COMPRESSIONS[storage]
+        if chosen and chosen[0] not in allowed:
+            raise UsageError(f"{storage} files cannot use {chosen[0]} (use {', '.join(allowed)})")
+        return chosen[0] if chosen else None
+
+    def chunk_bytes(self) -> int | None:
+        """``--chunksize`` in bytes (None: the default)."""
+        return self.chunk_size * 1024 if self.chunk_size else None
+
+
+@options_record
+@dataclass
+class Splitting:
+    """When a recording stops or starts a new file (bag record)."""
+
+    split: Annotated[
+        bool, typer.Option("--split", help="Start a new file at --size or --duration.")
+    ] = False
+    size: Annotated[int | None, typer.Option("--size", help="Stop (or split) at this many MB.")] = (
+        None
+    )
+    duration: Annotated[
+        str | None, typer.Option("--duration", help="Stop (or split) after 30, 30s, 5m, 2h.")
+    ] = None
+    max_splits: Annotated[
+        int | None,
+        typer.Option(
+            "--max-splits",
+            help="Keep only the newest N closed split files, and the last (rosbag: N + 1 in all).",
+        ),
+    ] = None
+    repeat_latched: Annotated[
+        bool,
+        typer.Option("--repeat-latched", help="Copy latched messages into every split file."),
+    ] = False
+
+
+@options_record
+@dataclass
+class Playback:
+    """How bag play publishes: pace, time range, clock, pauses and publishers."""
+
+    rate: Annotated[
+        float, typer.Option("--rate", "-r", click_type=FINITE, help="Speed factor.")
+    ] = 1.0
+    start: Annotated[
+        float,
+        typer.Option(
+            "--start", "-s", click_type=FINITE, help="Start this many seconds into the bags."
+        ),
+    ] = 0.0
+    duration: Annotated[
+        float | None,
+        typer.Option("--duration", "-u", click_type=FINITE, help="Play only this many seconds."),
+    ] = None
+    loop_: Annotated[bool, typer.Option("--loop", "-l", help="Play again and again.")] = False
+    clock: Annotated[bool, typer.Option("--clock", help="Publish bag time on /clock.")] = False
+    hz: Annotated[
+        float, typer.Option("--hz", click_type=FINITE, help="/clock messages per second.")
+    ] = 100.0
+    delay: Annotated[
+        float,
+        typer.Option("--delay", "-d", click_type=FINITE, help="Seconds to wait after advertising."),
+    ] = 0.2
+    immediate: Annotated[
+        bool, typer.Option("--immediate", "-i", help="Publish everything without waiting.")
+    ] = False
+    pause: Annotated[bool, typer.Option("--pause", help="Start paused.")] = False
+    prefix: Annotated[
+        str, typer.Option("--prefix", "-p", help="Put this before every topic name.")
+    ] = ""
+    keep_alive: Annotated[
+        bool, typer.Option("--keep-alive", "-k", help="Stay up after the end (latched topics).")
+    ] = False
+    skip_empty: Annotated[
+        float | None,
+        typer.Option("--skip-empty", click_type=FINITE, help="Skip gaps longer than this (s)."),
+    ] = None
+    queue: Annotated[int, typer.Option("--queue", help="Publisher queue size.")] = 100
+    wait_for_subscribers: Annotated[
+        bool,
+        typer.Option("--wait-for-subscribers", help="Wait for a subscriber on every topic."),
+    ] = False
+    pause_topics: Annotated[
+        list[str] | None,
+        typer.Option(
+            "--pause-topics", help="Pause before each message on these topics (repeat or commas)."
+        ),
+    ] = None
+    rate_control_topic: Annotated[
+        str | None,
+        typer.Option(
+            "--rate-control-topic",
+            help="Hold playback while this topic's header stamps lag bag time.",
+        ),
+    ] = None
+    rate_control_max_delay: Annotated[
+        float,
+        typer.Option(
+            "--rate-control-max-delay",
+            click_type=FINITE,
+            help="The lag (s) allowed before holding.",
+        ),
+    ] = 1.0
+
+    def options(self, topics: list[str]) -> PlayOptions:
+        """The player's options for ``topics``, checked as rosbag play checks them."""
+        from rostools.bag.play import PlayOptions
+
+        for value, flag in ((self.delay, "-d"), (self.start, "-s")):
+            if value < 0:
+                raise UsageError(f"{flag} cannot be negative")
+        return PlayOptions(
+            rate=self.rate, start=self.start, duration=self.duration, loop=self.loop_,
+            clock=self.clock, hz=self.hz, delay=self.delay, immediate=self.immediate,
+            pause=self.pause, topics=topics, prefix=self.prefix, keep_alive=self.keep_alive,
+            skip_empty=self.skip_empty, queue_size=self.queue,
+            wait_for_subscribers=self.wait_for_subscribers,
+            pause_topics=[t for item in self.pause_topics or [] for t in item.split(",") if t],
+            rate_control_topic=self.rate_control_topic,
+            rate_control_max_delay=self.rate_control_max_delay,
+        )  # fmt: skip

@@ -6,14 +6,16 @@ import contextlib
 import os
 import sys
 from collections.abc import Iterator
+from functools import partial
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated
 
 import typer
 
 from rostools.bag.model import counted
+from rostools.cli.bag.options import Playback
 from rostools.cli.bag.shared import check_read
-from rostools.cli.common import FINITE, FormatOpt, node_session, output_format
+from rostools.cli.common import FormatOpt, node_session, output_format
 from rostools.cli.declare import command
 from rostools.cli.output import Format, render
 from rostools.errors import UsageError, one_line
@@ -21,7 +23,8 @@ from rostools.errors import UsageError, one_line
 if TYPE_CHECKING:
     import asyncio
 
-    from rostools.bag.play import Player, Status
+    from rostools.bag.base import BagReader
+    from rostools.bag.play import Player, PlayOptions, Status
     from rostools.node.node import Node
 
 
@@ -89,71 +92,10 @@ def play(
         list[str] | None,
         typer.Argument(help="Bags to play, merged in time order.", show_default=False),
     ] = None,
-    rate: Annotated[
-        float, typer.Option("--rate", "-r", click_type=FINITE, help="Speed factor.")
-    ] = 1.0,
-    start: Annotated[
-        float,
-        typer.Option(
-            "--start", "-s", click_type=FINITE, help="Start this many seconds into the bags."
-        ),
-    ] = 0.0,
-    duration: Annotated[
-        float | None,
-        typer.Option("--duration", "-u", click_type=FINITE, help="Play only this many seconds."),
-    ] = None,
-    loop_: Annotated[bool, typer.Option("--loop", "-l", help="Play again and again.")] = False,
-    clock: Annotated[bool, typer.Option("--clock", help="Publish bag time on /clock.")] = False,
-    hz: Annotated[
-        float, typer.Option("--hz", click_type=FINITE, help="/clock messages per second.")
-    ] = 100.0,
-    delay: Annotated[
-        float,
-        typer.Option("--delay", "-d", click_type=FINITE, help="Seconds to wait after advertising."),
-    ] = 0.2,
-    immediate: Annotated[
-        bool, typer.Option("--immediate", "-i", help="Publish everything without waiting.")
-    ] = False,
-    pause: Annotated[bool, typer.Option("--pause", help="Start paused.")] = False,
+    playback: Playback = Playback(),  # noqa: B008 - a record of options, never changed
     topics: Annotated[
         list[str] | None, typer.Option("--topics", help="Only these topics (repeat or commas).")
     ] = None,
-    prefix: Annotated[
-        str, typer.Option("--prefix", "-p", help="Put this before every topic name.")
-    ] = "",
-    keep_alive: Annotated[
-        bool, typer.Option("--keep-alive", "-k", help="Stay up after the end (latched topics).")
-    ] = False,
-    skip_empty: Annotated[
-        float | None,
-        typer.Option("--skip-empty", click_type=FINITE, help="Skip gaps longer than this (s)."),
-    ] = None,
-    queue: Annotated[int, typer.Option("--queue", help="Publisher queue size.")] = 100,
-    wait_for_subscribers: Annotated[
-        bool,
-        typer.Option("--wait-for-subscribers", help="Wait for a subscriber on every topic."),
-    ] = False,
-    pause_topics: Annotated[
-        list[str] | None,
-        typer.Option(
-            "--pause-topics", help="Pause before each message on these topics (repeat or commas)."
-        ),
-    ] = None,
-    rate_control_topic: Annotated[
-        str | None,
-        typer.Option(
-            "--rate-control-topic",
-            help="Hold playback while this topic's header stamps lag bag time.",
-        ),
-    ] = None,
-    rate_control_max_delay: Annotated[
-        float,
-        typer.Option(
-            "--rate-control-max-delay",
-            click_type=FINITE,
-            help="The lag (s) allowed before holding.",
-        ),
-    ] = 1.0,
     bag_list: Annotated[
         list[str] | None,
         typer.Option("--bags", help="More bags (rosbag's form after --topics /a /b)."),
@@ -167,53 +109,52 @@ def play(
     --pause-topics on and off. The service ~pause_playback (std_srvs/SetBool) pauses too.
     """
     from rostools.bag.access import open_bag, require_ros1
-    from rostools.bag.play import Player, PlayOptions
 
     paths, wanted = split_bags_and_topics(bags or [], topics or [])
     paths += [Path(b) for b in bag_list or []]
     if not paths:
         raise UsageError("give at least one bag to play")
-    for value, flag in ((delay, "-d"), (start, "-s")):
-        if value < 0:
-            raise UsageError(f"{flag} cannot be negative")
-    opts = PlayOptions(
-        rate=rate, start=start, duration=duration, loop=loop_, clock=clock, hz=hz, delay=delay,
-        immediate=immediate, pause=pause, topics=wanted, prefix=prefix, keep_alive=keep_alive,
-        skip_empty=skip_empty, queue_size=queue, wait_for_subscribers=wait_for_subscribers,
-        pause_topics=[t for item in pause_topics or [] for t in item.split(",") if t],
-        rate_control_topic=rate_control_topic, rate_control_max_delay=rate_control_max_delay,
-    )  # fmt: skip
+    opts = playback.options(wanted)
     out = output_format(ctx, fmt)
     show_status = not quiet and out is Format.text
-    terminal = sys.stderr.isatty()
     with contextlib.ExitStack() as stack:
         readers = [stack.enter_context(open_bag(p)) for p in paths]
         for reader in readers:
             require_ros1(reader, "bag play", wanted)
-
-        async def main(node: Node, stop: asyncio.Event) -> int:
-            import asyncio
-
-            player = Player(node, readers, opts)
-            if show_status:
-                player.measure_topics()
-                for path in paths:
-                    sys.stderr.write(f"Opening {one_line(path)}\n")
-            with keyboard(player, asyncio.get_running_loop()) as keys:
-                if show_status and keys:
-                    sys.stderr.write("Hit space to toggle paused, or 's' to step.\n")
-                    if opts.pause_topics:
-                        sys.stderr.write("Hit 't' to toggle pausing on --pause-topics.\n")
-                if not show_status:
-                    return await player.run(stop)
-                return await player.run(stop, StatusLines(terminal), _say)
-
-        sent = node_session(ctx, main, "rostools_play")
+        run = partial(_play, readers, opts, paths if show_status else None)
+        sent = node_session(ctx, run, "rostools_play")
     if show_status:
-        sys.stderr.write("\nDone.\n" if terminal else "Done.\n")
+        sys.stderr.write("\nDone.\n" if sys.stderr.isatty() else "Done.\n")
     elif out is not Format.text:
         sys.stdout.write(render(out, {"published": sent}) + "\n")
     check_read(readers, f"published {counted(sent, 'message')}")
+
+
+async def _play(
+    readers: list[BagReader],
+    opts: PlayOptions,
+    shown: list[Path] | None,
+    node: Node,
+    stop: asyncio.Event,
+) -> int:
+    """Play ``readers`` on ``node``; with the status line and key hints when ``shown``."""
+    import asyncio
+
+    from rostools.bag.play import Player
+
+    player = Player(node, readers, opts)
+    if shown is not None:
+        player.measure_topics()
+        for path in shown:
+            sys.stderr.write(f"Opening {one_line(path)}\n")
+    with keyboard(player, asyncio.get_running_loop()) as keys:
+        if shown is not None and keys:
+            sys.stderr.write("Hit space to toggle paused, or 's' to step.\n")
+            if opts.pause_topics:
+                sys.stderr.write("Hit 't' to toggle pausing on --pause-topics.\n")
+        if shown is None:
+            return await player.run(stop)
+        return await player.run(stop, StatusLines(sys.stderr.isatty()), _say)
 
 
 def _say(text: str) -> None:

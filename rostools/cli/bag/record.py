@@ -5,13 +5,13 @@ from __future__ import annotations
 import shutil
 import sys
 import time
-from pathlib import Path
+from functools import partial
 from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
-from rostools.bag.access import WRITE_COMPRESSIONS
 from rostools.bag.model import counted
+from rostools.cli.bag.options import OutputFile, Splitting, TopicChoice
 from rostools.cli.common import FormatOpt, node_session, output_format
 from rostools.cli.declare import command
 from rostools.cli.output import Format, check_writable, render
@@ -21,45 +21,8 @@ from rostools.errors import DataLossError, UsageError, one_line
 if TYPE_CHECKING:
     import asyncio
 
-    from rostools.bag.record import Recorder
+    from rostools.bag.record import Recorder, RecordOptions
     from rostools.node.node import Node
-
-
-def output_name(
-    name: str | None, prefix: str | None, storage: str | None, now: float | None = None
-) -> tuple[Path, str]:
-    """The file to write and its format, from ``-O``, ``-o`` and ``--storage``.
-
-    As rosbag: ``-O x`` writes ``x.bag``; ``-o p`` writes ``p_<date-time>.bag``; neither
-    writes ``<date-time>.bag``. A name ending in ``.mcap`` means MCAP, as ``--storage mcap`` does.
-    """
-    if name is not None and prefix is not None:
-        raise UsageError("-O and -o cannot be combined")
-    given = name if name is not None else prefix
-    suffix = Path(given).suffix.lower() if given else ""
-    storage = storage or ("mcap" if suffix == ".mcap" else "bag")
-    if storage not in ("bag", "mcap"):
-        raise UsageError(f"unknown --storage {storage!r} (bag or mcap)")
-    ext = "." + storage
-    if suffix in (".bag", ".mcap"):
-        given = given[: -len(suffix)] if given else given
-    if name is not None:
-        return Path(name if suffix == ext else f"{given}{ext}"), storage
-    stamp = time.strftime("%Y-%m-%d-%H-%M-%S", time.localtime(now))
-    if prefix is not None:
-        return Path(f"{given}_{stamp}{ext}"), storage
-    return Path(stamp + ext), storage
-
-
-def compression_choice(storage: str, bz2: bool, lz4: bool, compression: str | None) -> str | None:
-    """The chunk compression from ``--bz2``/``--lz4``/``--compression`` (None: the default)."""
-    chosen = [c for c, on in (("bz2", bz2), ("lz4", lz4), (compression, compression)) if on]
-    if len(set(chosen)) > 1:
-        raise UsageError("give one compression: --bz2, --lz4 or --compression")
-    allowed = WRITE_COMPRESSIONS[storage]
-    if chosen and chosen[0] not in allowed:
-        raise UsageError(f"{storage} files cannot use {chosen[0]} (use {', '.join(allowed)})")
-    return chosen[0] if chosen else None
 
 
 def _size(n: float) -> str:
@@ -174,68 +137,11 @@ class LiveTable:
 def record(
     ctx: typer.Context,
     topics: Annotated[list[str] | None, typer.Argument(help="Topics (regexes with -e).")] = None,
-    all_: Annotated[bool, typer.Option("--all", "-a", help="Record every topic.")] = False,
-    regex: Annotated[
-        bool, typer.Option("--regex", "-e", help="The topics are regexes (full match).")
-    ] = False,
-    exclude: Annotated[
-        list[str] | None,
-        typer.Option("--exclude", "-x", help="Leave out topics matching this regex (repeatable)."),
-    ] = None,
-    node: Annotated[
-        str | None, typer.Option("--node", help="Record what this node subscribes to.")
-    ] = None,
-    types: Annotated[
-        list[str] | None,
-        typer.Option("--topic-types", help="Also topics of these types (globs: sensor_msgs/*)."),
-    ] = None,
-    exclude_types: Annotated[
-        list[str] | None,
-        typer.Option("--exclude-topic-types", help="Never topics of these types (globs)."),
-    ] = None,
-    output_name_: Annotated[
-        str | None, typer.Option("--output-name", "-O", help="The file name (.bag added).")
-    ] = None,
-    output_prefix: Annotated[
-        str | None, typer.Option("--output-prefix", "-o", help="A prefix for a dated file name.")
-    ] = None,
-    storage: Annotated[
-        str | None,
-        typer.Option(
-            "--storage", "-s", help="File format: bag or mcap (default: from -O, else bag)."
-        ),
-    ] = None,
-    split: Annotated[
-        bool, typer.Option("--split", help="Start a new file at --size or --duration.")
-    ] = False,
-    size: Annotated[
-        int | None, typer.Option("--size", help="Stop (or split) at this many MB.")
-    ] = None,
-    duration: Annotated[
-        str | None, typer.Option("--duration", help="Stop (or split) after 30, 30s, 5m, 2h.")
-    ] = None,
-    max_splits: Annotated[
-        int | None,
-        typer.Option(
-            "--max-splits",
-            help="Keep only the newest N closed split files, and the last (rosbag: N + 1 in all).",
-        ),
-    ] = None,
-    repeat_latched: Annotated[
-        bool,
-        typer.Option("--repeat-latched", help="Copy latched messages into every split file."),
-    ] = False,
+    choice: TopicChoice = TopicChoice(),  # noqa: B008 - a record of options, never changed
+    out: OutputFile = OutputFile(),  # noqa: B008
+    splitting: Splitting = Splitting(),  # noqa: B008
     limit: Annotated[
         int | None, typer.Option("--limit", "-l", help="Stop after N messages per topic.")
-    ] = None,
-    bz2: Annotated[bool, typer.Option("--bz2", "-j", help="bz2 chunks (.bag).")] = False,
-    lz4: Annotated[bool, typer.Option("--lz4", help="lz4 chunks (.bag or MCAP).")] = False,
-    compression: Annotated[
-        str | None,
-        typer.Option("--compression", help="none, bz2, lz4 (.bag); zstd, lz4, none (MCAP)."),
-    ] = None,
-    chunk_size: Annotated[
-        int | None, typer.Option("--chunksize", help="Chunk size in KB (default 768).")
     ] = None,
     buffer: Annotated[
         int,
@@ -262,63 +168,71 @@ def record(
     fmt: FormatOpt = None,
 ) -> None:
     """Record topics to a .bag or MCAP file (rosbag record); exit 6 on drops or a failed write."""
-    from rostools.bag.record import Recorder, RecordOptions
-
-    topics = topics or []
-    if not (topics or all_ or node or types):
-        hint = "-x subtracts from -a or -e" if exclude else None
-        raise UsageError(
-            "give topics to record, or -a, -e REGEX, --topic-types or --node NAME", hint=hint
-        )
-    if all_ and topics:
-        raise UsageError("-a records every topic; do not also name topics")
-    for value, flag in ((size, "--size"), (max_splits, "--max-splits"), (limit, "-l")):
-        if value is not None and value <= 0:
-            raise UsageError(f"{flag} must be positive")
-    path, kind = output_name(output_name_, output_prefix, storage)
-    opts = RecordOptions(
-        topics=topics, all=all_, regex=regex, exclude=exclude or [], node=node, base=path,
-        types=types or [], exclude_types=exclude_types or [],
-        format=kind, compression=compression_choice(kind, bz2, lz4, compression),
-        chunk_size=chunk_size * 1024 if chunk_size else None, split=split,
-        size=size * 1024 * 1024 if size else None,
-        duration=parse_duration(duration, "--duration") if duration else None,
-        max_splits=max_splits,
-        repeat_latched=repeat_latched, limit=limit, tcp_nodelay=tcp_nodelay,
-        buffer_bytes=max(buffer, 0) * 1024 * 1024, min_space=parse_size(min_space, "-L"),
-        publish=publish,
-    )  # fmt: skip
-    opts.check()
+    opts = _record_options(topics or [], choice, out, splitting, limit)
+    opts.buffer_bytes = max(buffer, 0) * 1024 * 1024
+    opts.tcp_nodelay, opts.publish = tcp_nodelay, publish
+    opts.min_space = parse_size(min_space, "-L")
     check_writable(opts.base)  # before subscribing
-    out = output_format(ctx, fmt)
-    live = not quiet and out is Format.text and sys.stderr.isatty()
-
-    async def main(n: Node, stop: asyncio.Event) -> Recorder:
-        rec = Recorder(n, opts)
-        rec.check_disk(started=False)  # before saying "Recording to"
-        if not live:
-            if not quiet:
-                rec.on_subscribe = _say_subscribing
-                sys.stderr.write(f"Recording to '{opts.base}'.\n")
-            await rec.run(stop)
-            return rec
-        with LiveTable() as table:
-            await rec.run(stop, table.tick)
-            table.last_frame(rec)
-        return rec
-
-    rec = node_session(ctx, main, "rostools_record")
+    fmt = output_format(ctx, fmt)
+    live = not quiet and fmt is Format.text and sys.stderr.isatty()
+    rec = node_session(ctx, partial(_run, opts, live, quiet), "rostools_record")
     data = summary_data(rec)
-    if out is Format.text:
+    if fmt is Format.text:
         if not quiet:
             sys.stderr.write(summary_text(data) + "\n")
     else:
-        sys.stdout.write(render(out, data) + "\n")
+        sys.stdout.write(render(fmt, data) + "\n")
     if rec.drops:
         were = "was" if rec.drops == 1 else "were"
         raise DataLossError(
             f"{counted(rec.drops, 'message')} {were} dropped: the buffer (-b) was full"
         )
+
+
+def _record_options(
+    topics: list[str], choice: TopicChoice, out: OutputFile, splitting: Splitting, limit: int | None
+) -> RecordOptions:
+    """The recorder's options from the command line's, checked as rosbag record checks them."""
+    from rostools.bag.record import RecordOptions
+
+    choice.check(topics)
+    for value, flag in ((splitting.size, "--size"), (splitting.max_splits, "--max-splits"),
+                        (limit, "-l")):  # fmt: skip
+        if value is not None and value <= 0:
+            raise UsageError(f"{flag} must be positive")
+    path, kind = out.path()
+    size, duration = splitting.size, splitting.duration
+    opts = RecordOptions(
+        topics=topics, all=choice.all_, regex=choice.regex, exclude=choice.exclude or [],
+        node=choice.node, types=choice.types or [], exclude_types=choice.exclude_types or [],
+        base=path, format=kind, compression=out.chunk_compression(kind),
+        chunk_size=out.chunk_bytes(), split=splitting.split,
+        size=size * 1024 * 1024 if size else None,
+        duration=parse_duration(duration, "--duration") if duration else None,
+        max_splits=splitting.max_splits, repeat_latched=splitting.repeat_latched, limit=limit,
+    )  # fmt: skip
+    opts.check()
+    return opts
+
+
+async def _run(
+    opts: RecordOptions, live: bool, quiet: bool, n: Node, stop: asyncio.Event
+) -> Recorder:
+    """Record until stopped or a limit is reached: with the live table, or lines on stderr."""
+    from rostools.bag.record import Recorder
+
+    rec = Recorder(n, opts)
+    rec.check_disk(started=False)  # before saying "Recording to"
+    if not live:
+        if not quiet:
+            rec.on_subscribe = _say_subscribing
+            sys.stderr.write(f"Recording to '{opts.base}'.\n")
+        await rec.run(stop)
+        return rec
+    with LiveTable() as table:
+        await rec.run(stop, table.tick)
+        table.last_frame(rec)
+    return rec
 
 
 def _say_subscribing(topic: str) -> None:

@@ -6,6 +6,7 @@ import math
 import sys
 import time
 from collections.abc import Callable, Iterator
+from functools import partial
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated, Any
 
@@ -171,121 +172,184 @@ def pub(
     msg_path: MsgPathOpt = None,
 ) -> None:
     """Publish messages (rostopic pub). By default: once, latched, until Ctrl-C."""
-    from rostools.msgs.codec import Codec
-    from rostools.msgs.fill import Filler
     from rostools.msgs.message import Time
-    from rostools.msgs.topictype import TopicType
-    from rostools.node.clock import tighten_timer_slack
 
     if rate is not None and not 0 < rate < math.inf:  # nan compares false both ways
         raise UsageError("--rate must be a number above 0")
     if once and rate is not None:
         raise UsageError("-1 and -r cannot be combined")
     name = script_resolve(topic, "rostopic")
-    store = type_store(msg_path)
-    if not store.has_msg(msg_type):
-        from rostools.cli.settings import learn_type
-
-        try:
-            store = learn_type(settings(ctx), name, store)
-        except Exception:  # noqa: BLE001 - no publisher to learn from: the type is unknown
-            raise NotFoundError(
-                f"invalid message type: {msg_type}", hint="add it with --msg-path"
-            ) from None
-        if not store.has_msg(msg_type):
-            raise NotFoundError(f"invalid message type: {msg_type}")
-    codec = Codec.of(store)
-    filler = Filler(codec)
-    source, repeated = _message_source(filler, msg_type, args or [], file, substitute, Time.now)
-    streamed = file is not None or (not args and not repeated)
+    plan = _Plan(name, _store_for(ctx, name, msg_type, msg_path), msg_type, args or [], file)
+    plan.substitute, plan.once, plan.timeout = substitute, once, timeout
+    source, plan.repeated = plan.messages(Time.now)
+    plan.streamed = file is not None or (not args and not plan.repeated)
     if file is not None and rate is None:
-        repeated = False  # a file's documents are sent once each unless a rate is given
-    if streamed and rate is None:
+        plan.repeated = False  # a file's documents are sent once each unless a rate is given
+    if plan.streamed and rate is None:
         rate = STREAM_RATE
-    latched = latch or (rate is None and not streamed) or once
-    ttype = TopicType.of(store, msg_type)
-
-    async def main(node: Node, stop: asyncio.Event) -> None:
-        import asyncio
-
+    plan.rate = rate
+    plan.latched = latch or (rate is None and not plan.streamed) or once
+    if verbose:
         from rostools.msgs.text import formatter, message_type
+
+        plan.show = formatter(plan.filler.codec, message_type(msg_type))
+    node_session(ctx, partial(_publish, plan, source, use_rostime), "rostools_pub")
+
+
+def _store_for(ctx: typer.Context, name: str, msg_type: str, msg_path: list[Path] | None) -> Any:
+    """The type store with ``msg_type``: installed, or learnt from a publisher of ``name``."""
+    store = type_store(msg_path)
+    if store.has_msg(msg_type):
+        return store
+    from rostools.cli.settings import learn_type
+
+    try:
+        store = learn_type(settings(ctx), name, store)
+    except Exception:  # noqa: BLE001 - no publisher to learn from: the type is unknown
+        raise NotFoundError(
+            f"invalid message type: {msg_type}", hint="add it with --msg-path"
+        ) from None
+    if not store.has_msg(msg_type):
+        raise NotFoundError(f"invalid message type: {msg_type}")
+    return store
+
+
+class _Plan:
+    """What ``pub`` publishes and how: the command line, read once."""
+
+    def __init__(
+        self, name: str, store: Any, msg_type: str, args: list[str], file: Path | None
+    ) -> None:
+        from rostools.msgs.codec import Codec
+        from rostools.msgs.fill import Filler
+        from rostools.msgs.topictype import TopicType
+
+        self.name, self.msg_type, self.args, self.file = name, msg_type, args, file
+        self.filler = Filler(Codec.of(store))
+        self.ttype = TopicType.of(store, msg_type)
+        self.substitute = self.once = self.repeated = self.streamed = self.latched = False
+        self.rate: float | None = None
+        self.timeout: float | None = None
+        self.show: Callable[[Any], str] | None = None  # -v
+
+    def messages(self, now: Callable[[], Any]) -> tuple[Callable[[], Iterator[Any]], bool]:
+        """The source of messages (``now`` stands for ``now``/``auto``), and if it repeats one."""
+        return _message_source(
+            self.filler, self.msg_type, self.args, self.file, self.substitute, now
+        )
+
+
+async def _publish(
+    plan: _Plan,
+    source: Callable[[], Iterator[Any]],
+    use_rostime: bool,
+    node: Node,
+    stop: asyncio.Event,
+) -> None:
+    """Advertise, then publish one latched message or a paced stream, until done or stopped."""
+    known = await node.master.topic_types()  # before ours replaces it
+    publisher = await node.advertise(plan.name, plan.ttype, latch=plan.latched, queue_size=1000)
+    refused = _watch_types(known.get(plan.name), publisher, plan.name, plan.ttype)
+    deadline = time.monotonic() + plan.timeout if plan.timeout is not None else None
+
+    def left() -> float | None:
+        return None if deadline is None else max(deadline - time.monotonic(), 0)
+
+    if use_rostime:
+        now = await _ros_now(node, stop, left())
+        plan.filler.now = now()
+        source = plan.messages(now)[0]
+    if plan.rate is None:
+        await _latch_one(plan, publisher, next(source()), refused, left, stop)
+        return
+    if plan.file is not None and plan.repeated:
+        sys.stderr.write("Got one message and a rate, publishing repeatedly\n")  # rostopic's
+    if plan.streamed:  # rostopic waits up to 5 s for a subscriber before a file or stdin
         from rostools.node.session import first
 
-        known = await node.master.topic_types()  # before ours replaces it
-        publisher = await node.advertise(name, ttype, latch=latched, queue_size=1000)
-        refused = _watch_types(known.get(name), publisher, name, ttype)
-        show = formatter(codec, message_type(msg_type)) if verbose else None
-        deadline = time.monotonic() + timeout if timeout is not None else None
+        give_up = time.monotonic() + SUBSCRIBER_WAIT
+        while publisher.subscriber_count == 0 and time.monotonic() < give_up:
+            if await first(stop.wait(), timeout=0.05) == 0:
+                return
+    await _paced(plan, publisher, source(), left, stop)
 
-        def left() -> float | None:
-            return None if deadline is None else max(deadline - time.monotonic(), 0)
 
-        messages_from = source
-        if use_rostime:
-            now = await _ros_now(node, stop, left())
-            filler.now = now()
-            messages_from = _message_source(filler, msg_type, args or [], file, substitute, now)[0]
-        messages = messages_from()
-        if rate is None:  # one latched message, then wait
-            msg = next(messages)
-            publisher.publish(msg.serialize())
-            linger = ONCE_LINGER if once else None
-            if linger is not None and deadline is not None:
-                linger = min(linger, left() or 0)
-            note = f" for {ONCE_LINGER} seconds" if once else ". Press ctrl-C to terminate"
-            what = "message" if show is None else f"[{show(msg)}]"  # rostopic's words
-            sys.stderr.write(f"publishing and latching {what}{note}\n")
-            await first(stop.wait(), timeout=linger if once else left())
-            if once and refused and publisher.subscriber_count == 0:
-                raise RostoolsError(
-                    f"no subscriber of {name} took the message: "
-                    f"{', '.join(sorted(refused))} wanted another type"
-                )
-            return
-        if file is not None and repeated:
-            sys.stderr.write("Got one message and a rate, publishing repeatedly\n")  # rostopic's
-        if streamed:  # rostopic waits up to 5 s for a subscriber before a file or stdin
-            give_up = time.monotonic() + SUBSCRIBER_WAIT
-            while publisher.subscriber_count == 0 and time.monotonic() < give_up:
-                if await first(stop.wait(), timeout=0.05) == 0:
+async def _latch_one(
+    plan: _Plan,
+    publisher: Publisher,
+    msg: Any,
+    refused: set[str],
+    left: Callable[[], float | None],
+    stop: asyncio.Event,
+) -> None:
+    """Publish one latched message and wait: for ever, for ``-1``'s 3 s, or to the timeout."""
+    from rostools.node.session import first
+
+    publisher.publish(msg.serialize())
+    note = f" for {ONCE_LINGER} seconds" if plan.once else ". Press ctrl-C to terminate"
+    what = "message" if plan.show is None else f"[{plan.show(msg)}]"  # rostopic's words
+    sys.stderr.write(f"publishing and latching {what}{note}\n")
+    linger = left()
+    if plan.once:
+        linger = ONCE_LINGER if linger is None else min(ONCE_LINGER, linger)
+    await first(stop.wait(), timeout=linger)
+    if plan.once and refused and publisher.subscriber_count == 0:
+        raise RostoolsError(
+            f"no subscriber of {plan.name} took the message: "
+            f"{', '.join(sorted(refused))} wanted another type"
+        )
+
+
+async def _paced(
+    plan: _Plan,
+    publisher: Publisher,
+    messages: Iterator[Any],
+    left: Callable[[], float | None],
+    stop: asyncio.Event,
+) -> None:
+    """Publish ``messages`` at the plan's rate until they end, the timeout, or a stop."""
+    import asyncio
+
+    from rostools.node.clock import tighten_timer_slack
+    from rostools.node.session import first
+
+    assert plan.rate is not None
+    rate, show = plan.rate, plan.show
+    reuse = plan.repeated and not plan.substitute
+    cached: bytes | None = None
+    said = ""  # -v: what each message sent prints, as rostopic prints it every time
+    tighten_timer_slack()
+    start, sent = time.monotonic(), 0
+    served = start
+    while not stop.is_set():
+        due = int((time.monotonic() - start) * rate) + 1 - sent
+        for _ in range(min(due, MAX_BURST)):
+            if not (reuse and cached is not None):
+                msg = next(messages, None)
+                if msg is None:
                     return
-        cached: bytes | None = None
-        said = ""  # -v: what each message sent prints, as rostopic prints it every time
-        tighten_timer_slack()
-        start, sent = time.monotonic(), 0
-        served = start
-        while not stop.is_set():
-            due = int((time.monotonic() - start) * rate) + 1 - sent
-            for _ in range(min(due, MAX_BURST)):
-                if not (repeated and cached is not None and not substitute):
-                    try:
-                        msg = next(messages)
-                    except StopIteration:
-                        return
-                    cached = msg.serialize()
-                    said = f"publishing {show(msg)}\n" if show is not None else ""
-                publisher.publish(cached)
-                if said:
-                    sys.stdout.write(said)
-                sent += 1
-            wait = start + sent / rate - time.monotonic()
-            limit = left()
-            if limit is not None:
-                if limit <= 0:
-                    return
-                wait = min(wait, limit)
-            if wait >= SPIN:
-                publisher.flush()  # paced: each message leaves when due, not with later ones
-            if wait > FINE_SLEEP:
-                await first(stop.wait(), timeout=wait - FINE_SLEEP)
-                served = time.monotonic()
-            elif wait >= SPIN:  # asyncio wakes in whole ms: 10 kHz came in bursts
-                time.sleep(wait)
-            if time.monotonic() - served > YIELD_PERIOD:
-                await asyncio.sleep(0)  # new subscribers, Ctrl-C and coalesced writes
-                served = time.monotonic()
-
-    node_session(ctx, main, "rostools_pub")
+                cached = msg.serialize()
+                said = f"publishing {show(msg)}\n" if show is not None else ""
+            publisher.publish(cached)
+            if said:
+                sys.stdout.write(said)
+            sent += 1
+        wait = start + sent / rate - time.monotonic()
+        limit = left()
+        if limit is not None:
+            if limit <= 0:
+                return
+            wait = min(wait, limit)
+        if wait >= SPIN:
+            publisher.flush()  # paced: each message leaves when due, not with later ones
+        if wait > FINE_SLEEP:
+            await first(stop.wait(), timeout=wait - FINE_SLEEP)
+            served = time.monotonic()
+        elif wait >= SPIN:  # asyncio wakes in whole ms: 10 kHz came in bursts
+            time.sleep(wait)
+        if time.monotonic() - served > YIELD_PERIOD:
+            await asyncio.sleep(0)  # new subscribers, Ctrl-C and coalesced writes
+            served = time.monotonic()
 
 
 def _watch_types(

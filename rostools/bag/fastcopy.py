@@ -103,43 +103,74 @@ def _convert_chunk(
         index = list(reader.index_records(chunk))
     except BagFormatError:
         return None
-    size = end - base
-    arr = np.frombuffer(buf, dtype=np.uint8, count=size, offset=base)
-    entry = np.dtype([("secs", "<u4"), ("nsecs", "<u4"), ("off", "<u4")])
-    parts, channels, ranks, sources = [], [], [], []
     if {conn_id: len(raw) // 12 for conn_id, raw in index} != chunk.counts:
         return None
-    for conn_id, raw in index:
-        if conn_id not in wanted:
-            return None
-        rank, conn = wanted[conn_id]
-        entries = np.frombuffer(raw, dtype=entry)
-        parts.append(entries)
-        channels.append(np.full(len(entries), targets.resolve(conn).id, dtype=np.uint16))
-        ranks.append(np.full(len(entries), rank, dtype=np.uint32))
-        sources.append(np.full(len(entries), conn_id, dtype=np.uint32))
-    if not parts:
+    if not index:
         return 0
-    entries = np.concatenate(parts)
-    count = len(entries)
-    times = entries["secs"].astype(np.uint64) * np.uint64(1_000_000_000) + entries["nsecs"]
-    offs = entries["off"].astype(np.int64)
-    order = np.argsort(offs, kind="stable")  # file order
-    offs, times = offs[order], times[order]
-    rank, cids = np.concatenate(ranks)[order], np.concatenate(channels)[order]
-    if (int(times.min()), int(times.max())) != (chunk.start_ns, chunk.end_ns):
-        return None  # the chunk info disagrees: the per-message path says how
-    if count > 1:
-        # Time order (time, rank, position) must be file order: no step back in (time, rank).
-        step = np.diff(times.astype(np.int64))
-        if not bool(np.all((step > 0) | ((step == 0) & (np.diff(rank.astype(np.int64)) >= 0)))):
-            return None
-        if not bool(np.all(offs[1:] > offs[:-1])):
-            return None  # two index entries for one record
+    arr = np.frombuffer(buf, dtype=np.uint8, count=end - base, offset=base)
+    entries = _Entries.read(np, index, wanted, targets, chunk)
+    dlen = None if entries is None else _data_lengths(np, arr, entries)
+    if entries is None or dlen is None:
+        return None
+    records, starts = _message_records(np, arr, entries.offs, dlen)
+    _write_headers(np, writer, records, starts, entries, dlen)
+    return len(starts)
+
+
+class _Entries:
+    """A chunk's index entries in file order: where each record is, its time and channel."""
+
+    def __init__(self, offs: Any, times: Any, cids: Any, conns: Any, secs: Any, nsecs: Any):
+        self.offs, self.times, self.cids = offs, times, cids
+        #: What each record's own header must say: its connection and time.
+        self.conns, self.secs, self.nsecs = conns, secs, nsecs
+
+    @classmethod
+    def read(
+        cls, np: Any, index: list[tuple[int, Any]], wanted: Any, targets: Targets, chunk: Chunk
+    ) -> _Entries | None:
+        """The entries, if time order is file order and the chunk info agrees, else None."""
+        entry = np.dtype([("secs", "<u4"), ("nsecs", "<u4"), ("off", "<u4")])
+        parts, channels, ranks, sources = [], [], [], []
+        for conn_id, raw in index:
+            if conn_id not in wanted:
+                return None
+            rank, conn = wanted[conn_id]
+            found = np.frombuffer(raw, dtype=entry)
+            parts.append(found)
+            channels.append(np.full(len(found), targets.resolve(conn).id, dtype=np.uint16))
+            ranks.append(np.full(len(found), rank, dtype=np.uint32))
+            sources.append(np.full(len(found), conn_id, dtype=np.uint32))
+        entries = np.concatenate(parts)
+        order = np.argsort(entries["off"].astype(np.int64), kind="stable")  # file order
+        entries = entries[order]
+        offs = entries["off"].astype(np.int64)
+        times = entries["secs"].astype(np.uint64) * np.uint64(1_000_000_000) + entries["nsecs"]
+        rank = np.concatenate(ranks)[order]
+        if (int(times.min()), int(times.max())) != (chunk.start_ns, chunk.end_ns):
+            return None  # the chunk info disagrees: the per-message path says how
+        if len(entries) > 1:
+            # Time order (time, rank, position) must be file order: no step back in it.
+            step = np.diff(times.astype(np.int64))
+            same_time_in_rank = (step == 0) & (np.diff(rank.astype(np.int64)) >= 0)
+            if not bool(np.all((step > 0) | same_time_in_rank)):
+                return None
+            if not bool(np.all(offs[1:] > offs[:-1])):
+                return None  # two index entries for one record
+        conns = np.concatenate(sources)[order]
+        cids = np.concatenate(channels)[order]
+        return cls(offs, times, cids, conns, entries["secs"], entries["nsecs"])
+
+
+def _data_lengths(np: Any, arr: Any, entries: _Entries) -> Any:
+    """Each message's data length, read from its record; None if a record disagrees.
+
+    Every record's 46-byte head in one gather: the fixed bytes say which layout it is in,
+    and its connection and time must be its index entry's.
+    """
+    size, offs = len(arr), entries.offs
     if int(offs[-1]) + _BAG_HEAD > size:
         return None
-    # Every record's 46-byte head in one gather; the fixed bytes say which layout it is in,
-    # and its connection and time must be its index entry's.
     windows = np.lib.stride_tricks.as_strided(
         arr, shape=(size - _BAG_HEAD + 1, _BAG_HEAD), strides=(1, 1)
     )
@@ -156,27 +187,44 @@ def _convert_chunk(
         return None
     fields = heads.view(layout[1])[:, 0]
     if not (
-        np.array_equal(fields["conn"], np.concatenate(sources)[order])
-        and np.array_equal(fields["secs"], entries["secs"][order])
-        and np.array_equal(fields["nsecs"], entries["nsecs"][order])
+        np.array_equal(fields["conn"], entries.conns)
+        and np.array_equal(fields["secs"], entries.secs)
+        and np.array_equal(fields["nsecs"], entries.nsecs)
     ):
         return None
     dlen = fields["dlen"].astype(np.int64)
     ends = offs + _BAG_HEAD + dlen
-    if int(ends[-1]) > size or (count > 1 and not bool(np.all(ends[:-1] <= offs[1:]))):
+    if int(ends[-1]) > size or (len(offs) > 1 and not bool(np.all(ends[:-1] <= offs[1:]))):
         return None
-    # Keep [record + 15, record end) of every message record; drop the rest (the first 15
-    # bytes of each message record, connection records): alternating drop/keep runs.
+    return dlen
+
+
+def _message_records(np: Any, arr: Any, offs: Any, dlen: Any) -> tuple[Any, Any]:
+    """The chunk's message records, 31 bytes of head each, and where each starts.
+
+    Keep [record + 15, record end) of every message record; drop the rest (the first 15
+    bytes of each message record, connection records): alternating drop/keep runs.
+    """
+    count = len(offs)
+    ends = offs + _BAG_HEAD + dlen
     runs = np.empty(2 * count + 1, dtype=np.int64)
     runs[0] = offs[0] + (_BAG_HEAD - _MCAP_HEAD)
     runs[1::2] = _MCAP_HEAD + dlen
     runs[2:-1:2] = offs[1:] + (_BAG_HEAD - _MCAP_HEAD) - ends[:-1]
-    runs[-1] = size - ends[-1]
+    runs[-1] = len(arr) - ends[-1]
     keep = np.zeros(2 * count + 1, dtype=np.bool_)
     keep[1::2] = True
     records = arr[np.repeat(keep, runs)]
     starts = np.zeros(count, dtype=np.int64)
     np.cumsum(runs[1:-2:2], out=starts[1:])
+    return records, starts
+
+
+def _write_headers(
+    np: Any, writer: McapWriter, records: Any, starts: Any, entries: _Entries, dlen: Any
+) -> None:
+    """Overwrite each record's head with MCAP's, index it by channel, write the chunk."""
+    count, times, cids = len(starts), entries.times, entries.cids
     header = np.empty(count, dtype=_mcap_header(np))
     header["op"] = 5
     header["length"] = 22 + dlen
@@ -204,7 +252,6 @@ def _convert_chunk(
     )
     windows[starts] = header.view(np.uint8).reshape(count, _MCAP_HEAD)
     writer.write_chunk(int(times[0]), int(times.max()), memoryview(records), indexes, counts)
-    return count
 
 
 def _layouts(np: Any) -> list[tuple[list[tuple[int, Any]], Any]]:

@@ -613,6 +613,32 @@ class McapReader(BagReader):
                 f"chunk at {rec}: its CRC does not match its records; its messages are given"
                 " as they are"
             )
+        out = self._records(rec, buf, view, pos, end, wanted, everything, complete)
+        out.sort()
+        if out and complete:
+            self._check_range(rec, start, out[0][0], out[-1][0], everything)
+        if out and lo > out[0][0]:
+            out = out[bisect_left(out, (lo,)) :]
+        if out and hi < out[-1][0]:
+            out = out[: bisect_left(out, (hi + 1,))]
+        return out
+
+    def _records(
+        self,
+        rec: int,
+        buf: bytes | memoryview,
+        view: memoryview,
+        pos: int,
+        end: int,
+        wanted: _Wanted,
+        everything: bool,
+        complete: bool,
+    ) -> list[Entry]:
+        """The wanted messages among a chunk's records, in file order, from ``pos`` to ``end``.
+
+        Schemas and channels inside the chunk are registered on the way; bytes that do not
+        parse are read past (``_read_on``).
+        """
         out: list[Entry] = []
         append = out.append
         unpack = _MSG.unpack_from
@@ -642,27 +668,19 @@ class McapReader(BagReader):
                     pos = nxt
             except fmt.McapFormatError as err:
                 pos = self._read_on(buf, pos, end, rec, complete, err)
-        out.sort()
+        return out
+
+    def _check_range(self, rec: int, start: int, low: int, high: int, everything: bool) -> None:
+        """Note a chunk whose messages run outside its header's time range.
+
+        Every message read: the range must be the header's; some: within it.
+        """
         first, last = _CHUNK_HEAD.unpack_from(self._mm, start)[:2]
-        # Every message read: the range must be the header's; some: within it.
-        if (
-            out
-            and complete
-            and (
-                (out[0][0], out[-1][0]) != (first, last)
-                if everything
-                else (out[0][0] < first or out[-1][0] > last)
-            )
-        ):
+        if (low, high) != (first, last) if everything else (low < first or high > last):
             self.note(
-                f"chunk at {rec}: its messages run from {out[0][0]} to {out[-1][0]} ns, its"
+                f"chunk at {rec}: its messages run from {low} to {high} ns, its"
                 f" header says {first} to {last}"
             )
-        if out and lo > out[0][0]:
-            out = out[bisect_left(out, (lo,)) :]
-        if out and hi < out[-1][0]:
-            out = out[: bisect_left(out, (hi + 1,))]
-        return out
 
     def close(self) -> None:
         """Release the file map."""

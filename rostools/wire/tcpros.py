@@ -191,17 +191,7 @@ class FrameReader:
         that is never reused (unless ``reuse``). Either stays valid after the call.
         """
         if self._big is not None:
-            self._big_filled += nbytes
-            if self._big_filled < self._big_length:
-                return []
-            if self.reuse:
-                self._spare = self._big
-                done = memoryview(self._big)[: self._big_length].toreadonly()
-            else:
-                # Read-only: nobody writes to it again, and writers may keep it without a copy.
-                done = memoryview(self._big).toreadonly()
-            self._big = None
-            return [done]
+            return self._fill_big(nbytes)
         view = self._view
         assert view is not None, "buffer_updated without get_buffer"
         self._end += nbytes
@@ -226,30 +216,53 @@ class FrameReader:
             elif length >= BIG_FRAME or (end < SCRATCH and size - pos - 4 > PARTIAL_FIRST):
                 # A big frame, or much of one cut short by the end of what the socket had: it
                 # waits in a buffer of its own, filled in place by the next reads.
-                have = size - pos - 4
-                spare = self._spare
-                if self.reuse and spare is not None and len(spare) >= length:
-                    self._big = spare
-                else:
-                    header = pos == 0 and self.first_max is not None
-                    first = PARTIAL_FIRST if length < BIG_FRAME or header else GROW_FIRST
-                    self._big = bytearray(min(length, max(first, have)))
-                self._big[:have] = view[start + pos + 4 : end]
-                self._big_filled, self._big_length = have, length
+                self._begin_big(view[start + pos + 4 : end], length, pos == 0)
                 pos = size
                 break
             else:
                 break
         if pos:
             self.first_max = None  # the first frame is done, or is a big one under way
-        if pos < size and end == SCRATCH:
+        self._keep_rest(view, data, pos, size)
+        return frames
+
+    def _fill_big(self, nbytes: int) -> list[bytes | memoryview]:
+        """Account for ``nbytes`` more of the big frame under way; the frame once complete."""
+        assert self._big is not None
+        self._big_filled += nbytes
+        if self._big_filled < self._big_length:
+            return []
+        if self.reuse:
+            self._spare = self._big
+            done = memoryview(self._big)[: self._big_length].toreadonly()
+        else:
+            # Read-only: nobody writes to it again, and writers may keep it without a copy.
+            done = memoryview(self._big).toreadonly()
+        self._big = None
+        return [done]
+
+    def _begin_big(self, have: memoryview, length: int, at_start: bool) -> None:
+        """Start a frame of ``length`` bytes in a buffer of its own, with what came of it."""
+        spare = self._spare
+        if self.reuse and spare is not None and len(spare) >= length:
+            self._big = spare
+        else:
+            header = at_start and self.first_max is not None
+            first = PARTIAL_FIRST if length < BIG_FRAME or header else GROW_FIRST
+            self._big = bytearray(min(length, max(first, len(have))))
+        self._big[: len(have)] = have
+        self._big_filled, self._big_length = len(have), length
+
+    def _keep_rest(self, view: memoryview, data: bytes, pos: int, size: int) -> None:
+        """After a read: keep its partial frame, in the scratch buffer or as the tail."""
+        if pos < size and self._end == SCRATCH:
             # More is waiting: keep the buffer and its partial frame.
             if self._own is None:
                 self._own = view
                 if self._lender.view is view:
                     self._lender.view = None  # the thread makes itself another
             self._start += pos
-            return frames
+            return
         self._tail = data[pos:] if pos < size else b""  # at most PARTIAL_FIRST + 4 bytes
         self._end = 0
         if self._own is not None:
@@ -257,7 +270,6 @@ class FrameReader:
             if self._lender.view is None:
                 self._lender.view = self._own
             self._own = None
-        return frames
 
 
 class Accepted(NamedTuple):

@@ -33,7 +33,7 @@ from rostools.errors import (
 if TYPE_CHECKING:
     import asyncio
 
-    from rostools.action.client import ClientGoalHandle, GoalEvent
+    from rostools.action.client import ActionClient, ClientGoalHandle, GoalEvent
     from rostools.action.types import ActionTypes
     from rostools.node.node import Node
 
@@ -150,6 +150,48 @@ def _outcome(event: GoalEvent, name: str) -> None:
     raise UnreachableError(f"{what} ended in an unknown state {event.status}")
 
 
+async def _server_connected(
+    client: ActionClient,
+    name: str,
+    deadline: float | None,
+    timeout: float | None,
+    stop: asyncio.Event,
+) -> None:
+    """Until the action server connects: by the deadline, else ``SERVER_WAIT`` seconds."""
+    from rostools.node.session import first
+
+    wait_until = deadline if deadline is not None else time.monotonic() + SERVER_WAIT
+    while not client.server_connected():
+        if stop.is_set():
+            raise QuietExit(130)
+        if time.monotonic() >= wait_until:
+            limit = timeout if timeout is not None else SERVER_WAIT
+            raise TimeoutExpired(
+                f"the action server of {name} did not connect within {limit:g} s",
+                hint="is its node running, and can it reach this host?",
+            )
+        await first(stop.wait(), timeout=0.02)
+
+
+async def _cancel(handle: ClientGoalHandle, printer: _Printer, reason: str) -> None:
+    """Leaving early: cancel the goal on the server, and show what it says for a moment."""
+    import asyncio
+
+    handle.cancel()
+    printer.event(
+        {"event": "cancel", "goal_id": handle.id, "reason": reason},
+        f"canceling goal {handle.id} ({reason})",
+    )
+    end, never = time.monotonic() + CANCEL_WAIT, asyncio.Event()
+    while (left := end - time.monotonic()) > 0:
+        got = await _next(handle, never, left)
+        if isinstance(got, str):
+            break
+        printer.show(got)
+        if got.kind in ("result", "lost"):
+            break
+
+
 @command("send-goal", context_settings={"ignore_unknown_options": True})
 def send_goal(
     ctx: typer.Context,
@@ -180,52 +222,25 @@ def send_goal(
     printer = _Printer(types, fmt, feedback)
 
     async def main(node: Node, stop: asyncio.Event) -> None:
-        import asyncio
-
         from rostools.action.client import ActionClient
-        from rostools.node.session import first
 
         client = await ActionClient(node, info.name, types).start()
-        wait_until = deadline if deadline is not None else time.monotonic() + SERVER_WAIT
-        while not client.server_connected():
-            if stop.is_set():
-                raise QuietExit(130)
-            if time.monotonic() >= wait_until:
-                limit = timeout if timeout is not None else SERVER_WAIT
-                raise TimeoutExpired(
-                    f"the action server of {info.name} did not connect within {limit:g} s",
-                    hint="is its node running, and can it reach this host?",
-                )
-            await first(stop.wait(), timeout=0.02)
+        await _server_connected(client, info.name, deadline, timeout, stop)
         message = _fill(types, values)
         handle = client.send_goal(message)
         printer.goal(handle, message)
-        reason = ""
         while True:
             left = None if deadline is None else max(deadline - time.monotonic(), 0.0)
             got = await _next(handle, stop, left)
             if isinstance(got, str):
-                reason = "interrupted" if got == "stop" else "timeout"
                 break
             printer.show(got)
             if got.kind in ("result", "lost"):
                 await client.close()
                 _outcome(got, info.name)
                 return
-        # leaving early: cancel on the server and wait a moment for it to say so
-        handle.cancel()
-        printer.event(
-            {"event": "cancel", "goal_id": handle.id, "reason": reason},
-            f"canceling goal {handle.id} ({reason})",
-        )
-        end, never = time.monotonic() + CANCEL_WAIT, asyncio.Event()
-        while (left := end - time.monotonic()) > 0:
-            got = await _next(handle, never, left)
-            if isinstance(got, str):
-                break
-            printer.show(got)
-            if got.kind in ("result", "lost"):
-                break
+        reason = "interrupted" if got == "stop" else "timeout"
+        await _cancel(handle, printer, reason)
         await client.close()
         if reason == "interrupted":
             raise QuietExit(130)

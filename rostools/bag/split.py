@@ -11,7 +11,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 from rostools.bag.access import (
     file_name,
@@ -110,6 +110,65 @@ class _Splitter:
         return crossed
 
 
+class _Parts:
+    """The part being written, and what starts the next one."""
+
+    def __init__(
+        self, base: Path, kind: str, report: SplitReport, splitter: _Splitter, repeat: bool
+    ) -> None:
+        self.base, self.kind, self.report, self.splitter = base, kind, report, splitter
+        #: ``repeat_latched``: the last message of each latched connection, for the next part.
+        self.latched: dict[int, tuple[Connection, memoryview]] | None = {} if repeat else None
+        #: open_writer's compression, chunk size, overwrite and profile, and the renames.
+        self.writing: tuple[str | None, int | None, bool, Any, Renames | None] = (
+            None, None, False, None, None
+        )  # fmt: skip
+        self.writer: BagWriter | None = None
+        self.targets: Targets | None = None
+        self.part = Part(file_name(base, True, 0))
+        self.part_bytes = 0
+
+    def write(self, conn: Connection, t: int, data: memoryview) -> None:
+        """Write one message into the part it belongs in, starting that part if need be."""
+        if self.writer is not None and self.splitter.new_part(t, self.part, self.part_bytes):
+            self.writer.close()
+            self.writer = None
+        if self.writer is None:
+            self._start(t)
+        assert self.writer is not None and self.targets is not None
+        self.writer.write(self.targets.resolve(conn), t, data)
+        self.part.messages += 1
+        self.part.end_ns = t
+        self.part_bytes += len(data)
+        if self.latched is not None and conn.latching:
+            self.latched[conn.id] = (conn, data)
+
+    def _start(self, t: int) -> None:
+        """Open the next part at time ``t``; it starts with the latched messages so far."""
+        compression, chunk_size, overwrite, profile, renames = self.writing
+        parts = self.report.parts
+        self.part = Part(file_name(self.base, True, len(parts)), start_ns=t)
+        parts.append(self.part)
+        self.writer = open_writer(self.part.path, self.kind, compression, chunk_size,
+                                  overwrite=overwrite, profile=profile)  # fmt: skip
+        self.targets = Targets(self.writer, (), renames)
+        self.part_bytes = 0
+        if self.latched and len(parts) > 1:
+            for old, payload in self.latched.values():
+                self.writer.write(self.targets.resolve(old), t, payload)
+                self.part.messages += 1
+
+    def close(self) -> None:
+        """Close the last part."""
+        if self.writer is not None:
+            self.writer.close()
+
+    def abort(self) -> None:
+        """Give up the part being written."""
+        if self.writer is not None:
+            self.writer.abort()
+
+
 def split(
     src: str | Path,
     base: str | Path,
@@ -137,46 +196,20 @@ def split(
     with open_bag(src) as reader:
         if kind != "mcap":  # an MCAP output takes any encoding as it is
             require_ros1(reader, "bag split")
-        profile = mcap_profile([reader])
         info = reader.info()
-        splitter = _Splitter(cut, info.start_ns or 0)
-        latched: dict[int, tuple[Connection, memoryview]] = {}
-        writer: BagWriter | None = None
-        targets: Targets | None = None
-        part = Part(first)
-        part_bytes = read = 0
+        parts = _Parts(base, kind, report, _Splitter(cut, info.start_ns or 0), repeat_latched)
+        parts.writing = (compression, chunk_size, overwrite, mcap_profile([reader]), renames)
+        read = 0
         try:
             for conn, t, data in reader.messages():
-                if writer is not None and splitter.new_part(t, part, part_bytes):
-                    writer.close()
-                    writer = None
-                if writer is None:
-                    part = Part(file_name(base, True, len(report.parts)), start_ns=t)
-                    report.parts.append(part)
-                    writer = open_writer(part.path, kind, compression, chunk_size,
-                                         overwrite=overwrite, profile=profile)  # fmt: skip
-                    targets = Targets(writer, (), renames)
-                    part_bytes = 0
-                    if repeat_latched and len(report.parts) > 1:
-                        for old, payload in latched.values():
-                            writer.write(targets.resolve(old), t, payload)
-                            part.messages += 1
-                assert targets is not None
-                writer.write(targets.resolve(conn), t, data)
-                part.messages += 1
-                part.end_ns = t
-                part_bytes += len(data)
-                if repeat_latched and conn.latching:
-                    latched[conn.id] = (conn, data)
+                parts.write(conn, t, data)
                 read += 1
                 if progress is not None and read % PROGRESS_EVERY == 0:
                     progress(read, info.message_count)
         except BaseException:
-            if writer is not None:
-                writer.abort()
+            parts.abort()
             raise
-        if writer is not None:
-            writer.close()
+        parts.close()
         report.notes, report.lost = problems([reader])
     if progress is not None:
         progress(read, info.message_count)

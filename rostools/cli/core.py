@@ -3,15 +3,15 @@
 from __future__ import annotations
 
 import asyncio
-import json
-import sys
+from dataclasses import dataclass
 from typing import Annotated
 
 import typer
 
 from rostools import __version__
-from rostools.cli.common import FINITE, FormatOpt, output_format
-from rostools.cli.output import Format
+from rostools.cli import output
+from rostools.cli.common import FINITE, FormatOpt, add, options_record, output_format
+from rostools.cli.declare import command
 from rostools.errors import RostoolsError
 
 app = typer.Typer(
@@ -19,7 +19,36 @@ app = typer.Typer(
 )
 
 
-@app.command()
+@options_record
+@dataclass
+class RoscoreFlags:
+    """roscore's own flags, taken so that scripts written for it run.
+
+    None changes anything here: one event loop, no worker threads, no separate processes.
+    """
+
+    verbose: Annotated[bool, typer.Option("-v", help="roscore's flag; no effect.")] = False
+    workers: Annotated[
+        int | None, typer.Option("--numworkers", "-w", help="roscore's flag; no effect.")
+    ] = None
+    socket_timeout: Annotated[
+        float | None,
+        typer.Option("--timeout", "-t", click_type=FINITE, help="roscore's flag; no effect."),
+    ] = None
+    logger_level: Annotated[
+        str | None, typer.Option("--master-logger-level", help="roscore's flag; no effect.")
+    ] = None
+    sigint_timeout: Annotated[
+        float | None,
+        typer.Option("--sigint-timeout", click_type=FINITE, help="roscore's flag; no effect."),
+    ] = None
+    sigterm_timeout: Annotated[
+        float | None,
+        typer.Option("--sigterm-timeout", click_type=FINITE, help="roscore's flag; no effect."),
+    ] = None
+
+
+@command()
 def core(
     ctx: typer.Context,
     port: Annotated[
@@ -36,30 +65,10 @@ def core(
         ),
     ] = None,
     fmt: FormatOpt = None,
-    # roscore's own flags, accepted so that scripts written for it run; none changes anything
-    # here: one event loop, no worker threads, no launch of separate processes.
-    verbose: Annotated[bool, typer.Option("-v", help="roscore's flag; no effect.")] = False,
-    workers: Annotated[
-        int | None, typer.Option("--numworkers", "-w", help="roscore's flag; no effect.")
-    ] = None,
-    socket_timeout: Annotated[
-        float | None,
-        typer.Option("--timeout", "-t", click_type=FINITE, help="roscore's flag; no effect."),
-    ] = None,
-    logger_level: Annotated[
-        str | None, typer.Option("--master-logger-level", help="roscore's flag; no effect.")
-    ] = None,
-    sigint_timeout: Annotated[
-        float | None,
-        typer.Option("--sigint-timeout", click_type=FINITE, help="roscore's flag; no effect."),
-    ] = None,
-    sigterm_timeout: Annotated[
-        float | None,
-        typer.Option("--sigterm-timeout", click_type=FINITE, help="roscore's flag; no effect."),
-    ] = None,
+    roscore: RoscoreFlags = RoscoreFlags(),  # noqa: B008 - a record of options, never changed
 ) -> None:
     """Run a ROS master and parameter server until Ctrl-C (SIGINT) or SIGTERM."""
-    del verbose, workers, socket_timeout, logger_level, sigint_timeout, sigterm_timeout
+    del roscore  # accepted, and without effect
     from rostools.master.core import choose_address, run_core
     from rostools.master.server import Master
     from rostools.rosgraph.masterapi import master_answers
@@ -75,18 +84,21 @@ def core(
     fmt = output_format(ctx, fmt)
 
     def ready(master: Master, run_id: str) -> None:
-        if fmt is Format.text:
-            sys.stdout.write(
+        info = {"uri": master.uri, "bind": address.bind, "port": master.port, "run_id": run_id}
+        output.write(
+            fmt,
+            info,
+            lambda _: (
                 f"rostools core {__version__}: master and parameter server\n"
                 f"ROS_MASTER_URI={master.uri}\n"
                 f"listening on {address.bind}:{master.port}\n"
                 f"setting /run_id to {run_id}\n"
                 "parameters: /rosdistro, /rosversion, /run_id\n"
-                "press Ctrl-C to stop\n"
-            )
-        else:
-            info = {"uri": master.uri, "bind": address.bind, "port": master.port, "run_id": run_id}
-            sys.stdout.write(json.dumps(info) + "\n")
-        sys.stdout.flush()
+                "press Ctrl-C to stop"
+            ),
+        )
 
     asyncio.run(run_core(address, ready))
+
+
+add(app, core)

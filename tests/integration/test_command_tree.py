@@ -13,6 +13,7 @@ from pathlib import Path
 from typing import Any
 
 import pytest
+import yaml
 
 from rostools.cli.completer import load_tree
 from tests.support.bagdata import write_sample
@@ -164,6 +165,18 @@ def test_core_format_json(graph: tuple[dict[str, str], Path]) -> None:
     try:
         line = core.expect(r"^\{", timeout=20)
         assert json.loads(line)["uri"].endswith(f":{port}/")
+    finally:
+        assert core.stop() == 0
+
+
+def test_core_format_yaml_is_yaml(graph: tuple[dict[str, str], Path]) -> None:
+    # the defect: core printed JSON for --format yaml
+    env, _ = graph
+    port = free_port()
+    core = start_cli("core", "-p", str(port), "-F", "yaml", env=env)
+    try:
+        line = core.expect(r"^uri: ", timeout=20)
+        assert yaml.safe_load(line)["uri"].endswith(f":{port}/")
     finally:
         assert core.stop() == 0
 

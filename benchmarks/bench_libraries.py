@@ -1,7 +1,10 @@
-"""Why rostools has its own MCAP and .bag code: the libraries beside it, in the same run.
+"""Why rostools has its own MCAP and .bag code and codec: the libraries beside it, one run.
 
 Rows, each ours beside the library (``theirs``), in one process, runs interleaved:
 
+- the ROS 1 codec: our generated decoders and encoders beside rosbags' ``deserialize_ros1``
+  and ``serialize_ros1``, for a small message and a camera image (rosbags decodes arrays as
+  numpy views, without a copy; ours copies them into the message);
 - MCAP: our writer and reader beside the ``mcap`` package's ``Writer`` and ``make_reader``
   (small messages, zstd chunks as both write by default; 1 MB messages, uncompressed), what
   each reads of a file cut mid-chunk and of one still being written, and how many of the MCAP
@@ -462,7 +465,97 @@ def bench_mcap_conformance() -> Result | list[Result]:
     )
 
 
+#: (type, a message of it) for the codec rows: a small one and a camera image.
+CODEC_CASES = ("geometry_msgs/PoseStamped", "sensor_msgs/Image")
+
+
+def _codec_message(codec: Any, type_name: str) -> Any:
+    """A filled message: a pose in a frame, or a 640 x 480 rgb8 image."""
+    msg = codec.message_class(type_name)()
+    msg.header.frame_id = "map"
+    if type_name.endswith("Image"):
+        msg.height, msg.width, msg.encoding, msg.step = 480, 640, "rgb8", 1920
+        msg.data = bytes(range(256)) * (480 * 1920 // 256)
+    else:
+        msg.pose.position.x = 1.5
+        msg.pose.orientation.w = 1.0
+    return msg
+
+
+def _codec_runs(
+    count: int, ours: tuple[Any, bytes, Any], theirs: tuple[Any, str, Any]
+) -> dict[str, Callable[[], int]]:
+    """``count`` decodes and encodes, each way: our decoder, wire bytes and message; rosbags'
+    store, type name and message."""
+    decode, wire, message = ours
+    store, name, their_message = theirs
+
+    def ours_decode() -> int:
+        for _ in range(count):
+            decode(wire, 0)
+        return count
+
+    def theirs_decode() -> int:
+        for _ in range(count):
+            store.deserialize_ros1(wire, name)
+        return count
+
+    def ours_encode() -> int:
+        for _ in range(count):
+            message.serialize()
+        return count
+
+    def theirs_encode() -> int:
+        for _ in range(count):
+            store.serialize_ros1(their_message, name)
+        return count
+
+    return {
+        "ours decode": ours_decode,
+        "theirs decode": theirs_decode,
+        "ours encode": ours_encode,
+        "theirs encode": theirs_encode,
+    }
+
+
+def bench_codec_speed() -> list[Result]:
+    """Decode and encode msgs/s: our generated codec beside rosbags' ROS 1 serde."""
+    from rosbags.typesys import Stores, get_typestore
+
+    from rostools.msgs.codec import Codec
+    from rostools.msgs.store import BuiltinSource, TypeStore
+
+    codec = Codec.of(TypeStore([BuiltinSource()]))
+    store = get_typestore(Stores.ROS1_NOETIC)
+    results = []
+    for type_name in CODEC_CASES:
+        theirs_name = type_name.replace("/", "/msg/")
+        wire = _codec_message(codec, type_name).serialize()
+        decode = codec.decoder(type_name)
+        message = decode(wire, 0)[0]
+        theirs_message = store.deserialize_ros1(wire, theirs_name)
+        assert store.serialize_ros1(theirs_message, theirs_name) == wire  # the same bytes
+        count = 20_000 if type_name.endswith("Stamped") else 200
+        runs = _codec_runs(count, (decode, wire, message), (store, theirs_name, theirs_message))
+        note = f"in-process, median of {REPEATS} interleaved runs; the same bytes both ways"
+        for what in ("decode", "encode"):
+            rates = _rates({"ours": runs[f"ours {what}"], "theirs": runs[f"theirs {what}"]})
+            results.append(
+                Result(
+                    f"ROS 1 {what}, {type_name}, vs rosbags",
+                    "msgs/s",
+                    rates["ours"],
+                    rates["theirs"],
+                    "faster than rosbags",
+                    rates["ours"] > rates["theirs"],
+                    note,
+                )
+            )
+    return results
+
+
 BENCHMARKS = {
+    "lib_codec_speed": bench_codec_speed,
     "lib_mcap_speed": bench_mcap_speed,
     "lib_mcap_salvage": bench_mcap_salvage,
     "lib_mcap_conformance": bench_mcap_conformance,

@@ -89,9 +89,37 @@ def bench_startup() -> list[Result]:
                         f"{' '.join(theirs)}; rosmaster, {PUBLISHERS} publishers, median of {RUNS}",
                     )
                 )
+            results.append(_launcher_row(rostools, env))
         finally:
             stop(talker)
     return results
+
+
+def _launcher_row(rostools: list[str], env: dict[str, str]) -> Result:
+    """``param get`` through the launcher beside the same command through Typer.
+
+    Why the quick commands have a launcher of their own: ``ROSTOOLS_NO_QUICK=1`` sends the
+    same command line to Typer, which runs the same function. Both start through ``env``.
+    """
+    command = ["param", "get", "/a"]
+    t = time_commands(
+        {
+            "ours": ["env", *rostools, *command],
+            "theirs": ["env", "ROSTOOLS_NO_QUICK=1", *rostools, *command],
+        },
+        runs=RUNS,
+        warmup=2,
+        env=env,
+    )
+    return Result(
+        "param get cold start: the launcher, vs the same command through Typer",
+        "ms",
+        t["ours"] * 1e3,
+        t["theirs"] * 1e3,
+        "faster than Typer",
+        t["ours"] < t["theirs"],
+        f"ROSTOOLS_NO_QUICK=1 for Typer; rosmaster, median of {RUNS}",
+    )
 
 
 BENCHMARKS = {"startup": bench_startup}

@@ -23,6 +23,7 @@ from collections.abc import Callable, Iterator, Sequence
 from pathlib import Path
 from typing import Any
 
+from rostools.cli import output
 from rostools.errors import one_line
 
 #: Seconds a completion may take in all, start-up included (``ROSTOOLS_COMPLETE_DEADLINE``).
@@ -58,7 +59,7 @@ def main(argv: Sequence[str]) -> int:
         pass  # print what there is
     finally:
         signal.setitimer(signal.ITIMER_REAL, 0)
-    sys.stdout.write("".join(line + "\n" for line in lines))
+    output.put("".join(line + "\n" for line in lines))
     return 0
 
 

@@ -10,12 +10,12 @@ the bash, zsh and fish glue that hands the command line to ``rostools __complete
 from __future__ import annotations
 
 import json
-import sys
 from pathlib import Path
 from typing import Annotated, Any
 
 import typer
 
+from rostools.cli import output
 from rostools.cli.common import FormatOpt, output_format
 from rostools.cli.output import Format, emit
 from rostools.errors import UsageError
@@ -324,7 +324,7 @@ ShellArg = Annotated[str, typer.Argument(help="bash, zsh or fish.")]
 @app.command()
 def show(shell: ShellArg) -> None:
     """Print the completion script (eval it, or save it where your shell looks)."""
-    sys.stdout.write(script(shell))
+    output.put(script(shell))
 
 
 def install_target(shell: str, home: Path) -> tuple[Path, Path | None, str]:
@@ -355,14 +355,14 @@ def install(ctx: typer.Context, shell: ShellArg, fmt: FormatOpt = None) -> None:
             changed = True
     fmt = output_format(ctx, fmt)
     if fmt is Format.text:
-        sys.stdout.write(f"installed {target}\n")
+        output.put(f"installed {target}\n")
         if changed:
-            sys.stdout.write(f"added to {rc}: {line}\n")
-        sys.stdout.write("open a new shell to use it\n")
+            output.put(f"added to {rc}: {line}\n")
+        output.put("open a new shell to use it\n")
     else:
         emit(fmt, {"script": str(target), "rc": str(rc) if changed else None})
 
 
 if __name__ == "__main__":
     for path in write_all():
-        print(path.relative_to(ROOT))
+        output.line(str(path.relative_to(ROOT)))

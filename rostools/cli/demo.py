@@ -18,7 +18,8 @@ from typing import Annotated
 
 import typer
 
-from rostools.cli.output import check_writable
+from rostools.cli.output import check_writable, flush
+from rostools.cli.output import put as say
 from rostools.errors import RostoolsError, UsageError
 
 app = typer.Typer(name="demo", add_completion=False)
@@ -105,8 +106,8 @@ class Graph:
 
 def _run_step(title: str, argv: list[str], env: dict[str, str]) -> None:
     shown = " ".join(f"'{a}'" if " " in a else a for a in argv)
-    sys.stdout.write(f"\n# {title}\n$ rostools {shown}\n")
-    sys.stdout.flush()
+    say(f"\n# {title}\n$ rostools {shown}\n")
+    flush()
     done = subprocess.run(
         [sys.executable, "-m", "rostools", *argv], env=env, stderr=subprocess.STDOUT, check=False
     )
@@ -139,19 +140,19 @@ def demo(
             import tempfile
 
             output = Path(tempfile.mkdtemp(prefix="rostools-demo-")) / "demo.mcap"
-            sys.stdout.write(f"(this folder is read-only: recording to {output})\n")
+            say(f"(this folder is read-only: recording to {output})\n")
 
     with MasterThread() as master:
         env = {k: v for k, v in os.environ.items() if k != "ROS_HOSTNAME"}
         env.update(ROS_MASTER_URI=master.uri, ROS_IP="127.0.0.1")
-        sys.stdout.write(
+        say(
             f"rostools demo: a master at {master.uri} (in this process), a talker on /chatter,\n"
             "an /add_two_ints service and /demo parameters. Each step runs the real command.\n"
         )
         with Graph(master.uri):
             for title, argv in STEPS:
                 _run_step(title, [a.replace("{out}", str(output)) for a in argv], env)
-    sys.stdout.write(
+    say(
         f"\nDone; nothing is left running, and {output} is yours. Next: 'rostools core' in one\n"
         "terminal, then any of these commands in another ('rostools -h' lists them all).\n"
     )

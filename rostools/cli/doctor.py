@@ -2,11 +2,11 @@
 
 from __future__ import annotations
 
-import sys
 from typing import Annotated
 
 import typer
 
+from rostools.cli import output
 from rostools.cli.common import FiniteFloat, FormatOpt, output_format, settings
 from rostools.cli.output import Format, emit
 from rostools.errors import RostoolsError, TimeoutExpired, UnreachableError, UsageError, one_line
@@ -52,10 +52,10 @@ def doctor(
         for check in checks:
             hint = f" (hint: {check.hint})" if check.hint else ""
             verdict = one_line(check.verdict + hint)  # it names nodes and URIs from the master
-            sys.stdout.write(f"{check.status.upper():5} {check.name:10} {verdict}\n")
+            output.put(f"{check.status.upper():5} {check.name:10} {verdict}\n")
     else:
         emit(fmt, {"ok": not failed, "checks": [c.as_dict() for c in checks]})
-    sys.stdout.flush()
+    output.flush()
     if failed:
         names = ", ".join(c.name for c in failed)
         error = _ERRORS.get(failed[0].exit_code, RostoolsError)

@@ -81,6 +81,26 @@ def write(fmt: Format, data: Any, text: Callable[[Any], str] | None = None) -> N
     sys.stdout.flush()
 
 
+def put(text: str) -> None:
+    """Write text that a command has laid out itself to stdout, as it is.
+
+    Every byte a command prints on stdout goes through this module.
+    """
+    sys.stdout.write(text)
+
+
+def line(text: str, flush: bool = False) -> None:
+    """Write one line of text (``print``'s way); ``flush`` for a line a reader waits for."""
+    sys.stdout.write(text + "\n")
+    if flush:
+        sys.stdout.flush()
+
+
+def flush() -> None:
+    """Hand what was written to stdout on now: the reader of a stream waits for it."""
+    sys.stdout.flush()
+
+
 def check_writable(path: Path) -> None:
     """Fail now, exit 2, when no file can be created where ``path`` goes.
 

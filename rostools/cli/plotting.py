@@ -189,16 +189,16 @@ class Screen:
         self.last = ""
 
     def __enter__(self) -> Screen:
-        sys.stdout.write("\x1b[?1049h\x1b[?25l")  # alternate screen, cursor hidden
-        sys.stdout.flush()
+        output.put("\x1b[?1049h\x1b[?25l")  # alternate screen, cursor hidden
+        output.flush()
         return self
 
     def show(self, text: str) -> None:
         """Replace what is on the screen with ``text``."""
         self.last = text
-        sys.stdout.write("\x1b[H" + text.replace("\n", "\x1b[K\n") + "\x1b[J")
-        sys.stdout.flush()
+        output.put("\x1b[H" + text.replace("\n", "\x1b[K\n") + "\x1b[J")
+        output.flush()
 
     def __exit__(self, *exc: object) -> None:
-        sys.stdout.write("\x1b[?25h\x1b[?1049l" + self.last)
-        sys.stdout.flush()
+        output.put("\x1b[?25h\x1b[?1049l" + self.last)
+        output.flush()

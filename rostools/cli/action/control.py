@@ -2,12 +2,12 @@
 
 from __future__ import annotations
 
-import sys
 import time
 from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
+from rostools.cli import output
 from rostools.cli.action.options import ActionArg, WaitOpt
 from rostools.cli.action.shared import SERVER_WAIT, action_types, find_action
 from rostools.cli.common import FormatOpt, master, node_session, output_format
@@ -150,8 +150,8 @@ def status(
                 continue
             rows = _table(client.statuses)
             if fmt is Format.text:
-                sys.stdout.write(_table_text(rows) + ("\n" if once else "\n---\n"))
-                sys.stdout.flush()
+                output.put(_table_text(rows) + ("\n" if once else "\n---\n"))
+                output.flush()
             else:
                 write(fmt, {"action": info.name, "goals": rows})
             shown = current

@@ -13,6 +13,7 @@ from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
+from rostools.cli import output
 from rostools.cli.action.options import ActionArg, WaitOpt
 from rostools.cli.action.shared import SERVER_WAIT, find_action, plain, text
 from rostools.cli.common import FormatOpt, MsgPathOpt, master, node_session, output_format
@@ -127,8 +128,8 @@ class _Printer:
         if suffix is not None:
             shown = text(self.types, suffix, event.message)
             ending = "\n---\n" if event.kind == "feedback" else "\n"
-            sys.stdout.write(shown + ending if shown else "")
-            sys.stdout.flush()
+            output.put(shown + ending if shown else "")
+            output.flush()
 
 
 def _outcome(event: GoalEvent, name: str) -> None:

@@ -12,6 +12,7 @@ from typing import TYPE_CHECKING, Annotated, Any
 import typer
 
 from rostools.bag.model import counted
+from rostools.cli import output
 from rostools.cli.bag.options import BagArg, ForceOpt, QuietOpt
 from rostools.cli.bag.shared import Progress
 from rostools.cli.common import FormatOpt, output_format
@@ -86,7 +87,7 @@ def attachments(
     if out is None:
         if sys.stdout.isatty():
             raise UsageError("give -o FILE: the attachment is not written to a terminal")
-        sys.stdout.flush()
+        output.flush()
         sys.stdout.buffer.write(data)
         return
     if out.exists() and not force:
@@ -129,11 +130,11 @@ def doctor(
         for r in reports:  # a finding may quote the file's names: one line each, escaped
             shown = one_line(r.path)
             if r.clean:
-                sys.stdout.write(f"{shown}: clean ({counted(r.messages, 'message')})\n")
+                output.put(f"{shown}: clean ({counted(r.messages, 'message')})\n")
             for finding in r.findings:
-                sys.stdout.write(f"{shown}: {one_line(finding)}\n")
+                output.put(f"{shown}: {one_line(finding)}\n")
             for note in r.notes:
-                sys.stdout.write(f"{shown}: note: {one_line(note)}\n")
+                output.put(f"{shown}: note: {one_line(note)}\n")
     else:
         data = [
             {"path": str(r.path), "clean": r.clean, "messages": r.messages,

@@ -76,14 +76,14 @@ def info(
         results.append((summary, freqs, name))
         readers.append(reader)
     if fmt is Format.text:
-        sys.stdout.write("\n---\n".join(info_text(*r) for r in results) + "\n")
+        output.put("\n---\n".join(info_text(*r) for r in results) + "\n")
     elif fmt is Format.yaml:  # rosbag's text, one document per bag
         data = [info_data(*r) for r in results]
         if key is None:
             docs = [info_yaml(d) + "\n" for d in data]
         else:
             docs = [key_yaml(info_key(as_rosbag_reads(d), key)) for d in data]
-        sys.stdout.write("---\n".join(docs))
+        output.put("---\n".join(docs))
     else:
         data = [info_data(*r) for r in results]
         if key is not None:
@@ -299,7 +299,7 @@ def _recover_report(fmt: Format, report: RecoverReport, quiet: bool = False) -> 
             "connections": report.connections, "notes": list(report.notes),
             "lost": list(report.lost),
         }  # fmt: skip
-        sys.stdout.write(render(fmt, data) + "\n")
+        output.put(render(fmt, data) + "\n")
     elif not quiet:
         for note in report.notes:
             sys.stderr.write(f"note: {one_line(note)}\n")  # may quote the file's names

@@ -13,6 +13,7 @@ from typing import TYPE_CHECKING, Annotated
 import typer
 
 from rostools.bag.model import counted
+from rostools.cli import output
 from rostools.cli.bag.options import Playback
 from rostools.cli.bag.shared import check_read
 from rostools.cli.common import FormatOpt, node_session, output_format
@@ -126,7 +127,7 @@ def play(
     if show_status:
         sys.stderr.write("\nDone.\n" if sys.stderr.isatty() else "Done.\n")
     elif out is not Format.text:
-        sys.stdout.write(render(out, {"published": sent}) + "\n")
+        output.put(render(out, {"published": sent}) + "\n")
     check_read(readers, f"published {counted(sent, 'message')}")
 
 

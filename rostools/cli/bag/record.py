@@ -11,6 +11,7 @@ from typing import TYPE_CHECKING, Annotated, Any
 import typer
 
 from rostools.bag.model import counted
+from rostools.cli import output
 from rostools.cli.bag.options import OutputFile, Splitting, TopicChoice
 from rostools.cli.common import FormatOpt, node_session, output_format
 from rostools.cli.declare import command
@@ -181,7 +182,7 @@ def record(
         if not quiet:
             sys.stderr.write(summary_text(data) + "\n")
     else:
-        sys.stdout.write(render(fmt, data) + "\n")
+        output.put(render(fmt, data) + "\n")
     if rec.drops:
         were = "was" if rec.drops == 1 else "were"
         raise DataLossError(

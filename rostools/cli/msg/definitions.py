@@ -2,9 +2,9 @@
 
 from __future__ import annotations
 
-import sys
 from pathlib import Path
 
+from rostools.cli import output
 from rostools.cli.declare import command
 from rostools.cli.msg.lookup import Kind, matches, read_type
 from rostools.cli.output import Format, emit
@@ -72,8 +72,8 @@ def show(
     if fmt is Format.text:
         for full, text, _ in results:
             if "/" not in name:
-                sys.stdout.write(f"[{full}]:\n")
-            sys.stdout.write(text + "\n")
+                output.put(f"[{full}]:\n")
+            output.put(text + "\n")
     else:
         emit(fmt, results[0][2] if "/" in name else [r[2] for r in results])
 
@@ -185,7 +185,7 @@ def proto(
         emit(fmt, yaml.safe_load(text) or {})
         return
     text = "\n".join(prefix + line for line in text.split("\n"))
-    sys.stdout.write((text if no_quotes else f'"{text}"') + "\n")
+    output.put((text if no_quotes else f'"{text}"') + "\n")
 
 
 def _proto_text(

@@ -2,8 +2,7 @@
 
 from __future__ import annotations
 
-import sys
-
+from rostools.cli import output
 from rostools.cli.declare import command
 from rostools.cli.msg.lookup import md5_text, md5sums, read_type
 from rostools.cli.output import Format, emit
@@ -25,7 +24,7 @@ def md5(
     found = md5sums(type_store(msg_path), name)
     out = s.output_format(fmt)
     if out is Format.text:
-        sys.stdout.write(md5_text(name, found))
+        output.put(md5_text(name, found))
     else:
         data = [{"type": t, "md5sum": m} for t, m in found]
         emit(out, data[0] if "/" in name else data)

@@ -9,12 +9,12 @@ the picture is missing and a person has the graph to render elsewhere.
 from __future__ import annotations
 
 import enum
-import sys
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated, Final
 
 import typer
 
+from rostools.cli import output
 from rostools.cli.common import master, settings
 from rostools.cli.declare import command
 from rostools.cli.output import Format, check_writable, emit
@@ -152,10 +152,10 @@ def graph_cmd(
         return
     chosen = fmt if fmt is not None else GraphFormat(settings(ctx).format.value)
     if chosen is GraphFormat.dot:
-        sys.stdout.write(graph_dot(graph) + "\n")
+        output.put(graph_dot(graph) + "\n")
     elif chosen is GraphFormat.text:
         if graph.nodes:
-            sys.stdout.write(graph_text(graph) + "\n")
+            output.put(graph_text(graph) + "\n")
         else:
             warn("no nodes are registered")
     else:

@@ -7,6 +7,7 @@ from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
+from rostools.cli import output
 from rostools.cli.common import FormatOpt, output_format, settings
 from rostools.cli.declare import command
 from rostools.cli.output import Format, emit, lines
@@ -30,8 +31,8 @@ def _choose(known: list[str]) -> list[str]:
     """rosnode kill's menu on a terminal: the node whose number is typed (none if none run)."""
     if not known:
         return []
-    print(lines(f"{i}. {n}" for i, n in enumerate(known, 1)))
-    print("\nPlease enter the number of the node you wish to kill.")
+    output.line(lines(f"{i}. {n}" for i, n in enumerate(known, 1)))
+    output.line("\nPlease enter the number of the node you wish to kill.")
     while True:
         try:
             answer = input("> ").strip()
@@ -39,7 +40,7 @@ def _choose(known: list[str]) -> list[str]:
             raise UsageError("no node chosen") from None
         if answer.isdigit() and 1 <= int(answer) <= len(known):
             return [known[int(answer) - 1]]
-        print(f"ERROR: enter a number from 1 to {len(known)} (Ctrl-C to cancel)")
+        output.line(f"ERROR: enter a number from 1 to {len(known)} (Ctrl-C to cancel)")
 
 
 @command()
@@ -85,13 +86,13 @@ def kill(
         return
     if fmt is Format.text:
         if len(names) > 1:
-            print("killing:\n" + lines(f" * {n}" for n in names), flush=True)
+            output.line("killing:\n" + lines(f" * {n}" for n in names), flush=True)
         else:
-            print(f"killing {one_line(names[0])}", flush=True)
+            output.line(f"killing {one_line(names[0])}", flush=True)
     result = kill_nodes(graph, names)
     if fmt is Format.text:
         if result.killed:
-            print("killed")
+            output.line("killed")
     else:
         failed = [{"node": n, "error": str(e)} for n, e in result.failed]
         emit(fmt, {"killed": result.killed, "failed": failed})
@@ -151,8 +152,8 @@ def cleanup(
             emit(fmt, data)
         return
     if fmt is Format.text:
-        sys.stdout.write(unreachable_text(dead))
-        sys.stdout.flush()
+        output.put(unreachable_text(dead))
+        output.flush()
     if not dry_run and not yes:
         # asked as rosnode asks: the answer comes from stdin, a terminal or a pipe (echo y |)
         sys.stderr.write(
@@ -173,7 +174,7 @@ def cleanup(
         ]
         if fmt is Format.text:
             for node in sorted(nodes):
-                print(f"Unregistering {one_line(node)}")
-            print("done")
+                output.line(f"Unregistering {one_line(node)}")
+            output.line("done")
     if fmt is not Format.text:
         emit(fmt, data)

@@ -8,6 +8,7 @@ from typing import TYPE_CHECKING, Annotated
 
 import typer
 
+from rostools.cli import output
 from rostools.cli.common import FormatOpt, output_format, settings
 from rostools.cli.declare import command
 from rostools.cli.output import Format
@@ -96,7 +97,7 @@ def ping(
     graph.require_uri(name)
     if fmt is Format.text:
         shown = one_line(name)
-        print(
+        output.line(
             f"rosnode: node is [{shown}]\npinging {shown} with a timeout of {timeout}s", flush=True
         )
     times: list[float] = []
@@ -107,7 +108,7 @@ def ping(
     except KeyboardInterrupt:
         pass  # asked to run until Ctrl-C: a normal end
     if fmt is Format.text and len(times) > 1:
-        print(f"ping average: {sum(times) / len(times):f}ms")
+        output.line(f"ping average: {sum(times) / len(times):f}ms")
 
 
 def _print_reply(fmt: Format, node: str, uri: str, pid: int, ms: float, seq: int) -> None:
@@ -120,14 +121,16 @@ def _print_reply(fmt: Format, node: str, uri: str, pid: int, ms: float, seq: int
 def _ping_all(graph: Graph, fmt: Format) -> None:
     nodes = graph.state().nodes()
     if fmt is Format.text:
-        print("Will ping the following nodes: \n" + "".join(f" * {one_line(n)}\n" for n in nodes))
+        output.line(
+            "Will ping the following nodes: \n" + "".join(f" * {one_line(n)}\n" for n in nodes)
+        )
     errors: list[RostoolsError] = []
     failed: list[str] = []
     for name in nodes:
         if graph.uri(name) is None:
             continue  # it left between the two calls to the master
         if fmt is Format.text:
-            print(f"pinging {one_line(name)} with a timeout of {graph.timeout}s", flush=True)
+            output.line(f"pinging {one_line(name)} with a timeout of {graph.timeout}s", flush=True)
         try:
             for uri, pid, ms in _ping_replies(graph, name, 1):
                 _print_reply(fmt, name, uri, pid, ms, 1)

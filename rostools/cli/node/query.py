@@ -6,8 +6,7 @@ Text follows rosnode line for line; ``--format json`` gives one document. Typer-
 
 from __future__ import annotations
 
-import sys
-
+from rostools.cli import output
 from rostools.cli.declare import command
 from rostools.cli.node.shared import graph, resolve_node, worst
 from rostools.cli.output import Format, emit, lines
@@ -87,8 +86,8 @@ def info(
         if found.error is not None:
             errors.append(found.error)
         if out is Format.text:
-            sys.stdout.write(info_text(found))
-            sys.stdout.flush()
+            output.put(info_text(found))
+            output.flush()
         results.append(found.to_data())
     if out is not Format.text:
         emit(out, results[0] if len(results) == 1 else results)

@@ -5,6 +5,7 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
+from rostools.cli import output
 from rostools.cli.declare import command
 from rostools.cli.output import Format, render
 from rostools.cli.param import paramyaml
@@ -26,13 +27,13 @@ if TYPE_CHECKING:
 def _print_params(params: Any, ns: str) -> None:
     """rosparam's -v listing of what load and dump carry: ``name=value`` per leaf."""
     if not isinstance(params, dict):
-        sys.stdout.write(f"{params}\n")
+        output.put(f"{params}\n")
         return
     for key, value in params.items():
         if isinstance(value, dict):
             _print_params(value, join(ns, key))
         else:
-            sys.stdout.write(f"{join(ns, key)}={value}\n")
+            output.put(f"{join(ns, key)}={value}\n")
 
 
 def _set_tree(proxy: Any, name: str, value: Any, verbose: bool) -> None:
@@ -157,7 +158,7 @@ def dump(
     else:
         text = render(fmt, paramyaml.to_plain(value)) + "\n"
     if file in (None, "-"):
-        sys.stdout.write(text)
+        output.put(text)
         return
     try:
         Path(file).write_text(text)

@@ -5,8 +5,7 @@ Typer-free (``rostools.cli.declare``): the launcher runs these without Typer.
 
 from __future__ import annotations
 
-import sys
-
+from rostools.cli import output
 from rostools.cli.declare import command
 from rostools.cli.output import Format, emit, lines
 from rostools.cli.param.shared import TOOL, say
@@ -59,11 +58,11 @@ def get(
         from rostools.cli.param import plainyaml  # PyYAML only for what it cannot print itself
 
         if pretty and isinstance(value, str):
-            sys.stdout.write(value + "\n")  # rosparam -p prints text as it is
+            output.put(value + "\n")  # rosparam -p prints text as it is
             return
         # rosparam ends a YAML dump with a blank line, but not its -p print of a mapping
         end = "" if pretty and isinstance(value, dict) else "\n"
-        sys.stdout.write(plainyaml.dump(value, pretty=pretty) + end)
+        output.put(plainyaml.dump(value, pretty=pretty) + end)
     else:
         from rostools.cli.param import paramyaml
 

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-import sys
+from rostools.cli import output
 
 TOOL = "rosparam"
 
@@ -10,4 +10,4 @@ TOOL = "rosparam"
 def say(verbose: bool, text: str) -> None:
     """rosparam's -v: a line on stdout, as rosparam prints it."""
     if verbose:
-        sys.stdout.write(text + "\n")
+        output.put(text + "\n")

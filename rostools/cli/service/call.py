@@ -5,6 +5,7 @@ from __future__ import annotations
 import sys
 import time
 
+from rostools.cli import output
 from rostools.cli.declare import command
 from rostools.cli.output import Format, emit
 from rostools.cli.service.shared import TOOL, client, service_spec, services, type_of
@@ -125,7 +126,7 @@ def _print(
             show = text.formatter(codec, text.message_type(spec.request.name), options)
             out = show(request) + "\n---\n"
         out += text.formatter(codec, text.message_type(spec.response.name), options)(response)
-        sys.stdout.write(out + "\n")
+        output.put(out + "\n")
     else:
         data = plain.to_plain(codec, text.message_type(spec.response.name))(response)
         if verbose:
@@ -134,7 +135,7 @@ def _print(
                 "response": data,
             }
         if fmt is Format.json:
-            sys.stdout.write(plain.dumps(data) + "\n")
+            output.put(plain.dumps(data) + "\n")
         else:
             emit(fmt, data)
-    sys.stdout.flush()
+    output.flush()

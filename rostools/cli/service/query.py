@@ -5,8 +5,7 @@ Typer-free (``rostools.cli.declare``): the launcher runs the quick ones without 
 
 from __future__ import annotations
 
-import sys
-
+from rostools.cli import output
 from rostools.cli.declare import command
 from rostools.cli.output import Format, emit, lines
 from rostools.cli.service.shared import TOOL, service_spec, services, type_of
@@ -46,9 +45,9 @@ def list_services(
     if out is not Format.text:
         emit(out, [{"service": n, "nodes": p} for n, p in found.items()])
     elif nodes:
-        sys.stdout.write("".join(one_line(f"{n} {','.join(p)}") + "\n" for n, p in found.items()))
+        output.put("".join(one_line(f"{n} {','.join(p)}") + "\n" for n, p in found.items()))
     else:
-        sys.stdout.write("".join(f"{one_line(n)}\n" for n in found))
+        output.put("".join(f"{one_line(n)}\n" for n in found))
 
 
 @command(quick=True)

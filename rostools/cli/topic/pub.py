@@ -12,6 +12,7 @@ from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
+from rostools.cli import output
 from rostools.cli.common import FINITE, MsgPathOpt, node_session, settings
 from rostools.cli.declare import command
 from rostools.cli.settings import type_store
@@ -332,7 +333,7 @@ async def _paced(
                 said = f"publishing {show(msg)}\n" if show is not None else ""
             publisher.publish(cached)
             if said:
-                sys.stdout.write(said)
+                output.put(said)
             sent += 1
         wait = start + sent / rate - time.monotonic()
         limit = left()

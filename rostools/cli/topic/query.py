@@ -6,8 +6,7 @@ meters (hz, bw, delay), pub and plot live beside this module.
 
 from __future__ import annotations
 
-import sys
-
+from rostools.cli import output
 from rostools.cli.declare import command
 from rostools.cli.output import Format, emit, lines
 from rostools.errors import NotFoundError, UsageError, one_line
@@ -65,7 +64,7 @@ def list_topics(
         emit(fmt, rows)
         return
     if not host:
-        sys.stdout.write(list_text(table, verbose, pubs_only, subs_only) + "\n")
+        output.put(list_text(table, verbose, pubs_only, subs_only) + "\n")
         return
     uris: dict[str, str] = {}
     by_host: dict[str, dict[str, Any]] = {}
@@ -80,8 +79,8 @@ def list_topics(
                 item = entry.setdefault(info.name, TopicInfo(info.name, info.type))
                 getattr(item, attr).append(node)
     for hostname in sorted(by_host):
-        sys.stdout.write(f"Host [{one_line(hostname)}]:\n")
-        sys.stdout.write(list_text(by_host[hostname], verbose, pubs_only, subs_only, "  ") + "\n")
+        output.put(f"Host [{one_line(hostname)}]:\n")
+        output.put(list_text(by_host[hostname], verbose, pubs_only, subs_only, "  ") + "\n")
 
 
 def list_text(
@@ -146,7 +145,7 @@ def info(s: Settings, topic: TopicArg, fmt: FormatOpt = None) -> None:
         else:
             out.append(f"{label}: None")
         out.append("")
-    sys.stdout.write("\n".join(out) + "\n\n")
+    output.put("\n".join(out) + "\n\n")
 
 
 @command(quick=True)

@@ -7,36 +7,26 @@ for its test:
 
     from rostools.testing import assert_message, assert_topic_rate
 
-They load on first use: the plugin is imported by every pytest run.
+They load on first use (``rostools.lazy``): the plugin is imported by every pytest run.
 """
 
 from __future__ import annotations
 
-#: The stable names.
-__all__ = ["RosProcess", "assert_message", "assert_topic_rate", "graph_report", "start_process"]
-
-_HOME = {
-    "assert_message": "rostools.testing.helpers",
-    "assert_topic_rate": "rostools.testing.helpers",
-    "RosProcess": "rostools.testing.process",
-    "start_process": "rostools.testing.process",
-    "graph_report": "rostools.testing.report",
-}
-
 TYPE_CHECKING = False
-if TYPE_CHECKING:
-    from rostools.testing.helpers import assert_message, assert_topic_rate
-    from rostools.testing.process import RosProcess, start_process
-    from rostools.testing.report import graph_report
+if TYPE_CHECKING:  # the stable names: type checkers read these imports, rostools.lazy too
+    from rostools.testing.helpers import (
+        assert_message as assert_message,
+    )
+    from rostools.testing.helpers import (
+        assert_topic_rate as assert_topic_rate,
+    )
+    from rostools.testing.process import RosProcess as RosProcess
+    from rostools.testing.process import start_process as start_process
+    from rostools.testing.report import graph_report as graph_report
 
 
 def __getattr__(name: str) -> object:
-    """Load a helper on first use (PEP 562)."""
-    home = _HOME.get(name)
-    if home is None:
-        raise AttributeError(f"module 'rostools.testing' has no attribute {name!r}")
-    import importlib
+    """Load a helper on first use (PEP 562); ``__all__`` is their list."""
+    from rostools.lazy import load
 
-    value = getattr(importlib.import_module(home), name)
-    globals()[name] = value
-    return value
+    return load(__name__, name)

@@ -14,7 +14,7 @@ ROOT = Path(__file__).resolve().parents[2] / "rostools"
 
 #: Bottom to top. A module may import its own package and anything on a lower layer.
 LAYERS: list[set[str]] = [
-    {"errors"},
+    {"errors", "lazy"},
     {"names", "yamlio"},
     {"wire"},
     {"msgs", "rates", "series"},
@@ -69,7 +69,10 @@ def _imports(
         module = ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
         package = module if path.name == "__init__.py" else module.rpartition(".")[0]
         found: set[str] = set()
-        for node in _nodes(ast.parse(path.read_text(), str(path)), at_run_time, on_import):
+        # The package's own block of TYPE_CHECKING imports is its list of public names, which
+        # load on first use (rostools.lazy): no import of anything when the package loads.
+        runtime_only = at_run_time or module == "rostools"
+        for node in _nodes(ast.parse(path.read_text(), str(path)), runtime_only, on_import):
             if isinstance(node, ast.Import):
                 found |= {a.name for a in node.names if a.name.startswith(("rostools", *outside))}
             elif (

@@ -18,19 +18,15 @@ from rostools.bag.model import counted
 from rostools.cli import output
 from rostools.cli.bag.options import (
     BagArg,
-    CompressionOpt,
+    CopyOutput,
+    CopyWindow,
     DstOpt,
-    EndOpt,
     ForceOpt,
     OutArg,
     OutputDirOpt,
     QuietOpt,
-    RenameOpt,
-    RenameTypeOpt,
-    StartOpt,
-    TopicsOpt,
 )
-from rostools.cli.bag.shared import check_read, copy_command, recovered_name, renames, time_window
+from rostools.cli.bag.shared import check_read, copy_command, recovered_name
 from rostools.cli.common import FormatOpt, output_format
 from rostools.cli.declare import command
 from rostools.cli.output import Format, emit, render
@@ -103,9 +99,7 @@ def filter_(
             help="Python over topic, m (the message) and t (its time), as rosbag filter."
         ),
     ] = None,
-    topics: TopicsOpt = None,
-    start: StartOpt = None,
-    end: EndOpt = None,
+    window: CopyWindow = CopyWindow(),  # noqa: B008 - a record of options, never changed
     print_: Annotated[
         str | None,
         typer.Option(
@@ -118,11 +112,7 @@ def filter_(
             "--latched", help="With --start: keep each latched topic's last earlier message."
         ),
     ] = False,
-    rename: RenameOpt = None,
-    rename_type: RenameTypeOpt = None,
-    compression: CompressionOpt = None,
-    force: ForceOpt = False,
-    quiet: QuietOpt = False,
+    how: CopyOutput = CopyOutput(),  # noqa: B008
     fmt: FormatOpt = None,
 ) -> None:
     """Copy the messages that pass topic, time and expression filters (rosbag filter).
@@ -131,14 +121,14 @@ def filter_(
     """
     from rostools.bag.ops import filter_bag
 
-    lo, hi = time_window([src], start, end)
+    lo, hi = window.bounds([src])
     out = output_format(ctx, fmt)
     show = None if print_ is None else (print_, partial(_say, out))
-    rules = renames(rename, rename_type)
-    copy_command(out, quiet or show is not None, "filter", lambda progress: filter_bag(
-        src, dst, topics=topics or None, start=lo, end=hi, expression=expression,
-        compression=compression, progress=progress, overwrite=force, show=show, latched=latched,
-        renames=rules,
+    rules = how.renames()
+    copy_command(out, how.quiet or show is not None, "filter", lambda progress: filter_bag(
+        src, dst, topics=window.topics or None, start=lo, end=hi, expression=expression,
+        compression=how.compression, progress=progress, overwrite=how.force, show=show,
+        latched=latched, renames=rules,
     ))  # fmt: skip
 
 
@@ -153,22 +143,18 @@ def convert(
     ctx: typer.Context,
     src: BagArg,
     dst: OutArg,
-    compression: CompressionOpt = None,
     chunk_size: Annotated[int | None, typer.Option("--chunksize", help="Chunk size in KB.")] = None,
-    rename: RenameOpt = None,
-    rename_type: RenameTypeOpt = None,
-    force: ForceOpt = False,
-    quiet: QuietOpt = False,
+    how: CopyOutput = CopyOutput(),  # noqa: B008 - a record of options, never changed
     fmt: FormatOpt = None,
 ) -> None:
     """Convert .bag to MCAP or back, losslessly (renaming topics or types if asked)."""
     from rostools.bag.ops import convert as run_convert
 
     size = chunk_size * 1024 if chunk_size else None
-    rules = renames(rename, rename_type)
-    copy_command(output_format(ctx, fmt), quiet, "convert", lambda progress: run_convert(
-        src, dst, compression=compression, chunk_size=size, progress=progress, overwrite=force,
-        renames=rules,
+    rules = how.renames()
+    copy_command(output_format(ctx, fmt), how.quiet, "convert", lambda progress: run_convert(
+        src, dst, compression=how.compression, chunk_size=size, progress=progress,
+        overwrite=how.force, renames=rules,
     ))  # fmt: skip
 
 

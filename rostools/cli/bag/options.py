@@ -17,6 +17,7 @@ from rostools.errors import UsageError
 
 if TYPE_CHECKING:
     from rostools.bag.play import PlayOptions
+    from rostools.bag.rename import Renames
 
 BagArg = Annotated[Path, typer.Argument(help="A .bag or .mcap file.")]
 OutArg = Annotated[Path, typer.Argument(help="The file to write; its name picks the format.")]
@@ -284,3 +285,40 @@ class Playback:
             rate_control_topic=self.rate_control_topic,
             rate_control_max_delay=self.rate_control_max_delay,
         )  # fmt: skip
+
+
+@options_record
+@dataclass
+class CopyWindow:
+    """Which messages a copying command takes: its topics and time range (filter, merge)."""
+
+    topics: TopicsOpt = None
+    start: StartOpt = None
+    end: EndOpt = None
+
+    def bounds(self, paths: list[Path]) -> tuple[int | None, int | None]:
+        """``--start``/``--end`` as ns, from the earliest start among ``paths``."""
+        from rostools.cli.bag.shared import time_window
+
+        return time_window(paths, self.start, self.end)
+
+
+@options_record
+@dataclass
+class CopyOutput:
+    """How a copying command writes (filter, convert, merge, split).
+
+    Renames, compression, overwriting, and the progress bar.
+    """
+
+    rename: RenameOpt = None
+    rename_type: RenameTypeOpt = None
+    compression: CompressionOpt = None
+    force: ForceOpt = False
+    quiet: QuietOpt = False
+
+    def renames(self) -> Renames | None:
+        """The rules of ``--rename`` and ``--rename-type``, or None when there are none."""
+        from rostools.cli.bag.shared import renames
+
+        return renames(self.rename, self.rename_type)

@@ -14,18 +14,12 @@ import typer
 from rostools.bag.model import counted
 from rostools.cli import output
 from rostools.cli.bag.options import (
-    CompressionOpt,
-    EndOpt,
+    CopyOutput,
+    CopyWindow,
     FilterExprOpt,
-    ForceOpt,
     OutArg,
-    QuietOpt,
-    RenameOpt,
-    RenameTypeOpt,
-    StartOpt,
-    TopicsOpt,
 )
-from rostools.cli.bag.shared import Progress, copy_command, renames, say_notes, time_window
+from rostools.cli.bag.shared import Progress, copy_command, say_notes
 from rostools.cli.common import FormatOpt, output_format
 from rostools.cli.declare import command
 from rostools.cli.output import Format, emit
@@ -40,25 +34,19 @@ def merge(
     ctx: typer.Context,
     dst: OutArg,
     sources: Annotated[list[Path], typer.Argument(help="The .bag or .mcap files to merge.")],
-    topics: TopicsOpt = None,
-    start: StartOpt = None,
-    end: EndOpt = None,
+    window: CopyWindow = CopyWindow(),  # noqa: B008 - a record of options, never changed
     expression: FilterExprOpt = None,
-    rename: RenameOpt = None,
-    rename_type: RenameTypeOpt = None,
-    compression: CompressionOpt = None,
-    force: ForceOpt = False,
-    quiet: QuietOpt = False,
+    how: CopyOutput = CopyOutput(),  # noqa: B008
     fmt: FormatOpt = None,
 ) -> None:
     """Merge bags into one, in time order; the same connection in several is written once."""
     from rostools.bag.merge import merge as run_merge
 
-    lo, hi = time_window(sources, start, end)
-    rules = renames(rename, rename_type)
-    copy_command(output_format(ctx, fmt), quiet, "merge", lambda progress: run_merge(
-        sources, dst, topics=topics or None, start=lo, end=hi, expression=expression,
-        compression=compression, progress=progress, overwrite=force, renames=rules,
+    lo, hi = window.bounds(sources)
+    rules = how.renames()
+    copy_command(output_format(ctx, fmt), how.quiet, "merge", lambda progress: run_merge(
+        sources, dst, topics=window.topics or None, start=lo, end=hi, expression=expression,
+        compression=how.compression, progress=progress, overwrite=how.force, renames=rules,
     ))  # fmt: skip
 
 
@@ -105,11 +93,7 @@ def split(
         bool,
         typer.Option("--repeat-latched", help="Start each part with the latched messages so far."),
     ] = False,
-    rename: RenameOpt = None,
-    rename_type: RenameTypeOpt = None,
-    compression: CompressionOpt = None,
-    force: ForceOpt = False,
-    quiet: QuietOpt = False,
+    how: CopyOutput = CopyOutput(),  # noqa: B008 - a record of options, never changed
     fmt: FormatOpt = None,
 ) -> None:
     """Split a bag into parts by duration, size, message count or times (record --split's names)."""
@@ -134,11 +118,11 @@ def split(
         at_ns=times,
     )
     chosen = output_format(ctx, fmt)
-    progress = Progress("split", chosen, quiet)
+    progress = Progress("split", chosen, how.quiet)
     try:
         report = run_split(
-            src, out or src, cut, repeat_latched=repeat_latched, compression=compression,
-            progress=progress, overwrite=force, renames=renames(rename, rename_type),
+            src, out or src, cut, repeat_latched=repeat_latched, compression=how.compression,
+            progress=progress, overwrite=how.force, renames=how.renames(),
         )  # fmt: skip
     finally:
         progress.done()

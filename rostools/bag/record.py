@@ -48,7 +48,7 @@ ENTRY_OVERHEAD = 160
 RELEASE_STEP = 1024 * 1024
 #: ``-p``: the name of each new file goes out latched on ``begin_write`` (rosbag record).
 BEGIN_WRITE = "begin_write"
-_STRING = TopicType("std_msgs/String", "992ce8a1687cec8c8bd883ec73ca41d1", "string data\n")
+STRING = TopicType("std_msgs/String", "992ce8a1687cec8c8bd883ec73ca41d1", "string data\n")
 
 
 @dataclass
@@ -277,7 +277,7 @@ class Recorder(Follower):
     async def _begin(self) -> None:
         if self.opts.publish:
             self._loop = asyncio.get_running_loop()
-            self._begin_write = await self.node.advertise(BEGIN_WRITE, _STRING, latch=True)
+            self._begin_write = await self.node.advertise(BEGIN_WRITE, STRING, latch=True)
         self._writer.start()
 
     async def run(self, stop: asyncio.Event, tick: Callable[[Any], None] | None = None) -> None:

@@ -12,6 +12,7 @@ from rostools.cli.bag import workbench  # noqa: F401
 from rostools.cli.bag import cat  # noqa: F401
 from rostools.cli.bag import plot  # noqa: F401
 from rostools.cli.bag import play, record  # noqa: F401
+from rostools.cli.bag import snapshot  # noqa: F401
 from rostools.cli.bag import extras  # noqa: F401
 
 # isort: on

@@ -1,0 +1,341 @@
+"""``rostools bag snapshot`` (a dash cam: the last minutes in memory) and ``bag trigger``.
+
+``snapshot`` buffers topics and writes a file when triggered: ``trigger_snapshot``
+(rosbag_snapshot's service), ``~trigger``, SIGUSR1, or the ``s`` key. ``trigger`` is the client
+of ``trigger_snapshot``: it waits until the file is complete and prints its name.
+"""
+
+from __future__ import annotations
+
+import signal
+import sys
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import TYPE_CHECKING, Annotated, Any
+
+import typer
+
+from rostools.bag.model import counted
+from rostools.cli.bag.group import app
+from rostools.cli.bag.record import compression_choice, output_name, parse_duration, parse_space
+from rostools.cli.common import FormatOpt, node_session, output_format
+from rostools.cli.output import Format, check_writable, render, write
+from rostools.errors import DataLossError, RostoolsError, UsageError, one_line
+
+if TYPE_CHECKING:
+    import asyncio
+
+    from rostools.bag.snapshot import SnapshotOptions, Snapshotter
+    from rostools.bag.snapshot_job import SnapshotJob
+    from rostools.bag.snapshot_srv import SnapshotRequest
+    from rostools.node.node import Node
+
+MB = 1024 * 1024
+
+
+@dataclass
+class SnapshotArgs:
+    """The ``snapshot`` command's options as typed (to merge with record's options later)."""
+
+    topics: list[str] = field(default_factory=list)
+    all: bool = False
+    regex: bool = False
+    exclude: list[str] = field(default_factory=list)
+    node: str | None = None
+    output_name: str | None = None
+    output_prefix: str | None = None
+    storage: str | None = None
+    bz2: bool = False
+    lz4: bool = False
+    compression: str | None = None
+    chunk_size: int | None = None  # KB
+    tcp_nodelay: bool = False
+    min_space: str = "100M"
+    duration: str = "30"
+    size: int = 256  # MB
+    topic_size: int | None = None  # MB
+    before: str | None = None
+    after: str | None = None
+    clear_on_write: bool = False
+    max_writes: int = 4
+
+    def options(self) -> SnapshotOptions:
+        """The library's options; ``UsageError`` for values that do not go together."""
+        from rostools.bag.snapshot import SnapshotOptions
+
+        if not (self.topics or self.all or self.node or self.exclude):
+            raise UsageError("give topics to buffer, or -a, -e REGEX or --node NAME")
+        if self.all and self.topics:
+            raise UsageError("-a buffers every topic; do not also name topics")
+        for value, flag in ((self.size, "--size"), (self.topic_size, "--topic-size")):
+            if value is not None and value <= 0:
+                raise UsageError(f"{flag} must be positive")
+        path, kind = output_name(self.output_name, self.output_prefix, self.storage)
+        prefix = ""
+        if self.output_name is None:  # the dated name is made anew for each file
+            given = Path(self.output_prefix or "")
+            prefix = given.stem if given.suffix.lower() in (".bag", ".mcap") else given.name
+            path = path.with_name("snapshot." + kind)  # only its folder counts
+        opts = SnapshotOptions(
+            topics=self.topics, all=self.all, regex=self.regex, exclude=self.exclude,
+            node=self.node, base=path, format=kind,
+            name=path.name if self.output_name is not None else None, prefix=prefix,
+            compression=compression_choice(kind, self.bz2, self.lz4, self.compression),
+            chunk_size=self.chunk_size * 1024 if self.chunk_size else None,
+            tcp_nodelay=self.tcp_nodelay, min_space=parse_space(self.min_space),
+            duration=parse_duration(self.duration), size=self.size * MB,
+            topic_size=(self.topic_size or 0) * MB, clear_on_write=self.clear_on_write,
+            max_writes=self.max_writes,
+            before=parse_duration(self.before) if self.before else None,
+            after=parse_duration(self.after) if self.after else 0.0,
+        )  # fmt: skip
+        opts.check()
+        return opts
+
+
+@app.command()
+def snapshot(
+    ctx: typer.Context,
+    topics: Annotated[list[str] | None, typer.Argument(help="Topics (regexes with -e).")] = None,
+    all_: Annotated[bool, typer.Option("--all", "-a", help="Buffer every topic.")] = False,
+    regex: Annotated[
+        bool, typer.Option("--regex", "-e", help="The topics are regexes (full match).")
+    ] = False,
+    exclude: Annotated[
+        list[str] | None,
+        typer.Option("--exclude", "-x", help="Leave out topics matching this regex (repeatable)."),
+    ] = None,
+    node: Annotated[
+        str | None, typer.Option("--node", help="Buffer what this node subscribes to.")
+    ] = None,
+    duration: Annotated[
+        str, typer.Option("--duration", "-d", help="The time the buffer spans: 30, 30s, 5m, 2h.")
+    ] = "30",
+    size: Annotated[
+        int, typer.Option("--size", help="Memory for the buffer, all topics together, in MB.")
+    ] = 256,
+    topic_size: Annotated[
+        int | None, typer.Option("--topic-size", help="Memory for each topic's buffer, in MB.")
+    ] = None,
+    before: Annotated[
+        str | None,
+        typer.Option("--before", help="What ~trigger, SIGUSR1 and s write from the buffer."),
+    ] = None,
+    after: Annotated[
+        str | None,
+        typer.Option("--after", help="...and how long they go on writing live messages."),
+    ] = None,
+    clear_on_write: Annotated[
+        bool, typer.Option("--clear-on-write", help="Empty the buffer of what a trigger takes.")
+    ] = False,
+    max_writes: Annotated[
+        int, typer.Option("--max-writes", help="Files written at once; more triggers refused.")
+    ] = 4,
+    output_name_: Annotated[
+        str | None,
+        typer.Option("--output-name", "-O", help="The first file's name (then NAME_1, ...)."),
+    ] = None,
+    output_prefix: Annotated[
+        str | None, typer.Option("--output-prefix", "-o", help="A prefix for dated file names.")
+    ] = None,
+    storage: Annotated[
+        str | None, typer.Option("--storage", "-s", help="File format: bag or mcap.")
+    ] = None,
+    bz2: Annotated[bool, typer.Option("--bz2", "-j", help="bz2 chunks (.bag).")] = False,
+    lz4: Annotated[bool, typer.Option("--lz4", help="lz4 chunks (.bag or MCAP).")] = False,
+    compression: Annotated[
+        str | None,
+        typer.Option("--compression", help="none, bz2, lz4 (.bag); zstd, lz4, none (MCAP)."),
+    ] = None,
+    chunk_size: Annotated[
+        int | None, typer.Option("--chunksize", help="Chunk size in KB (default 768).")
+    ] = None,
+    tcp_nodelay: Annotated[
+        bool, typer.Option("--tcpnodelay", help="Ask publishers for TCP_NODELAY.")
+    ] = False,
+    min_space: Annotated[
+        str,
+        typer.Option("--min-space", "-L", help="Refuse triggers with less free disk: 1G, 0 (off)."),
+    ] = "100M",
+    quiet: Annotated[bool, typer.Option("--quiet", "-q", help="No live table or lines.")] = False,
+    fmt: FormatOpt = None,
+) -> None:
+    """Keep the last --duration of topics in memory; write them to a bag when triggered.
+
+    Triggers: the trigger_snapshot service (rosbag_snapshot's; 'rostools bag trigger'),
+    ~trigger (std_srvs/Trigger), SIGUSR1, and the s key. ~pause and ~resume (and the p and r
+    keys) stop and restart buffering. Exit 6 if a file could not be written whole.
+    """
+    args = SnapshotArgs(
+        topics=topics or [], all=all_, regex=regex, exclude=exclude or [], node=node,
+        output_name=output_name_, output_prefix=output_prefix, storage=storage, bz2=bz2,
+        lz4=lz4, compression=compression, chunk_size=chunk_size, tcp_nodelay=tcp_nodelay,
+        min_space=min_space, duration=duration, size=size, topic_size=topic_size,
+        before=before, after=after, clear_on_write=clear_on_write, max_writes=max_writes,
+    )  # fmt: skip
+    opts = args.options()
+    check_writable(opts.base)
+    out = output_format(ctx, fmt)
+    snap = node_session(
+        ctx, lambda n, stop: _buffer(n, stop, opts, out, quiet), "rostools_snapshot"
+    )
+    if snap.failures:
+        failed = ", ".join(one_line(job.path) for job in snap.failures)
+        raise DataLossError(
+            f"{counted(len(snap.failures), 'snapshot')} not written whole: {failed}"
+        )
+
+
+async def _buffer(
+    node: Node, stop: asyncio.Event, opts: SnapshotOptions, out: Format, quiet: bool
+) -> Snapshotter:
+    """Run the snapshot recorder with its triggers: a signal, keys, and what it shows."""
+    import asyncio
+
+    from rostools.bag.snapshot import Snapshotter
+    from rostools.cli.bag.keys import keyboard
+    from rostools.cli.bag.snapview import SnapshotTable
+
+    snap = Snapshotter(node, opts)
+    snap.check_disk(started=False)
+    live = not quiet and out is Format.text and sys.stderr.isatty()
+    table = SnapshotTable() if live else None
+    snap.on_started = lambda job: _started(job, out, quiet or live)
+    snap.on_written = lambda job: _written(job, out, quiet, table)
+
+    def local() -> None:
+        try:
+            snap.trigger(snap.local_request(), remote=False)
+        except RostoolsError as err:
+            _line(f"no snapshot: {err}")
+
+    loop = asyncio.get_running_loop()
+    keys = {"s": local, "p": lambda: snap.set_paused(True), "r": lambda: snap.set_paused(False)}
+    loop.add_signal_handler(signal.SIGUSR1, local)
+    try:
+        with keyboard(keys if live else {}, loop):
+            if table is None:
+                if not quiet and out is Format.text:
+                    snap.on_subscribe = lambda topic: _line(f"Buffering {one_line(topic)}")
+                await snap.run(stop)
+                return snap
+            with table:
+                await snap.run(stop, table.tick)
+                table.tick(snap, force=True)
+    finally:
+        loop.remove_signal_handler(signal.SIGUSR1)
+    return snap
+
+
+def _line(text: str) -> None:
+    sys.stderr.write(one_line(text) + "\n")
+    sys.stderr.flush()
+
+
+def _started(job: SnapshotJob, out: Format, silent: bool) -> None:
+    if out is not Format.text:
+        write(out, {"event": "writing", "name": str(job.path)})
+    elif not silent:
+        _line(f"writing {job.path}")
+
+
+def _written(job: SnapshotJob, out: Format, quiet: bool, table: Any) -> None:
+    """A file is complete: a line (or an NDJSON record); a failure is one line, and goes on."""
+    from rostools.bag.bagfile import write_failure
+    from rostools.cli import report
+    from rostools.cli.bag.snapview import written_text
+
+    summary = job.summary()
+    if job.error is not None:
+        report(write_failure(job.error, "that snapshot stopped; buffering goes on"), False)
+    if out is not Format.text:
+        write(out, {"event": "written", **summary})
+    elif table is not None:
+        table.written(job)
+    elif not quiet and job.error is None:
+        _line(written_text(summary))
+
+
+@app.command()
+def trigger(
+    ctx: typer.Context,
+    node: Annotated[
+        str | None,
+        typer.Argument(help="The snapshot node (default: trigger_snapshot in this namespace)."),
+    ] = None,
+    output_name_: Annotated[
+        str | None,
+        typer.Option("--output-name", "-O", help="The file's name in the recorder's folder."),
+    ] = None,
+    topics: Annotated[
+        list[str] | None, typer.Option("--topics", help="Only these topics (repeatable, or a,b).")
+    ] = None,
+    before: Annotated[
+        str | None, typer.Option("--before", help="From the buffer: 20, 20s, 1m (default all).")
+    ] = None,
+    after: Annotated[
+        str | None, typer.Option("--after", help="Then live messages for this long: 10s.")
+    ] = None,
+    continue_: Annotated[
+        bool,
+        typer.Option("--continue", help="Go on writing live messages until Ctrl-C here."),
+    ] = False,
+    timeout: Annotated[
+        str | None, typer.Option("--timeout", help="Give up waiting for the file (exit 5).")
+    ] = None,
+    fmt: FormatOpt = None,
+) -> None:
+    """Ask a snapshot recorder for a file; print its name once it is complete.
+
+    The recorder is 'rostools bag snapshot' or rosbag_snapshot. With --format json: the file's
+    name, message count and time span.
+    """
+    if continue_ and after:
+        raise UsageError("--continue writes until stopped; it takes no --after")
+    limit = parse_duration(timeout) if timeout else None
+    spans = (parse_duration(before) if before else None, parse_duration(after) if after else 0.0)
+    chosen = [t for item in topics or [] for t in item.split(",") if t]
+    out = output_format(ctx, fmt)
+
+    async def main(n: Node, stop: asyncio.Event) -> dict[str, Any]:
+        import asyncio
+
+        from rostools.bag.snapshot_client import request_snapshot
+
+        request = await _window(n, output_name_ or "", chosen, spans, continue_)
+        say = _say_continuing if continue_ and out is Format.text else None
+        waiting = request_snapshot(n, node, request, stop, say)
+        try:
+            return await asyncio.wait_for(waiting, limit)
+        except asyncio.TimeoutError:
+            from rostools.errors import TimeoutExpired
+
+            raise TimeoutExpired(f"the snapshot was not complete within {timeout}") from None
+
+    summary = node_session(ctx, main, "rostools_trigger")
+    if out is Format.text:
+        sys.stdout.write(one_line(summary["name"]) + "\n")
+    else:
+        sys.stdout.write(render(out, summary) + "\n")
+    if summary.get("error"):
+        raise DataLossError(f"{summary['name']}: {summary['error']}")
+
+
+async def _window(
+    node: Node, name: str, topics: list[str], spans: tuple[float | None, float], forever: bool
+) -> SnapshotRequest:
+    """The request: the window in ROS time as this node sees it (``/clock`` under sim time)."""
+    from rostools.bag.snapshot_srv import FOREVER_SECS, SnapshotRequest
+    from rostools.node.clock import RosClock
+
+    clock = RosClock()
+    await clock.start(node)
+    now = clock.now()
+    before, after = spans
+    start = max(now - round(before * 1e9), 1) if before is not None else 0
+    stop = FOREVER_SECS * 1_000_000_000 if forever else (now + round(after * 1e9) if after else 0)
+    return SnapshotRequest(name, topics, start, stop)
+
+
+def _say_continuing(name: str) -> None:
+    _line(f"writing {name} until Ctrl-C")

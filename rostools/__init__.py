@@ -28,6 +28,7 @@ _HOMES = {
     ),
     "rostools._api.messages": ("message", "message_class"),
     "rostools._api.bags": ("record", "Recording", "read_bag", "BagMessage"),
+    "rostools._api.snapshots": ("snapshot", "SnapshotRecorder"),
     "rostools.msgs.message": ("Message", "Time", "Duration"),
     "rostools.errors": (
         "RostoolsError",
@@ -55,6 +56,7 @@ __all__ = [
     "Recording",
     "RostoolsError",
     "ServiceError",
+    "SnapshotRecorder",
     "Subscription",
     "Time",
     "TimeoutExpired",
@@ -70,6 +72,7 @@ __all__ = [
     "read_bag",
     "record",
     "set_param",
+    "snapshot",
     "subscribe",
     "wait_for_message",
     "wait_for_service",

@@ -16,6 +16,7 @@ from rostools._api.functions import (
 from rostools._api.master import Master
 from rostools._api.messages import message, message_class
 from rostools._api.node import Node, Publisher, Subscription
+from rostools._api.snapshots import SnapshotRecorder, snapshot
 from rostools.errors import (
     NotFoundError,
     RostoolsError,
@@ -41,6 +42,7 @@ __all__ = [
     "Recording",
     "RostoolsError",
     "ServiceError",
+    "SnapshotRecorder",
     "Subscription",
     "Time",
     "TimeoutExpired",
@@ -56,6 +58,7 @@ __all__ = [
     "read_bag",
     "record",
     "set_param",
+    "snapshot",
     "subscribe",
     "wait_for_message",
     "wait_for_service",

@@ -153,7 +153,11 @@ class SnapshotJob(threading.Thread):
                 return
 
     def summary(self) -> dict[str, Any]:
-        """What the file holds, or why it failed: name, messages, bytes, time span, drops."""
+        """What the file holds, or why it failed: name, messages, bytes, time span, drops.
+
+        ``start`` and ``end`` are the first and last message's receive times (s);
+        ``window_ns`` the range of receive times asked for (its end None: until stopped).
+        """
         out = self.file
         first = out.first_ns if out is not None else None
         last = out.last_ns if out is not None else None
@@ -164,6 +168,7 @@ class SnapshotJob(threading.Thread):
             "start": first / 1e9 if first is not None else None,
             "end": last / 1e9 if last is not None else None,
             "duration": (last - first) / 1e9 if first is not None and last is not None else 0.0,
+            "window_ns": [self.start_ns, self.stop_ns],
             "drops": self.drops,
             "error": str(self.error) if self.error is not None else None,
         }

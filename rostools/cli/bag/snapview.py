@@ -10,8 +10,7 @@ from __future__ import annotations
 import time
 from typing import TYPE_CHECKING, Any
 
-from rich.filesize import decimal
-
+from rostools.cli.bag.record import _size as size_text
 from rostools.errors import one_line
 
 if TYPE_CHECKING:
@@ -28,7 +27,7 @@ def written_text(summary: dict[str, Any]) -> str:
     drops = f", {summary['drops']} DROPPED" if summary["drops"] else ""
     return (
         f"wrote {one_line(summary['name'])}: {summary['messages']} messages "
-        f"({decimal(summary['bytes'])}), {summary['duration']:.1f} s{drops}"
+        f"({size_text(summary['bytes'])}), {summary['duration']:.1f} s{drops}"
     )
 
 
@@ -37,7 +36,7 @@ def progress_text(job: SnapshotJob) -> str:
     name = one_line(job.path.name)
     if job.total == 0 or job.done < job.total:
         share = job.done / job.total if job.total else 0.0
-        return f"writing {name}: {share:.0%} of the buffered part ({decimal(job.done)})"
+        return f"writing {name}: {share:.0%} of the buffered part ({size_text(job.done)})"
     out = job.file
     count = out.messages if out is not None else 0
     until = "until stopped" if job.stop_ns is None else "to the end of its window"
@@ -91,8 +90,8 @@ class SnapshotTable:
         ring = snap.ring
         state = "[bold yellow]PAUSED[/]" if snap.paused else "buffering"
         title = (
-            f"{state} {len(ring.topics)} topics: {decimal(ring.held)} of "
-            f"{decimal(ring.size)}, {snap.opts.duration:g} s at most; {KEYS}"
+            f"{state} {len(ring.topics)} topics: {size_text(ring.held)} of "
+            f"{size_text(ring.size)}, {snap.opts.duration:g} s at most"
         )
         table = Table(title=title, title_justify="left")
         columns = ("topic", "type", "pubs", "buffered", "fill", "span", "rate", "evicted")
@@ -103,8 +102,8 @@ class SnapshotTable:
             kind = escape(one_line(s.type)) if s and s.type else "[dim]no publisher yet[/]"
             table.add_row(
                 escape(one_line(topic)), kind, str(snap.publishers(topic)),
-                str(len(tb.entries)), decimal(tb.bytes), f"{tb.span():.1f} s",
+                str(len(tb.entries)), size_text(tb.bytes), f"{tb.span():.1f} s",
                 f"{self.rates.get(topic, 0.0):.1f} Hz", str(tb.evicted),
             )  # fmt: skip
-        lines = [progress_text(job) for job in snap.jobs] + self.files
+        lines = [KEYS, *(progress_text(job) for job in snap.jobs), *self.files]
         return Group(table, *(Text(line) for line in lines))

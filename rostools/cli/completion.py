@@ -67,6 +67,8 @@ KINDS: dict[tuple[str, ...] | str, str] = {
     ("action", "goal"): "goal",
     ("bag", "topics"): "",
     ("bag", "record", "topics"): "topic",
+    ("bag", "snapshot", "topics"): "topic",
+    ("bag", "trigger", "topics"): "topic",
 }
 
 

@@ -171,7 +171,7 @@ def test_snapshot_and_trigger(graph: tuple[dict[str, str], Path]) -> None:
         snap.signal(signal.SIGINT)
         assert snap.popen.wait(20) == 0
         events = [doc["event"] for doc in parse(snap.output()[0])]
-        assert events == ["writing", "written"]
+        assert events == ["writing", "written", "stopped"]
     finally:
         snap.stop()
 

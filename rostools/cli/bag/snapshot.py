@@ -179,6 +179,13 @@ def snapshot(
     snap = node_session(
         ctx, lambda n, stop: _buffer(n, stop, opts, out, quiet), "rostools_snapshot"
     )
+    from rostools.cli.bag.snapview import stopped_data, stopped_text
+
+    data = stopped_data(snap)
+    if out is not Format.text:
+        write(out, {"event": "stopped", **data})
+    elif not quiet:
+        _line(stopped_text(data))
     if snap.failures:
         failed = ", ".join(one_line(job.path) for job in snap.failures)
         raise DataLossError(

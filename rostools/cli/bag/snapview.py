@@ -31,6 +31,33 @@ def written_text(summary: dict[str, Any]) -> str:
     )
 
 
+def stopped_data(snap: Snapshotter) -> dict[str, Any]:
+    """What the recorder received, held at the end and evicted, and the files it wrote."""
+    topics = {
+        topic: {
+            "type": s.type,
+            "received": s.messages,
+            "buffered": len(snap.ring.topic(topic).entries),
+            "evicted": snap.ring.topic(topic).evicted,
+        }
+        for topic, s in sorted(snap.stats.items())
+    }
+    return {
+        "received": sum(t["received"] for t in topics.values()),
+        "evicted": sum(t["evicted"] for t in topics.values()),
+        "files": [str(job.path) for job in snap.finished if job.error is None],
+        "topics": topics,
+    }
+
+
+def stopped_text(data: dict[str, Any]) -> str:
+    """The line at the end: what was received and evicted, and how many files were written."""
+    return (
+        f"received {data['received']} messages on {len(data['topics'])} topics, "
+        f"{data['evicted']} evicted; wrote {len(data['files'])} snapshots"
+    )
+
+
 def progress_text(job: SnapshotJob) -> str:
     """Where a file being written is: its part from the buffer, then live until its stop."""
     name = one_line(job.path.name)

@@ -133,8 +133,7 @@ class SnapshotJob(threading.Thread):
             entries[i] = None
             out.write(conn, conn.topic, conn.header, t_ns, data)
             self.done += len(data)
-            if not i % 256:
-                out.flush_if_due()
+            out.flush_if_due()
         self.done = self.total
 
     def _write_live(self, out: BagFile) -> None:

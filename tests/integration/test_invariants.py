@@ -147,10 +147,10 @@ def test_snapshot_never_decodes(
     rostools_master: str, cli_env: dict[str, str], tmp_path: Path
 ) -> None:
     snap = start_cli("bag", "snapshot", "/opaque", "__name:=snap", env=cli_env, cwd=tmp_path)
+    opaque = "nobody_knows/Opaque"
     try:
-        with FakePublisher(
-            rostools_master, "/opaque", _broken_frames, msg_type="nobody_knows/Opaque"
-        ):
+        with FakePublisher(rostools_master, "/opaque", _broken_frames, msg_type=opaque):
+            wait_for(lambda: linked(rostools_master, "/snap", "/opaque"), 20, "/snap on /opaque")
             done = run_cli("bag", "trigger", "/snap", "-O", "o.bag", "--after", "0.5",
                            env=cli_env, timeout=60)  # fmt: skip
     finally:

@@ -12,6 +12,7 @@ their whole window, and at most ``max_writes`` files are written at once.
 from __future__ import annotations
 
 import asyncio
+import collections
 import contextlib
 import logging
 import time
@@ -34,6 +35,8 @@ log = logging.getLogger(__name__)
 
 #: Files written at once unless ``--max-writes`` says otherwise; more triggers are refused.
 MAX_WRITES = 4
+#: Files written that the recorder remembers (for its summary at the end).
+FINISHED_KEPT = 1000
 #: How long the end of a snapshot waits for its files to be complete (s).
 CLOSE_TIMEOUT = 600.0
 
@@ -90,7 +93,9 @@ class Snapshotter(Follower):
         self.paused = False
         self.closing = False
         self.jobs: list[SnapshotJob] = []
-        self.finished: list[SnapshotJob] = []
+        #: The last files written (or failed), and how many failed in all.
+        self.finished: collections.deque[SnapshotJob] = collections.deque(maxlen=FINISHED_KEPT)
+        self.failed = 0
         #: Called on the event loop as each file is started and once it is complete.
         self.on_started: Callable[[SnapshotJob], None] | None = None
         self.on_written: Callable[[SnapshotJob], None] | None = None
@@ -109,6 +114,7 @@ class Snapshotter(Follower):
             t_ns = self.clock.now()
             info = conns.get(conn.id)
             if info is None:
+                self._forget_closed(topic, conns)
                 info = conns[conn.id] = ConnInfo(topic, conn.header or {})
                 stats.type = stats.type or info.header.get("type", "")
             stats.messages += len(frames)
@@ -120,6 +126,13 @@ class Snapshotter(Follower):
                 self.ring.add(tb, info, t_ns, frames)
 
         return on_frames
+
+    def _forget_closed(self, topic: str, conns: dict[int, ConnInfo]) -> None:
+        """Let go of the connections of ``topic`` that have closed (publishers come and go)."""
+        sub = self.node.subscribers.get(topic)
+        live = {c.id for c in sub.connections.values()} if sub is not None else set()
+        for gone in set(conns) - live:
+            del conns[gone]  # what the buffer holds of it keeps its header
 
     # triggers ----------------------------------------------------------------------------
 
@@ -261,12 +274,8 @@ class Snapshotter(Follower):
             return
         self.jobs.remove(job)
         self.finished.append(job)
+        self.failed += job.error is not None
         if self.announce is not None:
             self.announce(job)
         if self.on_written is not None:
             self.on_written(job)
-
-    @property
-    def failures(self) -> list[SnapshotJob]:
-        """Snapshots whose file could not be written whole."""
-        return [job for job in self.finished if job.error is not None]

@@ -70,6 +70,7 @@ class SnapshotJob(threading.Thread):
         #: Progress of the buffered part: bytes of it written, of ``total`` (0 until known).
         self.total = 0
         self.done = 0
+        self._result: dict[str, Any] | None = None
 
     @property
     def path(self) -> Path:
@@ -120,6 +121,8 @@ class SnapshotJob(threading.Thread):
             self.error = err
             self.end()
         finally:
+            self._result = self._summary()
+            self.file = None  # the writer's index goes: the recorder keeps the job a while
             self.on_done(self)
 
     def _write_held(self, out: BagFile) -> None:
@@ -157,6 +160,9 @@ class SnapshotJob(threading.Thread):
         ``start`` and ``end`` are the first and last message's receive times (s);
         ``window_ns`` the range of receive times asked for (its end None: until stopped).
         """
+        return self._result if self._result is not None else self._summary()
+
+    def _summary(self) -> dict[str, Any]:
         out = self.file
         first = out.first_ns if out is not None else None
         last = out.last_ns if out is not None else None

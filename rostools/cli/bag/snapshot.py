@@ -186,11 +186,9 @@ def snapshot(
         write(out, {"event": "stopped", **data})
     elif not quiet:
         _line(stopped_text(data))
-    if snap.failures:
-        failed = ", ".join(one_line(job.path) for job in snap.failures)
-        raise DataLossError(
-            f"{counted(len(snap.failures), 'snapshot')} not written whole: {failed}"
-        )
+    if snap.failed:
+        names = ", ".join(one_line(job.path) for job in snap.finished if job.error is not None)
+        raise DataLossError(f"{counted(snap.failed, 'snapshot')} not written whole: {names}")
 
 
 async def _buffer(

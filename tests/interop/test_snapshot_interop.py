@@ -19,6 +19,7 @@ import pytest
 from rostools.bag.access import open_bag
 from tests.conftest import MasterInfo
 from tests.support import cppbuild
+from tests.support.bagdata import recorded
 from tests.support.env import needs_ros1, run_cli
 from tests.support.procs import Proc, linked, start_cli, start_ros1_node, wait_for
 
@@ -127,7 +128,8 @@ def killed_while_writing(snap: Proc, folder: Path, env: dict[str, str]) -> None:
     )
     assert started.returncode == 5, started.stderr  # gave up waiting; the file is under way
     active = folder / "k.bag.active"
-    wait_for(lambda: active.exists() and active.stat().st_size > 4096, 10, "k.bag flushed")
+    # once the buffered part and some live messages are on disk, in whole chunks
+    wait_for(lambda: all(recorded(active, t) > 2 * RATE for t in TOPICS), 20, "k.bag on disk")
     snap.signal(signal.SIGKILL)
     snap.popen.wait(10)
     done = run_cli("bag", "recover", str(active), env=env)

@@ -24,7 +24,6 @@ import json
 import os
 import subprocess
 import time
-from dataclasses import dataclass
 from pathlib import Path
 
 from benchmarks.bench_bag_live import _finish, _page_cache_mb_s
@@ -53,16 +52,6 @@ CLOSE_TIMEOUT = 120.0
 IMAGE = 1_000_000  # bytes a message
 IMAGE_RATE = 50.0
 WRITE_BYTES = 1_000_000_000  # the snapshot written
-
-
-@dataclass
-class _Run:
-    """What one recorder did in a run."""
-
-    cpu_s: float  # while the publisher ran
-    peak_kb: int
-    idle_kb: int  # once subscribed, before the first message
-    stopped: dict[str, object]  # the snapshot's last NDJSON record (empty for bag record)
 
 
 def _recorders() -> dict[str, list[str]]:

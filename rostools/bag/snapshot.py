@@ -14,7 +14,6 @@ from __future__ import annotations
 import asyncio
 import collections
 import contextlib
-import logging
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -30,8 +29,6 @@ from rostools.bag.snapshot_srv import NO_DATA_MESSAGE, SnapshotRequest
 from rostools.errors import RostoolsError, UsageError
 from rostools.node.connection import Frame, InboundConnection
 from rostools.node.node import Node
-
-log = logging.getLogger(__name__)
 
 #: Files written at once unless ``--max-writes`` says otherwise; more triggers are refused.
 MAX_WRITES = 4

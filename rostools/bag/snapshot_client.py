@@ -13,8 +13,9 @@ import struct
 from collections.abc import Callable
 from typing import Any
 
+from rostools.bag.snapshot import TriggerError
 from rostools.bag.snapshot_srv import TRIGGER, TRIGGER_SNAPSHOT, SnapshotRequest, decode_answer
-from rostools.errors import NotFoundError, RostoolsError, UnreachableError
+from rostools.errors import NotFoundError, UnreachableError
 from rostools.names import namespace
 from rostools.node.connection import Frame, InboundConnection
 from rostools.node.node import Node
@@ -23,10 +24,6 @@ from rostools.node.session import first
 
 #: How long the client waits to be connected to ``~written`` before it calls.
 CONNECT_TIMEOUT = 5.0
-
-
-class TriggerRefusedError(RostoolsError):
-    """The snapshot recorder answered the trigger with a failure (its reason is the message)."""
 
 
 async def find_recorder(node: Node, target: str | None) -> tuple[str, str]:
@@ -46,10 +43,10 @@ async def find_recorder(node: Node, target: str | None) -> tuple[str, str]:
 
 
 async def call(node: Node, service: str, kind: ServiceType, request: bytes) -> str:
-    """Call one of the recorder's services; its message, or ``TriggerRefusedError``."""
+    """Call one of the recorder's services; its message, or ``TriggerError``."""
     ok, message = decode_answer(await ServiceClient(node, service, kind).call(request))
     if not ok:
-        raise TriggerRefusedError(f"{service}: {message}")
+        raise TriggerError(f"{service}: {message}")
     return message
 
 

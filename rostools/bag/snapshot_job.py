@@ -71,6 +71,7 @@ class SnapshotJob(threading.Thread):
         self.total = 0
         self.done = 0
         self._result: dict[str, Any] | None = None
+        self.began = time.monotonic()
 
     @property
     def path(self) -> Path:
@@ -158,7 +159,8 @@ class SnapshotJob(threading.Thread):
         """What the file holds, or why it failed: name, messages, bytes, time span, drops.
 
         ``start`` and ``end`` are the first and last message's receive times (s);
-        ``window_ns`` the range of receive times asked for (its end None: until stopped).
+        ``window_ns`` the range of receive times asked for (its end None: until stopped);
+        ``seconds`` how long the file took, from the trigger until complete.
         """
         return self._result if self._result is not None else self._summary()
 
@@ -174,6 +176,7 @@ class SnapshotJob(threading.Thread):
             "end": last / 1e9 if last is not None else None,
             "duration": (last - first) / 1e9 if first is not None and last is not None else 0.0,
             "window_ns": [self.start_ns, self.stop_ns],
+            "seconds": round(time.monotonic() - self.began, 3),
             "drops": self.drops,
             "error": str(self.error) if self.error is not None else None,
         }

@@ -55,10 +55,15 @@ class _Kept:
     close_s: float  # seconds from SIGINT until the recorder exited
 
 
-def _wait_subscribed(uri: str, recorders: dict[str, subprocess.Popen[bytes]]) -> None:
+def _wait_subscribed(
+    uri: str,
+    recorders: dict[str, subprocess.Popen[bytes]],
+    prefix: str = PREFIX,
+    topics: int = TOPICS,
+) -> None:
     """Until the master lists every recorder as a subscriber of every load topic."""
     client = _Client(uri)
-    wanted = {f"{PREFIX}{i}" for i in range(TOPICS)}
+    wanted = {f"{prefix}{i}" for i in range(topics)}
     deadline = time.monotonic() + SUBSCRIBE_TIMEOUT
     try:
         while True:
@@ -72,7 +77,7 @@ def _wait_subscribed(uri: str, recorders: dict[str, subprocess.Popen[bytes]]) ->
                 return
             if time.monotonic() > deadline:
                 raise RuntimeError(
-                    f"after {SUBSCRIBE_TIMEOUT:.0f} s, {len(missing)} of {TOPICS} topics lack "
+                    f"after {SUBSCRIBE_TIMEOUT:.0f} s, {len(missing)} of {topics} topics lack "
                     f"{len(recorders)} subscribers; see {BUILD}"
                 )
             time.sleep(0.5)

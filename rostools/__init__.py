@@ -14,50 +14,24 @@ TYPE_CHECKING = False
 if TYPE_CHECKING:  # the stable API: type checkers read these imports, rostools.lazy too
     from rostools._api.asyncnode import (
         AsyncNode as AsyncNode,
-    )
-    from rostools._api.asyncnode import (
         AsyncPublisher as AsyncPublisher,
-    )
-    from rostools._api.asyncnode import (
         AsyncSubscription as AsyncSubscription,
     )
     from rostools._api.bags import (
         BagMessage as BagMessage,
-    )
-    from rostools._api.bags import (
         Recording as Recording,
-    )
-    from rostools._api.bags import (
         read_bag as read_bag,
-    )
-    from rostools._api.bags import (
         record as record,
     )
     from rostools._api.functions import (
         call_service as call_service,
-    )
-    from rostools._api.functions import (
         delete_param as delete_param,
-    )
-    from rostools._api.functions import (
         get_param as get_param,
-    )
-    from rostools._api.functions import (
         has_param as has_param,
-    )
-    from rostools._api.functions import (
         publish as publish,
-    )
-    from rostools._api.functions import (
         set_param as set_param,
-    )
-    from rostools._api.functions import (
         subscribe as subscribe,
-    )
-    from rostools._api.functions import (
         wait_for_message as wait_for_message,
-    )
-    from rostools._api.functions import (
         wait_for_service as wait_for_service,
     )
     from rostools._api.master import (
@@ -65,44 +39,28 @@ if TYPE_CHECKING:  # the stable API: type checkers read these imports, rostools.
     )
     from rostools._api.messages import (
         message as message,
-    )
-    from rostools._api.messages import (
         message_class as message_class,
     )
     from rostools._api.node import (
         Node as Node,
-    )
-    from rostools._api.node import (
         Publisher as Publisher,
-    )
-    from rostools._api.node import (
         Subscription as Subscription,
+    )
+    from rostools._api.snapshots import (
+        SnapshotRecorder as SnapshotRecorder,
+        snapshot as snapshot,
     )
     from rostools.errors import (
         NotFoundError as NotFoundError,
-    )
-    from rostools.errors import (
         RostoolsError as RostoolsError,
-    )
-    from rostools.errors import (
         ServiceError as ServiceError,
-    )
-    from rostools.errors import (
         TimeoutExpired as TimeoutExpired,
-    )
-    from rostools.errors import (
         UnreachableError as UnreachableError,
-    )
-    from rostools.errors import (
         UsageError as UsageError,
     )
     from rostools.msgs.message import (
         Duration as Duration,
-    )
-    from rostools.msgs.message import (
         Message as Message,
-    )
-    from rostools.msgs.message import (
         Time as Time,
     )
 

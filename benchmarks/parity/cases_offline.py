@@ -12,8 +12,7 @@ from pathlib import Path
 from typing import Any
 
 from benchmarks.parity import documented as d
-from benchmarks.parity.cases import case as online_case
-from benchmarks.parity.cases import error, rules, usage, verb_usage
+from benchmarks.parity.cases import case as online_case, error, rules, usage, verb_usage
 from benchmarks.parity.compare import Expect, Pairing
 from benchmarks.parity.runner import Case
 

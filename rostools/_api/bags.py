@@ -16,6 +16,7 @@ from typing import NamedTuple
 from rostools._api import loop, messages
 from rostools._api.asyncnode import default_master_uri
 from rostools.bag.access import format_for_name, open_bag, require_ros1
+from rostools.bag.follow import Follower
 from rostools.bag.record import Recorder, RecordOptions
 from rostools.errors import RostoolsError, TimeoutExpired, UsageError
 from rostools.msgs.message import Message, Time
@@ -42,7 +43,71 @@ def read_bag(path: str | Path, topics: Collection[str] | None = None) -> Iterato
             yield BagMessage(conn.topic, decode(data), Time.from_nsec(t_ns))
 
 
-class Recording:
+class LiveRecorder:
+    """A recorder of the live graph on a node of its own, on the API's loop or the caller's.
+
+    A subclass makes the recorder (``_make``) and says when it is under way (``_ready``).
+    """
+
+    #: The recorder node's name (made anonymous).
+    node_name = "rostools_record"
+
+    def __init__(self, master_uri: str | None) -> None:
+        self.master_uri = master_uri
+        self._node: CoreNode | None = None
+        self._stop: asyncio.Event | None = None
+        self._task: asyncio.Task[None] | None = None
+        self._on_api_loop = False
+
+    def _make(self, node: CoreNode) -> Follower:
+        raise NotImplementedError
+
+    def _ready(self, node: CoreNode) -> bool:
+        raise NotImplementedError
+
+    @property
+    def running(self) -> bool:
+        """Whether it records."""
+        return self._task is not None and not self._task.done()
+
+    async def _start(self, what: str) -> None:
+        node = CoreNode(self.node_name, self.master_uri or default_master_uri(),
+                        anonymous_name=True)  # fmt: skip
+        await node.start()
+        try:
+            follower = self._make(node)
+        except BaseException:
+            await node.close()
+            raise
+        self._node, self._stop = node, asyncio.Event()
+        self._task = asyncio.get_running_loop().create_task(follower.run(self._stop))
+        deadline = time.monotonic() + START_TIMEOUT
+        while not self._ready(node):
+            if self._task.done():
+                await self._finish()
+                raise RostoolsError(f"{what} stopped at once")
+            if time.monotonic() > deadline:
+                await self._finish()
+                raise TimeoutExpired(f"{what} did not start")
+            await asyncio.sleep(0.005)
+
+    async def _finish(self) -> None:
+        if self._stop is not None:
+            self._stop.set()
+        try:
+            if self._task is not None:
+                await self._task
+        finally:
+            if self._node is not None:
+                await self._node.close()
+                self._node = None
+
+    def _stop_on_api_loop(self) -> None:
+        if self._on_api_loop and self._node is not None:
+            loop.run(self._finish())
+
+
+class Recording(LiveRecorder):
     """Records topics into a bag while it runs: ``with record(["/a"], "a.bag") as rec:``.
 
     The bag is complete when the recording stops (the end of the ``with``, or ``stop()``).
@@ -60,26 +125,13 @@ class Recording:
             topics = [topics]
         if not topics:
             raise UsageError("record needs at least one topic")
+        super().__init__(master_uri)
         self.topics = list(topics)
         self.path = Path(path)
-        self.master_uri = master_uri
         self.compression = compression
-        self._node: CoreNode | None = None
         self._recorder: Recorder | None = None
-        self._stop: asyncio.Event | None = None
-        self._task: asyncio.Task[None] | None = None
-        self._on_api_loop = False
 
-    @property
-    def running(self) -> bool:
-        """Whether it records."""
-        return self._task is not None and not self._task.done()
-
-    async def start_async(self) -> Recording:
-        """Subscribe and open the file, on the running loop."""
-        node = CoreNode("rostools_record", self.master_uri or default_master_uri(),
-                        anonymous_name=True)  # fmt: skip
-        await node.start()
+    def _make(self, node: CoreNode) -> Follower:
         opts = RecordOptions(
             topics=list(self.topics),
             base=self.path,
@@ -87,40 +139,26 @@ class Recording:
             compression=self.compression,
             min_space=0,  # a test's bag is small; the disk check is for long recordings
         )
-        try:
-            recorder = Recorder(node, opts)
-        except BaseException:
-            await node.close()
-            raise
-        self._node, self._recorder, self._stop = node, recorder, asyncio.Event()
-        self._task = asyncio.get_running_loop().create_task(recorder.run(self._stop))
-        deadline = time.monotonic() + START_TIMEOUT
-        wanted = set(recorder.opts.topics)
-        while recorder.current_file is None or not wanted <= set(node.subscribers):
-            if self._task.done():
-                await self._finish()
-                raise RostoolsError(f"the recording into {self.path} stopped at once")
-            if time.monotonic() > deadline:
-                await self._finish()
-                raise TimeoutExpired(f"the recording into {self.path} did not start")
-            await asyncio.sleep(0.005)
+        self._recorder = Recorder(node, opts)
+        return self._recorder
+
+    def _ready(self, node: CoreNode) -> bool:
+        rec = self._recorder
+        return (
+            rec is not None
+            and rec.current_file is not None
+            and (set(rec.opts.topics) <= set(node.subscribers))
+        )
+
+    async def start_async(self) -> Recording:
+        """Subscribe and open the file, on the running loop."""
+        await self._start(f"the recording into {self.path}")
         return self
 
     async def stop_async(self) -> Path:
         """Stop, close the file; its path."""
         await self._finish()
         return self.path
-
-    async def _finish(self) -> None:
-        if self._stop is not None:
-            self._stop.set()
-        try:
-            if self._task is not None:
-                await self._task
-        finally:
-            if self._node is not None:
-                await self._node.close()
-                self._node = None
 
     def start(self) -> Recording:
         """Start recording (on the API's background loop)."""
@@ -129,8 +167,7 @@ class Recording:
 
     def stop(self) -> Path:
         """Stop recording and close the bag; its path."""
-        if self._on_api_loop and self._node is not None:
-            loop.run(self._finish())
+        self._stop_on_api_loop()
         return self.path
 
     @property

@@ -66,6 +66,8 @@ KINDS: dict[tuple[str, ...] | str, str] = {
     ("action", "goal"): "goal",
     ("bag", "topics"): "",
     ("bag", "record", "topics"): "topic",
+    ("bag", "snapshot", "topics"): "topic",
+    ("bag", "trigger", "topics"): "topic",
 }
 
 
@@ -112,8 +114,7 @@ def _command(group: str, name: str, cmd: Any) -> dict[str, Any]:
 
 def build_tree() -> dict[str, Any]:
     """The command tree of the app, as ``rostools.cli.completer`` reads it."""
-    from rostools.cli.app import GROUPS, group_app
-    from rostools.cli.app import app as root_app
+    from rostools.cli.app import GROUPS, app as root_app, group_app
 
     root = typer.main.get_command(root_app)
     tree: dict[str, Any] = {"help": _first_line(root.help), "options": {}, "commands": {}}
@@ -161,8 +162,7 @@ def quick_specs() -> dict[str, Any]:
 
     Written from the Typer app, so both read one command line the same way.
     """
-    from rostools.cli.app import GROUPS, group_app
-    from rostools.cli.app import app as root_app
+    from rostools.cli.app import GROUPS, app as root_app, group_app
 
     root = typer.main.get_command(root_app)
     specs: dict[str, Any] = {"": _quick_spec(root, "")}

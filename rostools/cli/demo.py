@@ -18,8 +18,7 @@ from typing import Annotated
 
 import typer
 
-from rostools.cli.output import check_writable, flush
-from rostools.cli.output import put as say
+from rostools.cli.output import check_writable, flush, put as say
 from rostools.errors import RostoolsError, UsageError
 
 app = typer.Typer(name="demo", add_completion=False)

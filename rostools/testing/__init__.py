@@ -16,12 +16,9 @@ TYPE_CHECKING = False
 if TYPE_CHECKING:  # the stable names: type checkers read these imports, rostools.lazy too
     from rostools.testing.helpers import (
         assert_message as assert_message,
-    )
-    from rostools.testing.helpers import (
         assert_topic_rate as assert_topic_rate,
     )
-    from rostools.testing.process import RosProcess as RosProcess
-    from rostools.testing.process import start_process as start_process
+    from rostools.testing.process import RosProcess as RosProcess, start_process as start_process
     from rostools.testing.report import graph_report as graph_report
 
 

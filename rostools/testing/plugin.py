@@ -14,6 +14,10 @@ Fixtures:
 
 When a test fails, its report gets a "ROS graph" section: topics, services, nodes,
 parameters, the last message of each subscribed topic, and the tail of each process's output.
+With ``--ros-snapshot SECONDS``, a snapshot recorder buffers every topic during each test that
+uses ``ros_master``; when the test fails, the last SECONDS go to a bag beside the test report
+(``--ros-snapshot-dir``; default: the JUnit XML's folder, else ``ros-snapshots``), and the
+report's "ROS snapshot" section names it.
 
 Every pytest run imports this module, so it imports nothing heavy: the fixtures load the API
 when a test asks for them.
@@ -32,9 +36,12 @@ if TYPE_CHECKING:
     from rostools._api.bags import Recording
     from rostools._api.master import Master
     from rostools._api.node import Node
+    from rostools._api.snapshots import SnapshotRecorder
     from rostools.testing.process import RosProcess
 
 MARKER = "ros_master"
+#: How often the test's snapshot recorder asks its master for new topics (s).
+SNAPSHOT_POLL = 0.1
 
 
 class _TestState:
@@ -45,9 +52,50 @@ class _TestState:
         self.nodes: list[Node] = []
         self.processes: list[RosProcess] = []
         self.recordings: list[Recording] = []
+        self.snapshot: SnapshotRecorder | None = None
 
 
 _STATE = pytest.StashKey[_TestState]()
+
+
+def pytest_addoption(parser: pytest.Parser) -> None:
+    """``--ros-snapshot SECONDS`` and ``--ros-snapshot-dir DIR``."""
+    group = parser.getgroup("rostools")
+    group.addoption(
+        "--ros-snapshot",
+        type=float,
+        default=None,
+        metavar="SECONDS",
+        help="buffer every topic during each ros_master test; on a failure, write the last "
+        "SECONDS to a bag and name it in the report",
+    )
+    group.addoption(
+        "--ros-snapshot-dir",
+        default=None,
+        metavar="DIR",
+        help="where --ros-snapshot bags go (default: the --junitxml folder, else ros-snapshots)",
+    )
+
+
+def _snapshot_folder(config: pytest.Config) -> Path:
+    given = config.getoption("ros_snapshot_dir")
+    if given:
+        return Path(given)
+    xml = getattr(config.option, "xmlpath", None)
+    return Path(xml).resolve().parent if xml else config.invocation_params.dir / "ros-snapshots"
+
+
+def _start_snapshot(config: pytest.Config, master_uri: str) -> SnapshotRecorder | None:
+    seconds = config.getoption("ros_snapshot")
+    if not seconds:
+        return None
+    from rostools._api.snapshots import SnapshotRecorder
+
+    folder = _snapshot_folder(config)
+    folder.mkdir(parents=True, exist_ok=True)
+    return SnapshotRecorder(
+        None, folder, master_uri, duration=seconds, poll_period=SNAPSHOT_POLL
+    ).start()
 
 
 def pytest_configure(config: pytest.Config) -> None:
@@ -91,13 +139,16 @@ def ros_master(request: pytest.FixtureRequest) -> Iterator[Master]:
     os.environ["ROS_MASTER_URI"] = master.uri
     if not os.environ.get("ROS_IP") and not os.environ.get("ROS_HOSTNAME"):
         os.environ["ROS_IP"] = "127.0.0.1"  # the test's graph stays on loopback
-    request.node.stash[_STATE] = _TestState(master.uri)
+    state = request.node.stash[_STATE] = _TestState(master.uri)
     from rostools.testing import helpers
 
     helpers.last_seen.clear()
     try:
+        state.snapshot = _start_snapshot(request.config, master.uri)
         yield master
     finally:
+        if state.snapshot is not None:
+            state.snapshot.stop()
         functions.reset()  # the default node lived on this master
         for key, value in saved.items():
             if value is None:
@@ -195,7 +246,22 @@ def pytest_runtest_makereport(item: pytest.Item, call: pytest.CallInfo[None]) ->
             report.sections.append(("ROS graph", _describe(state)))
         except Exception as err:  # noqa: BLE001 - a report must not fail the run
             report.sections.append(("ROS graph", f"(could not be read: {err!r})"))
+        if state.snapshot is not None and state.snapshot.running:
+            line = _write_snapshot(item, report, state.snapshot)
+            report.sections.append(("ROS snapshot", line))
     return report
+
+
+def _write_snapshot(item: pytest.Item, report: pytest.TestReport, snap: SnapshotRecorder) -> str:
+    """Write the test's last seconds beside the report; the line that names the bag."""
+    seconds = item.config.getoption("ros_snapshot")
+    name = "".join(c if c.isalnum() or c in "-." else "_" for c in item.nodeid) + ".bag"
+    try:
+        path = snap.write(name, before=seconds)
+    except Exception as err:  # noqa: BLE001 - a report must not fail the run
+        return f"(no snapshot: {err})"
+    report.user_properties.append(("ros_snapshot", str(path)))
+    return f"the last {seconds:g} s of the graph: {path}"
 
 
 def _describe(state: _TestState) -> str:

@@ -24,8 +24,7 @@ from pathlib import Path
 from types import FrameType
 
 import pytest
-from hypothesis import given, seed
-from hypothesis import strategies as st
+from hypothesis import given, seed, strategies as st
 
 from rostools.bag.doctor import doctor
 from rostools.cli import main

@@ -11,8 +11,7 @@ import json
 from pathlib import Path
 
 import pytest
-from hypothesis import given, seed
-from hypothesis import strategies as st
+from hypothesis import given, seed, strategies as st
 
 from tests.fuzz.conftest import FUZZ, SEED
 from tests.fuzz.test_fuzz_bags import _run

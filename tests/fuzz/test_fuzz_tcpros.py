@@ -13,8 +13,7 @@ import asyncio
 import struct
 from typing import Any
 
-from hypothesis import given, seed
-from hypothesis import strategies as st
+from hypothesis import given, seed, strategies as st
 
 from rostools.node.connection import InboundConnection, ServerConnection
 from rostools.wire.header import MAX_HEADER_LENGTH, HeaderError, decode_fields, encode_header

@@ -7,6 +7,7 @@ completion tests). A command added without a recipe here fails ``test_every_comm
 from __future__ import annotations
 
 import json
+import signal
 import sys
 from collections.abc import Iterator
 from pathlib import Path
@@ -24,6 +25,9 @@ ROOT = Path(__file__).resolve().parent.parent.parent
 
 #: Commands that print no data (they act, or print a script): no --format to test.
 NOT_DATA = {"topic pub", "param set", "param delete", "param load", "completion show", "demo"}
+
+#: Commands that run until stopped and serve each other: ``test_snapshot_and_trigger``.
+TOGETHER = {"bag snapshot", "bag trigger"}
 
 #: command -> its arguments; ``{bag}``, ``{tmp}`` are filled in. ``-F json`` is added.
 RECIPES: dict[str, list[str]] = {
@@ -98,7 +102,7 @@ def commands() -> list[str]:
 
 
 def test_every_command_has_a_recipe() -> None:
-    missing = set(commands()) - RECIPES.keys() - NOT_DATA - {"core"}
+    missing = set(commands()) - RECIPES.keys() - NOT_DATA - TOGETHER - {"core"}
     assert not missing, f"add a --format json recipe for: {sorted(missing)}"
     assert not (RECIPES.keys() - set(commands())), "recipes for commands that do not exist"
 
@@ -153,6 +157,24 @@ def test_format_json_is_valid_json(command: str, graph: tuple[dict[str, str], Pa
     assert done.returncode == 0, done.stderr
     documents = parse(done.stdout)
     assert documents, f"{command} printed nothing"
+
+
+def test_snapshot_and_trigger(graph: tuple[dict[str, str], Path]) -> None:
+    env, tmp = graph
+    snap = start_cli("bag", "snapshot", "/chatter_demo", "-F", "json", "__name:=snap_tree",
+                     env=env, cwd=tmp)  # fmt: skip
+    try:
+        wait_for(lambda: "/snap_tree/trigger" in run_cli("service", "list", env=env).stdout, 20)
+        done = run_cli("bag", "trigger", "/snap_tree", "--after", "0.2", "-F", "json", env=env)
+        assert done.returncode == 0, done.stderr
+        (summary,) = parse(done.stdout)
+        assert summary["messages"] > 0 and (tmp / summary["name"]).is_file()
+        snap.signal(signal.SIGINT)
+        assert snap.popen.wait(20) == 0
+        events = [doc["event"] for doc in parse(snap.output()[0])]
+        assert events == ["writing", "written", "stopped"]
+    finally:
+        snap.stop()
 
 
 def test_core_format_json(graph: tuple[dict[str, str], Path]) -> None:

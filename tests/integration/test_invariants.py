@@ -19,7 +19,7 @@ from rostools.bag.access import open_bag
 from rostools.wire.tcpros import publisher_header
 from tests.support.env import run_cli
 from tests.support.fakepeer import FakePublisher, frame
-from tests.support.procs import Proc, start_cli
+from tests.support.procs import Proc, linked, start_cli, wait_for
 
 #: 200 KB messages, each of one byte value: a frame overwritten by the next shows at once.
 BIG = 70_000
@@ -141,6 +141,27 @@ def test_record_and_play_never_decode(
         again.stop()
     with open_bag(tmp_path / "again.bag") as reader:
         assert [bytes(d) for _, _, d in reader.messages()] == got
+
+
+def test_snapshot_never_decodes(
+    rostools_master: str, cli_env: dict[str, str], tmp_path: Path
+) -> None:
+    snap = start_cli("bag", "snapshot", "/opaque", "__name:=snap", env=cli_env, cwd=tmp_path)
+    opaque = "nobody_knows/Opaque"
+    try:
+        with FakePublisher(rostools_master, "/opaque", _broken_frames, msg_type=opaque):
+            wait_for(lambda: linked(rostools_master, "/snap", "/opaque"), 20, "/snap on /opaque")
+            done = run_cli("bag", "trigger", "/snap", "-O", "o.bag", "--after", "0.5",
+                           env=cli_env, timeout=60)  # fmt: skip
+    finally:
+        snap.stop()
+    assert done.returncode == 0, done.stderr
+    with open_bag(tmp_path / "o.bag") as reader:
+        (conn,) = reader.connections
+        assert (conn.type, conn.definition) == ("nobody_knows/Opaque", BROKEN)
+        got = [bytes(d) for _, _, d in reader.messages()]
+    first = got[0][0]
+    assert got == [struct.pack("<I", i) + b"opaque" * 10 for i in range(first, first + len(got))]
 
 
 @pytest.mark.parametrize(

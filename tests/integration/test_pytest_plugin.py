@@ -13,6 +13,7 @@ import pytest
 # API's loop should be one per process: both are imported here, before any run.
 import rostools._api.functions
 import rostools.testing.helpers  # noqa: F401
+from rostools.bag.access import open_bag
 
 pytest_plugins = ["pytester"]
 
@@ -159,3 +160,34 @@ def test_a_failure_report_shows_the_graph(pytester: pytest.Pytester) -> None:
             "  | child says hi",
         ]
     )
+
+
+def test_a_failure_writes_the_last_seconds_to_a_bag_named_in_the_report(
+    pytester: pytest.Pytester,
+) -> None:
+    pytester.makepyfile(
+        test_snap="""
+        import pytest
+        from rostools.testing import assert_message
+
+        @pytest.mark.parametrize("fail", [False, True])
+        def test_speed(ros_node, fail):
+            pub = ros_node.advertise("/speed", "std_msgs/Float64")
+            sub = ros_node.subscribe("/speed")
+            pub.wait_for_subscribers(2, timeout=10)  # ours, and the snapshot recorder's
+            for value in (1.0, 2.0, 3.0):
+                pub.publish(data=value)
+                sub.get(timeout=5)
+            assert not fail, "too fast"
+        """
+    )
+    result = pytester.runpytest_inprocess("-p", "no:cacheprovider", "--ros-snapshot", "5")
+    result.assert_outcomes(passed=1, failed=1)
+    result.stdout.fnmatch_lines(["*- ROS snapshot -*", "the last 5 s of the graph: *.bag"])
+    folder = pytester.path / "ros-snapshots"
+    (bag,) = folder.iterdir()  # only the failing test wrote one
+    assert bag.name == "test_snap.py__test_speed_True_.bag"
+    assert str(bag) in result.stdout.str()
+    with open_bag(bag) as reader:
+        assert [c.topic for c in reader.connections] == ["/speed"]
+        assert reader.info().message_count == 3

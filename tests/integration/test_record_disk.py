@@ -21,7 +21,7 @@ from pathlib import Path
 
 import pytest
 
-from rostools.bag import record
+from rostools.bag import follow, record
 from rostools.bag.access import open_bag
 from rostools.errors import RostoolsError
 from rostools.master.server import MasterThread
@@ -37,7 +37,7 @@ def test_a_filling_disk_stops_the_recording_cleanly(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
     free = [10 * 1024**3]
-    monkeypatch.setattr(record, "free_bytes", lambda folder: free[0])
+    monkeypatch.setattr(follow, "free_bytes", lambda folder: free[0])
     monkeypatch.setattr(record, "DISK_PERIOD", 0.05)
     opts = record.RecordOptions(topics=["/t"], base=tmp_path / "x.bag", min_space=1024**3)
 

@@ -14,8 +14,7 @@ from collections import Counter
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from rostools.bag import mcap_format
-from rostools.bag import rosbag1_format as fmt
+from rostools.bag import mcap_format, rosbag1_format as fmt
 from rostools.bag.access import open_bag
 from rostools.bag.mcap_reader import McapReader
 from rostools.bag.rosbag1_reader import Bag1Reader

@@ -6,8 +6,7 @@ import xmlrpc.client
 from typing import Any
 
 import pytest
-from hypothesis import HealthCheck, given, settings
-from hypothesis import strategies as st
+from hypothesis import HealthCheck, given, settings, strategies as st
 
 from rostools.cli.param import paramyaml, plainyaml
 

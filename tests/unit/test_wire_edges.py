@@ -17,8 +17,7 @@ from typing import Any
 
 import pytest
 
-from rostools.wire import xmlrpc as wx
-from rostools.wire import xmlvalues as xv
+from rostools.wire import xmlrpc as wx, xmlvalues as xv
 from rostools.wire.header import MAX_HEADER_LENGTH
 from rostools.wire.tcpros import (
     Failed,

@@ -8,8 +8,7 @@ import tracemalloc
 from collections.abc import Callable
 
 import pytest
-from hypothesis import given, settings
-from hypothesis import strategies as st
+from hypothesis import given, settings, strategies as st
 
 from rostools.wire.header import MAX_HEADER_LENGTH, decode_fields, encode_header
 from rostools.wire.tcpros import (

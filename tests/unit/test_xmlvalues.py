@@ -8,8 +8,7 @@ import xmlrpc.client
 from typing import Any
 
 import pytest
-from hypothesis import given, settings
-from hypothesis import strategies as st
+from hypothesis import given, settings, strategies as st
 
 from rostools.wire.xmlvalues import BadAnswer, Fault, dumps_call, loads_response
 

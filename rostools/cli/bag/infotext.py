@@ -8,18 +8,10 @@ import time
 from typing import Any
 
 from rostools.bag.model import BagInfo
+from rostools.cli.bag.shared import human_size
 from rostools.errors import UsageError, one_line
 
 _NS = 1_000_000_000
-
-
-def human_size(size: float) -> str:
-    """rosbag's 1024-based sizes, always in KB or more."""
-    for suffix in ("KB", "MB", "GB", "TB", "PB", "EB", "ZB", "YB"):
-        size /= 1024.0
-        if size < 1024.0:
-            return f"{size:.1f} {suffix}"
-    return "-"
 
 
 def human_frequency(freq: float) -> str:

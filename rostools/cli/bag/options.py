@@ -8,7 +8,7 @@ from __future__ import annotations
 import time
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Annotated
+from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
@@ -69,10 +69,10 @@ DstOpt = Annotated[Path | None, typer.Argument(help="Output (default: NAME.recov
 
 @options_record
 @dataclass
-class TopicChoice:
-    """Which topics a recorder takes besides those it names (bag record, bag snapshot)."""
+class TopicOptions:
+    """Which topics a live recorder takes besides those it names (bag record, bag snapshot)."""
 
-    all_: Annotated[bool, typer.Option("--all", "-a", help="Record every topic.")] = False
+    all_: Annotated[bool, typer.Option("--all", "-a", help="Every topic.")] = False
     regex: Annotated[
         bool, typer.Option("--regex", "-e", help="The topics are regexes (full match).")
     ] = False
@@ -81,7 +81,7 @@ class TopicChoice:
         typer.Option("--exclude", "-x", help="Leave out topics matching this regex (repeatable)."),
     ] = None
     node: Annotated[
-        str | None, typer.Option("--node", help="Record what this node subscribes to.")
+        str | None, typer.Option("--node", help="The topics this node subscribes to.")
     ] = None
     types: Annotated[
         list[str] | None,
@@ -100,7 +100,40 @@ class TopicChoice:
                 "give topics to record, or -a, -e REGEX, --topic-types or --node NAME", hint=hint
             )
         if self.all_ and topics:
-            raise UsageError("-a records every topic; do not also name topics")
+            raise UsageError("-a takes every topic; do not also name topics")
+
+    def choice(self, topics: list[str]) -> dict[str, Any]:
+        """The library's ``TopicChoice`` fields (``bag.follow``), for ``topics``."""
+        return {
+            "topics": topics, "all": self.all_, "regex": self.regex,
+            "exclude": self.exclude or [], "node": self.node, "types": self.types or [],
+            "exclude_types": self.exclude_types or [],
+        }  # fmt: skip
+
+
+@options_record
+@dataclass
+class Receiving:
+    """How a live recorder receives, and the disk it keeps free (bag record, bag snapshot)."""
+
+    tcp_nodelay: Annotated[
+        bool, typer.Option("--tcpnodelay", help="Ask publishers for TCP_NODELAY.")
+    ] = False
+    min_space: Annotated[
+        str,
+        typer.Option(
+            "--min-space",
+            "-L",
+            help="Free disk to keep: 1G, 500M, 64K, 0 (off). Below it, record stops and "
+            "snapshot refuses triggers.",
+        ),
+    ] = "100M"
+
+    def min_space_bytes(self) -> int:
+        """``-L`` in bytes."""
+        from rostools.cli.units import parse_size
+
+        return parse_size(self.min_space, "-L")
 
 
 @options_record
@@ -109,7 +142,10 @@ class OutputFile:
     """The file a recorder writes: its name, format and chunks (bag record, bag snapshot)."""
 
     output_name: Annotated[
-        str | None, typer.Option("--output-name", "-O", help="The file name (.bag added).")
+        str | None,
+        typer.Option(
+            "--output-name", "-O", help="The file name, .bag added (snapshot: then NAME_1, ...)."
+        ),
     ] = None
     output_prefix: Annotated[
         str | None, typer.Option("--output-prefix", "-o", help="A prefix for a dated file name.")
@@ -322,3 +358,33 @@ class CopyOutput:
         from rostools.cli.bag.shared import renames
 
         return renames(self.rename, self.rename_type)
+
+
+@options_record
+@dataclass
+class Buffering:
+    """What bag snapshot keeps in memory, and what its own triggers write."""
+
+    duration: Annotated[
+        str, typer.Option("--duration", "-d", help="The time the buffer spans: 30, 30s, 5m, 2h.")
+    ] = "30"
+    size: Annotated[
+        int, typer.Option("--size", help="Memory for the buffer, all topics together, in MB.")
+    ] = 256
+    topic_size: Annotated[
+        int | None, typer.Option("--topic-size", help="Memory for each topic's buffer, in MB.")
+    ] = None
+    before: Annotated[
+        str | None,
+        typer.Option("--before", help="What ~trigger, SIGUSR1 and s write from the buffer."),
+    ] = None
+    after: Annotated[
+        str | None,
+        typer.Option("--after", help="...and how long they go on writing live messages."),
+    ] = None
+    clear_on_write: Annotated[
+        bool, typer.Option("--clear-on-write", help="Empty the buffer of what a trigger takes.")
+    ] = False
+    max_writes: Annotated[
+        int, typer.Option("--max-writes", help="Files written at once; more triggers refused.")
+    ] = 4

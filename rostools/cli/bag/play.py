@@ -3,9 +3,7 @@
 from __future__ import annotations
 
 import contextlib
-import os
 import sys
-from collections.abc import Iterator
 from functools import partial
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated
@@ -14,6 +12,7 @@ import typer
 
 from rostools.bag.model import counted
 from rostools.cli import output
+from rostools.cli.bag.keys import keyboard
 from rostools.cli.bag.options import Playback
 from rostools.cli.bag.shared import check_read
 from rostools.cli.common import FormatOpt, node_session, output_format
@@ -25,7 +24,7 @@ if TYPE_CHECKING:
     import asyncio
 
     from rostools.bag.base import BagReader
-    from rostools.bag.play import Player, PlayOptions, Status
+    from rostools.bag.play import PlayOptions, Status
     from rostools.node.node import Node
 
 
@@ -54,36 +53,6 @@ def status_line(status: Status) -> str:
         f" [{status.state.value}]  Bag Time: {status.bag_time / 1e9:13.6f}   "
         f"Duration: {status.elapsed:.6f} / {status.total:.6f}{tail}\r"
     )
-
-
-@contextlib.contextmanager
-def keyboard(player: Player, loop: asyncio.AbstractEventLoop) -> Iterator[bool]:
-    """Space, ``s`` and ``t`` from a terminal on stdin, read without echo; False if not one."""
-    if not sys.stdin.isatty():
-        yield False
-        return
-    import termios
-    import tty
-
-    fd = sys.stdin.fileno()
-    saved = termios.tcgetattr(fd)
-
-    def on_key() -> None:
-        for key in os.read(fd, 32).decode(errors="replace"):
-            if key == " ":
-                player.toggle_pause()
-            elif key == "s":
-                player.step()
-            elif key == "t":
-                player.toggle_pause_topics()
-
-    tty.setcbreak(fd)
-    loop.add_reader(fd, on_key)
-    try:
-        yield True
-    finally:
-        loop.remove_reader(fd)
-        termios.tcsetattr(fd, termios.TCSADRAIN, saved)
 
 
 @command()
@@ -148,8 +117,9 @@ async def _play(
         player.measure_topics()
         for path in shown:
             sys.stderr.write(f"Opening {one_line(path)}\n")
-    with keyboard(player, asyncio.get_running_loop()) as keys:
-        if shown is not None and keys:
+    keys = {" ": player.toggle_pause, "s": player.step, "t": player.toggle_pause_topics}
+    with keyboard(keys, asyncio.get_running_loop()) as keys_read:
+        if shown is not None and keys_read:
             sys.stderr.write("Hit space to toggle paused, or 's' to step.\n")
             if opts.pause_topics:
                 sys.stderr.write("Hit 't' to toggle pausing on --pause-topics.\n")

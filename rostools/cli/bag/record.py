@@ -12,11 +12,12 @@ import typer
 
 from rostools.bag.model import counted
 from rostools.cli import output
-from rostools.cli.bag.options import OutputFile, Splitting, TopicChoice
+from rostools.cli.bag.options import OutputFile, Receiving, Splitting, TopicOptions
+from rostools.cli.bag.shared import human_size
 from rostools.cli.common import FormatOpt, node_session, output_format
 from rostools.cli.declare import command
 from rostools.cli.output import Format, check_writable, render
-from rostools.cli.units import parse_duration, parse_size
+from rostools.cli.units import parse_duration
 from rostools.errors import DataLossError, UsageError, one_line
 
 if TYPE_CHECKING:
@@ -24,14 +25,6 @@ if TYPE_CHECKING:
 
     from rostools.bag.record import Recorder, RecordOptions
     from rostools.node.node import Node
-
-
-def _size(n: float) -> str:
-    for unit in ("B", "KB", "MB", "GB"):
-        if abs(n) < 1024 or unit == "GB":
-            return f"{n:.0f} {unit}" if unit == "B" else f"{n:.1f} {unit}"
-        n /= 1024
-    return f"{n:.1f} TB"
 
 
 def summary_data(rec: Recorder) -> dict[str, Any]:
@@ -51,7 +44,7 @@ def summary_data(rec: Recorder) -> dict[str, Any]:
 def summary_text(data: dict[str, Any]) -> str:
     """The end-of-recording summary for people."""
     lines = [
-        f"recorded {counted(data['messages'], 'message')} ({_size(data['bytes'])}) on "
+        f"recorded {counted(data['messages'], 'message')} ({human_size(data['bytes'])}) on "
         f"{counted(len(data['topics']), 'topic')} into "
         f"{', '.join(data['files']) or 'no file'}"
     ]
@@ -117,8 +110,8 @@ class LiveTable:
         size = path.stat().st_size if path is not None and path.exists() else 0
         free = shutil.disk_usage(path.parent if path is not None else ".").free
         title = (
-            f"recording {path.name if path else '…'}: {_size(size)} written, "
-            f"{_size(free)} free, {now - rec.started:.0f} s"
+            f"recording {path.name if path else '…'}: {human_size(size)} written, "
+            f"{human_size(free)} free, {now - rec.started:.0f} s"
         )
         table = Table(title=title, title_justify="left")
         for col in ("topic", "type", "pubs", "recorded", "rate", "bandwidth", "drops"):
@@ -130,7 +123,9 @@ class LiveTable:
             kind = escape(one_line(s.type)) if s.type else "[dim]no publisher yet[/]"
             pubs = str(self.pubs.get(topic, 0))
             name = escape(one_line(topic))
-            table.add_row(name, kind, pubs, str(s.written), f"{hz:.1f} Hz", f"{_size(bw)}/s", drops)
+            table.add_row(
+                name, kind, pubs, str(s.written), f"{hz:.1f} Hz", f"{human_size(bw)}/s", drops
+            )
         return table
 
 
@@ -138,7 +133,7 @@ class LiveTable:
 def record(
     ctx: typer.Context,
     topics: Annotated[list[str] | None, typer.Argument(help="Topics (regexes with -e).")] = None,
-    choice: TopicChoice = TopicChoice(),  # noqa: B008 - a record of options, never changed
+    choice: TopicOptions = TopicOptions(),  # noqa: B008 - a record of options, never changed
     out: OutputFile = OutputFile(),  # noqa: B008
     splitting: Splitting = Splitting(),  # noqa: B008
     limit: Annotated[
@@ -152,15 +147,7 @@ def record(
             help="Memory for messages waiting to be written, in MB; 0 for unlimited.",
         ),
     ] = 256,
-    tcp_nodelay: Annotated[
-        bool, typer.Option("--tcpnodelay", help="Ask publishers for TCP_NODELAY.")
-    ] = False,
-    min_space: Annotated[
-        str,
-        typer.Option(
-            "--min-space", "-L", help="Stop when the disk has less free: 1G, 500M, 64K, 0 (off)."
-        ),
-    ] = "100M",
+    receiving: Receiving = Receiving(),  # noqa: B008
     publish: Annotated[
         bool,
         typer.Option("--publish", "-p", help="Announce each new file on begin_write (latched)."),
@@ -171,8 +158,8 @@ def record(
     """Record topics to a .bag or MCAP file (rosbag record); exit 6 on drops or a failed write."""
     opts = _record_options(topics or [], choice, out, splitting, limit)
     opts.buffer_bytes = max(buffer, 0) * 1024 * 1024
-    opts.tcp_nodelay, opts.publish = tcp_nodelay, publish
-    opts.min_space = parse_size(min_space, "-L")
+    opts.tcp_nodelay, opts.publish = receiving.tcp_nodelay, publish
+    opts.min_space = receiving.min_space_bytes()
     check_writable(opts.base)  # before subscribing
     fmt = output_format(ctx, fmt)
     live = not quiet and fmt is Format.text and sys.stderr.isatty()
@@ -191,7 +178,11 @@ def record(
 
 
 def _record_options(
-    topics: list[str], choice: TopicChoice, out: OutputFile, splitting: Splitting, limit: int | None
+    topics: list[str],
+    choice: TopicOptions,
+    out: OutputFile,
+    splitting: Splitting,
+    limit: int | None,
 ) -> RecordOptions:
     """The recorder's options from the command line's, checked as rosbag record checks them."""
     from rostools.bag.record import RecordOptions
@@ -204,9 +195,7 @@ def _record_options(
     path, kind = out.path()
     size, duration = splitting.size, splitting.duration
     opts = RecordOptions(
-        topics=topics, all=choice.all_, regex=choice.regex, exclude=choice.exclude or [],
-        node=choice.node, types=choice.types or [], exclude_types=choice.exclude_types or [],
-        base=path, format=kind, compression=out.chunk_compression(kind),
+        **choice.choice(topics), base=path, format=kind, compression=out.chunk_compression(kind),
         chunk_size=out.chunk_bytes(), split=splitting.split,
         size=size * 1024 * 1024 if size else None,
         duration=parse_duration(duration, "--duration") if duration else None,

@@ -169,3 +169,12 @@ def recovered_name(src: Path) -> Path:
         src = final
     suffix = src.suffix or ".bag"
     return src.with_name(src.name.removesuffix(suffix) + ".recovered" + suffix)
+
+
+def human_size(size: float) -> str:
+    """rosbag's 1024-based sizes, always in KB or more."""
+    for suffix in ("KB", "MB", "GB", "TB", "PB", "EB", "ZB", "YB"):
+        size /= 1024.0
+        if size < 1024.0:
+            return f"{size:.1f} {suffix}"
+    return "-"

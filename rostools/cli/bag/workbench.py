@@ -98,8 +98,7 @@ def split(
 ) -> None:
     """Split a bag into parts by duration, size, message count or times (record --split's names)."""
     from rostools.bag.access import bag_info
-    from rostools.bag.split import Cut
-    from rostools.bag.split import split as run_split
+    from rostools.bag.split import Cut, split as run_split
     from rostools.cli.units import parse_duration
 
     times: list[int] = []

@@ -22,8 +22,7 @@ if TYPE_CHECKING:
 
 
 from rostools.cli.node.options import TimeoutOpt
-from rostools.cli.node.shared import graph as node_graph
-from rostools.cli.node.shared import resolve_node, warn, worst
+from rostools.cli.node.shared import graph as node_graph, resolve_node, warn, worst
 from rostools.rosgraph.masterapi import NODE_TIMEOUT
 
 

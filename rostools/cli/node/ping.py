@@ -26,8 +26,7 @@ if TYPE_CHECKING:
 
 
 from rostools.cli.node.options import TimeoutOpt
-from rostools.cli.node.shared import failure_class, resolve_node, warn
-from rostools.cli.node.shared import graph as node_graph
+from rostools.cli.node.shared import failure_class, graph as node_graph, resolve_node, warn
 from rostools.rosgraph.masterapi import NODE_TIMEOUT
 
 #: Seconds between two pings of one node, as rosnode.

@@ -10,8 +10,7 @@ from pathlib import Path
 
 import pytest
 
-from rostools.bag import mcap_format
-from rostools.bag import rosbag1_format as fmt
+from rostools.bag import mcap_format, rosbag1_format as fmt
 from rostools.bag.access import bag_info, open_bag, open_writer
 from rostools.bag.mcap_reader import McapReader
 from rostools.bag.ops import convert

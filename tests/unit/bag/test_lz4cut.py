@@ -6,8 +6,7 @@ import random
 
 import lz4.frame
 import pytest
-from hypothesis import given, settings
-from hypothesis import strategies as st
+from hypothesis import given, settings, strategies as st
 
 from rostools.bag import lz4cut
 from rostools.bag.rosbag1_format import lz4_compress

@@ -2,8 +2,7 @@
 
 from __future__ import annotations
 
-from hypothesis import given
-from hypothesis import strategies as st
+from hypothesis import given, strategies as st
 
 from rostools.bag.model import Connection
 from rostools.bag.ordering import Block, Entry, merge, ordered

@@ -1,0 +1,276 @@
+"""What every live recorder does: choose topics, subscribe as they appear, keep time.
+
+``bag record`` and ``bag snapshot`` differ only in what they do with the frames they receive
+(queue them for a writer, or keep them in a rolling buffer). Both are a ``Follower``: it
+subscribes to the topics the options select (names, regexes, types, what a node subscribes
+to, everything), asks the master for new ones every ``poll_period``, stamps frames in ROS
+time (``/clock`` under ``/use_sim_time``, as rosbag) and checks the free disk.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import fnmatch
+import logging
+import re
+import shutil
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from rostools.errors import RostoolsError, UsageError
+from rostools.node.clock import RosClock
+from rostools.node.connection import Frame, InboundConnection
+from rostools.node.node import Node
+
+log = logging.getLogger(__name__)
+
+#: How often the master is asked for new topics (rosbag record: 1 s).
+POLL_PERIOD = 1.0
+#: How often ``run`` checks its limits and calls its ``tick`` (the live table).
+TICK_PERIOD = 0.25
+
+FramesCallback = Callable[[list[Frame], InboundConnection, float], None]
+
+
+@dataclass
+class TopicStats:
+    """What was received on one topic."""
+
+    type: str = ""
+    messages: int = 0  # received
+    bytes: int = 0
+    drops: int = 0
+    written: int = 0  # less than received by the drops and what came after a size/time limit
+
+
+@dataclass
+class TopicChoice:
+    """Which topics to follow: rosbag record's ``TOPICS``, ``-a``, ``-e``, ``-x``, ``--node``."""
+
+    topics: list[str] = field(default_factory=list)
+    all: bool = False
+    regex: bool = False
+    exclude: list[str] = field(default_factory=list)  # regexes; a topic matching any is left out
+    types: list[str] = field(default_factory=list)  # globs: topics of these types too
+    exclude_types: list[str] = field(default_factory=list)  # globs: never these types
+    node: str | None = None
+
+
+@dataclass
+class LiveOptions(TopicChoice):
+    """What every live recorder takes: the topics, the files' name and format, the disk."""
+
+    base: Path = Path("recording.bag")  # the file name (before .active and split numbers)
+    format: str = "bag"
+    compression: str | None = None
+    chunk_size: int | None = None
+    tcp_nodelay: bool = False
+    min_space: int = 100 * 1024**2  # stop when the disk has less free (bytes; 0: never)
+
+
+def free_bytes(folder: Path) -> int:
+    """Free space on the disk that holds ``folder``."""
+    return shutil.disk_usage(folder).free
+
+
+class Selection:
+    """Which topics to record: names, regexes (full match, as rosbag), types, all, minus excludes.
+
+    Types are globs (``sensor_msgs/*``), as rosbag2's ``--topic-types``; a topic whose type is
+    not known yet waits for the next poll when types decide.
+    """
+
+    def __init__(self, opts: TopicChoice) -> None:
+        self.types = opts.types
+        self.exclude_types = opts.exclude_types
+        self.names = set(opts.topics) if not opts.regex else set()
+        try:
+            self.patterns = [re.compile(p) for p in opts.topics] if opts.regex else []
+            self.exclude = [re.compile(x) for x in opts.exclude]
+        except re.error as err:
+            raise UsageError(f"bad regular expression: {err}") from err
+        # --node records what the node subscribes to; -x alone means everything but that
+        self.everything = (
+            opts.all or opts.node is not None or (bool(opts.exclude) and not opts.topics)
+        )
+
+    @property
+    def by_type(self) -> bool:
+        """Whether topic types take part in the choice."""
+        return bool(self.types or self.exclude_types)
+
+    def wants(self, topic: str, topic_type: str | None = None) -> bool:
+        """Whether to record ``topic`` (of ``topic_type``, if known)."""
+        if any(x.fullmatch(topic) for x in self.exclude):
+            return False
+        if self.exclude_types and (topic_type is None or _matches(topic_type, self.exclude_types)):
+            return False
+        if self.everything or topic in self.names or any(p.fullmatch(topic) for p in self.patterns):
+            return True
+        return topic_type is not None and _matches(topic_type, self.types)
+
+
+def _matches(topic_type: str, globs: list[str]) -> bool:
+    return any(fnmatch.fnmatchcase(topic_type, g) for g in globs)
+
+
+class Follower:
+    """Subscribes to the chosen topics of a live graph; a subclass says what frames become."""
+
+    def __init__(self, node: Node, opts: LiveOptions) -> None:
+        if not opts.regex:
+            opts.topics = [node.resolve(t) for t in opts.topics]
+        self.node = node
+        self.live_opts = opts
+        self.selection = Selection(opts)
+        self.stats: dict[str, TopicStats] = {}
+        self.started = time.monotonic()
+        #: Message times: ROS time, so /clock under /use_sim_time (as rosbag record).
+        self.clock = RosClock()
+        self.start_ns = 0
+        self.poll_period = POLL_PERIOD
+        #: Called with each topic as it is subscribed to (rosbag's "Subscribing to" lines).
+        self.on_subscribe: Callable[[str], None] | None = None
+        self._space_warned = False
+
+    # what a subclass provides -------------------------------------------------------------
+
+    def _on_frames(self, topic: str) -> FramesCallback:
+        """The callback that takes the frames of ``topic``."""
+        raise NotImplementedError
+
+    async def _begin(self) -> None:
+        """Subscribed and on time: start whatever writes."""
+
+    def _finished(self) -> bool:
+        """Whether to stop before ``stop`` is set."""
+        return False
+
+    async def _end(self) -> None:
+        """Unsubscribed: finish writing."""
+
+    # the run --------------------------------------------------------------------------------
+
+    async def run(self, stop: asyncio.Event, tick: Callable[[Any], None] | None = None) -> None:
+        """Follow until ``stop`` or ``_finished``; ``tick`` is called four times a second."""
+        from rostools.node.session import first
+
+        self.check_disk(started=False)
+        await self.clock.start(self.node)  # no master: say so (no file) rather than wait forever
+        if not await self._clock_valid(stop):
+            return
+        self.start_ns = self.clock.now()
+        await self._poll()
+        await self._begin()
+        next_poll = time.monotonic() + self.poll_period
+        try:
+            while not stop.is_set() and not self._finished():
+                if time.monotonic() >= next_poll:
+                    try:
+                        await self._poll()
+                    except RostoolsError as err:  # the node says once that the master is gone
+                        log.debug("recording goes on; the master did not answer: %s", err)
+                    next_poll = time.monotonic() + self.poll_period
+                if tick is not None:
+                    tick(self)
+                await first(stop.wait(), timeout=TICK_PERIOD)
+        finally:
+            for sub in list(self.node.subscribers.values()):
+                await sub.close()
+            await self._end()
+
+    def check_disk(self, started: bool = True) -> None:
+        """Raise ``RostoolsError`` when the output disk has less than ``min_space`` free."""
+        need = self.live_opts.min_space
+        if not need:
+            return
+        folder = self.live_opts.base.parent.resolve()
+        free = free_bytes(folder)
+        if free < need:
+            outcome = "recording stopped; what was written is kept" if started else "not recording"
+            raise RostoolsError(
+                f"less than {gib(need)} free on the disk of {folder} ({gib(free)}): {outcome}",
+                hint="free some space, or lower the limit with -L/--min-space",
+            )
+        if free < 5 * need and not self._space_warned:
+            self._space_warned = True
+            log.warning("less than 5 x %s free on the disk of %s", gib(need), folder)
+
+    def publishers(self, topic: str) -> int:
+        """How many publishers ``topic`` is connected to now."""
+        sub = self.node.subscribers.get(topic)
+        return len(sub.connections) if sub is not None else 0
+
+    async def _poll(self) -> None:
+        """Subscribe to every wanted topic the master knows of (new ones as they appear)."""
+        if self.live_opts.node is not None:
+            candidates = await self._node_topics(self.live_opts.node)
+        elif self.selection.everything or self.selection.patterns or self.selection.types:
+            pubs, _, _ = await self.node.master.system_state()
+            candidates = [topic for topic, _ in pubs]
+        else:
+            candidates = sorted(self.selection.names)  # subscribed before anyone publishes
+        types: dict[str, str] = {}
+        if self.selection.by_type:
+            types = await self.node.master.topic_types()
+        for topic in candidates:
+            if not self.selection.wants(topic, types.get(topic)):
+                continue
+            if topic == "/clock" and self.clock.sim:  # already subscribed, for the time
+                if self.clock.forward is None:
+                    self._say_subscribing(topic)
+                    self.clock.forward = self._on_frames(topic)
+            elif topic not in self.node.subscribers:
+                self._say_subscribing(topic)
+                await self.node.subscribe(
+                    topic, self._on_frames(topic), tcp_nodelay=self.live_opts.tcp_nodelay
+                )
+        if any(not s.type for s in self.stats.values()):
+            # a topic with no message yet shows the type the master knows (it showed "?")
+            known = types or await self.node.master.topic_types()
+            for topic, stats in self.stats.items():
+                if not stats.type and known.get(topic, "*") != "*":
+                    stats.type = known[topic]
+
+    def _say_subscribing(self, topic: str) -> None:
+        if self.on_subscribe is not None:
+            self.on_subscribe(topic)
+
+    async def _node_topics(self, name: str) -> list[str]:
+        """The topics node ``name`` subscribes to (rosbag record --node)."""
+        from rostools.node.mastercalls import peer_value
+
+        try:
+            uri = await self.node.master.lookup_node(self.node.resolve(name))
+            subs = await peer_value(uri, self.node.name, "getSubscriptions")
+        except (RostoolsError, OSError) as err:
+            log.debug("node %s: %s", name, err)
+            return []
+        return [topic for topic, _ in subs]
+
+    def _elapsed(self) -> float:
+        return (self.clock.now() - self.start_ns) / 1e9
+
+    async def _clock_valid(self, stop: asyncio.Event) -> bool:
+        """Under sim time, wait for the first /clock (False if stopped first), as rosbag."""
+        from rostools.node.session import first
+
+        warn_at = time.monotonic() + 2.0
+        while not self.clock.valid:
+            if await first(stop.wait(), timeout=0.05) is not None:
+                return False
+            if time.monotonic() >= warn_at and not self.clock.valid:
+                warn_at += 2.0
+                log.warning("/use_sim_time is set and no clock is published; still waiting")
+        return True
+
+
+def gib(size: int) -> str:
+    """A byte count as rosbag writes -L limits: ``1G``, ``500M``, ``64K``."""
+    for unit, scale in (("G", 1024**3), ("M", 1024**2), ("K", 1024)):
+        if size >= scale:
+            return f"{size / scale:.1f}".removesuffix(".0") + unit
+    return f"{size}B"

@@ -1,0 +1,264 @@
+"""``rostools bag snapshot`` (a dash cam: the last minutes in memory) and ``bag trigger``.
+
+``snapshot`` buffers topics and writes a file when triggered: ``trigger_snapshot``
+(rosbag_snapshot's service), ``~trigger``, SIGUSR1, or the ``s`` key. ``trigger`` is the client
+of ``trigger_snapshot``: it waits until the file is complete and prints its name.
+"""
+
+from __future__ import annotations
+
+import signal
+import sys
+from functools import partial
+from pathlib import Path
+from typing import TYPE_CHECKING, Annotated, Any
+
+import typer
+
+from rostools.bag.model import counted
+from rostools.cli.bag.options import Buffering, OutputFile, Receiving, TopicOptions
+from rostools.cli.common import FormatOpt, node_session, output_format
+from rostools.cli.declare import command
+from rostools.cli.output import Format, check_writable, emit, write
+from rostools.cli.units import parse_duration
+from rostools.errors import DataLossError, RostoolsError, UsageError, one_line
+
+if TYPE_CHECKING:
+    import asyncio
+
+    from rostools.bag.snapshot import SnapshotOptions, Snapshotter
+    from rostools.bag.snapshot_job import SnapshotJob
+    from rostools.bag.snapshot_srv import SnapshotRequest
+    from rostools.node.node import Node
+
+MB = 1024 * 1024
+
+
+@command()
+def snapshot(
+    ctx: typer.Context,
+    topics: Annotated[list[str] | None, typer.Argument(help="Topics (regexes with -e).")] = None,
+    choice: TopicOptions = TopicOptions(),  # noqa: B008 - a record of options, never changed
+    buffering: Buffering = Buffering(),  # noqa: B008
+    out: OutputFile = OutputFile(),  # noqa: B008
+    receiving: Receiving = Receiving(),  # noqa: B008
+    quiet: Annotated[bool, typer.Option("--quiet", "-q", help="No live table or lines.")] = False,
+    fmt: FormatOpt = None,
+) -> None:
+    """Keep the last --duration of topics in memory; write them to a bag when triggered.
+
+    Triggers: the trigger_snapshot service (rosbag_snapshot's; 'rostools bag trigger'),
+    ~trigger (std_srvs/Trigger), SIGUSR1, and the s key. ~pause and ~resume (and the p and r
+    keys) stop and restart buffering. Exit 6 if a file could not be written whole.
+    """
+    opts = snapshot_options(topics or [], choice, buffering, out, receiving)
+    check_writable(opts.base)
+    fmt = output_format(ctx, fmt)
+    snap = node_session(ctx, partial(_buffer, opts=opts, out=fmt, quiet=quiet), "rostools_snapshot")
+    from rostools.cli.bag.snapview import stopped_data, stopped_text
+
+    data = stopped_data(snap)
+    if fmt is not Format.text:
+        write(fmt, {"event": "stopped", **data})
+    elif not quiet:
+        _line(stopped_text(data))
+    if snap.failed:
+        names = ", ".join(one_line(job.path) for job in snap.finished if job.error is not None)
+        raise DataLossError(f"{counted(snap.failed, 'snapshot')} not written whole: {names}")
+
+
+def snapshot_options(
+    topics: list[str],
+    choice: TopicOptions,
+    buffering: Buffering,
+    out: OutputFile,
+    receiving: Receiving,
+) -> SnapshotOptions:
+    """The library's options; ``UsageError`` for values that do not go together.
+
+    Unlike record, ``-x`` alone buffers every topic but those (as rosbag_snapshot's exclude).
+    """
+    from rostools.bag.snapshot import SnapshotOptions
+
+    if not (topics or choice.all_ or choice.node or choice.exclude or choice.types):
+        raise UsageError("give topics to buffer, or -a, -e REGEX, --topic-types or --node NAME")
+    if choice.all_ and topics:
+        raise UsageError("-a buffers every topic; do not also name topics")
+    for value, flag in ((buffering.size, "--size"), (buffering.topic_size, "--topic-size")):
+        if value is not None and value <= 0:
+            raise UsageError(f"{flag} must be positive")
+    path, kind = out.path()
+    prefix = ""
+    if out.output_name is None:  # the dated name is made anew for each file
+        given = Path(out.output_prefix or "")
+        prefix = given.stem if given.suffix.lower() in (".bag", ".mcap") else given.name
+        path = path.with_name("snapshot." + kind)  # only its folder counts
+    before, after = buffering.before, buffering.after
+    opts = SnapshotOptions(
+        **choice.choice(topics), base=path, format=kind,
+        name=path.name if out.output_name is not None else None, prefix=prefix,
+        compression=out.chunk_compression(kind), chunk_size=out.chunk_bytes(),
+        tcp_nodelay=receiving.tcp_nodelay, min_space=receiving.min_space_bytes(),
+        duration=parse_duration(buffering.duration, "--duration"), size=buffering.size * MB,
+        topic_size=(buffering.topic_size or 0) * MB, clear_on_write=buffering.clear_on_write,
+        max_writes=buffering.max_writes,
+        before=parse_duration(before, "--before") if before else None,
+        after=parse_duration(after, "--after") if after else 0.0,
+    )  # fmt: skip
+    opts.check()
+    return opts
+
+
+async def _buffer(
+    node: Node, stop: asyncio.Event, *, opts: SnapshotOptions, out: Format, quiet: bool
+) -> Snapshotter:
+    """Run the snapshot recorder with its triggers: a signal, keys, and what it shows."""
+    import asyncio
+
+    from rostools.bag.snapshot import Snapshotter
+    from rostools.cli.bag.keys import keyboard
+    from rostools.cli.bag.snapview import SnapshotTable
+
+    snap = Snapshotter(node, opts)
+    snap.check_disk(started=False)
+    live = not quiet and out is Format.text and sys.stderr.isatty()
+    table = SnapshotTable() if live else None
+    snap.on_started = lambda job: _started(job, out, quiet or live)
+    snap.on_written = lambda job: _written(job, out, quiet, table)
+
+    def local() -> None:
+        try:
+            snap.trigger(snap.local_request(), remote=False)
+        except RostoolsError as err:
+            _line(f"no snapshot: {err}")
+
+    loop = asyncio.get_running_loop()
+    keys = {"s": local, "p": lambda: snap.set_paused(True), "r": lambda: snap.set_paused(False)}
+    loop.add_signal_handler(signal.SIGUSR1, local)
+    try:
+        with keyboard(keys if live else {}, loop):
+            if table is None:
+                if not quiet and out is Format.text:
+                    snap.on_subscribe = lambda topic: _line(f"Buffering {one_line(topic)}")
+                await snap.run(stop)
+                return snap
+            with table:
+                await snap.run(stop, table.tick)
+                table.tick(snap, force=True)
+    finally:
+        loop.remove_signal_handler(signal.SIGUSR1)
+    return snap
+
+
+def _line(text: str) -> None:
+    sys.stderr.write(one_line(text) + "\n")
+    sys.stderr.flush()
+
+
+def _started(job: SnapshotJob, out: Format, silent: bool) -> None:
+    if out is not Format.text:
+        write(out, {"event": "writing", "name": str(job.path)})
+    elif not silent:
+        _line(f"writing {job.path}")
+
+
+def _written(job: SnapshotJob, out: Format, quiet: bool, table: Any) -> None:
+    """A file is complete: a line (or an NDJSON record); a failure is one line, and goes on."""
+    from rostools.bag.bagfile import write_failure
+    from rostools.cli import report
+    from rostools.cli.bag.snapview import written_text
+
+    summary = job.summary()
+    if job.error is not None:
+        report(write_failure(job.error, "that snapshot stopped; buffering goes on"), False)
+    if out is not Format.text:
+        write(out, {"event": "written", **summary})
+    elif table is not None:
+        table.written(job)
+    elif not quiet and job.error is None:
+        _line(written_text(summary))
+
+
+@command()
+def trigger(
+    ctx: typer.Context,
+    node: Annotated[
+        str | None,
+        typer.Argument(help="The snapshot node (default: trigger_snapshot in this namespace)."),
+    ] = None,
+    output_name_: Annotated[
+        str | None,
+        typer.Option("--output-name", "-O", help="The file's name in the recorder's folder."),
+    ] = None,
+    topics: Annotated[
+        list[str] | None, typer.Option("--topics", help="Only these topics (repeatable, or a,b).")
+    ] = None,
+    before: Annotated[
+        str | None, typer.Option("--before", help="From the buffer: 20, 20s, 1m (default all).")
+    ] = None,
+    after: Annotated[
+        str | None, typer.Option("--after", help="Then live messages for this long: 10s.")
+    ] = None,
+    continue_: Annotated[
+        bool,
+        typer.Option("--continue", help="Go on writing live messages until Ctrl-C here."),
+    ] = False,
+    timeout: Annotated[
+        str | None, typer.Option("--timeout", help="Give up waiting for the file (exit 5).")
+    ] = None,
+    fmt: FormatOpt = None,
+) -> None:
+    """Ask a snapshot recorder for a file; print its name once it is complete.
+
+    The recorder is 'rostools bag snapshot' or rosbag_snapshot. With --format json: the file's
+    name, message count and time span.
+    """
+    if continue_ and after:
+        raise UsageError("--continue writes until stopped; it takes no --after")
+    limit = parse_duration(timeout, "--timeout") if timeout else None
+    spans = (
+        parse_duration(before, "--before") if before else None,
+        parse_duration(after, "--after") if after else 0.0,
+    )
+    chosen = [t for item in topics or [] for t in item.split(",") if t]
+    out = output_format(ctx, fmt)
+
+    async def main(n: Node, stop: asyncio.Event) -> dict[str, Any]:
+        import asyncio
+
+        from rostools.bag.snapshot_client import request_snapshot
+
+        request = await _window(n, output_name_ or "", chosen, spans, continue_)
+        say = _say_continuing if continue_ and out is Format.text else None
+        waiting = request_snapshot(n, node, request, stop, say)
+        try:
+            return await asyncio.wait_for(waiting, limit)
+        except asyncio.TimeoutError:
+            from rostools.errors import TimeoutExpired
+
+            raise TimeoutExpired(f"the snapshot was not complete within {timeout}") from None
+
+    summary = node_session(ctx, main, "rostools_trigger")
+    emit(out, summary, lambda d: one_line(d["name"]))
+    if summary.get("error"):
+        raise DataLossError(f"{summary['name']}: {summary['error']}")
+
+
+async def _window(
+    node: Node, name: str, topics: list[str], spans: tuple[float | None, float], forever: bool
+) -> SnapshotRequest:
+    """The request: the window in ROS time as this node sees it (``/clock`` under sim time)."""
+    from rostools.bag.snapshot_srv import FOREVER_SECS, SnapshotRequest
+    from rostools.node.clock import RosClock
+
+    clock = RosClock()
+    await clock.start(node)
+    now = clock.now()
+    before, after = spans
+    start = max(now - round(before * 1e9), 1) if before is not None else 0
+    stop = FOREVER_SECS * 1_000_000_000 if forever else (now + round(after * 1e9) if after else 0)
+    return SnapshotRequest(name, topics, start, stop)
+
+
+def _say_continuing(name: str) -> None:
+    _line(f"writing {name} until Ctrl-C")

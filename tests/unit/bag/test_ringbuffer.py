@@ -1,0 +1,88 @@
+"""``bag snapshot``'s rolling buffer: oldest out first, within its limits, latched kept."""
+
+from __future__ import annotations
+
+import tracemalloc
+
+from rostools.bag.record import ENTRY_OVERHEAD
+from rostools.bag.ringbuffer import ConnInfo, RingBuffer
+
+NS = 1_000_000_000
+A = ConnInfo("/a", {"callerid": "/pa", "type": "std_msgs/String"})
+B = ConnInfo("/b", {"callerid": "/pb", "type": "std_msgs/String"})
+STATIC = ConnInfo("/tf_static", {"callerid": "/ps", "latching": "1"})
+
+
+def frame(text: str) -> bytes:
+    return len(text).to_bytes(4, "little") + text.encode()
+
+
+def texts(entries: object) -> list[str]:
+    return [bytes(d[4:]).decode() for _, _, d in entries]  # type: ignore[attr-defined]
+
+
+def test_the_duration_and_the_size_evict_the_oldest_of_all_topics() -> None:
+    ring = RingBuffer(duration_ns=10 * NS, size=10 * (8 + ENTRY_OVERHEAD))
+    for i in range(12):  # 8-byte messages, alternating topics, one a second
+        conn = A if i % 2 == 0 else B
+        ring.add(ring.topic(conn.topic), conn, i * NS, [frame(f"m{i:03}")])
+    held = ring.copy()
+    assert texts(held.messages(0, 100 * NS)) == [f"m{i:03}" for i in range(2, 12)]  # size: 10
+    assert ring.topics["/a"].evicted == ring.topics["/b"].evicted == 1
+    ring.evict_old(15 * NS)  # the duration: nothing older than 5 s
+    assert texts(ring.copy().messages(0, 100 * NS)) == [f"m{i:03}" for i in range(5, 12)]
+    assert ring.bytes == 7 * (8 + ENTRY_OVERHEAD)
+
+
+def test_a_topic_limit_evicts_only_that_topic_and_the_order_holds() -> None:
+    ring = RingBuffer(duration_ns=100 * NS, size=1 << 30, topic_size=3 * (8 + ENTRY_OVERHEAD))
+    for i in range(20):  # /a floods, /b trickles: each keeps its last 3
+        conn = B if i % 5 == 0 else A
+        ring.add(ring.topic(conn.topic), conn, i * NS, [frame(f"m{i:03}")])
+    got = texts(ring.copy().messages(0, 100 * NS))
+    assert got == ["m005", "m010", "m015", "m017", "m018", "m019"]
+    assert (ring.topics["/a"].evicted, ring.topics["/b"].evicted) == (13, 1)
+    # the slots /a let go are let go from the order as they reach its front
+    ring.size = 4 * (8 + ENTRY_OVERHEAD)
+    ring.add(ring.topic("/b"), B, 20 * NS, [frame("m020")])
+    assert texts(ring.copy().messages(0, 100 * NS)) == ["m017", "m018", "m019", "m020"]
+    assert len(ring.order) == 4 and ring.bytes == 4 * (8 + ENTRY_OVERHEAD)
+
+
+def test_a_copy_keeps_its_window_while_the_buffer_goes_on_evicting() -> None:
+    ring = RingBuffer(duration_ns=100 * NS, size=5 * (8 + ENTRY_OVERHEAD))
+    for i in range(5):
+        ring.add(ring.topic("/a"), A, i * NS, [frame(f"m{i:03}")])
+    held = ring.copy({"/a"})
+    for i in range(5, 10):  # every message the copy holds is evicted from the buffer
+        ring.add(ring.topic("/a"), A, i * NS, [frame(f"m{i:03}")])
+    assert texts(held.messages(1 * NS, 3 * NS)) == ["m001", "m002", "m003"]
+    ring.clear({"/a"})  # --clear-on-write
+    assert not ring.copy().any_between(0, 100 * NS) and ring.bytes == 5 * ENTRY_OVERHEAD
+
+
+def test_the_last_latched_message_is_kept_and_stamped_at_the_window() -> None:
+    ring = RingBuffer(duration_ns=5 * NS, size=1 << 30)
+    ring.add(ring.topic("/tf_static"), STATIC, 1 * NS, [frame("old"), frame("last")])
+    for i in range(2, 30):
+        ring.add(ring.topic("/a"), A, i * NS, [frame(f"m{i:03}")])
+    assert not ring.topics["/tf_static"].entries  # the duration evicted it
+    held = ring.copy()
+    assert [(t, bytes(d[4:])) for t, _, d in held.latched_before(27 * NS)] == [(27 * NS, b"last")]
+    assert texts(held.messages(27 * NS, 29 * NS)) == ["m027", "m028", "m029"]
+    assert ring.held == ring.bytes + len(frame("last")) + ENTRY_OVERHEAD
+
+
+def test_small_messages_hold_no_more_than_the_limit() -> None:
+    limit = 1024 * 1024
+    ring = RingBuffer(duration_ns=100 * NS, size=limit)
+    tb = ring.topic("/a")
+    tracemalloc.start()
+    try:
+        for i in range(400):  # 200,000 16-byte messages, in reads of 500
+            ring.add(tb, A, i, [bytes(16) for _ in range(500)])
+        held, _ = tracemalloc.get_traced_memory()
+    finally:
+        tracemalloc.stop()
+    assert held < 1.25 * limit, held
+    assert tb.evicted > 190_000

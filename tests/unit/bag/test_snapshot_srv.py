@@ -1,0 +1,67 @@
+"""``trigger_snapshot`` on the wire: rosbag_snapshot's type and md5sum, requests, names."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from types import SimpleNamespace
+from typing import Any
+
+import pytest
+
+from rostools.bag.snapshot import SnapshotOptions, Snapshotter, TriggerError, check_remote_name
+from rostools.bag.snapshot_srv import (
+    TRIGGER_SNAPSHOT,
+    TRIGGER_SNAPSHOT_TEXT,
+    SnapshotRequest,
+    decode_answer,
+    encode_answer,
+)
+from rostools.errors import InvalidDataError
+from rostools.msgs.store import PathSource, TypeStore
+
+
+def test_the_type_and_md5sum_are_rosbag_snapshots(tmp_path: Path) -> None:
+    package = tmp_path / "rosbag_snapshot_msgs"
+    (package / "srv").mkdir(parents=True)
+    (package / "package.xml").write_text("<package><name>rosbag_snapshot_msgs</name></package>")
+    (package / "srv" / "TriggerSnapshot.srv").write_text(TRIGGER_SNAPSHOT_TEXT)
+    store = TypeStore([PathSource([tmp_path])])
+    assert store.srv_md5(TRIGGER_SNAPSHOT.type) == TRIGGER_SNAPSHOT.md5sum
+    # as genmsg computes it for the .srv of ros/rosbag_snapshot (1.0.6)
+    assert TRIGGER_SNAPSHOT.md5sum == "d5f2b150730729bd0435527e829e65e2"
+
+
+def test_requests_and_answers_round_trip() -> None:
+    request = SnapshotRequest("crash.bag", ["/a", "/tf"], 1_500_000_000, 2_250_000_001)
+    assert SnapshotRequest.decode(request.encode()) == request
+    assert decode_answer(encode_answer(True, "crash.bag")) == (True, "crash.bag")
+
+
+@pytest.mark.parametrize(
+    "data",
+    [b"", b"\x05\x00\x00\x00ab", b"\x00\x00\x00\x00\xff\xff\xff\xff", b"\x01\x00\x00\x00\xff"],
+    ids=["empty", "cut string", "a list longer than the bytes", "not utf-8"],
+)
+def test_a_bad_request_is_refused_without_allocating(data: bytes) -> None:
+    with pytest.raises(InvalidDataError):
+        SnapshotRequest.decode(data)
+
+
+@pytest.mark.parametrize("name", ["../x.bag", "a/b.bag", "/tmp/x.bag", "..", "a\\b", "x\0.bag"])
+def test_a_remote_name_cannot_leave_the_folder(name: str) -> None:
+    with pytest.raises(TriggerError, match="refused the file name"):
+        check_remote_name(name)
+
+
+def test_file_names_follow_rosbag_snapshot_and_never_collide(tmp_path: Path) -> None:
+    node: Any = SimpleNamespace(resolve=lambda name: name)
+    opts = SnapshotOptions(topics=["/a"], base=tmp_path / "snapshot.bag", name="run.bag")
+    snap = Snapshotter(node, opts)
+    assert snap._file_spec("").path == tmp_path / "run.bag"
+    (tmp_path / "run.bag").touch()
+    (tmp_path / "run_1.bag.active").touch()  # being written by another recorder
+    assert snap._file_spec("").path == tmp_path / "run_2.bag"
+    given = snap._file_spec("crash.mcap")
+    assert (given.path, given.format) == (tmp_path / "crash.mcap", "mcap")
+    dated = snap._file_spec("test").path.name  # rosbag_snapshot: test -> test<date>.bag
+    assert dated.startswith("test2") and dated.endswith(".bag")

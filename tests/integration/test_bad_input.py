@@ -36,7 +36,7 @@ DEEP = "[" * 10_000 + "]" * 10_000
         (["param", "set", "/x", "{a: [2024-01-01 10:00:00]}"], "/x/a[0]: 2024-01-01 10:00:00"),
         (["param", "set", "/x", '{"\\n": null}'], "/x/\\n: null"),  # escaped, still one line
         (["param", "set", "/", '{"\\u0085": null}'], "rostools: /\\x85: null"),  # NEL too
-        (["bag", "snapshot", "-O", "x.bag"], "give topics to buffer, or -a, -e REGEX, --topic-types or --node"),
+        (["bag", "snapshot", "-O", "x.bag"], "give topics to buffer, or -a, -e REGEX, --topic-"),
         (["bag", "trigger", "--continue", "--after", "5"], "it takes no --after"),
     ],
 )

@@ -23,6 +23,11 @@ if TYPE_CHECKING:  # the stable API: type checkers read these imports, rostools.
         read_bag as read_bag,
         record as record,
     )
+    from rostools._api.blocking import (
+        Node as Node,
+        Publisher as Publisher,
+        Subscription as Subscription,
+    )
     from rostools._api.functions import (
         call_service as call_service,
         delete_param as delete_param,
@@ -40,11 +45,6 @@ if TYPE_CHECKING:  # the stable API: type checkers read these imports, rostools.
     from rostools._api.messages import (
         message as message,
         message_class as message_class,
-    )
-    from rostools._api.node import (
-        Node as Node,
-        Publisher as Publisher,
-        Subscription as Subscription,
     )
     from rostools._api.snapshots import (
         SnapshotRecorder as SnapshotRecorder,

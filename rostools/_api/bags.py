@@ -17,7 +17,7 @@ from rostools._api import loop, messages
 from rostools._api.asyncnode import default_master_uri
 from rostools.bag.access import format_for_name, open_bag, require_ros1
 from rostools.bag.follow import Follower
-from rostools.bag.record import Recorder, RecordOptions
+from rostools.bag.recorder import Recorder, RecordOptions
 from rostools.errors import RostoolsError, TimeoutExpired, UsageError
 from rostools.msgs.message import Message, Time
 from rostools.node.node import Node as CoreNode

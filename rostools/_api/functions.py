@@ -11,8 +11,8 @@ import threading
 from typing import Any
 
 from rostools._api.asyncnode import AsyncNode, Callback, default_master_uri
+from rostools._api.blocking import Node, Subscription
 from rostools._api.messages import Values
-from rostools._api.node import Node, Subscription
 from rostools.msgs.message import Message
 from rostools.rosgraph.masterapi import SERVICE_TIMEOUT
 

@@ -19,7 +19,7 @@ import itertools
 from collections.abc import Iterator, Mapping
 from dataclasses import dataclass, field
 
-from rostools.bag.record import ENTRY_OVERHEAD
+from rostools.bag.recorder import ENTRY_OVERHEAD
 from rostools.node.connection import Frame
 
 

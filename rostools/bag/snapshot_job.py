@@ -17,7 +17,7 @@ from pathlib import Path
 from typing import Any
 
 from rostools.bag.bagfile import FLUSH_PERIOD, BagFile
-from rostools.bag.record import ENTRY_OVERHEAD
+from rostools.bag.recorder import ENTRY_OVERHEAD
 from rostools.bag.ringbuffer import ConnInfo, Entry, Held
 from rostools.node.connection import Frame
 

@@ -21,7 +21,7 @@ from typing import Protocol
 
 from rostools.bag.follow import Selection
 from rostools.bag.play_control import SET_BOOL
-from rostools.bag.record import STRING
+from rostools.bag.recorder import STRING
 from rostools.bag.snapshot_job import SnapshotJob
 from rostools.bag.snapshot_srv import TRIGGER, TRIGGER_SNAPSHOT, SnapshotRequest, encode_answer
 from rostools.errors import RostoolsError

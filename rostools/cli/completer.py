@@ -298,7 +298,7 @@ class Completer:
 
     def actions(self) -> Candidates:
         """Actions in the graph, with their types."""
-        from rostools.action.graph import find_actions
+        from rostools.action.pattern import find_actions
 
         pubs, subs, _ = self._state()
         types = dict(self._ask("getTopicTypes") or [])
@@ -308,7 +308,7 @@ class Completer:
         """``action send-goal /fib <TAB>``: the goal as one line of YAML, quoted."""
         if not self.positionals or self.cur:
             return []
-        from rostools.action.graph import action_type
+        from rostools.action.pattern import action_type
 
         name = self.positionals[0]
         goal = dict(self._ask("getTopicTypes") or []).get(

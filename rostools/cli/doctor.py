@@ -43,7 +43,7 @@ def doctor(
     master or a node cannot be reached, 5: the master did not answer in time, 2: a bad
     ROS_IP/ROS_HOSTNAME, 1: anything else).
     """
-    from rostools.rosgraph.doctor import Doctor
+    from rostools.rosgraph.hostcheck import Doctor
 
     fmt = output_format(ctx, fmt)
     checks = Doctor(settings(ctx).resolved_master_uri(), timeout).run()

@@ -12,7 +12,7 @@ from types import TracebackType
 from typing import Any
 
 from rostools.master.master_api import MasterAPI
-from rostools.node.xmlrpc import Encoded, Notifier, XmlRpcServer
+from rostools.node.rpc import Encoded, Notifier, XmlRpcServer
 from rostools.wire.xmlvalues import dumps_response
 
 _READ_ONLY = frozenset(("getSystemState", "getTopicTypes", "getPublishedTopics", "getUri"))

@@ -10,7 +10,7 @@ from __future__ import annotations
 from typing import Any
 
 from rostools.errors import RostoolsError
-from rostools.node.xmlrpc import CALL_TIMEOUT, call
+from rostools.node.rpc import CALL_TIMEOUT, call
 from rostools.rosgraph.masterapi import MasterError, call_error, master_timeout, ros_value
 
 

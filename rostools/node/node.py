@@ -20,10 +20,10 @@ from rostools.node.listen import Listener, listen
 from rostools.node.mastercalls import LiveMaster
 from rostools.node.notice import Notice, to_stderr
 from rostools.node.publisher import Publisher
+from rostools.node.rpc import XmlRpcServer
 from rostools.node.service import ServiceHandler, ServiceServer, ServiceType
 from rostools.node.subscriber import FramesCallback, Subscriber
 from rostools.node.watch import MasterWatch
-from rostools.node.xmlrpc import XmlRpcServer
 from rostools.rosgraph.network import bind_address, host_name
 from rostools.wire import rosapi as check
 from rostools.wire.codes import ERROR, FAILURE, SUCCESS

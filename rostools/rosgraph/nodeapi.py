@@ -13,8 +13,8 @@ import time
 
 from rostools.errors import NotFoundError, RostoolsError, TimeoutExpired, UnreachableError
 from rostools.rosgraph.masterapi import NODE_TIMEOUT, MasterProxy, XmlRpcNode
-from rostools.rosgraph.record import Record
 from rostools.rosgraph.snapshot import SystemState, system_state
+from rostools.rosgraph.views import Record
 
 TYPE_CHECKING = False  # ``typing`` is 5-10 ms of start-up; only annotations use it
 if TYPE_CHECKING:

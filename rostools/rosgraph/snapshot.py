@@ -7,7 +7,7 @@ Pure data from ``getSystemState`` (``SystemState``) and the tree of nodes and to
 from __future__ import annotations
 
 from rostools.names import make_global_ns
-from rostools.rosgraph.record import Record
+from rostools.rosgraph.views import Record
 
 TYPE_CHECKING = False  # ``typing`` is 5-10 ms of start-up; only annotations use it
 if TYPE_CHECKING:

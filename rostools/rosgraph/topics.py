@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from rostools.errors import RostoolsError
 from rostools.names import ANYTYPE, make_global_ns
-from rostools.rosgraph.record import Record
+from rostools.rosgraph.views import Record
 
 TYPE_CHECKING = False  # ``typing`` is 5-10 ms of start-up; only annotations use it
 if TYPE_CHECKING:

@@ -34,8 +34,8 @@ import pytest
 
 if TYPE_CHECKING:
     from rostools._api.bags import Recording
+    from rostools._api.blocking import Node
     from rostools._api.master import Master
-    from rostools._api.node import Node
     from rostools._api.snapshots import SnapshotRecorder
     from rostools.testing.process import RosProcess
 
@@ -162,7 +162,7 @@ def ros_master(request: pytest.FixtureRequest) -> Iterator[Master]:
 @pytest.fixture
 def ros_node(ros_master: Master, request: pytest.FixtureRequest) -> Iterator[Node]:
     """A node on the test's master, closed after the test."""
-    from rostools._api.node import Node
+    from rostools._api.blocking import Node
 
     node = Node("pytest", ros_master.uri)
     request.node.stash[_STATE].nodes.append(node)

@@ -18,7 +18,7 @@ from hypothesis import given, seed, strategies as st
 
 from rostools.master.master_api import MasterAPI
 from rostools.node.node import Node
-from rostools.node.xmlrpc import encode_answer, run_call
+from rostools.node.rpc import encode_answer, run_call
 from rostools.wire.xmlrpc import BadCall, HttpError, HttpParser, decode_call
 from rostools.wire.xmlvalues import BadAnswer, DoctypeRefused, dumps_response, loads_response
 from tests.fuzz.conftest import FUZZ, SEED

@@ -10,8 +10,8 @@ import xmlrpc.client
 import pytest
 
 from rostools.master.server import MasterThread
-from rostools.node import xmlrpc as graph_xmlrpc
-from rostools.rosgraph.doctor import Doctor
+from rostools.node import rpc as graph_xmlrpc
+from rostools.rosgraph.hostcheck import Doctor
 from tests.support.env import run_cli
 from tests.support.procs import free_port
 

@@ -13,7 +13,7 @@ from typing import Any
 import pytest
 
 from rostools.master.server import MasterThread
-from rostools.node import xmlrpc as graph_xmlrpc
+from rostools.node import rpc as graph_xmlrpc
 from tests.support.fakepeer import FakeNode
 from tests.support.procs import wait_for
 

@@ -21,7 +21,7 @@ from pathlib import Path
 
 import pytest
 
-from rostools.bag import follow, record
+from rostools.bag import follow, recorder
 from rostools.bag.access import open_bag
 from rostools.errors import RostoolsError
 from rostools.master.server import MasterThread
@@ -38,15 +38,15 @@ def test_a_filling_disk_stops_the_recording_cleanly(
 ) -> None:
     free = [10 * 1024**3]
     monkeypatch.setattr(follow, "free_bytes", lambda folder: free[0])
-    monkeypatch.setattr(record, "DISK_PERIOD", 0.05)
-    opts = record.RecordOptions(topics=["/t"], base=tmp_path / "x.bag", min_space=1024**3)
+    monkeypatch.setattr(recorder, "DISK_PERIOD", 0.05)
+    opts = recorder.RecordOptions(topics=["/t"], base=tmp_path / "x.bag", min_space=1024**3)
 
     async def main(uri: str) -> int:
         pub_node = await Node("pub", uri).start()
         rec_node = await Node("rec", uri).start()
         try:
             pub = await pub_node.advertise("/t", STRING)
-            rec = record.Recorder(rec_node, opts)
+            rec = recorder.Recorder(rec_node, opts)
             task = asyncio.ensure_future(rec.run(asyncio.Event()))
             while pub.subscriber_count == 0:
                 await asyncio.sleep(0.01)

@@ -10,7 +10,7 @@ import pytest
 
 from rostools.action import status as st
 from rostools.action.goalid import goal_id
-from rostools.action.graph import action_type, find_actions
+from rostools.action.pattern import action_type, find_actions
 from rostools.action.server import ServerGoalHandle
 from rostools.action.types import ActionTypes
 from rostools.msgs.message import Time

@@ -11,19 +11,19 @@ from typing import Any
 
 import pytest
 
-from rostools.bag import record
+from rostools.bag import recorder
 
 BUFFER = 1024 * 1024
 HEADER = {"topic": "/t", "type": "std_msgs/String", "md5sum": "992ce8a1687cec8c8bd883ec73ca41d1"}
 
 
-def _recorder(tmp_path: Path) -> record.Recorder:
+def _recorder(tmp_path: Path) -> recorder.Recorder:
     node: Any = SimpleNamespace(resolve=lambda name: name)
-    opts = record.RecordOptions(topics=["/t"], base=tmp_path / "x.bag", buffer_bytes=BUFFER)
-    return record.Recorder(node, opts)
+    opts = recorder.RecordOptions(topics=["/t"], base=tmp_path / "x.bag", buffer_bytes=BUFFER)
+    return recorder.Recorder(node, opts)
 
 
-def _flood(rec: record.Recorder, messages: int) -> None:
+def _flood(rec: recorder.Recorder, messages: int) -> None:
     """What 100 topics of 16-byte strings deliver: many small frames, in reads of 500."""
     on_frames = rec._on_frames("/t")
     conn: Any = SimpleNamespace(id=1, header=HEADER)
@@ -47,22 +47,22 @@ def test_small_messages_count_their_overhead(tmp_path: Path) -> None:
 def test_a_batch_being_written_counts_too(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     rec = _recorder(tmp_path)
     taken, release = threading.Event(), threading.Event()
-    write = record._Writer._write
+    write = recorder._Writer._write
 
-    def slow_disk(self: record._Writer, batch: Any) -> None:
+    def slow_disk(self: recorder._Writer, batch: Any) -> None:
         taken.set()
         release.wait(30)
         write(self, batch)
 
-    monkeypatch.setattr(record._Writer, "_write", slow_disk)
+    monkeypatch.setattr(recorder._Writer, "_write", slow_disk)
     rec._writer.start()
     try:
         _flood(rec, 20_000)  # fills the buffer
         assert taken.wait(10)
         _flood(rec, 20_000)  # while the writer is stuck on the first batch
         # Resetting the count when the writer took its batch let the queue fill again: 2x.
-        assert rec.queued_bytes + rec.writing_bytes <= BUFFER + 500 * record.ENTRY_OVERHEAD
-        held = sum(len(e[4]) + record.ENTRY_OVERHEAD for e in rec.queue)
+        assert rec.queued_bytes + rec.writing_bytes <= BUFFER + 500 * recorder.ENTRY_OVERHEAD
+        held = sum(len(e[4]) + recorder.ENTRY_OVERHEAD for e in rec.queue)
         assert held == rec.queued_bytes  # how much the writer took depends on when it woke
     finally:
         release.set()

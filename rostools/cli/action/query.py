@@ -35,7 +35,7 @@ def list_actions(
     fmt: FormatOpt = None,
 ) -> None:
     """List the actions in the graph: names with all five topics of an action."""
-    from rostools.action.graph import find_actions
+    from rostools.action.pattern import find_actions
 
     proxy = s.master("rostools")
     pubs, subs, _ = proxy.system_state()

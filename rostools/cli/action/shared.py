@@ -9,7 +9,7 @@ TYPE_CHECKING = False  # ``typing`` is 5-10 ms of start-up; only annotations use
 if TYPE_CHECKING:
     from typing import Any
 
-    from rostools.action.graph import ActionInfo
+    from rostools.action.pattern import ActionInfo
     from rostools.action.types import ActionTypes
     from rostools.msgs.store import TypeStore
     from rostools.rosgraph.masterapi import MasterProxy
@@ -20,7 +20,7 @@ SERVER_WAIT = 10.0
 
 def find_action(proxy: MasterProxy, action: str, *, need_server: bool = True) -> ActionInfo:
     """The action ``action`` as the master sees it; NotFoundError when it is not there."""
-    from rostools.action.graph import find_actions
+    from rostools.action.pattern import find_actions
 
     name = script_resolve(action, "rostools")
     pubs, subs, _ = proxy.system_state()

@@ -16,7 +16,7 @@ from rostools.cli.common import FINITE, options_record
 from rostools.errors import UsageError
 
 if TYPE_CHECKING:
-    from rostools.bag.play import PlayOptions
+    from rostools.bag.player import PlayOptions
     from rostools.bag.rename import Renames
 
 BagArg = Annotated[Path, typer.Argument(help="A .bag or .mcap file.")]
@@ -306,7 +306,7 @@ class Playback:
 
     def options(self, topics: list[str]) -> PlayOptions:
         """The player's options for ``topics``, checked as rosbag play checks them."""
-        from rostools.bag.play import PlayOptions
+        from rostools.bag.player import PlayOptions
 
         for value, flag in ((self.delay, "-d"), (self.start, "-s")):
             if value < 0:

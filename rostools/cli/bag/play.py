@@ -24,7 +24,7 @@ if TYPE_CHECKING:
     import asyncio
 
     from rostools.bag.base import BagReader
-    from rostools.bag.play import PlayOptions, Status
+    from rostools.bag.player import PlayOptions, Status
     from rostools.node.node import Node
 
 
@@ -46,7 +46,7 @@ def split_bags_and_topics(args: list[str], topics: list[str]) -> tuple[list[Path
 
 def status_line(status: Status) -> str:
     """rosbag play's status line: `` [RUNNING]  Bag Time: ...   Duration: ... / ...``."""
-    from rostools.bag.play import State
+    from rostools.bag.player import State
 
     tail = f"   Delay: {status.delay:.2f} " if status.state is State.DELAYED else " " * 15
     return (
@@ -110,7 +110,7 @@ async def _play(
     """Play ``readers`` on ``node``; with the status line and key hints when ``shown``."""
     import asyncio
 
-    from rostools.bag.play import Player
+    from rostools.bag.player import Player
 
     player = Player(node, readers, opts)
     if shown is not None:
@@ -151,7 +151,7 @@ class StatusLines:
         """Show ``status``."""
         import time
 
-        from rostools.bag.play import State
+        from rostools.bag.player import State
 
         if self.terminal:
             sys.stderr.write(status_line(status))

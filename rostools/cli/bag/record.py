@@ -23,7 +23,7 @@ from rostools.errors import DataLossError, UsageError, one_line
 if TYPE_CHECKING:
     import asyncio
 
-    from rostools.bag.record import Recorder, RecordOptions
+    from rostools.bag.recorder import Recorder, RecordOptions
     from rostools.node.node import Node
 
 
@@ -185,7 +185,7 @@ def _record_options(
     limit: int | None,
 ) -> RecordOptions:
     """The recorder's options from the command line's, checked as rosbag record checks them."""
-    from rostools.bag.record import RecordOptions
+    from rostools.bag.recorder import RecordOptions
 
     choice.check(topics)
     for value, flag in ((splitting.size, "--size"), (splitting.max_splits, "--max-splits"),
@@ -209,7 +209,7 @@ async def _run(
     opts: RecordOptions, live: bool, quiet: bool, n: Node, stop: asyncio.Event
 ) -> Recorder:
     """Record until stopped or a limit is reached: with the live table, or lines on stderr."""
-    from rostools.bag.record import Recorder
+    from rostools.bag.recorder import Recorder
 
     rec = Recorder(n, opts)
     rec.check_disk(started=False)  # before saying "Recording to"

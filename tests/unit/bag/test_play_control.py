@@ -6,8 +6,8 @@ import struct
 
 import pytest
 
-from rostools.bag.play import State, Status
 from rostools.bag.play_control import RateControl, header_first, set_bool_reply
+from rostools.bag.player import State, Status
 from rostools.cli.bag.play import status_line
 from rostools.msgs.store import TypeStore
 from rostools.node.service import ServiceType

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import tracemalloc
 
-from rostools.bag.record import ENTRY_OVERHEAD
+from rostools.bag.recorder import ENTRY_OVERHEAD
 from rostools.bag.ringbuffer import ConnInfo, RingBuffer
 
 NS = 1_000_000_000

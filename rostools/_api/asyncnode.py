@@ -24,7 +24,7 @@ from rostools.msgs.message import Message
 from rostools.node.connection import Frame, InboundConnection
 from rostools.node.node import Node as CoreNode
 from rostools.node.notice import Notice
-from rostools.node.publisher import Publisher as CorePublisher
+from rostools.node.publisher import TopicPublisher as CorePublisher
 from rostools.node.service import ServiceClient, ServiceServer, ServiceType
 from rostools.node.subscriber import Subscriber as CoreSubscriber
 from rostools.rosgraph.masterapi import SERVICE_TIMEOUT

@@ -11,7 +11,7 @@ from types import TracebackType
 from rostools._api import loop
 from rostools.errors import UsageError
 from rostools.master.core import start_master
-from rostools.master.server import Master as CoreMaster
+from rostools.master.server import MasterServer
 
 
 class Master:
@@ -25,7 +25,7 @@ class Master:
     def __init__(self, port: int = 0, host: str = "127.0.0.1") -> None:
         self.host = host
         self._port = port
-        self.core: CoreMaster | None = None
+        self.core: MasterServer | None = None
         self._on_api_loop = False
 
     @property

@@ -23,7 +23,7 @@ from rostools.msgs.topictype import TopicType
 if TYPE_CHECKING:
     from rostools.node.connection import Frame, InboundConnection
     from rostools.node.node import Node
-    from rostools.node.publisher import Publisher
+    from rostools.node.publisher import TopicPublisher
     from rostools.node.subscriber import Subscriber
 
 #: How long the server may be out of reach on every topic before open goals are LOST (s).
@@ -94,8 +94,8 @@ class ActionClient:
         self.statuses: dict[str, tuple[int, str, int]] = {}
         #: Set on each status array.
         self.status_received = asyncio.Event()
-        self._goal_pub: Publisher | None = None
-        self._cancel_pub: Publisher | None = None
+        self._goal_pub: TopicPublisher | None = None
+        self._cancel_pub: TopicPublisher | None = None
         self._subs: dict[str, Subscriber] = {}
         self._watch: asyncio.Task[None] | None = None
         self._unreached_since: float | None = None

@@ -26,7 +26,7 @@ from rostools.msgs.message import Time
 if TYPE_CHECKING:
     from rostools.node.connection import Frame, InboundConnection
     from rostools.node.node import Node
-    from rostools.node.publisher import Publisher
+    from rostools.node.publisher import TopicPublisher
 
 log = logging.getLogger(__name__)
 
@@ -149,7 +149,7 @@ class ActionServer:
         self.status_rate = status_rate
         self.goals: dict[str, ServerGoalHandle] = {}
         self.tasks: set[asyncio.Task[None]] = set()
-        self._pubs: dict[str, Publisher] = {}
+        self._pubs: dict[str, TopicPublisher] = {}
         self._timer: asyncio.Task[None] | None = None
         self._last_cancel_ns = 0
 

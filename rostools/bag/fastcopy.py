@@ -28,7 +28,7 @@ from rostools.bag.model import BagFormatError
 
 if TYPE_CHECKING:
     from rostools.bag.mcap_writer import McapWriter
-    from rostools.bag.rosbag1_reader import Bag1Reader, Chunk
+    from rostools.bag.rosbag1_reader import Bag1Chunk, Bag1Reader
 
 #: A 38-byte message record header as rosbag's C++ writer (fields sorted: conn, op, time)
 #: and its Python writer (op, conn, time) lay it out: (place, bytes) of its fixed parts (the
@@ -91,7 +91,7 @@ def _convert_chunk(
     writer: McapWriter,
     targets: Targets,
     wanted: Any,
-    chunk: Chunk,
+    chunk: Bag1Chunk,
 ) -> int | None:
     """One bag chunk as one MCAP chunk; None when the chunk does not qualify.
 
@@ -127,7 +127,7 @@ class _Entries:
 
     @classmethod
     def read(
-        cls, np: Any, index: list[tuple[int, Any]], wanted: Any, targets: Targets, chunk: Chunk
+        cls, np: Any, index: list[tuple[int, Any]], wanted: Any, targets: Targets, chunk: Bag1Chunk
     ) -> _Entries | None:
         """The entries, if time order is file order and the chunk info agrees, else None."""
         entry = np.dtype([("secs", "<u4"), ("nsecs", "<u4"), ("off", "<u4")])

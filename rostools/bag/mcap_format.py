@@ -107,7 +107,7 @@ class MessageRecord(NamedTuple):
     data: bytes
 
 
-class Chunk(NamedTuple):
+class McapChunk(NamedTuple):
     """A compressed batch of schema, channel and message records."""
 
     message_start_time: int
@@ -211,7 +211,7 @@ Record = (
     | Schema
     | Channel
     | MessageRecord
-    | Chunk
+    | McapChunk
     | MessageIndex
     | ChunkIndex
     | Attachment
@@ -300,7 +300,7 @@ def parse(op: int, buf: Buffer, pos: int, end: int) -> Record | None:
         if op == OP_CHUNK:
             start, stop, size, crc = c.u64(), c.u64(), c.u64(), c.u32()
             compression = c.string()
-            return Chunk(start, stop, size, crc, compression, c.raw(c.u64()))
+            return McapChunk(start, stop, size, crc, compression, c.raw(c.u64()))
         if op == OP_MESSAGE_INDEX:
             channel = c.u16()
             size = c.u32()
@@ -709,7 +709,7 @@ def stream(buf: Buffer) -> Iterator[Record]:
         raise McapFormatError("not an MCAP file (bad magic)")
     for _, op, start, stop in records(buf, len(MAGIC), len(buf)):
         record = parse(op, buf, start, stop)
-        if isinstance(record, Chunk):
+        if isinstance(record, McapChunk):
             data = decompress(record.compression, record.records, record.uncompressed_size)
             for _, inner_op, inner_start, inner_stop in records(data, 0, len(data)):
                 inner = parse(inner_op, data, inner_start, inner_stop)

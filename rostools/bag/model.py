@@ -99,7 +99,7 @@ class CompressionStats:
 
 
 @dataclass(frozen=True)
-class TopicInfo:
+class BagTopic:
     """One topic of a bag: its type, message count and how many connections carry it."""
 
     topic: str
@@ -129,7 +129,7 @@ class BagInfo:
     compression: tuple[CompressionStats, ...]
     connections: tuple[Connection, ...]
     connection_counts: Mapping[int, int]
-    topics: tuple[TopicInfo, ...]
+    topics: tuple[BagTopic, ...]
     types: Mapping[str, str]
     profile: str = ""
     library: str = ""
@@ -156,7 +156,7 @@ class BagInfo:
 
 def summarize(
     connections: list[Connection], counts: Mapping[int, int]
-) -> tuple[tuple[TopicInfo, ...], dict[str, str]]:
+) -> tuple[tuple[BagTopic, ...], dict[str, str]]:
     """Per-topic rows (sorted by topic) and type -> md5sum (first connection of a type wins)."""
     by_topic: dict[str, list[Connection]] = {}
     types: dict[str, str] = {}
@@ -164,7 +164,7 @@ def summarize(
         by_topic.setdefault(conn.topic, []).append(conn)
         types.setdefault(conn.type, conn.md5sum)
     topics = tuple(
-        TopicInfo(
+        BagTopic(
             topic=topic,
             type=conns[0].type,
             md5sum=conns[0].md5sum,

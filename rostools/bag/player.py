@@ -26,7 +26,7 @@ from rostools.msgs.topictype import TopicType
 from rostools.node.clock import CLOCK, TIME, tighten_timer_slack
 from rostools.node.connection import Frame
 from rostools.node.node import Node
-from rostools.node.publisher import Publisher
+from rostools.node.publisher import TopicPublisher
 from rostools.node.session import first
 
 #: The last stretch before a due time is slept with ``time.sleep`` (asyncio wakes late).
@@ -93,8 +93,8 @@ class Player:
         self.node = node
         self.readers = readers
         self.opts = opts
-        self.publishers: dict[str, Publisher] = {}
-        self.clock: Publisher | None = None
+        self.publishers: dict[str, TopicPublisher] = {}
+        self.clock: TopicPublisher | None = None
         self.status = Status(state=State.PAUSED if opts.pause else State.RUNNING)
         self.steps = 0  # messages to send while paused (the ``s`` key)
         self.wake = asyncio.Event()
@@ -192,7 +192,7 @@ class Player:
             await self.rate_control.subscribe(self.node)
         await self.node.advertise_service("~pause_playback", SET_BOOL, self._pause_service)
 
-    def _publish(self, conn: Connection, data: Frame) -> Publisher:
+    def _publish(self, conn: Connection, data: Frame) -> TopicPublisher:
         # Latched per recorded publisher, as rosbag's latched_before keys them.
         pub = self.publishers[conn.topic]
         pub.publish_raw(data, (conn.topic, conn.callerid), conn.latching)

@@ -33,7 +33,7 @@ from rostools.errors import UsageError
 from rostools.msgs.topictype import TopicType
 from rostools.node.connection import Frame, InboundConnection
 from rostools.node.node import Node
-from rostools.node.publisher import Publisher
+from rostools.node.publisher import TopicPublisher
 
 log = logging.getLogger(__name__)
 
@@ -207,7 +207,7 @@ class Recorder(Follower):
         self.closed_files: list[Path] = []
         self.done_topics: set[str] = set()
         self._writer = _Writer(self)
-        self._begin_write: Publisher | None = None
+        self._begin_write: TopicPublisher | None = None
         self._loop: asyncio.AbstractEventLoop | None = None
 
     def file_opened(self, path: Path) -> None:
@@ -218,7 +218,7 @@ class Recorder(Follower):
             self._loop.call_soon_threadsafe(self._announce, self._begin_write, data)
 
     @staticmethod
-    def _announce(pub: Publisher, data: bytes) -> None:
+    def _announce(pub: TopicPublisher, data: bytes) -> None:
         pub.publish_raw(data)
         pub.flush()
 

@@ -55,7 +55,7 @@ _CHUNKS = "its chunks"
 
 
 @dataclass
-class Chunk:
+class Bag1Chunk:
     """A chunk record: where its data is, its times, and messages per connection.
 
     ``index_pos`` is the first INDEX_DATA record after it, or -1 when the chunk is read by
@@ -82,7 +82,7 @@ class Bag1Reader(BagReader):
 
     def __init__(self, path: str | Path) -> None:
         super().__init__(path)
-        self.chunks: list[Chunk] = []
+        self.chunks: list[Bag1Chunk] = []
         self._by_id: dict[int, Connection] = {}
         #: (chunk position, start, end, messages per connection) as the index lists them.
         self._infos: list[tuple[int, int, int, dict[int, int]]] = []
@@ -179,11 +179,11 @@ class Bag1Reader(BagReader):
             chunk.index_pos = chunk.data_pos + chunk.data_len
             self.chunks.append(chunk)
 
-    def _chunk_header(self, pos: int) -> Chunk:
+    def _chunk_header(self, pos: int) -> Bag1Chunk:
         fields, data, dlen = fmt.read_record(self._mm, pos, self.size)
         if fmt.op_of(fields) != fmt.OP_CHUNK:
             raise fmt.RecordError(f"chunk info points at {pos}, which is not a chunk")
-        return Chunk(
+        return Bag1Chunk(
             pos=pos,
             compression=fields.get("compression", b"none").decode("ascii", "replace"),
             size=fmt.u32_field(fields, "size"),
@@ -266,7 +266,7 @@ class Bag1Reader(BagReader):
         lost = f"; the index lists {counted(listed, 'message')} in chunks there" if listed else ""
         if head is not None and head[1] <= stop:
             fields, data, _ = head
-            chunk = Chunk(
+            chunk = Bag1Chunk(
                 pos=pos,
                 compression=fields.get("compression", b"none").decode("ascii", "replace"),
                 size=_u32_or(fields, "size", 0),
@@ -338,7 +338,7 @@ class Bag1Reader(BagReader):
             except fmt.RecordError:
                 break
             end = data + dlen
-        chunk = Chunk(pos, "none", end - pos, pos, end - pos)
+        chunk = Bag1Chunk(pos, "none", end - pos, pos, end - pos)
         self._add_scanned(chunk)
         self.note(
             f"{sum(chunk.counts.values())} message records at {pos} lie outside any chunk;"
@@ -346,7 +346,7 @@ class Bag1Reader(BagReader):
         )
         return end
 
-    def _add_scanned(self, chunk: Chunk) -> None:
+    def _add_scanned(self, chunk: Bag1Chunk) -> None:
         self._scan_chunk(chunk)
         if chunk.counts:
             self.chunks.append(chunk)
@@ -363,7 +363,7 @@ class Bag1Reader(BagReader):
                 )
         self.chunks = [c for c in self.chunks if c.counts]
 
-    def _scan_chunk(self, chunk: Chunk) -> None:
+    def _scan_chunk(self, chunk: Bag1Chunk) -> None:
         """Fill a chunk's counts and times by walking its records (no index)."""
         try:
             buf, base, end = self.chunk_data(chunk)
@@ -396,7 +396,7 @@ class Bag1Reader(BagReader):
         return found
 
     def _walk(
-        self, chunk: Chunk, buf: Buffer, base: int, end: int
+        self, chunk: Bag1Chunk, buf: Buffer, base: int, end: int
     ) -> Iterator[tuple[int, int, int]]:
         """(time, connection id, record offset) of each message record, by walking records.
 
@@ -427,7 +427,7 @@ class Bag1Reader(BagReader):
             pos = data + dlen
 
     def _skip(
-        self, chunk: Chunk, buf: Buffer, base: int, end: int, pos: int, err: Exception
+        self, chunk: Bag1Chunk, buf: Buffer, base: int, end: int, pos: int, err: Exception
     ) -> int:
         """Where the walk of a chunk reads on after bytes at ``pos`` that do not parse."""
         nxt = fmt.next_record(buf, pos + 1, end, _CHUNK_OPS)
@@ -443,7 +443,7 @@ class Bag1Reader(BagReader):
             self.damaged(f"chunk at {chunk.pos} ends in a partial record ({end - pos} bytes lost)")
         return end
 
-    def chunk_data(self, chunk: Chunk) -> tuple[Buffer, int, int]:
+    def chunk_data(self, chunk: Bag1Chunk) -> tuple[Buffer, int, int]:
         """(buffer, start, end) of a chunk's uncompressed records.
 
         Uncompressed chunks are read in place from the map; others are decompressed.
@@ -514,7 +514,7 @@ class Bag1Reader(BagReader):
         ]
         return blocks
 
-    def _lists_truly(self, chunk: Chunk) -> bool:
+    def _lists_truly(self, chunk: Bag1Chunk) -> bool:
         """Whether a chunk's index records are of the connections its chunk info lists."""
         if chunk.index_pos < 0:
             return True  # counted by walking its records
@@ -525,7 +525,7 @@ class Bag1Reader(BagReader):
         return found == chunk.counts
 
     def chunk_messages(
-        self, chunk: Chunk, wanted: Mapping[int, tuple[int, Connection]]
+        self, chunk: Bag1Chunk, wanted: Mapping[int, tuple[int, Connection]]
     ) -> Iterator[RawMessage]:
         """The wanted messages of one chunk, in time order."""
         for e in self._entries(chunk, wanted, 0, MAX_TIME_NS):
@@ -548,7 +548,7 @@ class Bag1Reader(BagReader):
         yield from ordered(blocks)
 
     def _index_entries(
-        self, chunk: Chunk, wanted: Mapping[int, tuple[int, Connection]]
+        self, chunk: Bag1Chunk, wanted: Mapping[int, tuple[int, Connection]]
     ) -> list[Entry]:
         try:
             return index_times(self.index_records(chunk), wanted)
@@ -557,7 +557,7 @@ class Bag1Reader(BagReader):
 
     def _entries(
         self,
-        chunk: Chunk,
+        chunk: Bag1Chunk,
         wanted: Mapping[int, tuple[int, Connection]],
         lo: int,
         hi: int,
@@ -614,7 +614,7 @@ class Bag1Reader(BagReader):
 
     def _walked(
         self,
-        chunk: Chunk,
+        chunk: Bag1Chunk,
         buf: Buffer,
         base: int,
         end: int,
@@ -642,7 +642,7 @@ class Bag1Reader(BagReader):
         out.sort()
         return out
 
-    def index_records(self, chunk: Chunk) -> Iterator[tuple[int, memoryview]]:
+    def index_records(self, chunk: Bag1Chunk) -> Iterator[tuple[int, memoryview]]:
         """(connection id, raw entries) of each INDEX_DATA record after a chunk.
 
         Raises ``RecordError`` when they do not parse.

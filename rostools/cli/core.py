@@ -70,7 +70,7 @@ def core(
     """Run a ROS master and parameter server until Ctrl-C (SIGINT) or SIGTERM."""
     del roscore  # accepted, and without effect
     from rostools.master.core import choose_address, run_core
-    from rostools.master.server import Master
+    from rostools.master.server import MasterServer
     from rostools.rosgraph.masterapi import master_answers
 
     address = choose_address(host, port)
@@ -83,7 +83,7 @@ def core(
         )
     fmt = output_format(ctx, fmt)
 
-    def ready(master: Master, run_id: str) -> None:
+    def ready(master: MasterServer, run_id: str) -> None:
         info = {"uri": master.uri, "bind": address.bind, "port": master.port, "run_id": run_id}
         output.write(
             fmt,

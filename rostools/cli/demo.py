@@ -35,7 +35,7 @@ STEPS: list[tuple[str, list[str]]] = [
 ]
 
 
-class Graph:
+class DemoGraph:
     """The demo's talker and service, on their own event loop in a thread."""
 
     def __init__(self, master_uri: str) -> None:
@@ -46,7 +46,7 @@ class Graph:
         self.error: BaseException | None = None
         self.thread = threading.Thread(target=self._run, name="rostools-demo", daemon=True)
 
-    def __enter__(self) -> Graph:
+    def __enter__(self) -> DemoGraph:
         self.thread.start()
         self.ready.wait(10)
         if self.error is not None:
@@ -148,7 +148,7 @@ def demo(
             f"rostools demo: a master at {master.uri} (in this process), a talker on /chatter,\n"
             "an /add_two_ints service and /demo parameters. Each step runs the real command.\n"
         )
-        with Graph(master.uri):
+        with DemoGraph(master.uri):
             for title, argv in STEPS:
                 _run_step(title, [a.replace("{out}", str(output)) for a in argv], env)
     say(

@@ -10,7 +10,7 @@ from dataclasses import dataclass
 from urllib.parse import urlsplit
 
 from rostools.errors import RostoolsError
-from rostools.master.server import Master
+from rostools.master.server import MasterServer
 from rostools.msgs.store import BuiltinSource, TypeStore
 from rostools.node.connection import Frame
 from rostools.node.listen import raise_descriptor_limit
@@ -73,12 +73,12 @@ def choose_address(
     return Address(bind_address(name), port, name)
 
 
-async def start_master(bind: str, port: int, advertise: str, hint: str) -> Master:
+async def start_master(bind: str, port: int, advertise: str, hint: str) -> MasterServer:
     """A master serving on ``bind:port``, with roscore's /run_id, /rosdistro and /rosversion.
 
     A port it cannot listen on is one line, with ``hint``.
     """
-    master = Master(bind, port, advertise)
+    master = MasterServer(bind, port, advertise)
     try:
         await master.start()
     except OSError as err:
@@ -92,7 +92,7 @@ async def start_master(bind: str, port: int, advertise: str, hint: str) -> Maste
     return master
 
 
-async def run_core(address: Address, ready: Callable[[Master, str], None]) -> None:
+async def run_core(address: Address, ready: Callable[[MasterServer, str], None]) -> None:
     """Serve until SIGINT, SIGTERM, SIGHUP or a ``shutdown`` call."""
     raise_descriptor_limit()  # a socket per client, as every server needs
     master = await start_master(
@@ -123,7 +123,7 @@ class _Rosout:
     rather than keep serving connections the master has forgotten.
     """
 
-    def __init__(self, master: Master, host: str) -> None:
+    def __init__(self, master: MasterServer, host: str) -> None:
         self.master = master
         # it calls the master on loopback, which a master listening anywhere also answers
         local = master.host if is_loopback(master.host) else "127.0.0.1"

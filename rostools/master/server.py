@@ -1,6 +1,6 @@
 """The bundled master, running: the Master/Parameter API served on asyncio.
 
-``Master`` runs on the caller's event loop; ``MasterThread`` runs one in a background thread,
+``MasterServer`` runs on the caller's event loop; ``MasterThread`` runs one in a background thread,
 which is how tests and ``rostools demo`` start and stop a master on a free port.
 """
 
@@ -22,7 +22,7 @@ _QUERIES = frozenset(
 )
 
 
-class Master:
+class MasterServer:
     """A ROS master and parameter server on the running event loop."""
 
     def __init__(self, host: str = "127.0.0.1", port: int = 11311, advertise: str | None = None):
@@ -99,7 +99,7 @@ class MasterThread:
     def __init__(self, host: str = "127.0.0.1", port: int = 0) -> None:
         self.host = host
         self.port = port
-        self.master: Master | None = None
+        self.master: MasterServer | None = None
         self.loop: asyncio.AbstractEventLoop | None = None
         self._thread: threading.Thread | None = None
         self._ready = threading.Event()
@@ -123,7 +123,7 @@ class MasterThread:
     def _run(self) -> None:
         async def main() -> None:
             self.loop = asyncio.get_running_loop()
-            self.master = Master(self.host, self.port)
+            self.master = MasterServer(self.host, self.port)
             try:
                 await self.master.start()
             except BaseException as err:  # noqa: BLE001 - handed to the starting thread

@@ -27,7 +27,7 @@ from rostools.wire.tcpros import (
     FrameError,
     FrameReader,
     Messages,
-    Subscription,
+    SubscriberStream,
     frame_prefix,
     parse_header,
 )
@@ -342,7 +342,7 @@ class InboundConnection(asyncio.BufferedProtocol):
         self.publisher_uri = publisher_uri
         self.id = conn_id
         self.request = header
-        self.session = Subscription(subscriber.max_frame)
+        self.session = SubscriberStream(subscriber.max_frame)
         self.session.reader.reuse = subscriber.reuse_frames
         self.transport: asyncio.Transport | None = None
         self.header: dict[str, str] | None = None

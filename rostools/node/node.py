@@ -19,7 +19,7 @@ from rostools.node.connection import ConnectionHandler, Pending, ServerConnectio
 from rostools.node.listen import Listener, listen
 from rostools.node.mastercalls import LiveMaster
 from rostools.node.notice import Notice, to_stderr
-from rostools.node.publisher import Publisher
+from rostools.node.publisher import TopicPublisher
 from rostools.node.rpc import XmlRpcServer
 from rostools.node.service import ServiceHandler, ServiceServer, ServiceType
 from rostools.node.subscriber import FramesCallback, Subscriber
@@ -76,7 +76,7 @@ class Node:
             for k, v in args.items()
             if not k.startswith("_")
         }
-        self.publishers: dict[str, Publisher] = {}
+        self.publishers: dict[str, TopicPublisher] = {}
         self.subscribers: dict[str, Subscriber] = {}
         self.services: dict[str, ServiceServer] = {}
         self.shutdown_requested = asyncio.Event()
@@ -158,12 +158,14 @@ class Node:
 
     async def advertise(
         self, topic: str, topic_type: TopicType, latch: bool = False, queue_size: int = 100
-    ) -> Publisher:
+    ) -> TopicPublisher:
         """Publish on ``topic`` (registered with the master)."""
         topic = self.resolve(topic)
         pub = self.publishers.get(topic)
         if pub is None:
-            pub = self.publishers[topic] = Publisher(self, topic, topic_type, latch, queue_size)
+            pub = self.publishers[topic] = TopicPublisher(
+                self, topic, topic_type, latch, queue_size
+            )
             pub.reported = await self.master.register_publisher(topic, topic_type.type, self.uri)
         return pub
 

@@ -18,7 +18,7 @@ _SEQ = struct.Struct("<I")
 _COUNTED = "publish"
 
 
-class Publisher:
+class TopicPublisher:
     """Publishes on one topic to every connected subscriber."""
 
     def __init__(

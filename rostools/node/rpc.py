@@ -24,8 +24,8 @@ from rostools.wire.xmlrpc import (
     MAX_BODY,
     BadCall,
     HttpError,
+    HttpMessage,
     HttpParser,
-    Message,
     answer_value,
     decode_call,
     format_request,
@@ -182,7 +182,7 @@ class _Connection(asyncio.BufferedProtocol):
             loop = asyncio.get_running_loop()
             self.deadline = loop.call_later(REQUEST_TIMEOUT, transport.abort)
 
-    async def _handle_big(self, message: Message) -> None:
+    async def _handle_big(self, message: HttpMessage) -> None:
         """Decode and encode in a thread, and run a multicall in slices: others get turns."""
         transport = self.transport
         assert transport is not None

@@ -20,7 +20,7 @@ from rostools.rosgraph.network import explain, uri_host
 
 if TYPE_CHECKING:
     from rostools.node.endpoint import Owner
-    from rostools.node.publisher import Publisher
+    from rostools.node.publisher import TopicPublisher
     from rostools.node.service import ServiceServer
     from rostools.node.subscriber import Subscriber
 
@@ -28,7 +28,7 @@ if TYPE_CHECKING:
         """A node as its watch sees it: what it has registered with the master."""
 
         @property
-        def publishers(self) -> Mapping[str, Publisher]:
+        def publishers(self) -> Mapping[str, TopicPublisher]:
             """Topic -> its publisher."""
 
         @property

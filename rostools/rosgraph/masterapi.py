@@ -13,7 +13,7 @@ import os
 
 from rostools.errors import NotFoundError, RostoolsError, TimeoutExpired, UnreachableError
 from rostools.wire import codes
-from rostools.wire.xmlrpc import HttpError, HttpParser, Message, answer_value, format_request
+from rostools.wire.xmlrpc import HttpError, HttpMessage, HttpParser, answer_value, format_request
 from rostools.wire.xmlvalues import BadAnswer, Fault
 
 TYPE_CHECKING = False  # ``typing`` is 5-10 ms of start-up; only annotations use it
@@ -90,7 +90,7 @@ class HttpConnection:
         self.retry = True
         self.sock: _socket.socket | None = None
 
-    def post(self, request: bytes) -> Message:
+    def post(self, request: bytes) -> HttpMessage:
         """Send a whole request and read the response (one retry on a connection gone stale)."""
         reused = self.sock is not None
         try:
@@ -101,7 +101,7 @@ class HttpConnection:
                 raise
             return self._exchange(request)
 
-    def _exchange(self, request: bytes) -> Message:
+    def _exchange(self, request: bytes) -> HttpMessage:
         if self.sock is None:
             self.sock = connect(self.host, self.port, self.timeout)
         self.sock.sendall(request)

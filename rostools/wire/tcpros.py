@@ -293,7 +293,7 @@ class Failed(NamedTuple):
 Event = Accepted | Messages | Failed
 
 
-class Subscription:
+class SubscriberStream:
     """A subscriber's end of one TCPROS connection, sans-IO: bytes in, events out.
 
     Feed it what the socket receives (``get_buffer``/``buffer_updated``, the shape of

@@ -46,7 +46,7 @@ class HttpError(Exception):
         self.reason = reason
 
 
-class Message:
+class HttpMessage:
     """A parsed HTTP request or response.
 
     Plain classes here: commands import this module, and ``dataclasses`` costs them 15 ms.
@@ -79,7 +79,7 @@ class HttpParser:
         """Add received bytes."""
         self.buffer += data
 
-    def next_message(self) -> Message | None:
+    def next_message(self) -> HttpMessage | None:
         """The next complete message, or None until more bytes arrive."""
         end = self.buffer.find(b"\r\n\r\n")
         if end < 0:
@@ -124,7 +124,7 @@ class HttpParser:
         connection = headers.get("connection", "").lower()
         http10 = start.endswith("HTTP/1.0") or start.startswith("HTTP/1.0")
         keep_alive = connection == "keep-alive" if http10 else connection != "close"
-        return Message(start, headers, body, keep_alive)
+        return HttpMessage(start, headers, body, keep_alive)
 
 
 _WS = rb"[ \t\r\n]*"
@@ -294,7 +294,7 @@ def _percent(char: str) -> str:
     return "".join(f"%{byte:02X}" for byte in char.encode())
 
 
-def answer_value(message: Message) -> Any:
+def answer_value(message: HttpMessage) -> Any:
     """The value an HTTP answer to an XML-RPC call carries: the one reading of an answer.
 
     Raises ``xmlvalues.Fault`` for a fault and ``xmlvalues.BadAnswer`` for a status other

@@ -163,13 +163,13 @@ def test_dead_publishers_of_rosout_cost_the_master_few_calls() -> None:
     from collections import Counter
 
     from rostools.master.core import start_rosout
-    from rostools.master.server import Master
+    from rostools.master.server import MasterServer
     from rostools.node.notice import Notice
 
     dead = 200
 
     async def main() -> tuple[Counter[str], list[Notice]]:
-        master = Master("127.0.0.1", 0)
+        master = MasterServer("127.0.0.1", 0)
         await master.start()
         assert master.server is not None and master.api is not None
         calls: Counter[str] = Counter()

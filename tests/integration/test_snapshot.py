@@ -19,7 +19,7 @@ from rostools.bag.snapshot_srv import TRIGGER, SnapshotRequest
 from rostools.master.server import MasterThread
 from rostools.msgs.topictype import TopicType
 from rostools.node.node import Node
-from rostools.node.publisher import Publisher
+from rostools.node.publisher import TopicPublisher
 from tests.support.env import run_cli
 from tests.support.procs import Proc, linked, start_cli, wait_for
 
@@ -27,7 +27,7 @@ STRING = TopicType("std_msgs/String", "992ce8a1687cec8c8bd883ec73ca41d1", "strin
 NS = 1_000_000_000
 
 
-def send(pub: Publisher, text: str) -> None:
+def send(pub: TopicPublisher, text: str) -> None:
     data = text.encode()
     pub.publish_raw(struct.pack("<I", len(data)) + data)
 
@@ -41,7 +41,7 @@ async def until(predicate: object, timeout: float = 10.0) -> None:
 
 
 @contextlib.asynccontextmanager
-async def graph(tmp_path: Path) -> AsyncIterator[tuple[Snapshotter, Publisher]]:
+async def graph(tmp_path: Path) -> AsyncIterator[tuple[Snapshotter, TopicPublisher]]:
     """A snapshot recorder of ``/t`` (``--max-writes 1``) and a publisher of it."""
     with MasterThread() as master:
         pub_node = await Node("pub", master.uri).start()
@@ -71,7 +71,7 @@ def test_services_pause_resume_and_end_an_open_ended_file(tmp_path: Path) -> Non
     asyncio.run(main())
 
 
-async def services_steer(snap: Snapshotter, pub: Publisher) -> None:
+async def services_steer(snap: Snapshotter, pub: TopicPublisher) -> None:
     node = snap.node
     send(pub, "before")
     await until(lambda: snap.ring.topics["/t"].entries)

@@ -3,7 +3,7 @@ is not.
 
 roscpp drops a connection whose frame is over 1e9 bytes (``Connection::read``), so a frame
 of exactly 1e9 is one it would read. Every place that reads a length prefix from a peer is
-tested at the boundary: the subscriber's connection (``Subscription``, ``InboundConnection``),
+tested at the boundary: the subscriber's connection (``SubscriberStream``, ``InboundConnection``),
 the connections a node's TCPROS server accepts (``ServerConnection``), and a service
 client's replies (``ResponseReader``). A whole frame of 1e9 bytes is not sent: its prefix and
 a first piece show whether it is taken, since a frame is refused as soon as its prefix is
@@ -31,7 +31,7 @@ from rostools.wire.tcpros import (
     FrameReader,
     Messages,
     ResponseReader,
-    Subscription,
+    SubscriberStream,
     publisher_header,
     service_reply_header,
 )
@@ -102,13 +102,13 @@ def test_a_header_of_exactly_its_limit_is_taken_and_one_over_is_not() -> None:
 
 
 def test_a_subscription_takes_a_frame_of_max_frame() -> None:
-    events = _feed(Subscription(), REPLY + _U32.pack(4) + b"kept" + _U32.pack(MAX_FRAME) + b"x")
+    events = _feed(SubscriberStream(), REPLY + _U32.pack(4) + b"kept" + _U32.pack(MAX_FRAME) + b"x")
     assert [type(e) for e in events] == [Accepted, Messages]
     assert [bytes(f) for f in events[1].frames] == [b"kept"]
 
 
 def test_a_subscription_fails_on_a_frame_one_over_max_frame() -> None:
-    events = _feed(Subscription(), REPLY + _U32.pack(4) + b"kept" + _U32.pack(MAX_FRAME + 1))
+    events = _feed(SubscriberStream(), REPLY + _U32.pack(4) + b"kept" + _U32.pack(MAX_FRAME + 1))
     assert [type(e) for e in events] == [Accepted, Messages, Failed]
     assert events[2].reason == f"frame of {MAX_FRAME + 1} bytes exceeds the limit of {MAX_FRAME}"
 

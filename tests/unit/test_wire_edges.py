@@ -24,7 +24,7 @@ from rostools.wire.tcpros import (
     FrameError,
     FrameReader,
     ResponseReader,
-    Subscription,
+    SubscriberStream,
     check_subscription,
     error_header,
     frame_prefix,
@@ -100,7 +100,7 @@ def test_a_subscriber_that_asks_for_any_type_is_accepted() -> None:
 # the subscriber's side --------------------------------------------------------------------
 
 
-def feed(sub: Subscription, data: bytes) -> list[Any]:
+def feed(sub: SubscriberStream, data: bytes) -> list[Any]:
     buf = sub.get_buffer()
     buf[: len(data)] = data
     return sub.buffer_updated(len(data))
@@ -110,14 +110,14 @@ def feed(sub: Subscription, data: bytes) -> list[Any]:
 def test_a_reply_without_md5sum_or_type_fails(missing: str) -> None:
     fields = {"callerid": "/p", "md5sum": "m", "type": "a/B"}
     del fields[missing]
-    sub = Subscription()
+    sub = SubscriberStream()
     assert feed(sub, ros_header(fields)) == [Failed("reply header lacks md5sum or type")]
     # nothing follows a failure
     assert feed(sub, struct.pack("<I", 1) + b"x") == []
 
 
 def test_a_reply_header_over_its_limit_fails() -> None:
-    sub = Subscription()
+    sub = SubscriberStream()
     events = feed(sub, struct.pack("<I", MAX_HEADER_LENGTH + 1))
     assert len(events) == 1 and isinstance(events[0], Failed)
     assert "exceeds the limit" in events[0].reason
@@ -136,7 +136,7 @@ def test_a_frame_of_exactly_the_limit_passes_one_byte_more_does_not() -> None:
 
 
 def test_after_a_failure_a_subscription_takes_nothing_more() -> None:
-    sub = Subscription(max_frame=10)
+    sub = SubscriberStream(max_frame=10)
     header = ros_header({"callerid": "/p", "md5sum": "m", "type": "a/B"})
     events = feed(sub, header + struct.pack("<I", 11))
     assert isinstance(events[-1], Failed)

@@ -21,7 +21,7 @@ from rostools.wire.tcpros import (
     FrameError,
     FrameReader,
     Messages,
-    Subscription,
+    SubscriberStream,
     check_subscription,
     publisher_header,
     subscriber_header,
@@ -215,8 +215,8 @@ def test_the_first_frame_has_its_own_limit() -> None:
 
 
 def _session_events(data: bytes, chunk: int, max_frame: int = 1 << 20) -> list[Event]:
-    """Feed ``data`` to a Subscription in chunks; every event, in order (no socket)."""
-    session = Subscription(max_frame)
+    """Feed ``data`` to a SubscriberStream in chunks; every event, in order (no socket)."""
+    session = SubscriberStream(max_frame)
     events: list[Event] = []
     pos = 0
     while pos < len(data):

@@ -25,7 +25,7 @@ if TYPE_CHECKING:
 
     from rostools.msgs.topictype import TopicType
     from rostools.node.node import Node
-    from rostools.node.publisher import Publisher
+    from rostools.node.publisher import TopicPublisher
 
 #: How long ``-1`` stays up so that late subscribers still get the latched message (rostopic).
 ONCE_LINGER = 3.0
@@ -277,7 +277,7 @@ async def _publish(
 
 async def _latch_one(
     plan: _Plan,
-    publisher: Publisher,
+    publisher: TopicPublisher,
     msg: Any,
     refused: set[str],
     left: Callable[[], float | None],
@@ -303,7 +303,7 @@ async def _latch_one(
 
 async def _paced(
     plan: _Plan,
-    publisher: Publisher,
+    publisher: TopicPublisher,
     messages: Iterator[Any],
     left: Callable[[], float | None],
     stop: asyncio.Event,
@@ -354,7 +354,7 @@ async def _paced(
 
 
 def _watch_types(
-    carried: str | None, publisher: Publisher, name: str, ttype: TopicType
+    carried: str | None, publisher: TopicPublisher, name: str, ttype: TopicType
 ) -> set[str]:
     """Say when the topic carries another type, and each subscriber that refuses ours.
 

@@ -34,7 +34,7 @@ def check_indexes(path: Path) -> int:
     chunk: bytes | None = None
     for _, op, start, stop in fmt.records(raw, 8, len(raw)):
         record = fmt.parse(op, raw, start, stop)
-        if isinstance(record, fmt.Chunk):
+        if isinstance(record, fmt.McapChunk):
             chunk = fmt.decompress(record.compression, record.records, record.uncompressed_size)
         elif isinstance(record, fmt.MessageIndex):
             assert chunk is not None

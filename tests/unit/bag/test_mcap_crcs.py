@@ -76,7 +76,7 @@ def check_crcs(path: Path) -> int:
     for rec, op, start, stop in top_records(raw):
         if op == fmt.OP_CHUNK:
             chunk = fmt.parse(op, raw, start, stop)
-            assert isinstance(chunk, fmt.Chunk)
+            assert isinstance(chunk, fmt.McapChunk)
             records = fmt.decompress(chunk.compression, chunk.records, chunk.uncompressed_size)
             assert chunk.uncompressed_crc == zlib.crc32(records) != 0
             chunks += 1

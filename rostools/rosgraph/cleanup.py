@@ -13,7 +13,7 @@ from rostools.rosgraph.masterapi import (
 from rostools.rosgraph.nodeapi import Graph
 
 #: The reason rosnode gives in ``shutdown`` calls (observed on the wire).
-from rostools.rosgraph.snapshot import SystemState
+from rostools.rosgraph.state import SystemState
 
 
 @dataclass(frozen=True)

@@ -13,7 +13,7 @@ import time
 
 from rostools.errors import NotFoundError, RostoolsError, TimeoutExpired, UnreachableError
 from rostools.rosgraph.masterapi import NODE_TIMEOUT, MasterProxy, XmlRpcNode
-from rostools.rosgraph.snapshot import SystemState, system_state
+from rostools.rosgraph.state import SystemState, system_state
 from rostools.rosgraph.views import Record
 
 TYPE_CHECKING = False  # ``typing`` is 5-10 ms of start-up; only annotations use it

@@ -15,7 +15,7 @@ from rostools.cli.node.query import info_text
 from rostools.cli.node.shared import failure_class
 from rostools.errors import NotFoundError, TimeoutExpired, UnreachableError
 from rostools.rosgraph.nodeapi import BusConnection, NodeInfo, Probe
-from rostools.rosgraph.snapshot import SystemState, build_graph
+from rostools.rosgraph.state import SystemState, build_graph
 
 # `rosnode info /listener` on roscore 1.15.15 with tests/support's talker and listener
 # (captured, byte for byte).

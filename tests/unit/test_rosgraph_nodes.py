@@ -8,7 +8,7 @@ from rostools.errors import NotFoundError
 from rostools.rosgraph.cleanup import Unregistration, plan_cleanup
 from rostools.rosgraph.machines import machines, nodes_on_machine
 from rostools.rosgraph.nodeapi import BusConnection
-from rostools.rosgraph.snapshot import SystemState, build_graph
+from rostools.rosgraph.state import SystemState, build_graph
 
 # getSystemState of a real roscore with the rospy talker and listener of tests/support
 # (captured), plus a node in a namespace that provides a service.

@@ -28,7 +28,7 @@ from rostools.errors import (
 )
 
 if TYPE_CHECKING:
-    from rostools.rosgraph.snapshot import RosGraph
+    from rostools.rosgraph.state import RosGraph
 
 
 from rostools.cli.node.shared import TOOL, warn
@@ -141,7 +141,7 @@ def graph_cmd(
     ] = None,
 ) -> None:
     """Nodes and the topics between them, like rqt_graph, from the master's registrations."""
-    from rostools.rosgraph.snapshot import build_graph, system_state
+    from rostools.rosgraph.state import build_graph, system_state
 
     if out is not None:
         _picture_kind(out)  # a bad name fails before the master is asked

@@ -93,13 +93,7 @@ def merge(
     ``ops.filter_bag``, on the input's names; ``renames`` applies as messages are written.
     MCAP attachments and metadata of every input are copied into an MCAP output.
     """
-    paths = [Path(s) for s in sources]
-    dst = Path(dst)
-    if not paths:
-        raise BagUsageError("give at least one bag to merge")
-    for path in paths:
-        if dst.exists() and path.resolve() == dst.resolve():
-            raise BagUsageError(f"cannot use the same file as input and output: {path}")
+    paths, dst = _checked_paths(sources, Path(dst))
     with contextlib.ExitStack() as stack:
         readers = [stack.enter_context(open_bag(p)) for p in paths]
         kind = format_for_name(dst)
@@ -139,6 +133,17 @@ def merge(
         notes=notes,
         lost=lost,
     )
+
+
+def _checked_paths(sources: Sequence[str | Path], dst: Path) -> tuple[list[Path], Path]:
+    """The inputs as paths, and the output; none of them the output itself."""
+    paths = [Path(s) for s in sources]
+    if not paths:
+        raise BagUsageError("give at least one bag to merge")
+    for path in paths:
+        if dst.exists() and path.resolve() == dst.resolve():
+            raise BagUsageError(f"cannot use the same file as input and output: {path}")
+    return paths, dst
 
 
 #: (output connection, time ns, data, whether the filter kept it)

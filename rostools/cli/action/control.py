@@ -19,6 +19,7 @@ from rostools.errors import NotFoundError, QuietExit, TimeoutExpired, UsageError
 if TYPE_CHECKING:
     import asyncio
 
+    from rostools.action.client import ActionClient
     from rostools.node.node import Node
 
 #: How long ``cancel`` watches the status for the server to take the cancel (s).
@@ -46,6 +47,22 @@ def _table_text(rows: list[dict[str, Any]]) -> str:
         for gid, r in zip(ids, rows, strict=True)
     ]
     return "\n".join(table)
+
+
+async def _confirmed(
+    client: ActionClient, goals: set[str], wait: float, stop: asyncio.Event
+) -> None:
+    """Until the server's status says it took the cancel of ``goals``, for at most ``wait``."""
+    from rostools.action import status as st
+    from rostools.node.session import first
+
+    settle = time.monotonic() + wait
+    while goals and time.monotonic() < settle and not stop.is_set():
+        states = {g: client.statuses.get(g, (st.LOST, "", 0))[0] for g in goals}
+        if all(c in st.CANCELING or c in st.TERMINAL for c in states.values()):
+            return
+        client.status_received.clear()
+        await first(client.status_received.wait(), stop.wait(), timeout=0.1)
 
 
 @command()
@@ -94,14 +111,7 @@ def cancel(
         else:
             covered = open_goals
         client.cancel(goal_id or "")
-        # the server says it took the cancel in its next status
-        settle = time.monotonic() + min(CONFIRM_WAIT, limit)
-        while covered and time.monotonic() < settle and not stop.is_set():
-            states = {g: client.statuses.get(g, (st.LOST, "", 0))[0] for g in covered}
-            if all(c in st.CANCELING or c in st.TERMINAL for c in states.values()):
-                break
-            client.status_received.clear()
-            await first(client.status_received.wait(), stop.wait(), timeout=0.1)
+        await _confirmed(client, covered, min(CONFIRM_WAIT, limit), stop)
         await client.close()
         chosen = covered if goal_id is None else {goal_id}
         return [r for r in _table(client.statuses) if r["goal_id"] in chosen]

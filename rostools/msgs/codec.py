@@ -8,12 +8,12 @@ is what makes ``echo`` of small high-rate topics fast (genpy does the same; rosb
 
 from __future__ import annotations
 
-import keyword
 import struct
 from collections.abc import Callable
 from typing import Any
 
 from rostools.errors import InvalidDataError
+from rostools.msgs.codegen import Source, attr_name, element
 from rostools.msgs.message import Duration, Message, Time
 from rostools.msgs.spec import Field, MsgSpec
 from rostools.msgs.store import TypeStore
@@ -38,11 +38,6 @@ class EncodeError(InvalidDataError):
     """A message whose field values cannot be serialised."""
 
 
-def attr_name(field_name: str) -> str:
-    """The Python attribute for a ROS field; keywords get a ``_`` suffix, as in genpy."""
-    return field_name + "_" if keyword.iskeyword(field_name) else field_name
-
-
 #: What a generated decoder can raise on bytes that lie about their type, besides
 #: ``DecodeError``: callers of a raw decoder turn these into one.
 DECODE_ERRORS = (struct.error, IndexError, ValueError, OverflowError, MemoryError)
@@ -52,37 +47,12 @@ def _short() -> None:
     raise DecodeError("message is shorter than its type says")
 
 
-class _Gen:
-    """Accumulates generated source lines and the objects they refer to."""
+class _Gen(Source):
+    """A codec generator: the source of one function, and the codec it asks for nested types."""
 
     def __init__(self, codec: Codec) -> None:
+        super().__init__()
         self.codec = codec
-        self.lines: list[str] = []
-        self.env: dict[str, Any] = {}
-        self.counter = 0
-        self.indent = "    "
-
-    def ref(self, obj: Any, prefix: str = "k") -> str:
-        for name, value in self.env.items():
-            if value is obj:
-                return name
-        name = f"_{prefix}{len(self.env)}"  # '_' keeps refs apart from fresh() locals
-        self.env[name] = obj
-        return name
-
-    def fresh(self, prefix: str) -> str:
-        self.counter += 1
-        return f"{prefix}{self.counter}"
-
-    def line(self, text: str) -> None:
-        self.lines.append(self.indent + text)
-
-    def compile(self, header: str, name: str) -> Any:
-        params = "".join(f", {k}={k}" for k in self.env)
-        source = f"{header[:-2]}{params}):\n" + "\n".join(self.lines) + "\n"
-        namespace: dict[str, Any] = dict(self.env)
-        exec(compile(source, f"<rostools codec {name}>", "exec"), namespace)  # noqa: S102
-        return namespace[header.split()[1].split("(")[0]]
 
 
 class _DecodeGen(_Gen):
@@ -183,7 +153,7 @@ class _DecodeGen(_Gen):
         else:
             count = self.read_count() if f.length is None else str(f.length)
             self.flush()
-            element = Field("_", f.base, f.base, False, None)
+            one = element(f.base)
             self.check_count(count, f.base)
             items = self.fresh("a")
             self.line(f"{items} = []")
@@ -191,7 +161,7 @@ class _DecodeGen(_Gen):
             self.indent += "    "
             if f.base in ("string", "time", "duration"):
                 item = self.fresh("e")
-                self.field(element, item)
+                self.field(one, item)
                 self.flush()
                 self.line(f"{items}.append({item})")
             else:
@@ -276,7 +246,7 @@ class _EncodeGen(_Gen):
             self.line(f"for {item} in {var}:")
             self.indent += "    "
             if f.base in ("string", "time", "duration"):
-                self.field(Field("_", f.base, f.base, False, None), item)
+                self.field(element(f.base), item)
                 self.flush()
             else:
                 encode = self.ref(self.codec.encoder(f.base), "e")
@@ -341,7 +311,7 @@ class Codec:
             root = gen.message(spec, None)
             gen.flush()
             gen.line(f"return {root}, pos")
-            fn = self._decoders[name] = gen.compile("def decode(buf, pos):", name)
+            fn = self._decoders[name] = gen.compile("decode(buf, pos)", "codec", name, bind=True)
         return fn
 
     def encoder(self, name: str) -> Callable[[Any, Callable[[Any], Any]], None]:
@@ -351,9 +321,7 @@ class Codec:
             gen = _EncodeGen(self)
             gen.message(self.store.msg(name), "msg")
             gen.flush()
-            if not gen.lines:
-                gen.line("pass")
-            fn = self._encoders[name] = gen.compile("def encode(msg, w):", name)
+            fn = self._encoders[name] = gen.compile("encode(msg, w)", "codec", name, bind=True)
         return fn
 
     def message_class(self, name: str) -> type[Message]:
@@ -370,7 +338,7 @@ class Codec:
                 return f"_bytes({f.length or 0})"
             if f.length is None:
                 return "[]"
-            one = self._default(Field("_", f.base, f.base, False, None))
+            one = self._default(element(f.base))
             return f"[{one} for _ in _range({f.length})]"
         if f.base == "string":
             return "''"
@@ -400,22 +368,17 @@ class Codec:
             if c.name not in slots and not hasattr(Message, c.name):  # never over machinery
                 namespace[c.name] = c.value
         cls: type[Message] = type(spec.name.replace("/", "__"), (Message,), namespace)
-        cls.__qualname__ = spec.name
+        cls.__qualname__ = name = spec.name
         # The generated names start with "_", which no ROS field name can (spec.py).
-        init_lines = [
-            f"    _self.{a} = {self._default(f)} if {a} is _U else {a}"
-            for a, f in zip(slots, spec.fields, strict=True)
-        ] or ["    pass"]
-        params = "".join(f", {a}=_U" for a in slots)
-        source = f"def __init__(_self{params}):\n" + "\n".join(init_lines) + "\n"
-        env: dict[str, Any] = {
+        init = Source({
             "_U": _UNSET, "_Time": Time, "_Duration": Duration, "_cls": self.message_class,
             "_bytes": bytes, "_range": range,
-        }  # fmt: skip
-        exec(compile(source, f"<rostools init {spec.name}>", "exec"), env)  # noqa: S102
-        setattr(cls, "__init__", env["__init__"])  # noqa: B010
+        })  # fmt: skip
+        for a, f in zip(slots, spec.fields, strict=True):
+            init.line(f"_self.{a} = {self._default(f)} if {a} is _U else {a}")
+        params = "".join(f", {a}=_U" for a in slots)
+        setattr(cls, "__init__", init.compile(f"__init__(_self{params})", "init", name))  # noqa: B010
         codec = self
-        name = spec.name
 
         def deserialize(klass: type[Message], data: Any) -> Any:
             return codec.decode(name, data)

@@ -20,6 +20,7 @@ from typing import Any
 
 from rostools.errors import UsageError
 from rostools.msgs.codec import STRUCT_CODES, Codec
+from rostools.msgs.codegen import Source, element
 from rostools.msgs.fieldpath import FieldPath, Step
 from rostools.msgs.spec import Field
 
@@ -75,28 +76,13 @@ def fixed_message_size(codec: Codec, name: str) -> int | None:
     return cache[name]
 
 
-class _Gen:
+class _Gen(Source):
     """Source of one ``f(buf, pos)`` function; ``off`` is a constant not yet added to pos."""
 
     def __init__(self, codec: Codec) -> None:
+        super().__init__({"_U32": _U32, "_short": _short, "_index": _index_error})
         self.codec = codec
-        self.lines: list[str] = []
-        self.env: dict[str, Any] = {"_U32": _U32, "_short": _short, "_index": _index_error}
-        self.indent = "    "
         self.off = 0
-        self.counter = 0
-
-    def fresh(self, prefix: str) -> str:
-        self.counter += 1
-        return f"{prefix}{self.counter}"
-
-    def ref(self, obj: Any) -> str:
-        name = f"_r{len(self.env)}"
-        self.env[name] = obj
-        return name
-
-    def line(self, text: str) -> None:
-        self.lines.append(self.indent + text)
 
     def at(self) -> str:
         return f"pos + {self.off}" if self.off else "pos"
@@ -131,13 +117,13 @@ class _Gen:
                     self.skip(g)
             return
         n = self.count(f)
-        element = Field("_", f.base, f.base, False, None)
-        size = fixed_size(self.codec, element)
+        one = element(f.base)
+        size = fixed_size(self.codec, one)
         self.flush()
         if size is not None:
             self.line(f"pos += {n} * {size}")
             return
-        self.loop(n, element, n)
+        self.loop(n, one, n)
 
     def loop(self, n: str, element: Field, bound: str) -> None:
         """Skip ``n`` elements of a variable size (``bound`` of them are in the message)."""
@@ -224,12 +210,8 @@ class _Gen:
         self.indent = self.indent[:-4]
         self.line(f"return [{sub}(buf, p) for p in {starts}[{picked}]]")
 
-    def compile(self, name: str) -> Callable[..., Any]:
-        params = "".join(f", {k}={k}" for k in self.env)
-        source = f"def extract(buf, pos=0{params}):\n" + "\n".join(self.lines) + "\n"
-        namespace: dict[str, Any] = dict(self.env)
-        exec(compile(source, f"<rostools extract {name}>", "exec"), namespace)  # noqa: S102
-        fn: Callable[..., Any] = namespace["extract"]
+    def extractor(self, name: str) -> Callable[..., Any]:
+        fn: Callable[..., Any] = self.compile("extract(buf, pos=0)", "extract", name, bind=True)
         return fn
 
 
@@ -240,7 +222,7 @@ def _compile(codec: Codec, element: Field, steps: tuple[Step, ...]) -> Callable[
         gen.walk(element.base, steps)
     else:
         gen.line(f"return {gen.read(element)}")
-    return gen.compile(element.base)
+    return gen.extractor(element.base)
 
 
 def extractor(codec: Codec, type_name: str, path: FieldPath, name: str = "") -> Extractor:
@@ -260,7 +242,7 @@ def extractor(codec: Codec, type_name: str, path: FieldPath, name: str = "") -> 
     gen = _Gen(codec)
     gen.walk(type_name, path.steps)
     # ``pos`` defaults to 0: called with the message alone, with no wrapper in between
-    return gen.compile(f"{type_name}/{path.text}")
+    return gen.extractor(f"{type_name}/{path.text}")
 
 
 def _sliced(path: FieldPath) -> bool:

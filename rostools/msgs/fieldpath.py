@@ -11,7 +11,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from rostools.errors import UsageError
-from rostools.msgs.codec import attr_name
+from rostools.msgs.codegen import attr_name
 from rostools.msgs.spec import BUILTIN_TYPES, Field
 from rostools.msgs.store import TypeStore
 

@@ -13,7 +13,8 @@ import math
 from typing import Any
 
 from rostools.errors import UsageError
-from rostools.msgs.codec import BYTE_TYPES, Codec, attr_name
+from rostools.msgs.codec import BYTE_TYPES, Codec
+from rostools.msgs.codegen import attr_name
 from rostools.msgs.message import Duration, Message, Time
 from rostools.msgs.spec import HEADER, Field, MsgSpec
 

@@ -15,28 +15,24 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
-from rostools.msgs.codec import BYTE_TYPES, STRUCT_CODES, Codec, attr_name
+from rostools.msgs.codec import BYTE_TYPES, STRUCT_CODES, Codec
+from rostools.msgs.codegen import Source, attr_name, element
 from rostools.msgs.message import Time
 from rostools.msgs.spec import Field
 
 Plain = Callable[[Any], Any]
 
 
-class _PlainGen:
+class _PlainGen(Source):
     def __init__(self, codec: Codec) -> None:
+        super().__init__({"_list": list})
         self.codec = codec
-        self.env: dict[str, Any] = {"_list": list}
-
-    def ref(self, obj: Any) -> str:
-        name = f"k{len(self.env)}"
-        self.env[name] = obj
-        return name
 
     def value(self, f: Field, expr: str) -> str:
         if f.is_array:
             if f.base in BYTE_TYPES or f.base in STRUCT_CODES or f.base == "string":
                 return f"_list({expr})"
-            item = to_plain(self.codec, Field("_", f.base, f.base, False, None))
+            item = to_plain(self.codec, element(f.base))
             return f"[{self.ref(item)}(v) for v in {expr}]"
         if f.base in ("time", "duration"):
             return f"{{'secs': {expr}.secs, 'nsecs': {expr}.nsecs}}"
@@ -60,10 +56,8 @@ def _generated(codec: Codec, value_type: Field, gen: _PlainGen, kind: str, wrap:
     key = (kind, value_type.type, value_type.is_array)
     fn = codec.store.cache.get(key)
     if fn is None:
-        body = wrap.replace("{}", gen.value(value_type, "m"))
-        source = f"def {kind}(m):\n    return {body}\n"
-        exec(compile(source, f"<rostools {kind} {value_type.type}>", "exec"), gen.env)  # noqa: S102
-        fn = codec.store.cache[key] = gen.env[kind]
+        gen.line("return " + wrap.replace("{}", gen.value(value_type, "m")))
+        fn = codec.store.cache[key] = gen.compile(f"{kind}(m)", kind, value_type.type)
     return fn
 
 
@@ -117,7 +111,7 @@ class _JsonGen(_PlainGen):
                 return f"{{_is({expr})}}"
             if f.base == "string":
                 return f"{{_each(_s, {expr})}}"
-            item = to_json(self.codec, Field("_", f.base, f.base, False, None))
+            item = to_json(self.codec, element(f.base))
             return f"{{_each({self.ref(item)}, {expr})}}"
         if f.base in ("time", "duration"):
             return f'{{{{"secs":{{{expr}.secs}},"nsecs":{{{expr}.nsecs}}}}}}'
@@ -185,9 +179,9 @@ def csv_header(codec: Codec, value_type: Field, value: Any, options: CsvOptions)
 
     def walk(f: Field, v: Any, label: str) -> None:
         if f.is_array:
-            element = Field("_", f.base, f.base, False, None)
+            one = element(f.base)
             for i, item in enumerate(v):
-                walk(element, item, f"{label}{i}")
+                walk(one, item, f"{label}{i}")
         elif f.base in STRUCT_CODES or f.base in ("string", "time", "duration"):
             columns.append(label)
         else:
@@ -199,46 +193,40 @@ def csv_header(codec: Codec, value_type: Field, value: Any, options: CsvOptions)
     return "%time," + ",".join(columns)
 
 
-class _CsvGen:
+class _CsvGen(Source):
     def __init__(self, codec: Codec, options: CsvOptions) -> None:
+        super().__init__({"_str": str, "_map": map})
         self.codec = codec
         self.options = options
-        self.env: dict[str, Any] = {"_str": str, "_map": map}
-        self.lines: list[str] = []
-        self.counter = 0
 
-    def ref(self, obj: Any) -> str:
-        name = f"k{len(self.env)}"
-        self.env[name] = obj
-        return name
-
-    def emit(self, f: Field, expr: str, indent: str) -> None:
+    def emit(self, f: Field, expr: str) -> None:
         if f.is_array:
             if f.base == "bool":
-                self.lines.append(f"{indent}x(['1' if v else '0' for v in {expr}])")
+                self.line(f"x(['1' if v else '0' for v in {expr}])")
             elif f.base in STRUCT_CODES:
-                self.lines.append(f"{indent}x(_map(_str, {expr}))")
+                self.line(f"x(_map(_str, {expr}))")
             elif f.base == "string":
-                self.lines.append(f"{indent}x({expr})")
+                self.line(f"x({expr})")
             else:
-                self.counter += 1
-                var = f"e{self.counter}"
-                self.lines.append(f"{indent}for {var} in {expr}:")
-                self.emit(Field("_", f.base, f.base, False, None), var, indent + "    ")
+                var = self.fresh("e")
+                self.line(f"for {var} in {expr}:")
+                self.indent += "    "
+                self.emit(element(f.base), var)
+                self.indent = self.indent[:-4]
         elif f.base == "bool":
-            self.lines.append(f"{indent}a('1' if {expr} else '0')")
+            self.line(f"a('1' if {expr} else '0')")
         elif f.base in STRUCT_CODES:
-            self.lines.append(f"{indent}a(_str({expr}))")
+            self.line(f"a(_str({expr}))")
         elif f.base == "string":
-            self.lines.append(f"{indent}a({expr})")
+            self.line(f"a({expr})")
         elif f.base == "time":
-            self.lines.append(f"{indent}a(_str({expr}.secs * 1000000000 + {expr}.nsecs - off))")
+            self.line(f"a(_str({expr}.secs * 1000000000 + {expr}.nsecs - off))")
         elif f.base == "duration":
-            self.lines.append(f"{indent}a(_str({expr}.secs * 1000000000 + {expr}.nsecs))")
+            self.line(f"a(_str({expr}.secs * 1000000000 + {expr}.nsecs))")
         else:
             for f2 in self.codec.store.msg(f.base).fields:
                 if self.options.keep(f2):
-                    self.emit(f2, f"{expr}.{attr_name(f2.name)}", indent)
+                    self.emit(f2, f"{expr}.{attr_name(f2.name)}")
 
 
 def csv_row(codec: Codec, value_type: Field, options: CsvOptions) -> Callable[[Any, int], str]:
@@ -247,12 +235,11 @@ def csv_row(codec: Codec, value_type: Field, options: CsvOptions) -> Callable[[A
     fn = codec.store.cache.get(key)
     if fn is None:
         gen = _CsvGen(codec, options)
-        gen.emit(value_type, "m", "    ")
-        body = "\n".join(gen.lines) or "    pass"
-        source = f"def row(m, off=0):\n    r = []\n    a = r.append\n    x = r.extend\n{body}\n"
-        source += "    return ','.join(r)\n"
-        exec(compile(source, f"<rostools csv {value_type.type}>", "exec"), gen.env)  # noqa: S102
-        fn = codec.store.cache[key] = gen.env["row"]
+        for line in ("r = []", "a = r.append", "x = r.extend"):
+            gen.line(line)
+        gen.emit(value_type, "m")
+        gen.line("return ','.join(r)")
+        fn = codec.store.cache[key] = gen.compile("row(m, off=0)", "csv", value_type.type)
     return fn  # type: ignore[no-any-return]
 
 

@@ -12,7 +12,8 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any, Protocol
 
-from rostools.msgs.codec import BYTE_TYPES, STRUCT_CODES, Codec, attr_name
+from rostools.msgs.codec import BYTE_TYPES, STRUCT_CODES, Codec
+from rostools.msgs.codegen import Source, attr_name, element
 from rostools.msgs.message import Time
 from rostools.msgs.spec import Field, MsgSpec
 
@@ -126,20 +127,15 @@ def _escape(text: str) -> str:
     )
 
 
-class _TextGen:
+class _TextGen(Source):
     def __init__(self, codec: Codec, options: TextOptions) -> None:
-        self.codec = codec
-        self.options = options
-        self.env: dict[str, Any] = {
+        super().__init__({
             "_q": quote, "_strs": _string_list, "_nw": _num_width, "_list": _list,
             "_chars": _char_array, "_time": _time, "_items": _items, "_W": options.width,
-        }  # fmt: skip
+        })  # fmt: skip
+        self.codec = codec
+        self.options = options
         self.parts: list[str] = []  # f-string source pieces
-
-    def ref(self, obj: Any) -> str:
-        name = f"k{len(self.env)}"
-        self.env[name] = obj
-        return name
 
     def lit(self, text: str) -> None:
         self.parts.append(_escape(text))
@@ -192,14 +188,12 @@ class _TextGen:
         elif f.base == "string":
             self.expr(f"_strs({expr}, {self.ref(indent)})")
         else:  # time, duration and messages: one "- " item per element
-            element = Field("_", f.base, f.base, False, None)
-            item = formatter(self.codec, element, self.options, indent + "  ")
+            item = formatter(self.codec, element(f.base), self.options, indent + "  ")
             self.expr(f"_items({expr}, {self.ref(indent + '- ')}, {self.ref(item)}, offset)")
 
-    def compile(self, name: str) -> TextFormatter:
-        source = 'def fmt(m, offset=None):\n    return f"' + "".join(self.parts) + '"\n'
-        exec(compile(source, f"<rostools text {name}>", "exec"), self.env)  # noqa: S102
-        fn: TextFormatter = self.env["fmt"]
+    def formatter(self, name: str) -> TextFormatter:
+        self.line('return f"' + "".join(self.parts) + '"')
+        fn: TextFormatter = self.compile("fmt(m, offset=None)", "text", name)
         return fn
 
 
@@ -222,7 +216,7 @@ def formatter(
         gen = _TextGen(codec, options)
         gen.value(value_type, "m", indent)
         gen.lit(suffix)
-        fn = codec.store.cache[key] = gen.compile(value_type.type)
+        fn = codec.store.cache[key] = gen.formatter(value_type.type)
     return fn
 
 

@@ -13,6 +13,7 @@ from collections.abc import Callable
 from typing import Any
 
 from rostools.errors import NotFoundError, UsageError
+from rostools.msgs import learnt
 from rostools.msgs.codec import Codec
 from rostools.msgs.message import Message
 from rostools.msgs.store import TypeStore
@@ -22,8 +23,9 @@ from rostools.msgs.topictype import TopicType
 #: and the API builds types on the caller's thread and on the loop's.
 _lock = threading.RLock()
 _store: TypeStore | None = None
-#: (type, md5sum) -> decoder, for types learnt from a publisher or a bag.
-_decoders: dict[tuple[str, str], Callable[[Any], Message]] = {}
+#: (type, md5sum, definition) -> decoder, for types learnt from a publisher or a bag: the
+#: codecs behind them are ``msgs/learnt``'s, and as many are kept.
+_decoders: dict[tuple[str, str, str], Callable[[Any], Message]] = {}
 
 Values = Message | dict[str, Any] | list[Any] | str | None
 
@@ -101,7 +103,7 @@ def decoder(type_name: str, md5sum: str, definition: str) -> Callable[[Any], Mes
     The shared store's class when it has the type with the same md5sum, so that decoded
     messages compare equal to ones built with ``message``; else the peer's definition.
     """
-    key = (type_name, md5sum)
+    key = (type_name, md5sum, definition)
     found = _decoders.get(key)
     if found is not None:
         return found
@@ -110,7 +112,7 @@ def decoder(type_name: str, md5sum: str, definition: str) -> Callable[[Any], Mes
         if shared.has_msg(type_name) and shared.md5(type_name) == md5sum:
             codec = Codec.of(shared)
         else:
-            codec = Codec.of(shared.with_definition(type_name, definition))
+            codec = learnt.codec(shared, type_name, md5sum, definition)
         for dep in codec.store.dependencies(type_name):
             codec.message_class(dep)
         codec.message_class(type_name)
@@ -120,6 +122,8 @@ def decoder(type_name: str, md5sum: str, definition: str) -> Callable[[Any], Mes
             msg: Message = decode(data, 0)[0]
             return msg
 
+        if len(_decoders) >= learnt.MAX_LEARNT:
+            _decoders.clear()
         _decoders[key] = whole
         return whole
 

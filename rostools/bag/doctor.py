@@ -118,12 +118,12 @@ def _connections(reader: BagReader, report: Checkup) -> None:
 
 
 def _decoder(conn: Connection, ros1: set[int]) -> Any:
-    from rostools.msgs.codec import Codec
+    from rostools.msgs import learnt
     from rostools.msgs.store import TypeStore, md5_of
 
     if conn.id not in ros1 or not md5_of(conn.type, conn.definition):
         return None
-    return Codec.of(TypeStore([]).with_definition(conn.type, conn.definition)).decoder(conn.type)
+    return learnt.decoder(TypeStore([]), conn.type, conn.md5sum, conn.definition)
 
 
 def _messages(

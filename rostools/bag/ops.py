@@ -222,12 +222,11 @@ def compile_filter(
 
 def _decoder(conn: Connection) -> Callable[[Any], Any]:
     """Decode a connection's messages with the definition stored in the bag."""
-    from rostools.msgs.codec import Codec
+    from rostools.msgs import learnt
     from rostools.msgs.store import TypeStore
 
     try:
-        store = TypeStore.default().with_definition(conn.type, conn.definition)
-        codec = Codec.of(store)
+        codec = learnt.codec(TypeStore.default(), conn.type, conn.md5sum, conn.definition)
         codec.decoder(conn.type)
     except RostoolsError as err:
         raise UnsupportedBagError(

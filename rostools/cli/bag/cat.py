@@ -53,8 +53,7 @@ class _Lines:
     def __init__(
         self, conn: Connection, fmt: CatFormat, raw: bool, ros2: Ros2Types | None = None
     ) -> None:
-        from rostools.msgs import plain
-        from rostools.msgs.codec import Codec
+        from rostools.msgs import learnt, plain
         from rostools.msgs.store import TypeStore
         from rostools.msgs.text import message_type
 
@@ -66,8 +65,7 @@ class _Lines:
             self._ros2(conn, ros2)
             return
         # The bag's definition first; a bag that left it out falls back to the built-in types.
-        store = TypeStore.default().with_definition(conn.type, conn.definition)
-        codec = Codec.of(store)
+        codec = learnt.codec(TypeStore.default(), conn.type, conn.md5sum, conn.definition)
         self.decode = codec.decoder(conn.type)
         value_type = message_type(conn.type)
         self.as_json = plain.to_json(codec, value_type)

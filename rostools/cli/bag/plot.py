@@ -149,13 +149,14 @@ def _samplers(
 ) -> dict[int, Sampler]:
     """A sampler per connection of the topics named, each checked before anything is read."""
     from rostools.cli.settings import type_store
+    from rostools.msgs import learnt
     from rostools.msgs.sample import Sampler
 
     store = type_store(None)
     found: dict[int, Sampler] = {}
     for conn in reader.connections:
         if conn.topic in paths:
-            own = store.with_definition(conn.type, conn.definition)
+            own = learnt.codec(store, conn.type, conn.md5sum, conn.definition).store
             topic = conn.topic
             found[conn.id] = Sampler(own, conn.type, topic, paths[topic], plot.sink, stamp, keep)
     return found

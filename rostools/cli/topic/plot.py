@@ -76,6 +76,7 @@ class _Live:
 
     def sampler(self, topic: str, header: dict[str, str]) -> Sampler:
         """The sampler for ``topic`` as this publisher's header defines its type."""
+        from rostools.msgs import learnt
         from rostools.msgs.sample import Sampler
 
         kind = header.get("type", "*")
@@ -83,7 +84,7 @@ class _Live:
         key = (topic, kind, header.get("md5sum", ""), definition)
         found = self.samplers.get(key)
         if found is None:
-            store = self.store.with_definition(kind, definition)
+            store = learnt.codec(self.store, *key[1:]).store
             paths = self.paths[topic]
             found = Sampler(store, kind, topic, paths, self.plot.sink, self.stamp, self.keep)
             self.samplers[key] = found

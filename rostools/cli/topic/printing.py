@@ -123,7 +123,9 @@ class Echo:
         key = (type_name, md5, definition)
         found = self.printers.get(key)
         if found is None:
-            store = self.store.with_definition(type_name, definition)
+            from rostools.msgs import learnt
+
+            store = learnt.codec(self.store, type_name, md5, definition).store
             found = self.printers[key] = Printer(store, type_name, topic, self.opts)
         return found
 

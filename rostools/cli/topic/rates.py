@@ -230,27 +230,24 @@ def _filter(
     """
     if not expr:
         return None
-    from rostools.msgs.codec import DECODE_ERRORS, Codec, DecodeError
+    from rostools.msgs import learnt
+    from rostools.msgs.codec import DECODE_ERRORS, DecodeError
     from rostools.msgs.expr import compile_expression
     from rostools.msgs.store import TypeStore
 
     wanted = compile_expression(expr)
     base = TypeStore.default()
-    decoders: dict[tuple[str, str], Any] = {}
 
     def keep(frames: list[Frame], conn: InboundConnection, topic: str) -> list[Frame]:
         header = conn.header or {}
-        key = (header.get("type", ""), header.get("message_definition", ""))
-        decode = decoders.get(key)
-        if decode is None:
-            store = base.with_definition(*key)
-            decode = decoders[key] = Codec.of(store).decoder(key[0])
+        kind, md5 = header.get("type", ""), header.get("md5sum", "")
+        decode = learnt.decoder(base, kind, md5, header.get("message_definition", ""))
         kept = []
         for data in frames:
             try:
                 msg = decode(data, 0)[0]
             except (DecodeError, *DECODE_ERRORS) as err:
-                why = f"a message on {topic} does not decode as {key[0]}: {err}"
+                why = f"a message on {topic} does not decode as {kind}: {err}"
                 skip(DecodeError(why), conn, data)
                 continue
             if wanted(topic, msg):
@@ -301,6 +298,7 @@ def delay(
     fmt: FormatOpt = None,
 ) -> None:
     """Now minus header.stamp of each message (rostopic delay); reads only the stamp."""
+    from rostools.msgs import learnt
     from rostools.msgs.codec import DecodeError
     from rostools.msgs.store import TypeStore
     from rostools.rates import DEFAULT_WINDOW, DelayMeter, format_delay
@@ -316,8 +314,8 @@ def delay(
         header = conn.header or {}
         kind = header.get("type", "")
         if kind not in checked:
-            store = base.with_definition(kind, header.get("message_definition", ""))
-            checked[kind] = store.msg(kind).has_header
+            md5, definition = header.get("md5sum", ""), header.get("message_definition", "")
+            checked[kind] = learnt.codec(base, kind, md5, definition).store.msg(kind).has_header
         if not checked[kind]:
             raise NotFoundError(f"{t} carries {kind}, which has no Header to take a stamp from")
         ref = runner.clock.now() / 1e9  # ROS time: /clock under sim time, else the wall clock

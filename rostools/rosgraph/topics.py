@@ -2,16 +2,16 @@
 
 from __future__ import annotations
 
-from rostools.errors import RostoolsError
-from rostools.names import ANYTYPE, make_global_ns
+# ``/topic/field`` is split in msgs/topicpath; the CLI's modules still import it from here.
+from rostools.msgs.topicpath import field_problem as field_problem
+from rostools.msgs.topicpath import split_field as split_field
+from rostools.names import make_global_ns
 from rostools.rosgraph.views import Record
 
 TYPE_CHECKING = False  # ``typing`` is 5-10 ms of start-up; only annotations use it
 if TYPE_CHECKING:
-    from collections.abc import Iterator
     from typing import Any
 
-    from rostools.msgs.store import TypeStore
     from rostools.rosgraph.masterapi import MasterProxy
 
 
@@ -62,60 +62,3 @@ def host_of(uri: str) -> str:
     from urllib.parse import urlsplit
 
     return urlsplit(uri).hostname or "unknown"
-
-
-class TopicRef(Record):
-    """A topic as the user named it: the real topic, its type, and a field path after it."""
-
-    __slots__ = ("field", "topic", "type")
-
-    def __init__(self, topic: str, type: str | None, field: str) -> None:
-        self.topic = topic
-        self.type = type
-        self.field = field
-
-
-def _prefixes(
-    name: str, types: dict[str, str], store: TypeStore | None
-) -> Iterator[tuple[str, str, str, str | None]]:
-    """The advertised topics that ``name`` extends, longest first.
-
-    Each as (topic, type, the field path after it, why that path is not a field of the type):
-    the last is None when it is one, or when the type is unknown here.
-    """
-    name = name.rstrip("/") or "/"
-    for topic in sorted((t for t in types if name.startswith(t + "/")), key=len, reverse=True):
-        kind, path = types[topic], name[len(topic) + 1 :]
-        error = None
-        if store is not None and kind != ANYTYPE and store.has_msg(kind):
-            from rostools.msgs import fieldpath  # only when a path has to be checked
-
-            try:
-                fieldpath.resolve(store, kind, path)
-            except RostoolsError as err:
-                error = str(err)
-        yield topic, kind, path, error
-
-
-def field_problem(name: str, types: dict[str, str], store: TypeStore) -> str | None:
-    """Why ``/topic/field/path`` matched no topic when a prefix of it is one: its field error."""
-    for topic, kind, _, error in _prefixes(name, types, store):
-        if error is not None:
-            return f"{topic} is {kind}: {error}"
-    return None
-
-
-def split_field(name: str, types: dict[str, str], store: TypeStore | None) -> TopicRef | None:
-    """Find the topic in ``/topic/field/path`` as rostopic does.
-
-    An exact match first, else the longest advertised prefix whose type has the field (types
-    unknown here are accepted).
-    """
-    exact = name.rstrip("/") or "/"
-    if exact in types:
-        kind = types[exact]
-        return TopicRef(exact, None if kind == ANYTYPE else kind, "")
-    for topic, kind, path, error in _prefixes(name, types, store):
-        if error is None:
-            return TopicRef(topic, None if kind == ANYTYPE else kind, path)
-    return None

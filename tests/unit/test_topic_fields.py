@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from rostools.msgs.store import TypeStore
-from rostools.rosgraph.topics import field_problem, split_field
+from rostools.msgs.topicpath import field_problem, split_field
 
 TYPES = {"/v": "geometry_msgs/Point", "/odom": "nav_msgs/Odometry", "/any": "*"}
 

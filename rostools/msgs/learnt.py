@@ -43,19 +43,16 @@ def codec(base: TypeStore, type_name: str, md5sum: str, definition: str) -> Code
     if not definition or definition.isspace():  # as with_definition's strip(), without a copy
         return Codec.of(base.with_definition(type_name, definition))
     key = (type_name, md5sum, definition)
-    found = _shared.get(key)
-    if found is not None:
-        return found
     own: dict[Key, Codec] = base.cache.setdefault("learnt", {})
-    found = own.get(key)
+    found = _shared.get(key) or own.get(key)
     if found is not None:
         return found
     alone = TypeStore([]).with_definition(type_name, definition)
-    if _complete(alone, type_name):
-        found = _keep(_shared, key, Codec.of(alone))
-    else:
-        found = _keep(own, key, Codec.of(base.with_definition(type_name, definition)))
-    return found
+    try:
+        alone.dependencies(type_name)
+    except NotFoundError:  # a type left out: the caller's store completes it
+        return _keep(own, key, Codec.of(base.with_definition(type_name, definition)))
+    return _keep(_shared, key, Codec.of(alone))
 
 
 def decoder(
@@ -63,15 +60,6 @@ def decoder(
 ) -> Callable[[Any, int], tuple[Any, int]]:
     """``decode(buf, pos) -> (message, new_pos)`` for a type as ``definition`` defines it."""
     return codec(base, type_name, md5sum, definition).decoder(type_name)
-
-
-def _complete(store: TypeStore, type_name: str) -> bool:
-    """Whether ``store`` resolves the type and every type nested in it."""
-    try:
-        store.dependencies(type_name)
-    except NotFoundError:
-        return False
-    return True
 
 
 def _keep(table: dict[Key, Codec], key: Key, found: Codec) -> Codec:

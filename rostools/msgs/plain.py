@@ -210,9 +210,12 @@ class _CsvGen(Source):
             else:
                 var = self.fresh("e")
                 self.line(f"for {var} in {expr}:")
+                loop = len(self.lines)
                 self.indent += "    "
                 self.emit(element(f.base), var)
                 self.indent = self.indent[:-4]
+                if len(self.lines) == loop:  # every field of the element left out (--nostr)
+                    self.lines.pop()
         elif f.base == "bool":
             self.line(f"a('1' if {expr} else '0')")
         elif f.base in STRUCT_CODES:

@@ -103,6 +103,18 @@ def test_csv_header_and_row() -> None:
     assert csv_row(CODEC, message_type("std_msgs/Bool"), CsvOptions())(flag, 0) == "1"
 
 
+def test_csv_nostr_of_an_array_of_messages_of_strings() -> None:
+    """rostopic echo -p --nostr of a DiagnosticStatus with two KeyValues prints
+    ``%time,field.level`` and ``1000000005,1``; the row's generated source had a ``for``
+    with an empty body, and did not compile."""
+    pairs = [make("diagnostic_msgs/KeyValue", key=k, value=v) for k, v in ("ab", "cd")]
+    status = make("diagnostic_msgs/DiagnosticStatus", level=1, name="n", values=pairs)
+    vt = message_type("diagnostic_msgs/DiagnosticStatus")
+    nostr = CsvOptions(nostr=True)
+    assert csv_header(CODEC, vt, status, nostr) == "%time,field.level"
+    assert csv_row(CODEC, vt, nostr)(status, 0) == "1"
+
+
 def test_field_paths() -> None:
     store = CODEC.store
     path = fieldpath.resolve(store, "geometry_msgs/PoseStamped", "pose/position/x")

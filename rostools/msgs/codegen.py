@@ -30,8 +30,7 @@ class Source:
     """The source of one generated function: its lines, and the objects they refer to.
 
     ``env`` holds names the generator fixes in advance (helpers it calls by name); ``ref``
-    adds the rest. A ref starts with ``_`` and a local from ``fresh`` does not, and no ROS
-    field name starts with ``_`` (``spec.py``), so the three never meet.
+    adds the rest. Refs start with ``_`` and locals from ``fresh`` do not, so they never meet.
     """
 
     def __init__(self, env: dict[str, Any] | None = None) -> None:

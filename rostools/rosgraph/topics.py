@@ -3,8 +3,7 @@
 from __future__ import annotations
 
 # ``/topic/field`` is split in msgs/topicpath; the CLI's modules still import it from here.
-from rostools.msgs.topicpath import field_problem as field_problem
-from rostools.msgs.topicpath import split_field as split_field
+from rostools.msgs.topicpath import field_problem as field_problem, split_field as split_field
 from rostools.names import make_global_ns
 from rostools.rosgraph.views import Record
 

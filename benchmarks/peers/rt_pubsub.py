@@ -17,7 +17,7 @@ import time
 from rostools.msgs.codec import Codec
 from rostools.msgs.store import BuiltinSource, TypeStore
 from rostools.msgs.topictype import TopicType
-from rostools.node.node import Node
+from rostools.node.node import LiveNode
 
 
 async def publish(master: str, topic: str, size: int, seconds: float) -> None:
@@ -31,7 +31,7 @@ async def publish(master: str, topic: str, size: int, seconds: float) -> None:
     else:
         kind = "std_msgs/String"
         msg = codec.message_class(kind)("x" * max(size - 4, 0))
-    node = await Node("rt_pub", master).start()
+    node = await LiveNode("rt_pub", master).start()
     pub = await node.advertise(topic, TopicType.of(store, kind), queue_size=1000)
     payload = msg.serialize()
     while pub.subscriber_count == 0:
@@ -52,7 +52,7 @@ async def publish(master: str, topic: str, size: int, seconds: float) -> None:
 
 
 async def subscribe(master: str, topic: str, seconds: float) -> None:
-    node = await Node("rt_sub", master).start()
+    node = await LiveNode("rt_sub", master).start()
     state = {"n": 0, "bytes": 0, "start": 0.0}
 
     def on_frames(frames: list, conn: object, now: float) -> None:

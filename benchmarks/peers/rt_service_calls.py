@@ -11,7 +11,7 @@ import sys
 import time
 
 from rostools.msgs.store import BuiltinSource, TypeStore
-from rostools.node.node import Node
+from rostools.node.node import LiveNode
 from rostools.node.service import ServiceClient, ServiceType
 from rostools.rosgraph.masterapi import MasterProxy
 from rostools.rosgraph.serviceclient import BlockingServiceClient
@@ -32,7 +32,7 @@ def blocking(master: str, seconds: float) -> dict[str, float]:
 
 async def asynchronous(master: str, seconds: float) -> dict[str, float]:
     store = TypeStore([BuiltinSource()])
-    node = await Node("rt_caller", master).start()
+    node = await LiveNode("rt_caller", master).start()
     client = ServiceClient(
         node, "/trigger", ServiceType.of(store, "std_srvs/Trigger"), persistent=True
     )

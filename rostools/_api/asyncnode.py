@@ -1,8 +1,9 @@
 """``AsyncNode``: the API's one implementation of a node, on asyncio.
 
-It wraps ``rostools.node.Node`` (the node every command runs) and adds what a script wants:
-typed messages in and out, several subscriptions to one topic, waiting for a message,
-service calls and servers, parameters. The blocking ``Node`` runs this on a background loop.
+It wraps ``rostools.node.node.LiveNode`` (the node every command runs) and adds what a script
+wants: typed messages in and out, several subscriptions to one topic, waiting for a message,
+service calls and servers, parameters. The blocking ``rostools.Node`` runs this on a background
+loop.
 """
 
 from __future__ import annotations
@@ -22,7 +23,7 @@ from rostools._api.messages import Values
 from rostools.errors import NotFoundError, RostoolsError, TimeoutExpired, UsageError, one_line
 from rostools.msgs.message import Message
 from rostools.node.connection import Frame, InboundConnection
-from rostools.node.node import Node as CoreNode
+from rostools.node.node import LiveNode as CoreNode
 from rostools.node.notice import Notice
 from rostools.node.publisher import TopicPublisher as CorePublisher
 from rostools.node.service import ServiceClient, ServiceServer, ServiceType

@@ -20,7 +20,7 @@ from rostools.bag.follow import Follower
 from rostools.bag.recorder import Recorder, RecordOptions
 from rostools.errors import RostoolsError, TimeoutExpired, UsageError
 from rostools.msgs.message import Message, Time
-from rostools.node.node import Node as CoreNode
+from rostools.node.node import LiveNode as CoreNode
 
 #: How long a recording may take to subscribe and open its file before it gives up.
 START_TIMEOUT = 10.0

@@ -18,7 +18,7 @@ from rostools.bag.follow import Follower
 from rostools.bag.snapshot import SnapshotOptions, Snapshotter
 from rostools.bag.snapshot_srv import SnapshotRequest
 from rostools.errors import UsageError
-from rostools.node.node import Node as CoreNode
+from rostools.node.node import LiveNode as CoreNode
 
 
 class SnapshotRecorder(LiveRecorder):

@@ -22,7 +22,7 @@ from rostools.msgs.topictype import TopicType
 
 if TYPE_CHECKING:
     from rostools.node.connection import Frame, InboundConnection
-    from rostools.node.node import Node
+    from rostools.node.node import LiveNode
     from rostools.node.publisher import TopicPublisher
     from rostools.node.subscriber import Subscriber
 
@@ -85,7 +85,7 @@ class ClientGoalHandle:
 class ActionClient:
     """A client of the action ``name`` (``/fib``) with the types in ``types``."""
 
-    def __init__(self, node: Node, name: str, types: ActionTypes) -> None:
+    def __init__(self, node: LiveNode, name: str, types: ActionTypes) -> None:
         self.node = node
         self.name = node.resolve(name)
         self.types = types

@@ -25,7 +25,7 @@ from rostools.msgs.message import Time
 
 if TYPE_CHECKING:
     from rostools.node.connection import Frame, InboundConnection
-    from rostools.node.node import Node
+    from rostools.node.node import LiveNode
     from rostools.node.publisher import TopicPublisher
 
 log = logging.getLogger(__name__)
@@ -133,7 +133,7 @@ class ActionServer:
 
     def __init__(
         self,
-        node: Node,
+        node: LiveNode,
         name: str,
         types: ActionTypes,
         execute: Execute,

@@ -23,7 +23,7 @@ from typing import Any
 from rostools.errors import RostoolsError, UsageError
 from rostools.node.clock import RosClock
 from rostools.node.connection import Frame, InboundConnection
-from rostools.node.node import Node
+from rostools.node.node import LiveNode
 
 log = logging.getLogger(__name__)
 
@@ -120,7 +120,7 @@ def _matches(topic_type: str, globs: list[str]) -> bool:
 class Follower:
     """Subscribes to the chosen topics of a live graph; a subclass says what frames become."""
 
-    def __init__(self, node: Node, opts: LiveOptions) -> None:
+    def __init__(self, node: LiveNode, opts: LiveOptions) -> None:
         if not opts.regex:
             opts.topics = [node.resolve(t) for t in opts.topics]
         self.node = node

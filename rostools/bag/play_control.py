@@ -13,7 +13,7 @@ from collections.abc import Callable
 
 from rostools.bag.model import NS_PER_SEC
 from rostools.node.connection import Frame, InboundConnection
-from rostools.node.node import Node
+from rostools.node.node import LiveNode
 from rostools.node.service import ServiceType
 
 log = logging.getLogger(__name__)
@@ -46,7 +46,7 @@ class RateControl:
         self.last_ns: int | None = None
         self._warned = False
 
-    async def subscribe(self, node: Node) -> None:
+    async def subscribe(self, node: LiveNode) -> None:
         """Listen on the topic (any type with a Header first)."""
         await node.subscribe(self.topic, self._frames)
 

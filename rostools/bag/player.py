@@ -25,7 +25,7 @@ from rostools.errors import UsageError
 from rostools.msgs.topictype import TopicType
 from rostools.node.clock import CLOCK, TIME, tighten_timer_slack
 from rostools.node.connection import Frame
-from rostools.node.node import Node
+from rostools.node.node import LiveNode
 from rostools.node.publisher import TopicPublisher
 from rostools.node.session import first
 
@@ -85,7 +85,7 @@ class Status:
 class Player:
     """Publishes the messages of ``readers`` on ``node``."""
 
-    def __init__(self, node: Node, readers: Sequence[BagReader], opts: PlayOptions) -> None:
+    def __init__(self, node: LiveNode, readers: Sequence[BagReader], opts: PlayOptions) -> None:
         if opts.rate <= 0:
             raise UsageError("the rate (-r) must be positive")
         if opts.clock and opts.hz <= 0:

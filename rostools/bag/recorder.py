@@ -32,7 +32,7 @@ from rostools.bag.follow import (
 from rostools.errors import UsageError
 from rostools.msgs.topictype import TopicType
 from rostools.node.connection import Frame, InboundConnection
-from rostools.node.node import Node
+from rostools.node.node import LiveNode
 from rostools.node.publisher import TopicPublisher
 
 log = logging.getLogger(__name__)
@@ -190,7 +190,7 @@ class _Writer(threading.Thread):
 class Recorder(Follower):
     """Records topics of a live graph into ``.bag`` or MCAP files."""
 
-    def __init__(self, node: Node, opts: RecordOptions) -> None:
+    def __init__(self, node: LiveNode, opts: RecordOptions) -> None:
         opts.check()
         super().__init__(node, opts)
         self.opts = opts

@@ -28,7 +28,7 @@ from rostools.bag.snapshot_services import serve
 from rostools.bag.snapshot_srv import NO_DATA_MESSAGE, SnapshotRequest
 from rostools.errors import RostoolsError, UsageError
 from rostools.node.connection import Frame, InboundConnection
-from rostools.node.node import Node
+from rostools.node.node import LiveNode
 
 #: Files written at once unless ``--max-writes`` says otherwise; more triggers are refused.
 MAX_WRITES = 4
@@ -82,7 +82,7 @@ def check_remote_name(name: str) -> None:
 class Snapshotter(Follower):
     """Buffers topics of a live graph and writes snapshots of them on request."""
 
-    def __init__(self, node: Node, opts: SnapshotOptions) -> None:
+    def __init__(self, node: LiveNode, opts: SnapshotOptions) -> None:
         opts.check()
         super().__init__(node, opts)
         self.opts = opts

@@ -18,7 +18,7 @@ from rostools.bag.snapshot_srv import TRIGGER, TRIGGER_SNAPSHOT, SnapshotRequest
 from rostools.errors import NotFoundError, UnreachableError
 from rostools.names import namespace
 from rostools.node.connection import Frame, InboundConnection
-from rostools.node.node import Node
+from rostools.node.node import LiveNode
 from rostools.node.service import ServiceClient, ServiceType
 from rostools.node.session import first
 
@@ -26,7 +26,7 @@ from rostools.node.session import first
 CONNECT_TIMEOUT = 5.0
 
 
-async def find_recorder(node: Node, target: str | None) -> tuple[str, str]:
+async def find_recorder(node: LiveNode, target: str | None) -> tuple[str, str]:
     """The ``trigger_snapshot`` service and the node serving it, by node name or namespace."""
     if target is not None:
         name = node.resolve(target)
@@ -42,7 +42,7 @@ async def find_recorder(node: Node, target: str | None) -> tuple[str, str]:
     )
 
 
-async def call(node: Node, service: str, kind: ServiceType, request: bytes) -> str:
+async def call(node: LiveNode, service: str, kind: ServiceType, request: bytes) -> str:
     """Call one of the recorder's services; its message, or ``TriggerError``."""
     ok, message = decode_answer(await ServiceClient(node, service, kind).call(request))
     if not ok:
@@ -51,7 +51,7 @@ async def call(node: Node, service: str, kind: ServiceType, request: bytes) -> s
 
 
 async def request_snapshot(
-    node: Node,
+    node: LiveNode,
     target: str | None,
     request: SnapshotRequest,
     stop: asyncio.Event | None = None,
@@ -94,7 +94,7 @@ async def request_snapshot(
 
 
 async def _connected(
-    node: Node, topic: str, on_frames: Callable[[list[Frame], InboundConnection, float], None]
+    node: LiveNode, topic: str, on_frames: Callable[[list[Frame], InboundConnection, float], None]
 ) -> None:
     """Subscribe to ``topic`` and wait until a publisher is connected."""
     sub = await node.subscribe(topic, on_frames)

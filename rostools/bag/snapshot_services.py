@@ -25,7 +25,7 @@ from rostools.bag.recorder import STRING
 from rostools.bag.snapshot_job import SnapshotJob
 from rostools.bag.snapshot_srv import TRIGGER, TRIGGER_SNAPSHOT, SnapshotRequest, encode_answer
 from rostools.errors import RostoolsError
-from rostools.node.node import Node
+from rostools.node.node import LiveNode
 
 #: The topic each complete file is announced on, private to the node.
 WRITTEN = "~written"
@@ -34,7 +34,7 @@ WRITTEN = "~written"
 class Served(Protocol):
     """What the services steer: ``snapshot.Snapshotter``."""
 
-    node: Node
+    node: LiveNode
     selection: Selection
     announce: Callable[[SnapshotJob], None] | None
 

@@ -70,7 +70,7 @@ class DemoGraph:
         from rostools.msgs.codec import Codec
         from rostools.msgs.store import BuiltinSource, TypeStore
         from rostools.msgs.topictype import TopicType
-        from rostools.node.node import Node
+        from rostools.node.node import LiveNode
         from rostools.node.service import ServiceType
 
         store = TypeStore([BuiltinSource()])
@@ -84,8 +84,8 @@ class DemoGraph:
             return answer(req.a + req.b).serialize()
 
         # the demo's master is loopback-only, so its nodes are too, whatever the host's name
-        talker = await Node("talker", self.master_uri, host="127.0.0.1").start()
-        server = await Node("add_two_ints_server", self.master_uri, host="127.0.0.1").start()
+        talker = await LiveNode("talker", self.master_uri, host="127.0.0.1").start()
+        server = await LiveNode("add_two_ints_server", self.master_uri, host="127.0.0.1").start()
         try:
             pub = await talker.advertise("/chatter", TopicType.of(store, "std_msgs/String"))
             await server.advertise_service("/add_two_ints", srv_type, add)

@@ -13,7 +13,7 @@ if TYPE_CHECKING:
 
     from rostools.msgs.store import TypeStore
     from rostools.msgs.topictype import TopicType
-    from rostools.node.node import Node
+    from rostools.node.node import LiveNode
     from rostools.rosgraph.masterapi import MasterProxy
 
 DEFAULT_MASTER_URI = "http://localhost:11311"
@@ -113,7 +113,7 @@ def learn_type(s: Settings, topic: str, store: TypeStore) -> TypeStore:
     from rostools.node.session import run_node
     from rostools.rosgraph.masterapi import PROBE_TIMEOUT
 
-    async def main(node: Node, stop: asyncio.Event) -> TopicType:
+    async def main(node: LiveNode, stop: asyncio.Event) -> TopicType:
         return await learn_topic_type(node, topic, PROBE_TIMEOUT)
 
     learnt = run_node(

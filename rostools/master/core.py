@@ -14,7 +14,7 @@ from rostools.master.server import MasterServer
 from rostools.msgs.store import BuiltinSource, TypeStore
 from rostools.node.connection import Frame
 from rostools.node.listen import raise_descriptor_limit
-from rostools.node.node import Node
+from rostools.node.node import LiveNode
 from rostools.node.session import STOP_SIGNALS
 from rostools.rosgraph.network import (
     ANY_ADDRESS,
@@ -129,7 +129,7 @@ class _Rosout:
         local = master.host if is_loopback(master.host) else "127.0.0.1"
         self.uri = f"http://{local}:{master.port}/"
         self.host = host
-        self.node: Node | None = None
+        self.node: LiveNode | None = None
         self._watch: asyncio.Task[None] | None = None
 
     async def start(self) -> None:
@@ -154,13 +154,13 @@ class _Rosout:
             await self.node.close()
 
 
-async def start_rosout(master_uri: str, host: str) -> Node:
+async def start_rosout(master_uri: str, host: str) -> LiveNode:
     """roscore's /rosout node: every node's /rosout messages, republished on /rosout_agg."""
     from rostools.msgs.topictype import TopicType
 
     store = TypeStore([BuiltinSource()])
     log_type = TopicType.of(store, "rosgraph_msgs/Log")
-    node = await Node(
+    node = await LiveNode(
         "/rosout", master_uri, host="127.0.0.1" if host == "localhost" else host
     ).start()
     agg = await node.advertise("/rosout_agg", log_type, queue_size=1000)
@@ -174,7 +174,7 @@ async def start_rosout(master_uri: str, host: str) -> Node:
     return node
 
 
-async def add_logger_services(node: Node, store: TypeStore) -> None:
+async def add_logger_services(node: LiveNode, store: TypeStore) -> None:
     """``~get_loggers`` and ``~set_logger_level``, which every rospy and roscpp node offers."""
     from rostools.msgs.codec import Codec
     from rostools.node.service import ServiceType

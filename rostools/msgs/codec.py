@@ -13,7 +13,7 @@ from collections.abc import Callable
 from typing import Any
 
 from rostools.errors import InvalidDataError
-from rostools.msgs.codegen import Source, attr_name, element
+from rostools.msgs.codegen import GeneratedCode, attr_name, element
 from rostools.msgs.message import Duration, Message, Time
 from rostools.msgs.spec import Field, MsgSpec
 from rostools.msgs.store import TypeStore
@@ -47,7 +47,7 @@ def _short() -> None:
     raise DecodeError("message is shorter than its type says")
 
 
-class _Gen(Source):
+class _Gen(GeneratedCode):
     """A codec generator: the source of one function, and the codec it asks for nested types."""
 
     def __init__(self, codec: Codec) -> None:
@@ -370,7 +370,7 @@ class Codec:
         cls: type[Message] = type(spec.name.replace("/", "__"), (Message,), namespace)
         cls.__qualname__ = name = spec.name
         # The generated names start with "_", which no ROS field name can (spec.py).
-        init = Source({
+        init = GeneratedCode({
             "_U": _UNSET, "_Time": Time, "_Duration": Duration, "_cls": self.message_class,
             "_bytes": bytes, "_range": range,
         })  # fmt: skip

@@ -3,9 +3,9 @@
 The codec, the text, plain, JSON and CSV formatters and the partial decoders of plots each
 write the source of one function per type and ``exec`` it: that is what makes them fast. Each
 keeps its own logic; this module is the rest, in one place: the table of objects the source
-refers to by name (``Source.ref``), fresh local names (``Source.fresh``), field names as
-attributes (``attr_name``), and compiling (``Source.compile``: ``<rostools KIND NAME>`` in
-tracebacks, the table as globals or bound as default arguments).
+refers to by name (``GeneratedCode.ref``), fresh local names (``GeneratedCode.fresh``), field
+names as attributes (``attr_name``), and compiling (``GeneratedCode.compile``: ``<rostools KIND
+NAME>`` in tracebacks, the table as globals or bound as default arguments).
 """
 
 from __future__ import annotations
@@ -26,7 +26,7 @@ def element(base: str) -> Field:
     return Field("_", base, base, False, None)
 
 
-class Source:
+class GeneratedCode:
     """The source of one generated function: its lines, and the objects they refer to.
 
     ``env`` holds names the generator fixes in advance (helpers it calls by name); ``ref``

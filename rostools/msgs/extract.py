@@ -20,7 +20,7 @@ from typing import Any
 
 from rostools.errors import UsageError
 from rostools.msgs.codec import STRUCT_CODES, Codec
-from rostools.msgs.codegen import Source, element
+from rostools.msgs.codegen import GeneratedCode, element
 from rostools.msgs.fieldpath import FieldPath, Step
 from rostools.msgs.spec import Field
 
@@ -76,7 +76,7 @@ def fixed_message_size(codec: Codec, name: str) -> int | None:
     return cache[name]
 
 
-class _Gen(Source):
+class _Gen(GeneratedCode):
     """Source of one ``f(buf, pos)`` function; ``off`` is a constant not yet added to pos."""
 
     def __init__(self, codec: Codec) -> None:

@@ -16,14 +16,14 @@ from dataclasses import dataclass
 from typing import Any
 
 from rostools.msgs.codec import BYTE_TYPES, STRUCT_CODES, Codec
-from rostools.msgs.codegen import Source, attr_name, element
+from rostools.msgs.codegen import GeneratedCode, attr_name, element
 from rostools.msgs.message import Time
 from rostools.msgs.spec import Field
 
 Plain = Callable[[Any], Any]
 
 
-class _PlainGen(Source):
+class _PlainGen(GeneratedCode):
     def __init__(self, codec: Codec) -> None:
         super().__init__({"_list": list})
         self.codec = codec
@@ -193,7 +193,7 @@ def csv_header(codec: Codec, value_type: Field, value: Any, options: CsvOptions)
     return "%time," + ",".join(columns)
 
 
-class _CsvGen(Source):
+class _CsvGen(GeneratedCode):
     def __init__(self, codec: Codec, options: CsvOptions) -> None:
         super().__init__({"_str": str, "_map": map})
         self.codec = codec

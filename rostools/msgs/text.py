@@ -13,7 +13,7 @@ from dataclasses import dataclass
 from typing import Any, Protocol
 
 from rostools.msgs.codec import BYTE_TYPES, STRUCT_CODES, Codec
-from rostools.msgs.codegen import Source, attr_name, element
+from rostools.msgs.codegen import GeneratedCode, attr_name, element
 from rostools.msgs.message import Time
 from rostools.msgs.spec import Field, MsgSpec
 
@@ -127,7 +127,7 @@ def _escape(text: str) -> str:
     )
 
 
-class _TextGen(Source):
+class _TextGen(GeneratedCode):
     def __init__(self, codec: Codec, options: TextOptions) -> None:
         super().__init__({
             "_q": quote, "_strs": _string_list, "_nw": _num_width, "_list": _list,

@@ -11,7 +11,7 @@ from rostools.msgs.topictype import TopicType
 from rostools.node.connection import Frame, InboundConnection
 
 if TYPE_CHECKING:
-    from rostools.node.node import Node
+    from rostools.node.node import LiveNode
     from rostools.node.subscriber import FramesCallback
 
 #: rosgraph_msgs/Clock, as roscpp and rospy announce it.
@@ -26,7 +26,7 @@ CLOCK = TopicType(
 TIME = struct.Struct("<II")
 
 
-async def uses_sim_time(node: Node) -> bool:
+async def uses_sim_time(node: LiveNode) -> bool:
     """Whether the parameter ``/use_sim_time`` is true."""
     if not await node.master.has_param("/use_sim_time"):
         return False
@@ -63,7 +63,7 @@ class RosClock:
         self.last_ns = 0
         self.forward: FramesCallback | None = None
 
-    async def start(self, node: Node) -> None:
+    async def start(self, node: LiveNode) -> None:
         """Follow ``/clock`` if ``/use_sim_time`` says so."""
         self.sim = await uses_sim_time(node)
         if self.sim:

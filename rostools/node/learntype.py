@@ -11,10 +11,10 @@ import asyncio
 from rostools.errors import TimeoutExpired
 from rostools.msgs.topictype import TopicType
 from rostools.node.connection import InboundConnection
-from rostools.node.node import Node
+from rostools.node.node import LiveNode
 
 
-async def learn_topic_type(node: Node, topic: str, timeout: float) -> TopicType:
+async def learn_topic_type(node: LiveNode, topic: str, timeout: float) -> TopicType:
     """The type one publisher of ``topic`` announces."""
     found: asyncio.Future[TopicType] = asyncio.get_running_loop().create_future()
 

@@ -34,8 +34,8 @@ from rostools.wire.xmlrpc import multicall
 log = logging.getLogger(__name__)
 
 
-class Node:
-    """A ROS node: ``await Node(...).start()``, then advertise and subscribe."""
+class LiveNode:
+    """A ROS node: ``await LiveNode(...).start()``, then advertise and subscribe."""
 
     def __init__(
         self,
@@ -94,7 +94,7 @@ class Node:
 
     # life cycle -----------------------------------------------------------------------
 
-    async def start(self) -> Node:
+    async def start(self) -> LiveNode:
         """Start the slave API and TCPROS servers."""
         bind = bind_address(self.host)
         self._xmlrpc = XmlRpcServer(self._dispatch, bind, 0)

@@ -1,6 +1,6 @@
 """Running a command as a short-lived node: start, stop on Ctrl-C/SIGTERM/shutdown, clean up.
 
-``run_node(main, ...)`` gives ``main`` a started ``Node`` and a ``stop`` event that is set by
+``run_node(main, ...)`` gives ``main`` a started ``LiveNode`` and a ``stop`` event that is set by
 SIGINT, SIGTERM, SIGHUP or a ``shutdown`` call (``rosnode kill``); whatever happens, the node
 unregisters from the master before the process exits.
 """
@@ -15,7 +15,7 @@ from typing import Any, TypeVar
 
 from rostools.errors import RostoolsError
 from rostools.node.listen import raise_descriptor_limit
-from rostools.node.node import Node
+from rostools.node.node import LiveNode
 from rostools.node.notice import Notice
 
 T = TypeVar("T")
@@ -46,7 +46,7 @@ STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)
 
 
 def run_node(
-    main: Callable[[Node, asyncio.Event], Awaitable[T]],
+    main: Callable[[LiveNode, asyncio.Event], Awaitable[T]],
     master_uri: str,
     name: str = "rostools",
     anonymous_name: bool = True,
@@ -63,7 +63,7 @@ def run_node(
     raise_descriptor_limit()  # record -a of a thousand topics holds a socket per topic
 
     async def runner() -> T:
-        node = Node(name, master_uri, anonymous_name=anonymous_name, remappings=remappings)
+        node = LiveNode(name, master_uri, anonymous_name=anonymous_name, remappings=remappings)
         if notify is not None:
             node.notify = notify
         try:

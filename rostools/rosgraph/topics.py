@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-# ``/topic/field`` is split in msgs/topicpath; the CLI's modules still import it from here.
-from rostools.msgs.topicpath import field_problem as field_problem, split_field as split_field
 from rostools.names import make_global_ns
 from rostools.rosgraph.views import Record
 

@@ -17,7 +17,7 @@ import pytest
 from hypothesis import given, seed, strategies as st
 
 from rostools.master.master_api import MasterAPI
-from rostools.node.node import Node
+from rostools.node.node import LiveNode
 from rostools.node.rpc import encode_answer, run_call
 from rostools.wire.xmlrpc import BadCall, HttpError, HttpParser, decode_call
 from rostools.wire.xmlvalues import BadAnswer, DoctypeRefused, dumps_response, loads_response
@@ -79,7 +79,7 @@ MASTER_METHODS = [*sorted(MASTER_ARITY), "system.multicall", "nope"]
 
 def test_the_tables_name_every_method() -> None:
     assert set(MasterAPI("http://m:1/").methods) == set(MASTER_ARITY)
-    assert set(Node("n", "http://m:1/", host="127.0.0.1")._methods) == set(SLAVE_ARITY)
+    assert set(LiveNode("n", "http://m:1/", host="127.0.0.1")._methods) == set(SLAVE_ARITY)
 
 
 def _answer(result: Any) -> Any:
@@ -184,7 +184,7 @@ SLAVE_METHODS = [*sorted(SLAVE_ARITY), "system.multicall", "nope"]
 @FUZZ
 @given(st.sampled_from(SLAVE_METHODS), PARAMS)
 def test_slave_methods_answer_anything(method: str, params: tuple[Any, ...]) -> None:
-    node = Node("fuzzed", "http://m:1/", host="127.0.0.1")
+    node = LiveNode("fuzzed", "http://m:1/", host="127.0.0.1")
     node._xmlrpc = SimpleNamespace(port=1)  # type: ignore[assignment]  # no sockets here
     _check_call(_answer(run_call(node._dispatch, method, params)), method, params, SLAVE_ARITY)
 

@@ -42,7 +42,7 @@ def test_every_service_command(services: Proc, cli_env: dict[str, str]) -> None:
     assert cli("uri", "/add_two_ints").startswith("rosrpc://127.0.0.1:")
     assert cli("node", "/add_two_ints") == "/rt_services\n"  # rosservice node
     info = cli("info", "/set_bool")
-    assert info.startswith("Node: /rt_services\nURI: rosrpc://") and info.endswith(
+    assert info.startswith("LiveNode: /rt_services\nURI: rosrpc://") and info.endswith(
         "Type: std_srvs/SetBool\nArgs: data\n"
     )
     assert cli("find", "std_srvs/Trigger") == "/trigger\n"
@@ -140,14 +140,14 @@ def _fake_server(behaviour: str) -> tuple[socket.socket, threading.Thread]:
 def test_persistent_async_client(services: Proc, rostools_master: str) -> None:
     from rostools.msgs.codec import Codec
     from rostools.msgs.store import BuiltinSource, TypeStore
-    from rostools.node.node import Node
+    from rostools.node.node import LiveNode
     from rostools.node.service import ServiceClient, ServiceType
 
     store = TypeStore([BuiltinSource()])
     codec = Codec.of(store)
 
     async def main() -> list[int]:
-        node = await Node("client", rostools_master, anonymous_name=True).start()
+        node = await LiveNode("client", rostools_master, anonymous_name=True).start()
         try:
             client = ServiceClient(
                 node,

@@ -345,7 +345,7 @@ def test_pub_rate_paces_each_message(rostools_master: str, cli_env: dict[str, st
     import asyncio
     import itertools
 
-    from rostools.node.node import Node
+    from rostools.node.node import LiveNode
 
     pub = start_cli(
         "topic", "pub", "/pace", "std_msgs/String", "data: x", "-r", "5000", env=cli_env
@@ -353,7 +353,7 @@ def test_pub_rate_paces_each_message(rostools_master: str, cli_env: dict[str, st
     arrivals: list[float] = []
 
     async def main() -> None:
-        node = await Node("pace_probe", rostools_master, anonymous_name=True).start()
+        node = await LiveNode("pace_probe", rostools_master, anonymous_name=True).start()
         try:
             await node.subscribe("/pace", lambda f, c, now: arrivals.extend([now] * len(f)))
             deadline = time.monotonic() + 30

@@ -23,7 +23,7 @@ from rostools.master.server import MasterThread
 from rostools.msgs.store import BuiltinSource, TypeStore
 from rostools.msgs.topictype import TopicType
 from rostools.node import connection, mastercalls, subscriber
-from rostools.node.node import Node
+from rostools.node.node import LiveNode
 from rostools.node.notice import Notice
 from rostools.wire.tcpros import subscriber_header
 from tests.support.procs import Proc, free_port, linked, publishers, start_cli, wait_for
@@ -172,8 +172,8 @@ def test_silent_connections_past_the_limit_drop_the_oldest(
     extra = 50
 
     async def main() -> tuple[set[int], list[bytes]]:
-        node = await Node("flooded", master.uri).start()
-        listener = await Node("listener", master.uri).start()
+        node = await LiveNode("flooded", master.uri).start()
+        listener = await LiveNode("listener", master.uri).start()
         try:
             pub = await node.advertise("/f", STRING)
             streams: Streams = []
@@ -215,7 +215,7 @@ def test_a_burst_of_subscribers_past_the_limit_all_get_through(master: MasterThr
     count = 3 * connection.MAX_PENDING
 
     async def main() -> int:
-        node = await Node("popular", master.uri).start()
+        node = await LiveNode("popular", master.uri).start()
         try:
             pub = await node.advertise("/p", STRING)
             header = subscriber_header("/many", "/p", "*", "*", "", False)
@@ -247,10 +247,10 @@ MANY_TOPICS = f"""
 import asyncio, sys
 from rostools.msgs.store import BuiltinSource, TypeStore
 from rostools.msgs.topictype import TopicType
-from rostools.node.node import Node
+from rostools.node.node import LiveNode
 
 async def main():
-    node = await Node("/many", sys.argv[1]).start()
+    node = await LiveNode("/many", sys.argv[1]).start()
     string = TopicType.of(TypeStore([BuiltinSource()]), "std_msgs/String")
     for i in range({TOPICS}):
         await node.advertise(f"/many_{{i}}", string)
@@ -275,7 +275,7 @@ def _subscribe_all(
     monkeypatch.setattr(mastercalls, "call", counted)
 
     async def main() -> list[Notice]:
-        node = await Node("/watcher", master_uri).start()
+        node = await LiveNode("/watcher", master_uri).start()
         notices: list[Notice] = []
         node.notify = notices.append
         try:

@@ -16,7 +16,7 @@ from rostools.master.server import MasterThread
 from rostools.msgs.codec import Codec
 from rostools.msgs.store import BuiltinSource, TypeStore
 from rostools.msgs.topictype import TopicType
-from rostools.node.node import Node
+from rostools.node.node import LiveNode
 from rostools.wire.header import encode_header
 
 STORE = TypeStore([BuiltinSource()])
@@ -50,8 +50,8 @@ def string(text: str) -> bytes:
 
 def test_publish_subscribe_latch_and_seq(master: MasterThread) -> None:
     async def main() -> None:
-        pub_node = await Node("pub", master.uri).start()
-        sub_node = await Node("sub", master.uri, anonymous_name=True).start()
+        pub_node = await LiveNode("pub", master.uri).start()
+        sub_node = await LiveNode("sub", master.uri, anonymous_name=True).start()
         try:
             latched = await pub_node.advertise("/latched", STRING, latch=True)
             latched.publish(string("kept"))
@@ -81,8 +81,8 @@ def test_publish_subscribe_latch_and_seq(master: MasterThread) -> None:
 
 def test_slave_api(master: MasterThread) -> None:
     async def main() -> None:
-        node = await Node("api_node", master.uri).start()
-        other = await Node("peer", master.uri).start()
+        node = await LiveNode("api_node", master.uri).start()
+        other = await LiveNode("peer", master.uri).start()
         try:
             await node.advertise("/out", STRING)
             await other.subscribe("/out", lambda f, c, t: None)
@@ -123,7 +123,7 @@ def test_slave_api(master: MasterThread) -> None:
 
 def test_hostile_peers_do_not_break_a_node(master: MasterThread) -> None:
     async def main() -> None:
-        node = await Node("victim", master.uri).start()
+        node = await LiveNode("victim", master.uri).start()
         try:
             pub = await node.advertise("/t", STRING)
             port = node.tcpros_port
@@ -154,7 +154,7 @@ def test_hostile_peers_do_not_break_a_node(master: MasterThread) -> None:
                 None, attack, unknown
             )
             # And it still works for a well-behaved subscriber.
-            peer = await Node("good", master.uri).start()
+            peer = await LiveNode("good", master.uri).start()
             got: list[Any] = []
             await peer.subscribe("/t", lambda f, c, t: got.extend(f))
             await until(lambda: pub.subscriber_count == 1)
@@ -169,8 +169,8 @@ def test_hostile_peers_do_not_break_a_node(master: MasterThread) -> None:
 
 def test_big_messages_arrive_byte_exact(master: MasterThread) -> None:
     async def main() -> None:
-        a = await Node("img_pub", master.uri).start()
-        b = await Node("img_sub", master.uri).start()
+        a = await LiveNode("img_pub", master.uri).start()
+        b = await LiveNode("img_sub", master.uri).start()
         try:
             pub = await a.advertise("/image", IMAGE)
             got: list[bytes] = []
@@ -197,8 +197,8 @@ def test_big_messages_arrive_byte_exact(master: MasterThread) -> None:
 
 def test_slow_subscriber_does_not_stall_a_fast_one(master: MasterThread) -> None:
     async def main() -> None:
-        pub_node = await Node("fan", master.uri).start()
-        fast = await Node("fast", master.uri).start()
+        pub_node = await LiveNode("fan", master.uri).start()
+        fast = await LiveNode("fast", master.uri).start()
         try:
             pub = await pub_node.advertise("/firehose", STRING, queue_size=10)
             got: list[int] = []
@@ -224,7 +224,7 @@ def test_slow_subscriber_does_not_stall_a_fast_one(master: MasterThread) -> None
 
 def test_subscriber_follows_publishers_that_come_and_go(master: MasterThread) -> None:
     async def main() -> None:
-        sub_node = await Node("follower", master.uri).start()
+        sub_node = await LiveNode("follower", master.uri).start()
         try:
             got: list[str] = []
             await sub_node.subscribe(
@@ -232,7 +232,7 @@ def test_subscriber_follows_publishers_that_come_and_go(master: MasterThread) ->
                 lambda f, c, t: got.extend(CODEC.decode("std_msgs/String", x).data for x in f),
             )
             for round_ in range(3):
-                pub_node = await Node("comer", master.uri, anonymous_name=True).start()
+                pub_node = await LiveNode("comer", master.uri, anonymous_name=True).start()
                 pub = await pub_node.advertise("/come_go", STRING)
                 await until(lambda p=pub: p.subscriber_count == 1)  # type: ignore[misc]
                 pub.publish(string(f"round {round_}"))

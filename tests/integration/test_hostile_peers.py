@@ -16,7 +16,7 @@ from rostools.master.server import MasterThread
 from rostools.msgs.store import BuiltinSource, TypeStore
 from rostools.msgs.topictype import TopicType
 from rostools.node import connection
-from rostools.node.node import Node
+from rostools.node.node import LiveNode
 from tests.support.fakepeer import FakePublisher, frame, valid_header
 from tests.support.procs import Proc, start_cli
 
@@ -90,7 +90,7 @@ def test_a_big_message_in_the_same_read_as_the_header(master: MasterThread) -> N
         sock.sendall(valid_header("/big") + frame(message))
 
     async def main() -> list[int]:
-        node = await Node("big_sub", master.uri).start()
+        node = await LiveNode("big_sub", master.uri).start()
         got: list[int] = []
         try:
             await node.subscribe("/big", lambda frames, conn, t: got.extend(map(len, frames)))
@@ -113,7 +113,7 @@ def test_a_peer_that_never_sends_its_header_is_closed(
     monkeypatch.setattr(connection, "HANDSHAKE_TIMEOUT", 0.5)
 
     async def main() -> tuple[bytes, bytes, float]:
-        node = await Node("victim", master.uri).start()
+        node = await LiveNode("victim", master.uri).start()
         await node.advertise("/v", STRING)
         loop = asyncio.get_running_loop()
         try:

@@ -37,7 +37,7 @@ def big_publisher(rostools_master: str, cli_env: dict[str, str]) -> Proc:
     script = f"""
 import struct, sys, time
 import rostools
-with rostools.Node("big_talker", sys.argv[1]) as node:
+with rostools.LiveNode("big_talker", sys.argv[1]) as node:
     pub = node.advertise("/big", "std_msgs/String", queue_size=1000)
     pub.wait_for_subscribers(1, timeout=30)
     print("ready", flush=True)
@@ -191,18 +191,18 @@ def test_how_each_command_subscribes(
     import rostools
     from rostools.cli import main
     from rostools.master.server import MasterThread
-    from rostools.node.node import Node
+    from rostools.node.node import LiveNode
 
     asked: list[dict[str, object]] = []
-    subscribe = Node.subscribe
+    subscribe = LiveNode.subscribe
 
-    async def spy(self: Node, topic: str, *args: object, **kwargs: object) -> object:
+    async def spy(self: LiveNode, topic: str, *args: object, **kwargs: object) -> object:
         if topic == "/chatter":
             asked.append(kwargs)
         return await subscribe(self, topic, *args, **kwargs)  # type: ignore[arg-type]
 
-    monkeypatch.setattr(Node, "subscribe", spy)
-    with MasterThread() as master, rostools.Node("talker", master.uri) as node:
+    monkeypatch.setattr(LiveNode, "subscribe", spy)
+    with MasterThread() as master, rostools.LiveNode("talker", master.uri) as node:
         monkeypatch.setenv("ROS_MASTER_URI", master.uri)
         pub = node.advertise("/chatter", "std_msgs/String", latch=True)
         pub.publish(data="hi")

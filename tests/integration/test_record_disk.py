@@ -26,7 +26,7 @@ from rostools.bag.access import open_bag
 from rostools.errors import RostoolsError
 from rostools.master.server import MasterThread
 from rostools.msgs.topictype import TopicType
-from rostools.node.node import Node
+from rostools.node.node import LiveNode
 from tests.support.env import CLI, run_cli
 from tests.support.procs import Proc, start_cli
 
@@ -42,8 +42,8 @@ def test_a_filling_disk_stops_the_recording_cleanly(
     opts = recorder.RecordOptions(topics=["/t"], base=tmp_path / "x.bag", min_space=1024**3)
 
     async def main(uri: str) -> int:
-        pub_node = await Node("pub", uri).start()
-        rec_node = await Node("rec", uri).start()
+        pub_node = await LiveNode("pub", uri).start()
+        rec_node = await LiveNode("rec", uri).start()
         try:
             pub = await pub_node.advertise("/t", STRING)
             rec = recorder.Recorder(rec_node, opts)

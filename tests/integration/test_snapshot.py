@@ -18,7 +18,7 @@ from rostools.bag.snapshot_client import call
 from rostools.bag.snapshot_srv import TRIGGER, SnapshotRequest
 from rostools.master.server import MasterThread
 from rostools.msgs.topictype import TopicType
-from rostools.node.node import Node
+from rostools.node.node import LiveNode
 from rostools.node.publisher import TopicPublisher
 from tests.support.env import run_cli
 from tests.support.procs import Proc, linked, start_cli, wait_for
@@ -44,8 +44,8 @@ async def until(predicate: object, timeout: float = 10.0) -> None:
 async def graph(tmp_path: Path) -> AsyncIterator[tuple[Snapshotter, TopicPublisher]]:
     """A snapshot recorder of ``/t`` (``--max-writes 1``) and a publisher of it."""
     with MasterThread() as master:
-        pub_node = await Node("pub", master.uri).start()
-        snap_node = await Node("snap", master.uri).start()
+        pub_node = await LiveNode("pub", master.uri).start()
+        snap_node = await LiveNode("snap", master.uri).start()
         opts = SnapshotOptions(
             topics=["/t"], base=tmp_path / "s.bag", name="s.bag", max_writes=1, min_space=0
         )

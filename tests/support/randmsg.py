@@ -6,7 +6,8 @@ import random
 import string
 from typing import Any
 
-from rostools.msgs.codec import BYTE_TYPES, Codec, attr_name
+from rostools.msgs.codec import BYTE_TYPES, Codec
+from rostools.msgs.codegen import attr_name
 from rostools.msgs.message import Duration, Message, Time
 from rostools.msgs.spec import Field
 

@@ -6,12 +6,12 @@ import struct
 
 from rostools.msgs import extract, fieldpath, plain, text
 from rostools.msgs.codec import Codec
-from rostools.msgs.codegen import Source, attr_name
+from rostools.msgs.codegen import GeneratedCode, attr_name
 from rostools.msgs.store import BuiltinSource, TypeStore
 
 
 def test_one_name_per_object() -> None:
-    gen = Source({"_helper": len})
+    gen = GeneratedCode({"_helper": len})
     packer = struct.Struct("<I").unpack_from
     first = gen.ref(packer, "u")
     assert gen.ref(packer, "u") == first
@@ -23,7 +23,7 @@ def test_one_name_per_object() -> None:
 
 
 def test_compile_names_the_function_and_its_source() -> None:
-    gen = Source()
+    gen = GeneratedCode()
     two = gen.ref(2)
     gen.line(f"return x * {two}")
     fn = gen.compile("double(x)", "test", "pkg/T")
@@ -34,7 +34,7 @@ def test_compile_names_the_function_and_its_source() -> None:
 
 
 def test_bound_refs_are_locals() -> None:
-    gen = Source()
+    gen = GeneratedCode()
     two = gen.ref(2)
     gen.line(f"return x * {two}")
     fn = gen.compile("double(x)", "test", "pkg/T", bind=True)
@@ -43,7 +43,7 @@ def test_bound_refs_are_locals() -> None:
 
 
 def test_an_empty_body_passes() -> None:
-    assert Source().compile("nothing(m)", "test", "pkg/T")(1) is None
+    assert GeneratedCode().compile("nothing(m)", "test", "pkg/T")(1) is None
 
 
 def test_field_names_that_are_keywords_get_genpys_suffix() -> None:

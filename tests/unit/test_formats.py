@@ -11,7 +11,8 @@ import pytest
 
 from rostools.errors import UsageError
 from rostools.msgs import fieldpath
-from rostools.msgs.codec import Codec, attr_name
+from rostools.msgs.codec import Codec
+from rostools.msgs.codegen import attr_name
 from rostools.msgs.message import Time
 from rostools.msgs.plain import CsvOptions, csv_header, csv_row, dumps, to_plain
 from rostools.msgs.store import BuiltinSource, TypeStore

@@ -103,13 +103,13 @@ def test_core_host_loopback_stays_loopback() -> None:
 def test_a_node_on_the_masters_host_gives_out_the_hostname(
     hostname: list[str], monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    from rostools.node.node import Node
+    from rostools.node.node import LiveNode
 
     monkeypatch.delenv("ROS_IP", raising=False)
     monkeypatch.delenv("ROS_HOSTNAME", raising=False)
-    assert Node("n", "http://localhost:11311").host == "robot"
-    assert Node("n", "http://127.0.0.1:11311").host == "robot"
-    remapped = Node(
+    assert LiveNode("n", "http://localhost:11311").host == "robot"
+    assert LiveNode("n", "http://127.0.0.1:11311").host == "robot"
+    remapped = LiveNode(
         "n", "http://localhost:11311", remappings={"__hostname": "h", "__ip": "1.2.3.4"}
     )
     assert remapped.host == "h" and not remapped.remappings  # both consumed, neither a remap

@@ -10,7 +10,8 @@ import pytest
 
 from rostools.errors import UsageError
 from rostools.msgs import extract, fieldpath
-from rostools.msgs.codec import Codec, DecodeError, attr_name
+from rostools.msgs.codec import Codec, DecodeError
+from rostools.msgs.codegen import attr_name
 from rostools.msgs.expr import compile_expression
 from rostools.msgs.message import Message, Time
 from rostools.msgs.sample import MAX_SLICE, Labels, Sampler

@@ -20,7 +20,7 @@ if TYPE_CHECKING:
     import asyncio
 
     from rostools.action.client import ActionClient
-    from rostools.node.node import Node
+    from rostools.node.node import LiveNode
 
 #: How long ``cancel`` watches the status for the server to take the cancel (s).
 CONFIRM_WAIT = 2.0
@@ -86,7 +86,7 @@ def cancel(
     types = action_types(type_store(), info)
     limit = timeout if timeout is not None else SERVER_WAIT
 
-    async def main(node: Node, stop: asyncio.Event) -> list[dict[str, Any]] | None:
+    async def main(node: LiveNode, stop: asyncio.Event) -> list[dict[str, Any]] | None:
         from rostools.action.client import ActionClient
         from rostools.node.session import first
 
@@ -141,7 +141,7 @@ def status(
     info = find_action(master(ctx, "rostools"), action)
     types = action_types(type_store(), info)
 
-    async def main(node: Node, stop: asyncio.Event) -> bool:
+    async def main(node: LiveNode, stop: asyncio.Event) -> bool:
         from rostools.action.client import ActionClient
         from rostools.node.session import first
 

@@ -36,7 +36,7 @@ if TYPE_CHECKING:
 
     from rostools.action.client import ActionClient, ClientGoalHandle, GoalEvent
     from rostools.action.types import ActionTypes
-    from rostools.node.node import Node
+    from rostools.node.node import LiveNode
 
 #: How long a goal canceled on the way out may take to confirm it (s).
 CANCEL_WAIT = 3.0
@@ -222,7 +222,7 @@ def send_goal(
     deadline = started + timeout if timeout is not None else None
     printer = _Printer(types, fmt, feedback)
 
-    async def main(node: Node, stop: asyncio.Event) -> None:
+    async def main(node: LiveNode, stop: asyncio.Event) -> None:
         from rostools.action.client import ActionClient
 
         client = await ActionClient(node, info.name, types).start()

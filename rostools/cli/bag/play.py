@@ -25,7 +25,7 @@ if TYPE_CHECKING:
 
     from rostools.bag.base import BagReader
     from rostools.bag.player import PlayOptions, Status
-    from rostools.node.node import Node
+    from rostools.node.node import LiveNode
 
 
 def split_bags_and_topics(args: list[str], topics: list[str]) -> tuple[list[Path], list[str]]:
@@ -104,7 +104,7 @@ async def _play(
     readers: list[BagReader],
     opts: PlayOptions,
     shown: list[Path] | None,
-    node: Node,
+    node: LiveNode,
     stop: asyncio.Event,
 ) -> int:
     """Play ``readers`` on ``node``; with the status line and key hints when ``shown``."""

@@ -121,8 +121,8 @@ def _topics(reader: BagReader, fields: list[str], plot: SeriesSet) -> dict[str, 
     """The field paths asked for, by the bag topic each starts with; their series declared."""
     from rostools.cli.settings import type_store
     from rostools.msgs.sample import Labels
+    from rostools.msgs.topicpath import split_field
     from rostools.names import script_resolve
-    from rostools.rosgraph.topics import split_field
 
     store = type_store(None)
     types = {c.topic: c.type for c in reader.connections}

@@ -24,7 +24,7 @@ if TYPE_CHECKING:
     import asyncio
 
     from rostools.bag.recorder import Recorder, RecordOptions
-    from rostools.node.node import Node
+    from rostools.node.node import LiveNode
 
 
 def summary_data(rec: Recorder) -> dict[str, Any]:
@@ -206,7 +206,7 @@ def _record_options(
 
 
 async def _run(
-    opts: RecordOptions, live: bool, quiet: bool, n: Node, stop: asyncio.Event
+    opts: RecordOptions, live: bool, quiet: bool, n: LiveNode, stop: asyncio.Event
 ) -> Recorder:
     """Record until stopped or a limit is reached: with the live table, or lines on stderr."""
     from rostools.bag.recorder import Recorder

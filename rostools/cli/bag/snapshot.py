@@ -29,7 +29,7 @@ if TYPE_CHECKING:
     from rostools.bag.snapshot import SnapshotOptions, Snapshotter
     from rostools.bag.snapshot_job import SnapshotJob
     from rostools.bag.snapshot_srv import SnapshotRequest
-    from rostools.node.node import Node
+    from rostools.node.node import LiveNode
 
 MB = 1024 * 1024
 
@@ -110,7 +110,7 @@ def snapshot_options(
 
 
 async def _buffer(
-    node: Node, stop: asyncio.Event, *, opts: SnapshotOptions, out: Format, quiet: bool
+    node: LiveNode, stop: asyncio.Event, *, opts: SnapshotOptions, out: Format, quiet: bool
 ) -> Snapshotter:
     """Run the snapshot recorder with its triggers: a signal, keys, and what it shows."""
     import asyncio
@@ -223,7 +223,7 @@ def trigger(
     chosen = [t for item in topics or [] for t in item.split(",") if t]
     out = output_format(ctx, fmt)
 
-    async def main(n: Node, stop: asyncio.Event) -> dict[str, Any]:
+    async def main(n: LiveNode, stop: asyncio.Event) -> dict[str, Any]:
         import asyncio
 
         from rostools.bag.snapshot_client import request_snapshot
@@ -245,7 +245,7 @@ def trigger(
 
 
 async def _window(
-    node: Node, name: str, topics: list[str], spans: tuple[float | None, float], forever: bool
+    node: LiveNode, name: str, topics: list[str], spans: tuple[float | None, float], forever: bool
 ) -> SnapshotRequest:
     """The request: the window in ROS time as this node sees it (``/clock`` under sim time)."""
     from rostools.bag.snapshot_srv import FOREVER_SECS, SnapshotRequest

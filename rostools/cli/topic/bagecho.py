@@ -20,7 +20,7 @@ def echo_bag(path: Path, name: str | None, store: TypeStore, opts: EchoOptions) 
     from rostools.bag.model import counted
     from rostools.cli.topic.printing import Echo
     from rostools.errors import InvalidDataError
-    from rostools.rosgraph.topics import split_field
+    from rostools.msgs.topicpath import split_field
 
     with open_bag(path) as bag:
         resolved = {c.topic: _resolved(c.topic) for c in bag.connections}

@@ -29,7 +29,7 @@ if TYPE_CHECKING:
     from rostools.msgs.codec import DecodeError
     from rostools.msgs.store import TypeStore
     from rostools.node.connection import Frame, InboundConnection
-    from rostools.node.node import Node
+    from rostools.node.node import LiveNode
 
 
 @command()
@@ -88,7 +88,7 @@ def echo(
 
 
 async def _live(
-    node: Node,
+    node: LiveNode,
     stop: asyncio.Event,
     name: str,
     store: TypeStore,

@@ -18,7 +18,7 @@ if TYPE_CHECKING:
     from rostools.msgs.codec import DecodeError
     from rostools.msgs.store import TypeStore
     from rostools.node.connection import Frame, InboundConnection
-    from rostools.node.node import Node
+    from rostools.node.node import LiveNode
 
 TopicArg = Annotated[str, typer.Argument(help="Topic name; relative names join ROS_NAMESPACE.")]
 CountOpt = Annotated[int | None, typer.Option("-n", help="Exit after this many messages.")]
@@ -47,12 +47,12 @@ FilterOpt = Annotated[
 
 
 async def wait_for_topic(
-    node: Node, name: str, store: TypeStore, deadline: float | None, stop: asyncio.Event
+    node: LiveNode, name: str, store: TypeStore, deadline: float | None, stop: asyncio.Event
 ) -> Any:
     """Wait until the topic is advertised; the topic and field path."""
     import asyncio
 
-    from rostools.rosgraph.topics import field_problem, split_field
+    from rostools.msgs.topicpath import field_problem, split_field
 
     name = node.resolve(name)  # command-line remappings apply
     warned = False
@@ -83,7 +83,7 @@ class Undecodable:
     the first ends the command instead.
     """
 
-    def __init__(self, node: Node, strict: bool) -> None:
+    def __init__(self, node: LiveNode, strict: bool) -> None:
         self.node = node
         self.strict = strict
         #: Messages skipped per publisher (its caller id, or its URI).

@@ -38,7 +38,7 @@ if TYPE_CHECKING:
     from rostools.msgs.sample import Sampler
     from rostools.msgs.store import TypeStore
     from rostools.node.connection import Frame, InboundConnection
-    from rostools.node.node import Node
+    from rostools.node.node import LiveNode
     from rostools.series import SeriesSet
 
 #: Seconds small reads gather before the callback runs: at 10 kHz, ten messages a wake-up.
@@ -180,7 +180,9 @@ def plot(
         raise TimeoutExpired(f"{', '.join(names)} did not deliver {wanted} within {timeout:g} s")
 
 
-async def _subscribe(node: Node, stop: asyncio.Event, live: _Live, deadline: float | None) -> bool:
+async def _subscribe(
+    node: LiveNode, stop: asyncio.Event, live: _Live, deadline: float | None
+) -> bool:
     """Find each topic, check its paths where the type is known, subscribe; False if stopped."""
     from rostools.msgs.sample import Labels, Sampler
 
@@ -209,7 +211,12 @@ async def _subscribe(node: Node, stop: asyncio.Event, live: _Live, deadline: flo
 
 
 async def _run(
-    node: Node, stop: asyncio.Event, live: _Live, timeout: float | None, fmt: Format, strict: bool
+    node: LiveNode,
+    stop: asyncio.Event,
+    live: _Live,
+    timeout: float | None,
+    fmt: Format,
+    strict: bool,
 ) -> str:
     import contextlib
 

@@ -24,7 +24,7 @@ if TYPE_CHECKING:
     import asyncio
 
     from rostools.msgs.topictype import TopicType
-    from rostools.node.node import Node
+    from rostools.node.node import LiveNode
     from rostools.node.publisher import TopicPublisher
 
 #: How long ``-1`` stays up so that late subscribers still get the latched message (rostopic).
@@ -115,7 +115,7 @@ def _stdin_docs() -> Iterator[Any]:
         yield from _yaml_docs("".join(lines), "stdin")
 
 
-async def _ros_now(node: Node, stop: asyncio.Event, limit: float | None) -> Callable[[], Any]:
+async def _ros_now(node: LiveNode, stop: asyncio.Event, limit: float | None) -> Callable[[], Any]:
     """A function giving ROS time; under sim time, once the first ``/clock`` has come.
 
     It waits for that at most ``CLOCK_WAIT`` seconds (or the --timeout); rospy would stamp 0.
@@ -244,7 +244,7 @@ async def _publish(
     plan: _Plan,
     source: Callable[[], Iterator[Any]],
     use_rostime: bool,
-    node: Node,
+    node: LiveNode,
     stop: asyncio.Event,
 ) -> None:
     """Advertise, then publish one latched message or a paced stream, until done or stopped."""

@@ -164,7 +164,7 @@ def find(
 def type_(s: Settings, topic: TopicArg, fmt: FormatOpt = None, msg_path: MsgPathOpt = None) -> None:
     """A topic's type, or the type of a field: /odom/pose/pose (rostopic type)."""
     from rostools.cli.settings import learn_type, type_store
-    from rostools.rosgraph.topics import split_field
+    from rostools.msgs.topicpath import split_field
 
     name = script_resolve(topic, "rostopic", field_path=True)
     types = s.master("rostopic").topic_types()

@@ -24,7 +24,7 @@ if TYPE_CHECKING:
     from rostools.msgs.codec import DecodeError
     from rostools.msgs.store import TypeStore
     from rostools.node.connection import Frame, InboundConnection
-    from rostools.node.node import Node
+    from rostools.node.node import LiveNode
 
 _STAMP = struct.Struct("<II")
 WindowOpt = Annotated[int | None, typer.Option("--window", "-w", help="Messages to average over.")]
@@ -86,7 +86,7 @@ class Meter:
 
     async def run(
         self,
-        node: Node,
+        node: LiveNode,
         stop: asyncio.Event,
         sink: Callable[[str, list[Frame], InboundConnection, float], None],
         report: Callable[[bool], None],
@@ -104,7 +104,7 @@ class Meter:
 
     async def _run(
         self,
-        node: Node,
+        node: LiveNode,
         stop: asyncio.Event,
         sink: Callable[[str, list[Frame], InboundConnection, float], None],
         report: Callable[[bool], None],

@@ -21,7 +21,7 @@ from pathlib import Path
 from rostools.action.server import ActionServer, ServerGoalHandle
 from rostools.action.types import ActionTypes
 from rostools.msgs.store import BuiltinSource, PathSource, TypeStore
-from rostools.node.node import Node
+from rostools.node.node import LiveNode
 
 
 async def main() -> None:
@@ -29,7 +29,7 @@ async def main() -> None:
     sources = [PathSource([Path(msg_path)])] if msg_path else []
     types = ActionTypes(TypeStore([*sources, BuiltinSource()]), type_name or "actionlib/TestAction")
     node_name = "rt_actions" + name.replace("/", "_") if name else "rt_actions"
-    node = await Node(node_name, os.environ["ROS_MASTER_URI"]).start()
+    node = await LiveNode(node_name, os.environ["ROS_MASTER_URI"]).start()
 
     async def execute(goal: ServerGoalHandle) -> object:
         n = goal.goal.goal

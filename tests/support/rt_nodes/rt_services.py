@@ -13,14 +13,14 @@ import os
 from rostools.errors import ServiceError
 from rostools.msgs.codec import Codec
 from rostools.msgs.store import BuiltinSource, TypeStore
-from rostools.node.node import Node
+from rostools.node.node import LiveNode
 from rostools.node.service import ServiceType
 
 
 async def main() -> None:
     store = TypeStore([BuiltinSource()])
     codec = Codec.of(store)
-    node = await Node("rt_services", os.environ["ROS_MASTER_URI"]).start()
+    node = await LiveNode("rt_services", os.environ["ROS_MASTER_URI"]).start()
     calls = {"trigger": 0}
 
     def add(request: bytes) -> bytes:

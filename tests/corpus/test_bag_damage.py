@@ -17,7 +17,7 @@ from typing import Any
 
 from rostools.bag import rosbag1_format as fmt
 from rostools.bag.access import open_bag
-from rostools.bag.doctor import doctor
+from rostools.bag.findings import doctor
 from rostools.bag.recover import recover
 from tests.support.bagdata import bag_records, chunk_spans, digest, swap_spans
 from tests.support.env import CORPUS, SYSTEM_PYTHON, needs_corpus, needs_ros1, run_cli

@@ -117,7 +117,7 @@ def doctor(
     quiet: QuietOpt = False,
 ) -> None:
     """Check bags without changing them: one line per finding; exit 1 if there is any."""
-    from rostools.bag.doctor import doctor as check
+    from rostools.bag.findings import doctor as check
 
     out = output_format(ctx, fmt)
     reports = []

@@ -5,7 +5,7 @@ from __future__ import annotations
 import typer
 
 from rostools.cli.common import add
-from rostools.cli.topic import echo, plot, pub, query, rates
+from rostools.cli.topic import echo, meters, plot, pub, query
 
 app = typer.Typer(
     name="topic",
@@ -14,4 +14,4 @@ app = typer.Typer(
     add_completion=False,
 )
 add(app, query.list_topics, query.info, query.find, query.type_)
-add(app, echo.echo, pub.pub, rates.hz, rates.bw, rates.delay, plot.plot)
+add(app, echo.echo, pub.pub, meters.hz, meters.bw, meters.delay, plot.plot)

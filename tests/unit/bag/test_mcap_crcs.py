@@ -14,7 +14,7 @@ import pytest
 
 from rostools.bag import mcap_format as fmt
 from rostools.bag.access import open_writer
-from rostools.bag.doctor import doctor
+from rostools.bag.findings import doctor
 from rostools.bag.mcap_reader import McapReader
 from rostools.bag.ops import convert
 from tests.support.bagdata import STRING_MD5, read_stream, write_sample

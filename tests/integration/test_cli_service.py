@@ -42,7 +42,7 @@ def test_every_service_command(services: Proc, cli_env: dict[str, str]) -> None:
     assert cli("uri", "/add_two_ints").startswith("rosrpc://127.0.0.1:")
     assert cli("node", "/add_two_ints") == "/rt_services\n"  # rosservice node
     info = cli("info", "/set_bool")
-    assert info.startswith("LiveNode: /rt_services\nURI: rosrpc://") and info.endswith(
+    assert info.startswith("Node: /rt_services\nURI: rosrpc://") and info.endswith(
         "Type: std_srvs/SetBool\nArgs: data\n"
     )
     assert cli("find", "std_srvs/Trigger") == "/trigger\n"

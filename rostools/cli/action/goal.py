@@ -15,7 +15,7 @@ import typer
 
 from rostools.cli import output
 from rostools.cli.action.options import ActionArg, WaitOpt
-from rostools.cli.action.shared import SERVER_WAIT, find_action, plain, text
+from rostools.cli.action.shared import SERVER_WAIT, find_action, renderer
 from rostools.cli.common import FormatOpt, MsgPathOpt, master, node_session, output_format
 from rostools.cli.declare import command
 from rostools.cli.output import Format, write
@@ -36,6 +36,7 @@ if TYPE_CHECKING:
 
     from rostools.action.client import ActionClient, ClientGoalHandle, GoalEvent
     from rostools.action.types import ActionTypes
+    from rostools.cli.render import Renderer
     from rostools.node.node import LiveNode
 
 #: How long a goal canceled on the way out may take to confirm it (s).
@@ -83,9 +84,20 @@ class _Printer:
 
     def __init__(self, types: ActionTypes, fmt: Format, feedback: bool) -> None:
         self.types = types
+        self.renderers: dict[str, Renderer] = {}
         self.fmt = fmt
         self.feedback = feedback
         self.said = -1  # the status last written on stderr (text)
+
+    def part(self, suffix: str) -> Renderer:
+        """The renderer of the action's ``Goal``, ``Feedback`` or ``Result``.
+
+        Made when first needed: a type the store lacks is learnt from the server's header.
+        """
+        found = self.renderers.get(suffix)
+        if found is None:
+            found = self.renderers[suffix] = renderer(self.types, suffix)
+        return found
 
     def say(self, line: str) -> None:
         sys.stderr.write(one_line(line) + "\n")  # goal ids and texts are the server's
@@ -99,7 +111,7 @@ class _Printer:
             write(self.fmt, record)
 
     def goal(self, handle: ClientGoalHandle, goal: Any) -> None:
-        record = {"event": "goal", "goal_id": handle.id, "goal": plain(self.types, "Goal", goal)}
+        record = {"event": "goal", "goal_id": handle.id, "goal": self.part("Goal").plain(goal)}
         self.event(record, f"goal {handle.id} sent")
 
     def show(self, event: GoalEvent) -> None:
@@ -115,9 +127,9 @@ class _Printer:
         if event.kind == "feedback":
             if not self.feedback:
                 return
-            record["feedback"] = plain(self.types, "Feedback", event.message)
+            record["feedback"] = self.part("Feedback").plain(event.message)
         elif event.kind == "result":
-            record["result"] = plain(self.types, "Result", event.message)
+            record["result"] = self.part("Result").plain(event.message)
         if self.fmt is not Format.text:
             write(self.fmt, record)
             return
@@ -126,7 +138,7 @@ class _Printer:
             self.say(f"goal {event.goal_id}: {status}" + (f" ({event.text})" if event.text else ""))
         suffix = {"feedback": "Feedback", "result": "Result"}.get(event.kind)
         if suffix is not None:
-            shown = text(self.types, suffix, event.message)
+            shown = self.part(suffix).text(event.message)
             ending = "\n---\n" if event.kind == "feedback" else "\n"
             output.put(shown + ending if shown else "")
             output.flush()

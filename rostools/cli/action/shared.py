@@ -7,10 +7,9 @@ from rostools.names import script_resolve
 
 TYPE_CHECKING = False  # ``typing`` is 5-10 ms of start-up; only annotations use it
 if TYPE_CHECKING:
-    from typing import Any
-
     from rostools.action.pattern import ActionInfo
     from rostools.action.types import ActionTypes
+    from rostools.cli.render import Renderer
     from rostools.msgs.store import TypeStore
     from rostools.rosgraph.masterapi import MasterProxy
 
@@ -42,16 +41,8 @@ def action_types(store: TypeStore, info: ActionInfo) -> ActionTypes:
     return ActionTypes(store, info.type)
 
 
-def plain(types: ActionTypes, suffix: str, message: Any) -> Any:
-    """A message of the action as plain data (echo's JSON and YAML)."""
-    from rostools.msgs.plain import to_plain
-    from rostools.msgs.text import message_type
+def renderer(types: ActionTypes, suffix: str) -> Renderer:
+    """The renderer of one part of the action (``Goal``, ``Feedback``, ``Result``)."""
+    from rostools.cli.render import Renderer
 
-    return to_plain(types.codec, message_type(types.stem + suffix))(message)
-
-
-def text(types: ActionTypes, suffix: str, message: Any) -> str:
-    """A message of the action as rostopic echo prints it."""
-    from rostools.msgs.text import formatter, message_type
-
-    return str(formatter(types.codec, message_type(types.stem + suffix))(message))
+    return Renderer(types.codec, types.stem + suffix)

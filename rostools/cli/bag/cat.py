@@ -11,7 +11,6 @@ from __future__ import annotations
 import contextlib
 import enum
 import heapq
-import sys
 from collections.abc import Callable, Iterator
 from operator import itemgetter
 from pathlib import Path
@@ -20,9 +19,11 @@ from typing import TYPE_CHECKING, Annotated, Any
 import typer
 
 from rostools.bag.model import counted
+from rostools.cli import output
 from rostools.cli.bag.options import EndOpt, FilterExprOpt, StartOpt
 from rostools.cli.bag.shared import check_read, time_window
 from rostools.cli.declare import command
+from rostools.cli.render import Renderer
 from rostools.errors import InvalidDataError, UsageError
 
 if TYPE_CHECKING:
@@ -45,17 +46,14 @@ class CatFormat(str, enum.Enum):
 
 
 class _Lines:
-    """Renders one connection's messages; built once per connection.
+    """One connection's messages as ``bag cat`` lines: its ``Renderer`` in cat's envelope.
 
     ``ros2``: the connection's messages are CDR, decoded through these types.
     """
 
-    def __init__(
-        self, conn: Connection, fmt: CatFormat, raw: bool, ros2: Ros2Types | None = None
-    ) -> None:
-        from rostools.msgs import learnt, plain
+    def __init__(self, conn: Connection, raw: bool, ros2: Ros2Types | None = None) -> None:
+        from rostools.msgs import plain
         from rostools.msgs.store import TypeStore
-        from rostools.msgs.text import message_type
 
         self.raw = raw
         self.head = plain.dumps({"topic": conn.topic, "type": conn.type})[:-1]
@@ -65,17 +63,12 @@ class _Lines:
             self._ros2(conn, ros2)
             return
         # The bag's definition first; a bag that left it out falls back to the built-in types.
-        codec = learnt.codec(TypeStore.default(), conn.type, conn.md5sum, conn.definition)
-        self.decode = codec.decoder(conn.type)
-        value_type = message_type(conn.type)
-        self.as_json = plain.to_json(codec, value_type)
-        self.stamp = plain.stamp_ns
-        self.row = (
-            plain.csv_row(codec, value_type, plain.CsvOptions()) if fmt is CatFormat.csv else None
+        self.renderer = Renderer.learnt(
+            TypeStore.default(), conn.type, conn.md5sum, conn.definition
         )
-        self.header: Callable[[Any], str] = lambda value: plain.csv_header(
-            codec, value_type, value, plain.CsvOptions()
-        )
+        self.decode = self.renderer.decode
+        self.as_json = self.renderer.json
+        self.stamp = self.renderer.stamp
 
     def _ros2(self, conn: Connection, types: Ros2Types) -> None:
         from rostools.bag import ros2
@@ -86,7 +79,6 @@ class _Lines:
         self.decode = lambda data, _: (types.decode(kind, data), len(data))
         self.as_json = lambda msg: dumps(ros2.plain(msg))
         self.stamp = ros2.stamp_ns
-        self.row = None
 
     def json(self, entry: Entry) -> str:
         """One NDJSON line."""
@@ -102,6 +94,12 @@ class _Lines:
         if stamp is not None:
             times += f',"stamp":{stamp}'
         return f'{self.head}{times},"msg":{self.as_json(msg)}}}\n'
+
+    def csv(self, t: int, data: Any, header: bool) -> str:
+        """One CSV line (the time, then the row), after the header if ``header``."""
+        msg = self.decode(data, 0)[0]
+        line = f"{t},{self.renderer.csv_row(msg, 0)}\n"
+        return self.renderer.csv_header(msg) + "\n" + line if header else line
 
 
 def _entries(
@@ -206,7 +204,7 @@ def _print(
     lines: dict[tuple[int, int], _Lines] = {}
     ros2_types: dict[int, Ros2Types] = {}
     out: list[str] = []
-    write = sys.stdout.write
+    write = output.put
     printed = pending = 0
     header_done = False
     for t, i, e in _entries(readers, topics, lo, hi):
@@ -219,17 +217,13 @@ def _print(
         render = lines.get((i, conn.id))
         if render is None:
             types = ros2_types.setdefault(i, Ros2Types()) if conn.id in cdr[i] else None
-            render = lines[(i, conn.id)] = _Lines(conn, fmt, raw, types)
+            render = lines[(i, conn.id)] = _Lines(conn, raw, types)
         try:
             if fmt is CatFormat.json:
                 line = render.json(e)
             else:
-                assert render.row is not None
-                msg = render.decode(e[4], 0)[0]
-                if not header_done:
-                    out.append(render.header(msg) + "\n")
-                    header_done = True
-                line = f"{t},{render.row(msg, 0)}\n"
+                line = render.csv(t, e[4], not header_done)
+                header_done = True
         except InvalidDataError as err:  # say where: the file, the topic and the time
             write("".join(out))
             raise InvalidDataError(

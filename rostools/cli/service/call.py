@@ -8,6 +8,7 @@ import time
 from rostools.cli import output
 from rostools.cli.declare import command
 from rostools.cli.output import Format, emit
+from rostools.cli.render import Renderer
 from rostools.cli.service.shared import TOOL, client, service_spec, services, type_of
 from rostools.cli.settings import caller_id, type_store
 from rostools.errors import TimeoutExpired, UsageError, one_line
@@ -23,7 +24,6 @@ if TYPE_CHECKING:
     from rostools.cli.common import FormatOpt, MsgPathOpt
     from rostools.cli.service.options import CallTimeoutOpt, ServiceArg
     from rostools.cli.settings import Settings
-    from rostools.msgs.text import TextOptions
     from rostools.rosgraph.masterapi import MasterProxy
 
 
@@ -73,6 +73,10 @@ def call(
     else:
         requests = [[]]
     out = s.output_format(fmt)
+    shown = TextOptions(nostr, noarr)
+    asks, answers = (
+        Renderer(codec, m.name, text_options=shown) for m in (spec.request, spec.response)
+    )
     server = client(proxy, name, timeout)
     server.waiting = _say_waiting
     for arguments in requests:
@@ -83,7 +87,7 @@ def call(
             raise UsageError(f"{err}", hint=f"{name} takes: {fields}") from err
         answer = server.call(caller_id(TOOL), md5, request.serialize())
         response = codec.decode(spec.response.name, answer)
-        _print(codec, spec, request, response, verbose, out, TextOptions(nostr, noarr))
+        _print(asks, answers, (request, response), verbose, out)
 
 
 def _say_waiting(what: str) -> None:
@@ -110,32 +114,21 @@ def _wait_for(proxy: MasterProxy, name: str, timeout: float | None) -> None:
 
 
 def _print(
-    codec: Any,
-    spec: Any,
-    request: Any,
-    response: Any,
-    verbose: bool,
-    fmt: Format,
-    options: TextOptions,
+    request: Renderer, response: Renderer, messages: tuple[Any, Any], verbose: bool, fmt: Format
 ) -> None:
-    from rostools.msgs import plain, text
-
+    """The response (with ``verbose``, the request first), as rosservice prints it or as data."""
+    asked, answered = messages
     if fmt is Format.text:
-        out = ""
-        if verbose:
-            show = text.formatter(codec, text.message_type(spec.request.name), options)
-            out = show(request) + "\n---\n"
-        out += text.formatter(codec, text.message_type(spec.response.name), options)(response)
-        output.put(out + "\n")
+        shown = response.text(answered)
+        output.line(request.text(asked) + "\n---\n" + shown if verbose else shown)
     else:
-        data = plain.to_plain(codec, text.message_type(spec.response.name))(response)
+        data = response.plain(answered)
         if verbose:
-            data = {
-                "request": plain.to_plain(codec, text.message_type(spec.request.name))(request),
-                "response": data,
-            }
+            data = {"request": request.plain(asked), "response": data}
         if fmt is Format.json:
-            output.put(plain.dumps(data) + "\n")
+            from rostools.msgs.plain import dumps
+
+            output.line(dumps(data))
         else:
             emit(fmt, data)
     output.flush()

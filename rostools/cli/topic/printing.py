@@ -1,17 +1,19 @@
 """What echo prints and how, shared by ``topic echo`` live and from a bag (``-b``).
 
-A ``Printer`` turns raw messages of one type into text, CSV, YAML or NDJSON, compiled once
-per type; ``Echo`` hands each message to the printer of its type and counts what it printed.
+A ``Printer`` is echo's policy (filter, field, CSV time, ``--clear``) over the ``Renderer`` of
+one type as its publisher defines it; ``Echo`` hands each message to the printer of its type
+and counts what it printed.
 """
 
 from __future__ import annotations
 
-import sys
 import time
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
+from rostools.cli import output
 from rostools.cli.output import Format
+from rostools.cli.render import Renderer
 from rostools.errors import UsageError
 
 if TYPE_CHECKING:
@@ -40,72 +42,44 @@ class EchoOptions:
 
 
 class Printer:
-    """Turns raw messages of one type into output text, compiled once per type."""
+    """Echo's policy over one connection's ``Renderer``: filter, field, CSV time, text extras."""
 
-    def __init__(self, store: TypeStore, type_name: str, topic: str, opts: EchoOptions) -> None:
-        from rostools.msgs import fieldpath, plain, text
-        from rostools.msgs.codec import Codec
-
-        self.codec = Codec.of(store)
-        self.type_name = type_name
+    def __init__(self, renderer: Renderer, topic: str, opts: EchoOptions) -> None:
+        self.renderer = renderer
+        self.type_name = renderer.type_name
         self.topic = topic
         self.opts = opts
-        self.decode = self.codec.decoder(type_name)
-        if opts.field:
-            path = fieldpath.resolve(store, type_name, opts.field)
-            self.value_type = path.result
-            self.get: Any = path.get
-        else:
-            self.value_type = text.message_type(type_name)
-            self.get = None
-        self.fast: Any = None  # frames -> texts, when nothing needs a per-message decision
+        self.decode = renderer.decode
+        #: frames -> texts, when nothing needs a per-message decision
+        self.fast: Callable[[list[Any]], list[str]] | None = None
         if opts.plot:
-            self.csv_opts = plain.CsvOptions(opts.nostr, opts.noarr)
-            self.row = plain.csv_row(self.codec, self.value_type, self.csv_opts)
-        elif opts.fmt is Format.text:
-            options = text.TextOptions(opts.nostr, opts.noarr, opts.width, opts.offset)
-            self.text = text.formatter(self.codec, self.value_type, options)
-            if not (opts.filter or opts.field or opts.clear or opts.offset):
-                fmt = text.formatter(self.codec, self.value_type, options, suffix="\n---\n")
-                decode = self.decode
-                self.fast = lambda frames: [fmt(decode(f, 0)[0]) for f in frames]
-        else:
-            self.plain = plain.to_plain(self.codec, self.value_type)
-            if opts.fmt is Format.json and not (opts.filter or opts.field):
-                as_json, decode = plain.to_json(self.codec, self.value_type), self.decode
-                self.fast = lambda frames: [as_json(decode(f, 0)[0]) + "\n" for f in frames]
+            pass
+        elif opts.fmt is Format.text and not (opts.filter or opts.field or opts.clear):
+            self.fast = None if opts.offset else renderer.texts()
+        elif opts.fmt is Format.json and not (opts.filter or opts.field):
+            self.fast = renderer.jsons()
 
     def render(self, data: Any, stamp_ns: int | None, header_needed: bool) -> str | None:
         """The output for one message, or None when the filter rejects it."""
-        from rostools.msgs import plain
-
         msg = self.decode(data, 0)[0]
         if self.opts.filter is not None and not self.opts.filter(self.topic, msg):
             return None
-        value = self.get(msg) if self.get is not None else msg
-        opts = self.opts
+        r, opts = self.renderer, self.opts
+        value = r.value(msg)
         if opts.plot:
             now = time.time_ns()
             offset = now if opts.offset else 0
             # rostopic's order: a time given (a bag's record time), the header's stamp, now
-            t = stamp_ns if stamp_ns is not None else plain.stamp_ns(value)
+            t = stamp_ns if stamp_ns is not None else r.stamp(value)
             t = now if t is None else t
-            line = f"{t - offset},{self.row(value, offset)}\n"
-            if header_needed:
-                line = (
-                    plain.csv_header(self.codec, self.value_type, value, self.csv_opts)
-                    + "\n"
-                    + line
-                )
-            return line
+            line = f"{t - offset},{r.csv_row(value, offset)}\n"
+            return r.csv_header(value) + "\n" + line if header_needed else line
         if opts.fmt is Format.text:
             from rostools.msgs.message import Time
 
             prefix = "\033[2J\033[;H" if opts.clear else ""
-            return prefix + self.text(value, Time.now() if opts.offset else None) + "\n---\n"
-        from rostools.cli import output
-
-        return output.record(opts.fmt, self.plain(value))
+            return prefix + r.text(value, Time.now() if opts.offset else None) + "\n---\n"
+        return output.record(opts.fmt, r.plain(value))
 
 
 class Echo:
@@ -123,10 +97,16 @@ class Echo:
         key = (type_name, md5, definition)
         found = self.printers.get(key)
         if found is None:
-            from rostools.msgs import learnt
+            from rostools.msgs.plain import CsvOptions
+            from rostools.msgs.text import TextOptions
 
-            store = learnt.codec(self.store, type_name, md5, definition).store
-            found = self.printers[key] = Printer(store, type_name, topic, self.opts)
+            o = self.opts
+            renderer = Renderer.learnt(
+                self.store, type_name, md5, definition, field=o.field,
+                text_options=TextOptions(o.nostr, o.noarr, o.width, o.offset),
+                csv_options=CsvOptions(o.nostr, o.noarr),
+            )  # fmt: skip
+            found = self.printers[key] = Printer(renderer, topic, o)
         return found
 
     def emit(
@@ -151,8 +131,8 @@ class Echo:
                 pass  # one at a time below, to say which message and print the others
             else:
                 self.printed += len(texts)
-                sys.stdout.write("".join(texts))
-                sys.stdout.flush()
+                output.put("".join(texts))
+                output.flush()
                 return True
         out: list[str] = []
         try:
@@ -177,8 +157,8 @@ class Echo:
                 self.printed += 1
         finally:  # what came before a message that stops us is printed first
             if out:
-                sys.stdout.write("".join(out))
-                sys.stdout.flush()
+                output.put("".join(out))
+                output.flush()
         return limit is None or self.printed < limit
 
 

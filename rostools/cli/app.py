@@ -9,6 +9,7 @@ import typer
 from typer.core import TyperGroup
 
 from rostools import __version__
+from rostools.cli import output
 from rostools.cli.output import Format
 from rostools.cli.settings import Settings
 
@@ -73,7 +74,7 @@ app = typer.Typer(
 
 def _version(value: bool) -> None:
     if value:
-        typer.echo(f"rostools {__version__}")
+        output.line(f"rostools {__version__}")
         raise typer.Exit()
 
 

@@ -96,6 +96,13 @@ def line(text: str, flush: bool = False) -> None:
         sys.stdout.flush()
 
 
+def put_bytes(data: bytes | memoryview) -> None:
+    """Write bytes to stdout as they are (``bag attachments --get`` into a pipe)."""
+    sys.stdout.flush()
+    sys.stdout.buffer.write(data)
+    sys.stdout.buffer.flush()
+
+
 def flush() -> None:
     """Hand what was written to stdout on now: the reader of a stream waits for it."""
     sys.stdout.flush()

@@ -87,8 +87,7 @@ def attachments(
     if out is None:
         if sys.stdout.isatty():
             raise UsageError("give -o FILE: the attachment is not written to a terminal")
-        output.flush()
-        sys.stdout.buffer.write(data)
+        output.put_bytes(data)
         return
     if out.exists() and not force:
         raise UsageError(f"{out} exists (use -f to overwrite)")

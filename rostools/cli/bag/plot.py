@@ -15,6 +15,7 @@ from typing import TYPE_CHECKING, Annotated
 import typer
 
 from rostools.bag.model import counted
+from rostools.cli import output
 from rostools.cli.bag.options import EndOpt, StartOpt
 from rostools.cli.bag.shared import check_read, time_window
 from rostools.cli.common import FormatOpt, output_format
@@ -114,7 +115,7 @@ def _draw(
         plot, origin=origin, title=bag.name, xlabel=xlabel, color=plotting.use_color(),
         status=_status(count, plot),
     )  # fmt: skip
-    sys.stdout.write(picture)
+    output.put(picture)
 
 
 def _topics(reader: BagReader, fields: list[str], plot: SeriesSet) -> dict[str, list[str]]:

@@ -154,11 +154,11 @@ class Meter:
                 if self.error is not None:
                     raise self.error
                 report(True)  # Ctrl-C: rostopic prints the window once more
-                sys.stdout.flush()
+                output.flush()
                 return "stopped"
             if time.monotonic() >= next_report:
                 report(False)
-                sys.stdout.flush()
+                output.flush()
                 next_report += REPORT_PERIOD
             if deadline is not None and time.monotonic() >= deadline:
                 return "done" if self.received else "timeout"
@@ -212,11 +212,11 @@ def hz(
                        "std_dev": s.std_dev, "window": s.window}  # fmt: skip
                 output.write(fmt, row)
         elif not rows:
-            sys.stdout.write("no new messages\n")
+            output.put("no new messages\n")
         elif len(names) == 1:
-            sys.stdout.write(format_rate(rows[0][1]) + "\n")
+            output.put(format_rate(rows[0][1]) + "\n")
         else:
-            sys.stdout.write(rate_table(rows))
+            output.put(rate_table(rows))
 
     _run(ctx, runner, sink, report)
 

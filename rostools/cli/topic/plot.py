@@ -15,6 +15,7 @@ from typing import TYPE_CHECKING, Annotated
 
 import typer
 
+from rostools.cli import output
 from rostools.cli.common import FormatOpt, MsgPathOpt, node_session, output_format
 from rostools.cli.declare import command
 from rostools.cli.output import Format
@@ -277,7 +278,7 @@ async def _run(
     if not draw:
         plotting.emit_records(fmt, live.plot, kind)
     elif screen is None:
-        sys.stdout.write(render())
+        output.put(render())
     if live.done:
         return "done"
     if stop.is_set():

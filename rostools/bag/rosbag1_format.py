@@ -14,6 +14,7 @@ from collections.abc import Collection, Mapping
 from typing import Final
 
 from rostools.bag.model import NS_PER_SEC, BagFormatError, UnsupportedBagError
+from rostools.wire.header import HeaderError, split_fields
 
 MAGIC: Final = b"#ROSBAG V2.0\n"
 
@@ -99,23 +100,14 @@ def encode_record(fields: Mapping[str, bytes], data: bytes | memoryview = b"") -
 
 
 def parse_header(buf: ReadBuffer, start: int, end: int) -> dict[str, bytes]:
-    """The fields of a record header occupying ``buf[start:end]``."""
-    fields: dict[str, bytes] = {}
-    pos = start
-    while pos < end:
-        if pos + 4 > end:
-            raise RecordError("record header field length is cut short")
-        (length,) = U32.unpack_from(buf, pos)
-        pos += 4
-        if pos + length > end:
-            raise RecordError(f"record header field of {length} bytes overruns its header")
-        item = bytes(buf[pos : pos + length])
-        pos += length
-        name, sep, value = item.partition(b"=")
-        if not sep:
-            raise RecordError(f"record header field without '=': {item[:32]!r}")
-        fields[name.decode("ascii", "replace")] = value
-    return fields
+    """The fields of a record header occupying ``buf[start:end]``.
+
+    A record header is encoded as a TCPROS connection header is (``wire/header``).
+    """
+    try:
+        return split_fields(buf, start, end)
+    except HeaderError as err:
+        raise RecordError(f"record header: {err}") from None
 
 
 def read_record(

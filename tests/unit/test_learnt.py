@@ -100,7 +100,7 @@ def test_echo_and_bag_doctor_share_one_codec() -> None:
     opts = EchoOptions("", None, None, False, False, False, False, False, None, Format.text)
     echo = Echo(TypeStore.default(), opts)
     key = ("std_msgs/String", STRING_MD5, "string data\n")
-    assert echo.printer(*key, "/chatter").codec is learnt.codec(TypeStore([]), *key)
+    assert echo.printer(*key, "/chatter").renderer.codec is learnt.codec(TypeStore([]), *key)
 
 
 def test_the_api_decodes_each_definition_with_its_own_decoder() -> None:

@@ -37,7 +37,7 @@ def big_publisher(rostools_master: str, cli_env: dict[str, str]) -> Proc:
     script = f"""
 import struct, sys, time
 import rostools
-with rostools.LiveNode("big_talker", sys.argv[1]) as node:
+with rostools.Node("big_talker", sys.argv[1]) as node:
     pub = node.advertise("/big", "std_msgs/String", queue_size=1000)
     pub.wait_for_subscribers(1, timeout=30)
     print("ready", flush=True)
@@ -202,7 +202,7 @@ def test_how_each_command_subscribes(
         return await subscribe(self, topic, *args, **kwargs)  # type: ignore[arg-type]
 
     monkeypatch.setattr(LiveNode, "subscribe", spy)
-    with MasterThread() as master, rostools.LiveNode("talker", master.uri) as node:
+    with MasterThread() as master, rostools.Node("talker", master.uri) as node:
         monkeypatch.setenv("ROS_MASTER_URI", master.uri)
         pub = node.advertise("/chatter", "std_msgs/String", latch=True)
         pub.publish(data="hi")

@@ -10,8 +10,9 @@ import typer
 
 from rostools import __version__
 from rostools.cli import output
-from rostools.cli.common import FINITE, FormatOpt, add, options_record, output_format
-from rostools.cli.declare import command
+from rostools.cli.common import FINITE, FormatOpt, output_format
+from rostools.cli.declare import command, options_record
+from rostools.cli.register import add
 from rostools.errors import RostoolsError
 
 app = typer.Typer(

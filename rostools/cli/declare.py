@@ -4,7 +4,7 @@ A command is one function. Its signature is the command line: each parameter's a
 ``Annotated[type, typer.Option(...)]`` (or an alias such as ``FormatOpt``), and its docstring
 is the help. Modules of commands import Typer and their option aliases for annotations only
 (``if TYPE_CHECKING:``); with ``from __future__ import annotations`` the annotations stay
-text, so a module of commands imports no Typer. ``rostools.cli.common.add`` reads them when
+text, so a module of commands imports no Typer. ``rostools.cli.register.add`` reads them when
 a group's Typer app (``group.py``) is built, and ``python -m rostools.cli.completion`` writes
 the grammar of each ``quick`` command into ``quick.json`` for ``rostools.cli.launch``.
 
@@ -20,6 +20,7 @@ if TYPE_CHECKING:
     from typing import Any, TypeVar
 
     F = TypeVar("F", bound=Callable[..., Any])
+    T = TypeVar("T")
 
 #: The attribute of a declared function that holds its ``Declared``.
 ATTRIBUTE = "rostools_command"
@@ -59,3 +60,23 @@ def declared(function: Callable[..., Any]) -> Declared:
     if not isinstance(found, Declared):
         raise TypeError(f"{function.__qualname__} is not declared with rostools.cli.declare")
     return found
+
+
+def options_record(kind: type[T]) -> type[T]:
+    """Mark a dataclass of options as a record that commands take as one parameter.
+
+    Its fields are ``Annotated`` options, each declared once for every command that takes
+    the record (``bag record`` and ``bag snapshot`` share what to record and where).
+    """
+    kind.rostools_options = True  # type: ignore[attr-defined]
+    return kind
+
+
+def _is_record(hint: object) -> bool:
+    """Whether a parameter's type is an options record (``options_record``)."""
+    return isinstance(hint, type) and getattr(hint, "rostools_options", False) is True
+
+
+def is_record(hint: object) -> bool:
+    """Whether a parameter's type is an options record (``options_record``)."""
+    return isinstance(hint, type) and getattr(hint, "rostools_options", False) is True

@@ -5,7 +5,7 @@ from __future__ import annotations
 import typer
 
 from rostools.cli.action import control, goal, query
-from rostools.cli.common import add
+from rostools.cli.register import add
 
 app = typer.Typer(
     name="action",

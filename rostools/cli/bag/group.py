@@ -5,7 +5,7 @@ from __future__ import annotations
 import typer
 
 from rostools.cli.bag import cat, extras, files, play, plot, record, snapshot, workbench
-from rostools.cli.common import add
+from rostools.cli.register import add
 
 app = typer.Typer(
     name="bag",

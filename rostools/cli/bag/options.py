@@ -12,7 +12,8 @@ from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
-from rostools.cli.common import FINITE, options_record
+from rostools.cli.common import FINITE
+from rostools.cli.declare import options_record
 from rostools.errors import UsageError
 
 if TYPE_CHECKING:

@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import typer
 
-from rostools.cli.common import add, alias
 from rostools.cli.msg import definitions, query
+from rostools.cli.register import add, alias
 
 app = typer.Typer(
     name="msg",

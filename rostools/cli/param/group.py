@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import typer
 
-from rostools.cli.common import add
 from rostools.cli.param import edit, query
+from rostools.cli.register import add
 
 app = typer.Typer(
     name="param",

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import typer
 
-from rostools.cli.common import add
+from rostools.cli.register import add
 from rostools.cli.topic import echo, meters, plot, pub, query
 
 app = typer.Typer(

@@ -8,6 +8,7 @@ from typing import Any
 import pytest
 
 from rostools.master.master_api import MasterAPI
+from rostools.master.params import MAX_DEPTH
 from rostools.wire.xmlvalues import Fault
 
 NODE_A = "http://127.0.0.1:40001/"
@@ -279,3 +280,14 @@ def test_a_nodes_calls_are_cached_under_their_resolved_names(api: MasterAPI) -> 
         "getPublishedTopics",
         "/ns/sub",
     )
+
+
+def test_a_value_nested_too_deep_is_refused_as_any_bad_value(api: MasterAPI) -> None:
+    deep: Any = 1
+    for _ in range(MAX_DEPTH):
+        deep = {"a": deep}
+    assert api.call("setParam", ("/n", "/deep", deep)) == [
+        -1,
+        f"ERROR: parameter [/deep] would nest deeper than {MAX_DEPTH} levels",
+        0,  # setParam's error value, as rosmaster's
+    ]

@@ -174,7 +174,8 @@ def test_the_crawl_follows_rospkg(tmp_path: Path) -> None:
     assert store.packages("srv") == ["p_srv"]
     assert store.srv("p_srv/S").request.fields[0].name == "a"
     # a system folder is searched one level deep only
-    shallow = TypeStore([PathSource([], shallow=[tmp_path / "a", tmp_path / "src"])])
+    _package(tmp_path / "sys" / "x", "p_two", {"msg/T.msg": "int8 t\n"})
+    shallow = TypeStore([PathSource([], shallow=[tmp_path / "sys", tmp_path / "src"])])
     assert shallow.packages("srv") == ["p_srv"]
     assert shallow.packages("msg") == []
 
@@ -187,13 +188,6 @@ def test_type_files_are_those_with_the_kinds_suffix(tmp_path: Path) -> None:
     assert store.types("msg") == [*(f"acts/Do{s}" for s in sorted(SUFFIXES)), "p/A"]
     assert store.packages("action") == ["acts"]
     assert store.packages("srv") == []
-
-
-def test_a_package_in_two_folders_is_searched_in_both(tmp_path: Path) -> None:
-    _package(tmp_path / "one", "x", {"msg/A.msg": "int8 a\n"}, "dup")
-    _package(tmp_path / "two", "y", {"msg/B.msg": "int8 b\n"}, "dup")
-    store = TypeStore([PathSource([tmp_path])])
-    assert [store.msg(n).fields[0].name for n in ("dup/A", "dup/B")] == ["a", "b"]
 
 
 def test_a_type_name_has_one_slash(tmp_path: Path) -> None:

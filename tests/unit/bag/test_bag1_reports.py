@@ -197,3 +197,57 @@ def _listed(raw: bytes, chunk_pos: int) -> int:
         if op == fmt.OP_CHUNK_INFO and fmt.u64_field(fields, "chunk_pos") == chunk_pos:
             return sum(struct.unpack_from(f"<{dlen // 4}I", raw, data)[1::2])
     raise AssertionError(f"no chunk info for {chunk_pos}")
+
+
+def _chunk_infos(raw: bytes) -> list[tuple[int, dict[str, bytes], int, int]]:
+    """(record position, fields, data start, data length) of each CHUNK_INFO record."""
+    return [(r[0], r[2], r[3], r[4]) for r in bag_records(raw) if r[1] == fmt.OP_CHUNK_INFO]
+
+
+def _times(fields: dict[str, bytes]) -> tuple[int, int]:
+    return fmt.time_field(fields, "start_time"), fmt.time_field(fields, "end_time")
+
+
+def test_chunk_info_times_that_disagree_with_the_records_are_noted(tmp_path: Path) -> None:
+    sample = write_sample(tmp_path / "x.bag", 200, chunk_size=3000)
+    raw = sample.path.read_bytes()
+    pos, fields, data, dlen = _chunk_infos(raw)[1]
+    chunk_pos = fmt.u64_field(fields, "chunk_pos")
+    start, end = _times(fields)  # the first and last record's times (the format's rule)
+    bad = tmp_path / "bad.bag"
+    for new_start, new_end in ((start, end + 10**9), (start + 1, end)):
+        changed = {**fields, "start_time": fmt.pack_time(new_start)}
+        changed["end_time"] = fmt.pack_time(new_end)
+        record = fmt.encode_record(changed, raw[data : data + dlen])
+        bad.write_bytes(raw[:pos] + record + raw[pos + len(record) :])
+        with Bag1Reader(bad) as reader:
+            assert [m[2] for m in read_stream(bad)] == [m[2] for m in sample.stream]
+            list(reader.messages())
+            assert reader.notes == [
+                f"chunk at {chunk_pos}: its records run from {start} to {end} ns,"
+                f" its chunk info says {new_start} to {new_end}"
+            ]
+    # a read of some topics only: records inside the chunk info's times are no news
+    bad.write_bytes(raw[:pos] + record + raw[pos + len(record) :])
+    with Bag1Reader(bad) as reader:
+        list(reader.messages(topics=["/point"]))
+        assert reader.notes == []
+
+
+@pytest.mark.parametrize(("chunk_size", "lost"), [(3000, None), (1, "1 message is lost")])
+def test_a_chunk_that_does_not_decompress_names_what_it_held(
+    tmp_path: Path, chunk_size: int, lost: str | None
+) -> None:
+    raw = write_sample(tmp_path / "x.bag", 100, compression="bz2", chunk_size=chunk_size)
+    raw_bytes = raw.path.read_bytes()
+    victim = [r for r in bag_records(raw_bytes) if r[1] == fmt.OP_CHUNK][1]
+    damaged = bytearray(raw_bytes)
+    middle = victim[3] + victim[4] // 2
+    damaged[middle : middle + 8] = bytes(8)
+    bad = tmp_path / "bad.bag"
+    bad.write_bytes(bytes(damaged))
+    with Bag1Reader(bad) as reader:
+        list(reader.messages())
+        [said] = reader.damage
+    lost = lost or f"{_listed(raw_bytes, victim[0])} messages are lost"
+    assert re.fullmatch(rf"chunk at {victim[0]} is unreadable \(.+\); its {lost}", said), said

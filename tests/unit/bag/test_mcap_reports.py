@@ -128,3 +128,29 @@ def test_chunks_out_of_time_order_are_counted(tmp_path: Path) -> None:
             [],
             [f"chunk at {index.chunk_start_offset}: 2 messages out of time order"],
         )
+
+
+def test_closing_unmaps_the_file(tmp_path: Path) -> None:
+    path = write_sample(tmp_path / "x.mcap", 5).path
+    reader = McapReader(path)
+    info = reader.info()
+    assert (info.path, info.version, info.connections) == (path, "0", tuple(reader.connections))
+    assert Path("/proc/self/maps").read_text().count(str(path)) == 1
+    reader.close()
+    assert Path("/proc/self/maps").read_text().count(str(path)) == 0
+
+
+def test_a_chunk_cut_short_is_read_as_far_as_it_goes(tmp_path: Path) -> None:
+    sample = write_sample(tmp_path / "x.mcap", 200, compression="none", chunk_size=3000)
+    raw = sample.path.read_bytes()
+    with McapReader(sample.path) as reader:
+        chunk = reader.chunk_indexes[1]
+    cut = chunk.chunk_start_offset + chunk.chunk_length // 2
+    bad = tmp_path / "bad.mcap"
+    bad.write_bytes(raw[:cut])
+    with McapReader(bad) as reader:
+        got = read_stream(bad)
+        damage = list(reader.damage)
+    assert got == sample.stream[: len(got)] and len(got) < len(sample.stream)
+    assert damage[0] == f"chunk at {chunk.chunk_start_offset} is cut short; read what decompresses"
+    assert damage[1].startswith(f"chunk at {chunk.chunk_start_offset} is cut short (")

@@ -16,7 +16,13 @@ from rostools.bag import rosbag1_format as fmt
 from rostools.bag.access import open_writer
 from rostools.bag.model import BagFormatError, UnsupportedBagError
 from rostools.bag.rosbag1_reader import Bag1Reader
-from tests.support.bagdata import STRING_MD5, bag_records, read_stream, write_sample
+from tests.support.bagdata import (
+    STRING_MD5,
+    bag_records,
+    read_stream,
+    write_late_chunk,
+    write_sample,
+)
 
 
 def _with_bag_header(raw: bytes, **fields: bytes | None) -> bytes:
@@ -130,13 +136,7 @@ def test_an_empty_bag_is_an_indexed_bag(tmp_path: Path) -> None:
 
 def test_records_out_of_time_order_are_counted_per_chunk(tmp_path: Path) -> None:
     path = tmp_path / "x.bag"
-    with open_writer(path, chunk_size=10**6) as writer:
-        conn = writer.add_connection("/t", "std_msgs/String", STRING_MD5, "string data\n")
-        for t in (5, 1, 2, 9, 3, 7):  # late after 5 and after 9: two
-            writer.write(conn, t, struct.pack("<I", 0))
-        writer.flush()
-        for t in (10, 11):
-            writer.write(conn, t, struct.pack("<I", 0))
+    write_late_chunk(path)
     chunks = [r[0] for r in bag_records(path.read_bytes()) if r[1] == fmt.OP_CHUNK]
     with Bag1Reader(path) as reader:
         assert reader.order_notes() == [f"chunk at {chunks[0]}: 2 messages out of time order"]
@@ -232,22 +232,3 @@ def test_chunk_info_times_that_disagree_with_the_records_are_noted(tmp_path: Pat
     with Bag1Reader(bad) as reader:
         list(reader.messages(topics=["/point"]))
         assert reader.notes == []
-
-
-@pytest.mark.parametrize(("chunk_size", "lost"), [(3000, None), (1, "1 message is lost")])
-def test_a_chunk_that_does_not_decompress_names_what_it_held(
-    tmp_path: Path, chunk_size: int, lost: str | None
-) -> None:
-    raw = write_sample(tmp_path / "x.bag", 100, compression="bz2", chunk_size=chunk_size)
-    raw_bytes = raw.path.read_bytes()
-    victim = [r for r in bag_records(raw_bytes) if r[1] == fmt.OP_CHUNK][1]
-    damaged = bytearray(raw_bytes)
-    middle = victim[3] + victim[4] // 2
-    damaged[middle : middle + 8] = bytes(8)
-    bad = tmp_path / "bad.bag"
-    bad.write_bytes(bytes(damaged))
-    with Bag1Reader(bad) as reader:
-        list(reader.messages())
-        [said] = reader.damage
-    lost = lost or f"{_listed(raw_bytes, victim[0])} messages are lost"
-    assert re.fullmatch(rf"chunk at {victim[0]} is unreadable \(.+\); its {lost}", said), said

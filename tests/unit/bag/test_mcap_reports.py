@@ -15,7 +15,7 @@ from rostools.bag import mcap_format as fmt
 from rostools.bag.access import open_writer
 from rostools.bag.mcap_reader import McapReader
 from rostools.bag.model import BagFormatError
-from tests.support.bagdata import STRING_MD5, read_stream, write_sample
+from tests.support.bagdata import STRING_MD5, read_stream, write_late_chunk, write_sample
 
 #: The footer: opcode, length, summary start, summary offset start, summary CRC; then magic.
 FOOTER = struct.Struct("<BQQQI")
@@ -118,16 +118,10 @@ def test_attachments_and_metadata_are_counted_with_or_without_a_summary(
 
 def test_chunks_out_of_time_order_are_counted(tmp_path: Path) -> None:
     path = tmp_path / "x.mcap"
-    with open_writer(path, chunk_size=10**6) as writer:
-        conn = writer.add_connection("/t", "std_msgs/String", STRING_MD5, "string data\n")
-        for t in (5, 1, 2, 9, 3, 7):  # late after 5 and after 9: two
-            writer.write(conn, t, struct.pack("<I", 0))
+    write_late_chunk(path)
     with McapReader(path) as reader:
-        [index] = reader.chunk_indexes
-        assert reader.chunk_checks() == (
-            [],
-            [f"chunk at {index.chunk_start_offset}: 2 messages out of time order"],
-        )
+        late = reader.chunk_indexes[0].chunk_start_offset
+        assert reader.chunk_checks() == ([], [f"chunk at {late}: 2 messages out of time order"])
 
 
 def test_closing_unmaps_the_file(tmp_path: Path) -> None:

@@ -23,6 +23,7 @@ from tests.support.bagdata import (
     STRING_MD5,
     bag_records,
     first_chunk_data,
+    handmade_mcap,
     read_stream,
     write_sample,
 )
@@ -287,14 +288,8 @@ def _cdr_mcap(path: Path) -> Path:
     """An unindexed MCAP of one ROS 2 channel (CDR), as a ros2 bag recorder writes them."""
     from rostools.bag import mcap_format as fmt
 
-    out = bytearray(fmt.MAGIC)
-    out += fmt.encode_header("ros2", "")
-    out += fmt.encode_schema(1, "std_msgs/msg/String", "ros2msg", b"string data")
-    out += fmt.encode_channel(1, 1, "/x", "cdr", {})
-    out += fmt.encode_data_end()
-    out += fmt.encode_footer(0, 0, b"")
-    path.write_bytes(bytes(out))
-    return path
+    schema = fmt.encode_schema(1, "std_msgs/msg/String", "ros2msg", b"string data")
+    return handmade_mcap(path, "ros2", schema + fmt.encode_channel(1, 1, "/x", "cdr", {}))
 
 
 def test_ros2_messages_are_recovered_into_mcap_only(tmp_path: Path) -> None:

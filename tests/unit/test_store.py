@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import hashlib
 from pathlib import Path
+from typing import Any
 
 import pytest
 
@@ -322,3 +323,22 @@ def test_recursion_found_outside_the_check_is_named(tmp_path: Path) -> None:
 def test_md5_of_a_definition() -> None:
     assert md5_of("std_msgs/String", "string data\n") == "992ce8a1687cec8c8bd883ec73ca41d1"
     assert md5_of("p/A", "q/Missing m\n") == ""
+
+
+def test_a_type_shared_at_every_level_is_checked_once(monkeypatch: pytest.MonkeyPatch) -> None:
+    # each type holds the next twice: walking every path would be 2**20 visits
+    levels = 20
+    fields = [f"p/T{i + 1} a\np/T{i + 1} b\n" for i in range(levels - 1)] + ["int8 x\n"]
+    definition = fields[0] + "".join(
+        f"{SECTION_RULE}\nMSG: p/T{i}\n{text}" for i, text in enumerate(fields[1:], 1)
+    )
+    looked_up: list[str] = []
+    msg = TypeStore.msg
+
+    def counting(self: TypeStore, name: str) -> Any:
+        looked_up.append(name)
+        return msg(self, name)
+
+    monkeypatch.setattr(TypeStore, "msg", counting)
+    assert TypeStore([]).with_definition("p/T0", definition).has_msg("p/T0")
+    assert len(looked_up) < 4 * levels

@@ -410,6 +410,8 @@ def test_the_value_of_an_answer() -> None:
     body = xv.dumps_response({"a": [1.5]})
     assert wx.answer_value(wx.Message("HTTP/1.1 200 OK", {}, body, True)) == {"a": [1.5]}
     assert wx.answer_value(wx.Message("HTTP/1.0 200 Fine", {}, body, False)) == {"a": [1.5]}
+    # no reason phrase: http.client reads it as 200 too
+    assert wx.answer_value(wx.Message("HTTP/1.1 200", {}, body, True)) == {"a": [1.5]}
 
 
 @pytest.mark.parametrize(

@@ -688,9 +688,7 @@ def _u64_or(fields: Mapping[str, bytes], name: str, default: int) -> int:
 
 
 def _not_a_bag(path: Path, head: bytes) -> BagFormatError:
-    """The error for a file that does not start with the v2.0 magic."""
-    if not head:
-        return BagFormatError(f"{path} is empty, not a bag")
+    """The error for a file that does not start with the v2.0 magic (an empty one never opens)."""
     if head.startswith(b"#ROSBAG V"):
         version = head[len(b"#ROSBAG V") :].split(b"\n")[0].decode("ascii", "replace")
         return UnsupportedBagError(f"{path} is a rosbag of version {version}; only 2.0 is read")

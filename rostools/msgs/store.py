@@ -285,7 +285,7 @@ class TypeStore:
         ``DefinitionError`` naming the type.
         """
         root = normalize_type_name(name)
-        depth: dict[str, int] = {}  # the longest chain of nested types below each type
+        done: set[str] = set()  # checked with all below them (a type shared twice is fine)
         stack = [(root, iter(self.msg(root).dependencies))]
         on_path = {root}
         while stack:
@@ -294,11 +294,10 @@ class TypeStore:
             if dep is None:
                 stack.pop()
                 on_path.discard(current)
-                below = (depth.get(d, 0) for d in self.msg(current).dependencies)
-                depth[current] = 1 + max(below, default=0)
+                done.add(current)
             elif dep in on_path:
                 raise DefinitionError(f"invalid definition of {root}: {dep} contains itself")
-            elif dep not in depth:
+            elif dep not in done:
                 if len(stack) >= MAX_NESTING:
                     raise DefinitionError(
                         f"invalid definition of {root}: types nest deeper than {MAX_NESTING} levels"
@@ -306,7 +305,7 @@ class TypeStore:
                 try:
                     spec = self.msg(dep)
                 except NotFoundError:
-                    depth[dep] = 0  # unknown here: whoever needs it says so
+                    done.add(dep)  # unknown here: whoever needs it says so
                     continue
                 on_path.add(dep)
                 stack.append((dep, iter(spec.dependencies)))

@@ -230,7 +230,7 @@ def decode_call(body: bytes | bytearray) -> tuple[str, tuple[Any, ...]]:
     # xmlrpc.client.loads, fed in slices by a parser that refuses a DTD
     target = xmlrpc.client.Unmarshaller(use_builtin_types=False)
     target.xml(None, None)  # type: ignore[arg-type]  # as ExpatParser: expat gives str
-    parser = xmlvalues.expat_parser(None)
+    parser = xmlvalues.expat_parser()
     parser.StartElementHandler = target.start
     parser.EndElementHandler = target.end
     parser.CharacterDataHandler = target.data

@@ -44,15 +44,16 @@ def _refuse_doctype(name: str, *_: object) -> None:
     raise DoctypeRefused(f"XML-RPC needs no DTD: refused the DOCTYPE {name!r} unread")
 
 
-def expat_parser(encoding: str | None) -> Any:
+def expat_parser() -> Any:
     """A pyexpat parser that stops at a DOCTYPE.
 
     Every XML-RPC body we parse goes through one: the answers our clients read, and the calls
-    our servers read (``wire.xmlrpc``).
+    our servers read (``wire.xmlrpc``). It reads the encoding a body declares (UTF-8 if none),
+    as ``xmlrpc.client`` does.
     """
     from xml.parsers import expat
 
-    parser = expat.ParserCreate(encoding)
+    parser = expat.ParserCreate()
     parser.StartDoctypeDeclHandler = _refuse_doctype
     return parser
 
@@ -94,10 +95,11 @@ def _value(out: list[str], value: Any) -> None:
 
 
 def _rare(out: list[str], value: Any) -> None:
-    """Binaries, dates and subclasses of the plain types: rare in ROS, kept off the fast path."""
-    if isinstance(value, bool):  # before int: bool is an int
-        _value(out, bool(value))
-    elif isinstance(value, int):
+    """Binaries, dates and subclasses of the plain types: rare in ROS, kept off the fast path.
+
+    ``bool`` has no subclasses, so every bool took the fast path.
+    """
+    if isinstance(value, int):
         _value(out, int(value))
     elif isinstance(value, str):
         _value(out, str(value))
@@ -240,7 +242,7 @@ def loads_response(body: bytes | bytearray) -> Any:
     from xml.parsers import expat
 
     reader = _Reader()
-    parser = expat_parser("utf-8")
+    parser = expat_parser()
     parser.StartElementHandler = reader.start
     parser.EndElementHandler = reader.end
     parser.CharacterDataHandler = reader.chars

@@ -200,3 +200,27 @@ def recorded(path: Path, topic: str) -> int:
             return sum(1 for _ in reader.messages([topic]))
     except (RostoolsError, OSError):
         return 0
+
+
+def handmade_mcap(path: Path, profile: str, records: bytes = b"") -> Path:
+    """An unindexed MCAP file: magic, header, ``records``, data end, an empty footer."""
+    from rostools.bag import mcap_format as fmt
+
+    out = fmt.MAGIC + fmt.encode_header(profile, "") + records
+    path.write_bytes(out + fmt.encode_data_end() + fmt.encode_footer(0, 0, b""))
+    return path
+
+
+#: Times written in this order make two messages late: 1 after 5, and 3 after 9.
+LATE_TWICE = (5, 1, 2, 9, 3, 7)
+
+
+def write_late_chunk(path: Path) -> None:
+    """A chunk of ``LATE_TWICE``, then one in time order (10, 11); the format follows the name."""
+    with open_writer(path, chunk_size=10**6) as writer:
+        conn = writer.add_connection("/t", "std_msgs/String", STRING_MD5, "string data\n")
+        for t in LATE_TWICE:
+            writer.write(conn, t, struct.pack("<I", 0))
+        writer.flush()
+        for t in (10, 11):
+            writer.write(conn, t, struct.pack("<I", 0))

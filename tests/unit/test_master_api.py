@@ -2,13 +2,18 @@
 
 from __future__ import annotations
 
+import os
+from typing import Any
+
 import pytest
 
 from rostools.master.master_api import MasterAPI
+from rostools.master.params import MAX_DEPTH
 from rostools.wire.xmlvalues import Fault
 
 NODE_A = "http://127.0.0.1:40001/"
 NODE_B = "http://127.0.0.1:40002/"
+NODE_C = "http://127.0.0.1:40003/"
 
 
 @pytest.fixture
@@ -179,3 +184,110 @@ def test_types_go_with_the_last_user(api: MasterAPI) -> None:
     api.call("registerPublisher", ("/n", "/u", "a/B", NODE_A))
     api.call("registerSubscriber", ("/n", "/v", "a/B", NODE_B))  # same name, new URI: purged
     assert api.call("getTopicTypes", ("/x",))[2] == [["/v", "a/B"]]
+
+
+#: One session with a real rosmaster (Noetic, ``rosmaster --core`` on loopback, called in this
+#: order with ``xmlrpc.client``), and its answers, captured.
+ROSMASTER_SESSION: list[tuple[str, tuple[Any, ...], list[Any]]] = [
+    ("getUri", ("/a", 1), [-1, "Error: bad call arity", ""]),
+    ("getParamNames", ("/a",), [1, "Parameter names", []]),
+    ("setParam", ("/ns/n", "p", 1), [1, "parameter /ns/p set", 0]),
+    ("getParamNames", ("/a",), [1, "Parameter names", ["/ns/p"]]),
+    ("getParam", ("/ns/n", "p"), [1, "Parameter [/ns/p]", 1]),
+    ("subscribeParam", ("/ns/w", NODE_A, "p"), [1, "Subscribed to parameter [/ns/p]", 1]),
+    ("lookupNode", ("/x", "/ns/w"), [1, "node api", NODE_A]),
+    ("deleteParam", ("/ns/n", "p"), [1, "parameter /ns/p deleted", 0]),
+    ("unsubscribeParam", ("/ns/w", NODE_A, "p"), [1, "Unsubscribe to parameter [/ns/p]", 1]),
+    ("unsubscribeParam", ("/ns/w", "bad", "p"),
+     [-1, "ERROR: parameter [caller_api] is not an RPC URI", 0]),
+    ("unregisterService", ("/a", "/s", "bad"),
+     [-1, "ERROR: parameter [service_api] is not an RPC URI", 0]),
+    ("unregisterService", ("/a", "/s", ""),
+     [-1, "ERROR: parameter [service_api] is not an XMLRPC URI", 0]),
+    ("unregisterSubscriber", ("/a", "/t", "bad"),
+     [-1, "ERROR: parameter [caller_api] is not an RPC URI", 0]),
+    ("unregisterPublisher", ("/a", "/t", "bad"),
+     [-1, "ERROR: parameter [caller_api] is not an RPC URI", 0]),
+    ("registerPublisher", ("/p", "/t", "a/B", NODE_A),
+     [1, "Registered [/p] as publisher of [/t]", []]),
+    ("registerSubscriber", ("/s", "/t", "a/B", NODE_B), [1, "Subscribed to [/t]", [NODE_A]]),
+    ("unregisterService", ("/p", "/nosrv", "rosrpc://h:1"),
+     [1, "[/p] is not a provider of [/nosrv]", 0]),
+    ("unregisterSubscriber", ("/p", "/other", NODE_A),
+     [1, "[/p] is not a known provider of [/other]", 0]),
+    ("unregisterSubscriber", ("/p", "/t", NODE_A), [1, "[/p] is not a known provider of [/t]", 0]),
+    ("registerService", ("/p", "/srv", "rosrpc://h:1", NODE_A),
+     [1, "Registered [/p] as provider of [/srv]", 1]),
+    ("searchParam", ("/a", "nope"), [-1, "Cannot find parameter [nope] in an upwards search", ""]),
+    ("registerPublisher", ("/m", "/t", "a/B", NODE_C),
+     [1, "Registered [/m] as publisher of [/t]", [NODE_B]]),
+    # /p again, at a new URI: rosmaster forgets what the old /p registered, and only that
+    ("registerSubscriber", ("/p", "/u", "a/B", NODE_B), [1, "Subscribed to [/u]", []]),
+    ("getSystemState", ("/x",),
+     [1, "current system state", [[["/t", ["/m"]]], [["/t", ["/s"]], ["/u", ["/p"]]], []]]),
+    ("shutdown", ("/a", 1, 2), [-1, "Error: bad call arity", 0]),
+    ("shutdown", ("/a", "bye"), [1, "shutdown", 0]),
+]  # fmt: skip
+
+
+def test_a_session_answers_as_rosmaster_did(api: MasterAPI) -> None:
+    for method, params, answer in ROSMASTER_SESSION:
+        assert api.call(method, params) == answer, (method, params)
+
+
+def test_uri_pid_and_shutdown(api: MasterAPI) -> None:
+    assert api.call("getUri", ("/a",)) == [1, "", "http://localhost:11311/"]
+    assert MasterAPI("http://h:1/").call("getPid", ("/a",)) == [1, "", os.getpid()]
+    # The server stops once this is set: a fresh master has not been asked to.
+    assert api.shutdown_requested is None
+    api.call("shutdown", ("/a", ""))
+    assert api.shutdown_requested == "external shutdown request"
+    api.call("shutdown", ("/a", "bye"))
+    assert api.shutdown_requested == "bye"
+
+
+def test_parameter_updates_go_to_each_subscriber_but_the_setter(api: MasterAPI) -> None:
+    api.call("subscribeParam", ("/ns/w", NODE_A, "p"))
+    api.call("setParam", ("/ns/w", "/ns/p", 1))
+    assert api.outgoing == []  # rosmaster does not tell a node of its own change
+    api.call("setParam", ("/other", "/ns/p", 2))
+    api.call("deleteParam", ("/other", "/ns/p"))
+    assert [(c.uri, c.method, c.args) for c in api.outgoing] == [
+        (NODE_A, "paramUpdate", ("/master", "/ns/p/", 2)),
+        (NODE_A, "paramUpdate", ("/master", "/ns/p/", {})),
+    ]
+
+
+def test_every_update_a_multicall_makes_is_sent(api: MasterAPI) -> None:
+    """The server sends ``outgoing`` once a whole multicall is done: no call may drop it."""
+    calls = [
+        ("registerSubscriber", ["/s", "/t", "a/B", NODE_B]),
+        ("registerPublisher", ["/p", "/t", "a/B", NODE_A]),
+        ("registerSubscriber", ["/s2", "/u", "a/B", NODE_C]),
+        ("registerPublisher", ["/p2", "/v", "a/B", NODE_C]),
+        ("registerService", ["/q", "/srv", "rosrpc://h:1", NODE_C]),
+        ("subscribeParam", ["/r", NODE_C, "/k"]),
+    ]
+    api.call("system.multicall", ([{"methodName": m, "params": p} for m, p in calls],))
+    assert [(c.uri, c.method, c.args) for c in api.outgoing] == [
+        (NODE_B, "publisherUpdate", ("/master", "/t", [NODE_A])),
+    ]
+
+
+def test_a_nodes_calls_are_cached_under_their_resolved_names(api: MasterAPI) -> None:
+    # the server caches the answers to getPublishedTopics and the like
+    assert api.cache_key("getPublishedTopics", ("/ns/n", "sub")) == (
+        "getPublishedTopics",
+        "/ns/sub",
+    )
+
+
+def test_a_value_nested_too_deep_is_refused_as_any_bad_value(api: MasterAPI) -> None:
+    deep: Any = 1
+    for _ in range(MAX_DEPTH):
+        deep = {"a": deep}
+    assert api.call("setParam", ("/n", "/deep", deep)) == [
+        -1,
+        f"ERROR: parameter [/deep] would nest deeper than {MAX_DEPTH} levels",
+        0,  # setParam's error value, as rosmaster's
+    ]

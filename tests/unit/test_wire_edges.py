@@ -331,7 +331,10 @@ def test_responses_read_back_with_http_client(keep_alive: bool) -> None:
     assert response.getheader("Date") == "Tue, 25 Nov 2026 04:00:00 GMT"
     assert response.getheader("Content-Type") == "text/xml"
     assert response.read() == b"<x/>"
-    assert read_response(wx.format_response(b"", True)).getheader("Date") is None
+    assert wx.format_response(b"", True) == (
+        b"HTTP/1.1 200 OK\r\nServer: rostools\r\nContent-Type: text/xml\r\n"
+        b"Content-Length: 0\r\nConnection: keep-alive\r\n\r\n"
+    )  # no date: no Date header
     assert raw.startswith(b"HTTP/1.1 200 OK\r\n")  # XmlRpc++ keeps the socket only then (§1.1)
 
 
@@ -345,11 +348,12 @@ def test_a_request_names_its_agent() -> None:
 
 def test_printable_paths_stay_as_they_are() -> None:
     assert wx.request_path("/!~") == "/!~"
+    assert wx.request_path("/!a b~") == "/!a%20b~"  # RFC 3986 keeps ! and ~ as they are
     assert wx.request_path("/a b") == "/a%20b"
     assert wx.request_path("/\x7f") == "/%7F"
 
 
-def parse(data: bytes) -> wx.Message | None:
+def parse(data: bytes) -> wx.HttpMessage | None:
     parser = wx.HttpParser()
     parser.feed(data)
     return parser.next_message()
@@ -376,6 +380,58 @@ def test_http_errors_carry_the_standard_reason(data: bytes, status: int, detail:
     assert caught.value.status == status
     assert caught.value.reason == phrase + detail
     assert str(caught.value) == f"{status} {phrase}{detail}"
+
+
+def test_nothing_is_pending_before_a_head_or_after_a_message() -> None:
+    parser = wx.HttpParser()
+    assert parser.pending == 0
+    parser.feed(b"POST / HTTP/1.1\r\nContent-Length: 3\r\n\r\nab")
+    assert parser.next_message() is None and parser.pending == 3
+
+
+@pytest.mark.parametrize(
+    ("start_line", "why"),
+    [
+        ("HTTP/1.1 500 Internal Server Error", "HTTP 500 Internal Server Error"),
+        ("HTTP/1.1 404", "HTTP 404"),
+        ("HTTP/1.1", "HTTP answer without a status"),
+        ("HTTP/1.1 2000 OK", "HTTP 2000 OK"),
+    ],
+)
+def test_an_answer_other_than_200_is_a_bad_answer(start_line: str, why: str) -> None:
+    message = wx.HttpMessage(start_line, {}, xv.dumps_response(1), True)
+    with pytest.raises(xv.BadAnswer) as caught:
+        wx.answer_value(message)
+    assert str(caught.value) == why
+
+
+def test_the_value_of_an_answer() -> None:
+    body = xv.dumps_response({"a": [1.5]})
+    assert wx.answer_value(wx.HttpMessage("HTTP/1.1 200 OK", {}, body, True)) == {"a": [1.5]}
+    assert wx.answer_value(wx.HttpMessage("HTTP/1.0 200 Fine", {}, body, False)) == {"a": [1.5]}
+    # no reason phrase: http.client reads it as 200 too
+    assert wx.answer_value(wx.HttpMessage("HTTP/1.1 200", {}, body, True)) == {"a": [1.5]}
+
+
+@pytest.mark.parametrize(
+    "params",
+    [(1.0, True, "1"), (xmlrpc.client.Binary(b"ab"), xmlrpc.client.DateTime("20261125T04:00:00"))],
+)
+def test_calls_are_read_with_the_types_xmlrpc_client_reads(params: tuple[Any, ...]) -> None:
+    body = xmlrpc.client.dumps(params, "m").encode()
+    theirs, _ = xmlrpc.client.loads(body)  # as rosmaster's SimpleXMLRPCServer reads them
+    method, ours = wx.decode_call(body)
+    assert method == "m"
+    assert [(type(v), v) for v in ours] == [(type(v), v) for v in theirs]
+
+
+def test_a_double_written_as_an_integer_is_a_float() -> None:
+    body = (
+        b"<methodCall><methodName>m</methodName><params><param><value><double>1</double>"
+        b"</value></param></params></methodCall>"
+    )
+    [value] = wx.decode_call(body)[1]
+    assert (type(value), value) == (float, xmlrpc.client.loads(body)[0][0])
 
 
 def test_http_limits_are_inclusive() -> None:

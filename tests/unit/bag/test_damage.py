@@ -201,9 +201,12 @@ def test_chunks_before_their_connection_records(tmp_path: Path, compression: str
     assert report.complete and read_stream(tmp_path / "out.bag") == sample.stream
 
 
-@pytest.mark.parametrize("compression", ["bz2", "lz4"])
-def test_an_unreadable_chunk_is_left_out_and_named(tmp_path: Path, compression: str) -> None:
-    sample, raw = _sample(tmp_path, compression)
+@pytest.mark.parametrize(("compression", "chunk_size"), [("bz2", 3000), ("lz4", 3000), ("bz2", 1)])
+def test_an_unreadable_chunk_is_left_out_and_named(
+    tmp_path: Path, compression: str, chunk_size: int
+) -> None:
+    sample = write_sample(tmp_path / "x.bag", 400, compression=compression, chunk_size=chunk_size)
+    raw = sample.path.read_bytes()
     victim = [r for r in bag_records(raw) if r[1] == fmt.OP_CHUNK][1]
     damaged = bytearray(raw)
     middle = victim[3] + victim[4] // 2
@@ -212,7 +215,10 @@ def test_an_unreadable_chunk_is_left_out_and_named(tmp_path: Path, compression: 
     bad.write_bytes(bytes(damaged))
     got, reader = _messages_and_reader(bad)  # no exception: the other chunks still read
     assert got and all(m in sample.stream for m in got) and len(got) < len(sample.stream)
-    assert any(str(victim[0]) in d for d in reader.damage), reader.damage
+    lost = len(sample.stream) - len(got)
+    lost_text = "1 message is" if lost == 1 else f"{lost} messages are"
+    [said] = reader.damage
+    assert re.fullmatch(rf"chunk at {victim[0]} is unreadable \(.+\); its {lost_text} lost", said)
     report = convert(bad, tmp_path / "out.bag")
     assert report.messages_written == len(got) and report.lost
 

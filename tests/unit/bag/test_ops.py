@@ -10,7 +10,14 @@ from rostools.bag import ops
 from rostools.bag.access import bag_info, open_bag, open_writer
 from rostools.bag.model import BagUsageError, UnsupportedBagError
 from rostools.msgs.expr import ExpressionError
-from tests.support.bagdata import STEP_NS, STRING_MD5, headers, read_stream, write_sample
+from tests.support.bagdata import (
+    STEP_NS,
+    STRING_MD5,
+    handmade_mcap,
+    headers,
+    read_stream,
+    write_sample,
+)
 
 
 @pytest.mark.parametrize(
@@ -60,13 +67,7 @@ def test_convert_keeps_unusual_headers(tmp_path: Path) -> None:
 def test_convert_refuses_non_ros1_messages(tmp_path: Path) -> None:
     from rostools.bag import mcap_format as fmt
 
-    path = tmp_path / "cdr.mcap"
-    out = bytearray(fmt.MAGIC)
-    out += fmt.encode_header("ros2", "")
-    out += fmt.encode_channel(1, 0, "/x", "cdr", {})
-    out += fmt.encode_data_end()
-    out += fmt.encode_footer(0, 0, b"")
-    path.write_bytes(bytes(out))
+    path = handmade_mcap(tmp_path / "cdr.mcap", "ros2", fmt.encode_channel(1, 0, "/x", "cdr", {}))
     with pytest.raises(UnsupportedBagError, match="cdr"):
         ops.convert(path, tmp_path / "out.bag")
     assert not (tmp_path / "out.bag").exists()

@@ -15,14 +15,15 @@ import pytest
 
 from rostools.bag.access import bag_info, open_bag, open_writer
 from rostools.bag.mcap_reader import McapReader
-from rostools.bag.model import BagFormatError
-from rostools.bag.recover import recover, reindex
+from rostools.bag.model import BagFormatError, BagUsageError, UnsupportedBagError
+from rostools.bag.recover import RecoverReport, recover, reindex
 from rostools.bag.rosbag1_reader import Bag1Reader
 from rostools.errors import DataLossError
 from tests.support.bagdata import (
     STRING_MD5,
     bag_records,
     first_chunk_data,
+    handmade_mcap,
     read_stream,
     write_sample,
 )
@@ -281,3 +282,63 @@ def test_a_corrupt_chunk_is_skipped_and_reported(
     got = read_stream(tmp_path / ("out" + Path(name).suffix))
     assert 300 < len(got) < 600
     assert set(got) < set(sample.stream)
+
+
+def _cdr_mcap(path: Path) -> Path:
+    """An unindexed MCAP of one ROS 2 channel (CDR), as a ros2 bag recorder writes them."""
+    from rostools.bag import mcap_format as fmt
+
+    schema = fmt.encode_schema(1, "std_msgs/msg/String", "ros2msg", b"string data")
+    return handmade_mcap(path, "ros2", schema + fmt.encode_channel(1, 1, "/x", "cdr", {}))
+
+
+def test_ros2_messages_are_recovered_into_mcap_only(tmp_path: Path) -> None:
+    src = _cdr_mcap(tmp_path / "cdr.mcap")
+    with pytest.raises(UnsupportedBagError, match=r"^.*cdr\.mcap: /x holds ROS 2 CDR .*\.bag"):
+        recover(src, tmp_path / "out.bag")
+    assert not (tmp_path / "out.bag").exists()
+    recover(src, tmp_path / "out.mcap")
+    with McapReader(tmp_path / "out.mcap") as reader:
+        assert reader.profile == "ros2"
+        assert [c.topic for c in reader.connections] == ["/x"]
+
+
+def test_the_report_says_what_was_recovered_and_how(tmp_path: Path) -> None:
+    sample = write_sample(tmp_path / "x.bag", 10, close=False)
+    with open_writer(tmp_path / "quiet.bag") as writer:  # a connection with no messages
+        writer.add_connection("/quiet", "std_msgs/String", STRING_MD5, "string data\n")
+    out = tmp_path / "y.bag"
+    report = recover(sample.path, out)
+    with open_bag(sample.path) as reader:
+        notes = tuple(reader.notes)
+    assert notes  # an unclosed recording is read by walking it, and says so
+    assert (report.source, report.output, report.connections, report.notes) == (
+        sample.path,
+        out,
+        4,
+        notes,
+    )
+    # rosbag reindex keeps every connection, whether or not it has messages
+    recover(tmp_path / "quiet.bag", tmp_path / "quiet2.bag")
+    assert [c.topic for c in bag_info(tmp_path / "quiet2.bag").connections] == ["/quiet"]
+
+
+def test_recover_never_overwrites_unless_asked(tmp_path: Path) -> None:
+    sample = write_sample(tmp_path / "x.bag", 10)
+    with pytest.raises(BagUsageError, match=r"x\.bag into itself; give another output file"):
+        recover(sample.path, sample.path, overwrite=True)
+    other = write_sample(tmp_path / "y.bag", 3).path
+    with pytest.raises(BagUsageError, match="exists; refusing to overwrite it"):
+        recover(sample.path, other)
+    assert recover(sample.path, other, overwrite=True).messages == 10
+
+
+def test_lost_data_is_one_line_naming_each_loss(tmp_path: Path) -> None:
+    report = RecoverReport(
+        tmp_path / "a.bag", tmp_path / "b.bag", "bag", False, 1, 1, (), ("one", "two")
+    )
+    with pytest.raises(DataLossError) as err:
+        report.raise_if_lost()
+    assert (
+        str(err.value) == f"recovered 1 message into {tmp_path / 'b.bag'}, but lost data: one; two"
+    )

@@ -72,11 +72,6 @@ def options_record(kind: type[T]) -> type[T]:
     return kind
 
 
-def _is_record(hint: object) -> bool:
-    """Whether a parameter's type is an options record (``options_record``)."""
-    return isinstance(hint, type) and getattr(hint, "rostools_options", False) is True
-
-
 def is_record(hint: object) -> bool:
     """Whether a parameter's type is an options record (``options_record``)."""
     return isinstance(hint, type) and getattr(hint, "rostools_options", False) is True

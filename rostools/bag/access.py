@@ -20,6 +20,7 @@ from rostools.bag.model import (
     BagNotFoundError,
     BagUsageError,
     UnsupportedBagError,
+    not_a_bag,
 )
 from rostools.bag.ordering import RawMessage, merge
 from rostools.errors import InvalidDataError
@@ -49,12 +50,7 @@ def detect_format(path: str | Path) -> str:
         return "bag"
     if not head:
         raise BagFormatError(f"{path} is empty, not a bag")
-    if head.startswith(b"#ROSBAG V"):
-        version = head[len(b"#ROSBAG V") :].split(b"\n")[0].decode("ascii", "replace")
-        raise UnsupportedBagError(f"{path} is a rosbag of version {version}; only 2.0 is read")
-    if head.startswith(b"SQLite format"):
-        raise BagFormatError(f"{path} is an SQLite database (a ROS 2 bag?), not a ROS 1 bag")
-    raise BagFormatError(f"{path} is neither a ROS 1 .bag nor an MCAP file")
+    raise not_a_bag(path, head, "neither a ROS 1 .bag nor an MCAP file")
 
 
 def _is_ros2(path: Path) -> bool:

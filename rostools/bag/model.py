@@ -218,6 +218,19 @@ class BagUnindexedError(InvalidDataError):
 LISTED = 5
 
 
+def not_a_bag(path: object, head: bytes, otherwise: str) -> BagFormatError:
+    """The error for a file whose first bytes are no bag we read: what they are, if known.
+
+    ``otherwise`` says what the file is not, when its first bytes say nothing.
+    """
+    if head.startswith(b"#ROSBAG V"):
+        version = head[len(b"#ROSBAG V") :].split(b"\n")[0].decode("ascii", "replace")
+        return UnsupportedBagError(f"{path} is a rosbag of version {version}; only 2.0 is read")
+    if head.startswith(b"SQLite format"):
+        return BagFormatError(f"{path} is an SQLite database (a ROS 2 bag?), not a ROS 1 bag")
+    return BagFormatError(f"{path} is {otherwise}")
+
+
 def lost_data(what: str, lost: Sequence[str]) -> BagDataLossError:
     """The error (exit code 6) for ``what`` was done, with ``lost`` left out."""
     shown = "; ".join(lost[:LISTED])

@@ -35,6 +35,7 @@ from rostools.bag.model import (
     compression_rows,
     connection_from_header,
     counted,
+    not_a_bag,
     summarize,
 )
 from rostools.bag.ordering import Block, Entry, RawMessage, ordered, out_of_order
@@ -103,7 +104,7 @@ class Bag1Reader(BagReader):
     def _open(self) -> None:
         head = self._mm[: len(fmt.MAGIC)]
         if head != fmt.MAGIC:
-            raise _not_a_bag(self.path, head)
+            raise not_a_bag(self.path, head, "not a ROS 1 bag (no '#ROSBAG V2.0' line)")
         try:
             fields, data, dlen = fmt.read_record(self._mm, len(fmt.MAGIC), self.size)
             if fmt.op_of(fields) != fmt.OP_BAG_HEADER:
@@ -685,13 +686,3 @@ def _u32_or(fields: Mapping[str, bytes], name: str, default: int) -> int:
 def _u64_or(fields: Mapping[str, bytes], name: str, default: int) -> int:
     raw = fields.get(name)
     return int(fmt.U64.unpack(raw)[0]) if raw is not None and len(raw) == 8 else default
-
-
-def _not_a_bag(path: Path, head: bytes) -> BagFormatError:
-    """The error for a file that does not start with the v2.0 magic (an empty one never opens)."""
-    if head.startswith(b"#ROSBAG V"):
-        version = head[len(b"#ROSBAG V") :].split(b"\n")[0].decode("ascii", "replace")
-        return UnsupportedBagError(f"{path} is a rosbag of version {version}; only 2.0 is read")
-    if head.startswith(b"SQLite format"):
-        return BagFormatError(f"{path} is an SQLite database (a ROS 2 bag?), not a ROS 1 bag")
-    return BagFormatError(f"{path} is not a ROS 1 bag (no '#ROSBAG V2.0' line)")

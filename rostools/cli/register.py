@@ -12,7 +12,6 @@ import ast
 import functools
 import inspect
 import sys
-import typing
 from collections.abc import Callable
 from typing import Any
 
@@ -50,11 +49,7 @@ def _callback(function: Callable[..., Any]) -> Callable[..., Any]:
     gathered into the record again for the call. Anything else is Typer's as it is.
     """
     first, *params = inspect.signature(function).parameters.values()
-    try:
-        hints = typing.get_type_hints(function, include_extras=True)
-    except NameError:  # it names what its module imports for annotations only
-        names = _annotation_names(function.__module__)
-        hints = typing.get_type_hints(function, names, include_extras=True)
+    hints = {p.name: _resolved(p.annotation, function.__module__) for p in (first, *params)}
     wants_settings = hints[first.name] is Settings
     if not wants_settings and not any(is_record(hints[p.name]) for p in params):
         return function
@@ -88,13 +83,27 @@ def _record_fields(kind: type[Any]) -> list[inspect.Parameter]:
     """The fields of an options record, as keyword parameters with their options."""
     import dataclasses
 
-    hints = typing.get_type_hints(kind, include_extras=True)
+    hints = {name: _resolved(a, kind.__module__) for name, a in kind.__annotations__.items()}
     return [
         inspect.Parameter(
             f.name, inspect.Parameter.KEYWORD_ONLY, annotation=hints[f.name], default=f.default
         )
         for f in dataclasses.fields(kind)
     ]
+
+
+def _resolved(annotation: Any, module_name: str) -> Any:
+    """An annotation as an object, evaluated where it was written.
+
+    Not ``typing.get_type_hints``: before Python 3.11 it wraps the annotation of a parameter
+    that defaults to None in ``Optional``, which hides the ``Annotated`` option from Typer.
+    """
+    if not isinstance(annotation, str):
+        return annotation
+    try:
+        return eval(annotation, vars(sys.modules[module_name]))  # noqa: S307 - our own source
+    except NameError:  # it names what its module imports for annotations only
+        return eval(annotation, _annotation_names(module_name))  # noqa: S307
 
 
 @functools.cache

@@ -211,6 +211,38 @@ async def _subscribe(
     return True
 
 
+class _Frames:
+    """The live plot's frames: the x axis from the start (receive time) or the first stamp."""
+
+    def __init__(self, live: _Live, started: float, kind: str) -> None:
+        from rostools.cli import plotting
+
+        self.live, self.started, self.kind = live, started, kind
+        self.color = plotting.use_color()
+        self.window = live.plot.window or 0.0
+        self.start_wall = live.wall + started
+        self.first_stamp: float | None = None  # stamps may be on any clock: count from the first
+
+    def __call__(self) -> str:
+        """The frame now."""
+        from rostools.cli import plotting
+
+        live, now = self.live, time.time()
+        if not live.stamp:
+            origin, right = self.start_wall, now
+        else:
+            held = live.plot.bounds()
+            if held is not None and self.first_stamp is None:
+                self.first_stamp = held[0]
+            origin = self.first_stamp if self.first_stamp is not None else now
+            right = live.plot.newest if held is not None else now
+        return plotting.frame(
+            live.plot, origin=origin, title=f"topic plot, last {self.window:g} s",
+            color=self.color, xlabel=plotting.axis_label(self.kind, origin),
+            status=live.status(self.started), x_range=(max(right - self.window, origin), right),
+        )  # fmt: skip
+
+
 async def _run(
     node: LiveNode,
     stop: asyncio.Event,
@@ -228,27 +260,8 @@ async def _run(
     deadline = started + timeout if timeout is not None else None
     draw = fmt is Format.text
     screen = plotting.Screen() if draw and sys.stdout.isatty() else None
-    color = plotting.use_color()
     kind = "stamp" if live.stamp else "receive"
-    window = live.plot.window or 0.0
-    start_wall = live.wall + started
-    first_stamp: list[float] = []  # stamps may be on any clock: they count from the first
-
-    def render() -> str:
-        now = time.time()
-        if not live.stamp:
-            origin, right = start_wall, now
-        else:
-            held = live.plot.bounds()
-            if held is not None and not first_stamp:
-                first_stamp.append(held[0])
-            origin = first_stamp[0] if first_stamp else now
-            right = live.plot.newest if held is not None else now
-        return plotting.frame(
-            live.plot, origin=origin, title=f"topic plot, last {window:g} s", color=color,
-            xlabel=plotting.axis_label(kind, origin), status=live.status(started),
-            x_range=(max(right - window, origin), right),
-        )  # fmt: skip
+    render = _Frames(live, started, kind)
 
     live.undecodable = Undecodable(node, strict)
     stack = contextlib.ExitStack()

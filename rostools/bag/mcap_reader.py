@@ -538,7 +538,7 @@ class McapReader(BagReader):
                     hi,
                     complete,
                 )
-                blocks.append(Block(first, last, len(blocks), load))
+                blocks.append(Block(first, len(blocks), load))
             elif op in (fmt.OP_SCHEMA, fmt.OP_CHANNEL):
                 self._register_inner(op, mm, rec, stop, None)
             elif op in (fmt.OP_DATA_END, fmt.OP_FOOTER):
@@ -690,7 +690,7 @@ class McapReader(BagReader):
 def _loose_block(entries: list[Entry], order: int) -> Block:
     """A block for a run of messages outside chunks."""
     entries.sort()
-    return Block(entries[0][0], max(e[0] for e in entries), order, lambda: entries)
+    return Block(entries[0][0], order, lambda: entries)
 
 
 def channel_connection(channel: fmt.Channel, schemas: Mapping[int, fmt.Schema]) -> Connection:

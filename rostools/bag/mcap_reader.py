@@ -651,6 +651,8 @@ class McapReader(BagReader):
                         )
                         if pos + 9 + length > end:
                             raise _cut(pos, length, end)
+                        if op in (fmt.OP_SCHEMA, fmt.OP_CHANNEL):  # short: a channel's, say
+                            self._register_inner(op, buf, pos, pos + 9 + length, rec)
                         pos += 9 + length
                         continue
                     op, length, channel_id, seq, log, pub = unpack(buf, pos)

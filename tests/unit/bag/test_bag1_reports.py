@@ -423,7 +423,8 @@ def test_damage_inside_chunks_is_said_where_it_is(tmp_path: Path) -> None:
         {"op": bytes([fmt.OP_CONNECTION]), "conn": struct.pack("<I", 7), "topic": b"/x"},
         b"\xff\xff\xff\x7f",
     )
-    head = bag_connection(0, "/t") + bag_message(0, 1) + bag_message(5, 1)
+    head = bag_connection(1, "/u") + bag_connection(0, "/t") + bag_message(0, 1)
+    head += bag_message(5, 1)
     first = bag_chunk(head + b"\xee" * 10 + bag_message(0, 2) + bag_message(0, 3))
     second = bag_chunk(bad_header + bag_message(0, 4) + b"\xee" * 5)
     partial = bag_message(0, 7)
@@ -440,6 +441,8 @@ def test_damage_inside_chunks_is_said_where_it_is(tmp_path: Path) -> None:
     junk = data[0] + len(head)
     tail = data[1] + len(bad_header) + len(bag_message(0, 4))
     with Bag1Reader(path) as reader:
+        assert [c.id for c in reader.connections] == [0, 1]  # in id order, as an index lists them
+        assert reader.info().message_count == 5  # the message of a lost connection left out
         assert _read(reader) == [("/t", t) for t in (1, 2, 3, 4, 6)]
         assert reader.order_notes() == []
         header_error = reader.damage[0].partition("malformed header: ")[2]
@@ -457,8 +460,12 @@ def test_damage_inside_chunks_is_said_where_it_is(tmp_path: Path) -> None:
         assert header_error
 
 
-def test_unknown_compression_is_named(tmp_path: Path) -> None:
-    odd = bag_chunk(bag_message(0, 1), "zip")
+@pytest.mark.parametrize(("name", "said"), [(b"zip", "zip"), (b"zi\xff", "zi\ufffd")])
+def test_unknown_compression_is_named(tmp_path: Path, name: bytes, said: str) -> None:
+    odd = fmt.encode_record(
+        {"op": bytes([fmt.OP_CHUNK]), "compression": name, "size": struct.pack("<I", 0)},
+        bag_message(0, 1),
+    )
     path = handmade_bag(
         tmp_path / "x.bag", bag_connection(0, "/t") + odd + bag_chunk(bag_message(0, 2))
     )
@@ -466,7 +473,7 @@ def test_unknown_compression_is_named(tmp_path: Path) -> None:
     with Bag1Reader(path) as reader:
         assert _read(reader) == [("/t", 2)]
         assert reader.damage == [
-            f"chunk at {pos} is unreadable: {path}: chunk at {pos} uses unknown compression 'zip'"
+            f"chunk at {pos} is unreadable: {path}: chunk at {pos} uses unknown compression {said!r}"
         ]
 
 
@@ -565,6 +572,16 @@ def test_index_records_that_do_not_parse_are_noted(tmp_path: Path) -> None:
         assert [t for _, t, _ in reader.times()] == [m[2] for m in sample.stream]
         assert reader.notes == [said]
         assert read_stream(bad) == sample.stream
+    last, _, _, last_data, _ = [r for r in bag_records(raw) if r[1] == fmt.OP_INDEX_DATA][-1]
+    count = last + raw[last:last_data].index(b"count=") + len(b"count=")
+    bad.write_bytes(raw[:count] + struct.pack("<I", 2**31) + raw[count + 4 :])
+    last_chunk = [r for r in bag_records(raw) if r[1] == fmt.OP_CHUNK][-1][0]
+    with Bag1Reader(bad) as reader:
+        list(reader.messages())
+        assert reader.notes == [
+            f"chunk at {last_chunk}: its index disagrees with its records (its index records do"
+            f" not parse: index data at {last_data} is cut short); read from the records"
+        ]
     op = pos + raw[pos:data].index(b"op=") + len(b"op=")
     bad.write_bytes(raw[:op] + bytes([fmt.OP_MSG_DATA]) + raw[op + 1 :])
     with Bag1Reader(bad) as reader:

@@ -230,6 +230,25 @@ def test_loose_messages_between_chunks_are_read_in_time_order(tmp_path: Path) ->
     cut.write_bytes(path.read_bytes()[: DATA + len(records)])
     with McapReader(cut) as reader:
         assert _read(reader) == [("/t", t) for t in (1, 2, 3, 4, 5, 9, 10, 11)]
+    # cut inside its last message: reading on after damage needs two whole records
+    cut.write_bytes(path.read_bytes()[: DATA + len(records) - 3])
+    with McapReader(cut) as reader:
+        assert _read(reader) == [("/t", t) for t in (1, 2, 3, 5, 9, 10)]
+        assert reader.damage == [
+            f"data section ends in a damaged or cut-short record (message at {short} is too short)"
+        ]
+
+
+def test_a_chunk_that_does_not_decompress_is_named_by_the_scan(tmp_path: Path) -> None:
+    junk = fmt.encode_chunk_head(1, 1, 10, "zstd", 8, 0) + b"\0" * 8
+    records = SCHEMA + _channel(1, "/t") + junk + _chunk(_msg(1, 2), 2, 2)
+    with McapReader(handmade_mcap(tmp_path / "x.mcap", "ros1", records)) as reader:
+        assert _read(reader) == [("/t", 2)]
+        said = reader.damage[0]
+        # the scan meets it first, then the read
+        assert reader.damage == [said, f"{said}; its messages are left out"]
+    at = DATA + len(SCHEMA) + len(_channel(1, "/t"))
+    assert said.startswith(f"chunk at {at} is unreadable (zstd chunk does not decompress: ")
 
 
 def _summary_file(path: Path, records: bytes, count: int, start: int, end: int) -> Path:

@@ -277,7 +277,10 @@ def test_damaged_index_records_are_named(tmp_path: Path) -> None:
             return reader.unindexed
 
     def damaged(detail: str) -> str:
-        return f"unindexed: its index at {index_pos} is damaged ({detail}); read by scanning its chunks"
+        return (
+            f"unindexed: its index at {index_pos} is damaged ({detail});"
+            " read by scanning its chunks"
+        )
 
     assert why(_with_bag_header(raw, conn_count=struct.pack("<I", 5))) == damaged(
         f"expected a connection record at {info_pos}"
@@ -473,7 +476,8 @@ def test_unknown_compression_is_named(tmp_path: Path, name: bytes, said: str) ->
     with Bag1Reader(path) as reader:
         assert _read(reader) == [("/t", 2)]
         assert reader.damage == [
-            f"chunk at {pos} is unreadable: {path}: chunk at {pos} uses unknown compression {said!r}"
+            f"chunk at {pos} is unreadable: {path}: chunk at {pos} uses unknown compression"
+            f" {said!r}"
         ]
 
 
@@ -559,8 +563,8 @@ def test_times_of_some_topics(tmp_path: Path) -> None:
 def test_index_records_that_do_not_parse_are_noted(tmp_path: Path) -> None:
     sample = write_sample(tmp_path / "x.bag", 40, chunk_size=2000)
     raw = sample.path.read_bytes()
-    chunk = [r for r in bag_records(raw) if r[1] == fmt.OP_CHUNK][0]
-    pos, _, fields, data, _ = [r for r in bag_records(raw) if r[1] == fmt.OP_INDEX_DATA][0]
+    chunk = next(r for r in bag_records(raw) if r[1] == fmt.OP_CHUNK)
+    pos, _, _, data, _ = next(r for r in bag_records(raw) if r[1] == fmt.OP_INDEX_DATA)
     ver = pos + raw[pos:data].index(b"ver=") + len(b"ver=")
     bad = tmp_path / "bad.bag"
     bad.write_bytes(raw[:ver] + struct.pack("<I", 2) + raw[ver + 4 :])
@@ -596,7 +600,7 @@ def test_index_records_that_do_not_parse_are_noted(tmp_path: Path) -> None:
 def test_a_message_of_an_unknown_connection_in_an_indexed_chunk(tmp_path: Path) -> None:
     sample = write_sample(tmp_path / "x.bag", 40, chunk_size=2000)
     raw = sample.path.read_bytes()
-    chunk = [r for r in bag_records(raw) if r[1] == fmt.OP_CHUNK][0]
+    chunk = next(r for r in bag_records(raw) if r[1] == fmt.OP_CHUNK)
     inner = bag_records(raw, chunk[3], chunk[3] + chunk[4])
     msg = next(r for r in inner if r[1] == fmt.OP_MSG_DATA and r[2]["conn"] == struct.pack("<I", 2))
     at = msg[0] + raw[msg[0] : msg[3]].index(b"conn=") + len(b"conn=")

@@ -206,7 +206,8 @@ def test_damage_inside_chunks_is_said_where_it_is(tmp_path: Path) -> None:
             " or corrupt)",
             f"chunk at {at[3]}: {len(short)} bytes at {too_short} do not parse (message at"
             f" {too_short} is too short); read on at {too_short + len(short)}",
-            f"skipped a damaged channel record at {at[4]} (record field of 2 bytes overruns its record)",
+            f"skipped a damaged channel record at {at[4]} (record field of 2 bytes overruns its"
+            " record)",
         ]
 
 

@@ -250,19 +250,15 @@ def bag_message(conn: int, t_ns: int, text: bytes = b"") -> bytes:
     return fmt.encode_record(fields, struct.pack("<I", len(text)) + text)
 
 
-def bag_chunk(records: bytes, compression: str | None = "none", size: int | None = None) -> bytes:
-    """A ``.bag`` CHUNK record holding ``records``; None leaves the field out."""
+def bag_chunk(records: bytes, compression: str | None = "none") -> bytes:
+    """A ``.bag`` CHUNK record holding ``records``; None leaves the compression field out."""
     from rostools.bag import rosbag1_format as fmt
 
     fields = {"op": bytes([fmt.OP_CHUNK]), "size": fmt.U32.pack(len(records))}
-    if size is not None:
-        fields["size"] = fmt.U32.pack(size)
-    data = records
-    if compression is not None:
-        fields["compression"] = compression.encode()
-        if compression in fmt.COMPRESSIONS:
-            data = fmt.compress(compression, records)
-    return fmt.encode_record(fields, data)
+    if compression is None:
+        return fmt.encode_record(fields, records)
+    fields["compression"] = compression.encode()
+    return fmt.encode_record(fields, fmt.compress(compression, records))
 
 
 def handmade_bag(path: Path, records: bytes) -> Path:

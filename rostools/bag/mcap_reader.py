@@ -538,7 +538,7 @@ class McapReader(BagReader):
                     hi,
                     complete,
                 )
-                blocks.append(Block(first, last, len(blocks), load))
+                blocks.append(Block(first, len(blocks), load))
             elif op in (fmt.OP_SCHEMA, fmt.OP_CHANNEL):
                 self._register_inner(op, mm, rec, stop, None)
             elif op in (fmt.OP_DATA_END, fmt.OP_FOOTER):
@@ -651,6 +651,8 @@ class McapReader(BagReader):
                         )
                         if pos + 9 + length > end:
                             raise _cut(pos, length, end)
+                        if op in (fmt.OP_SCHEMA, fmt.OP_CHANNEL):  # short: a channel's, say
+                            self._register_inner(op, buf, pos, pos + 9 + length, rec)
                         pos += 9 + length
                         continue
                     op, length, channel_id, seq, log, pub = unpack(buf, pos)
@@ -690,7 +692,7 @@ class McapReader(BagReader):
 def _loose_block(entries: list[Entry], order: int) -> Block:
     """A block for a run of messages outside chunks."""
     entries.sort()
-    return Block(entries[0][0], max(e[0] for e in entries), order, lambda: entries)
+    return Block(entries[0][0], order, lambda: entries)
 
 
 def channel_connection(channel: fmt.Channel, schemas: Mapping[int, fmt.Schema]) -> Connection:

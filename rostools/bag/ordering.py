@@ -34,13 +34,12 @@ RawMessage = tuple["Connection", int, memoryview]
 
 @dataclass(frozen=True)
 class Block:
-    """A stored group of messages: its time range, file order, and how to load its entries.
+    """A stored group of messages: its first time, file order, and how to load its entries.
 
     ``load`` returns the block's entries (already filtered) sorted by ``Entry`` order.
     """
 
     start_ns: int
-    end_ns: int
     order: int
     load: Callable[[], list[Entry]]
 

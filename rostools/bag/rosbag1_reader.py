@@ -117,11 +117,11 @@ class Bag1Reader(BagReader):
             )
         self._records_start = data + dlen
         index_pos = _u64_or(fields, "index_pos", 0)
-        conn_count = _u32_or(fields, "conn_count", 0)
-        chunk_count = _u32_or(fields, "chunk_count", 0)
         if self._records_start <= index_pos <= self.size:
             try:
-                self._read_index(index_pos, conn_count, chunk_count)
+                # Without its counts the index cannot be read: rosbag too reads it unindexed.
+                counts = fmt.u32_field(fields, "conn_count"), fmt.u32_field(fields, "chunk_count")
+                self._read_index(index_pos, *counts)
                 self.indexed = True
                 return
             except (fmt.RecordError, HeaderError, struct.error) as err:
@@ -502,12 +502,7 @@ class Bag1Reader(BagReader):
         once its index records (their headers) agree: a damaged chunk info hides nothing.
         """
         blocks = [
-            Block(
-                chunk.start_ns,
-                chunk.end_ns,
-                order,
-                partial(self._entries, chunk, wanted, lo, hi),
-            )
+            Block(chunk.start_ns, order, partial(self._entries, chunk, wanted, lo, hi))
             for order, chunk in enumerate(self.chunks)
             if chunk.end_ns >= lo
             and chunk.start_ns <= hi
@@ -542,7 +537,7 @@ class Bag1Reader(BagReader):
             return
         wanted = self.wanted(topics, None)
         blocks = [
-            Block(chunk.start_ns, chunk.end_ns, order, partial(self._index_entries, chunk, wanted))
+            Block(chunk.start_ns, order, partial(self._index_entries, chunk, wanted))
             for order, chunk in enumerate(self.chunks)
             if not wanted.keys().isdisjoint(chunk.counts)
         ]

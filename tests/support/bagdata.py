@@ -224,3 +224,57 @@ def write_late_chunk(path: Path) -> None:
         writer.flush()
         for t in (10, 11):
             writer.write(conn, t, struct.pack("<I", 0))
+
+
+def bag_connection(conn: int, topic: str, *, in_record: bool = True) -> bytes:
+    """A ``.bag`` CONNECTION record of std_msgs/String; ``in_record`` False leaves out the
+    record header's topic field (the connection header in its data still names the topic,
+    as the format says)."""
+    from rostools.bag import rosbag1_format as fmt
+    from rostools.wire.header import encode_fields
+
+    fields = {"op": bytes([fmt.OP_CONNECTION]), "conn": fmt.U32.pack(conn)}
+    if in_record:
+        fields["topic"] = topic.encode()
+    header = {"topic": topic, "type": "std_msgs/String", "md5sum": STRING_MD5}
+    header["message_definition"] = "string data\n"
+    return fmt.encode_record(fields, encode_fields(header))
+
+
+def bag_message(conn: int, t_ns: int, text: bytes = b"") -> bytes:
+    """A ``.bag`` MSG_DATA record: a std_msgs/String of ``text`` on connection ``conn``."""
+    from rostools.bag import rosbag1_format as fmt
+
+    fields = {"op": bytes([fmt.OP_MSG_DATA]), "conn": fmt.U32.pack(conn)}
+    fields["time"] = fmt.pack_time(t_ns)
+    return fmt.encode_record(fields, struct.pack("<I", len(text)) + text)
+
+
+def bag_chunk(records: bytes, compression: str | None = "none") -> bytes:
+    """A ``.bag`` CHUNK record holding ``records``; None leaves the compression field out."""
+    from rostools.bag import rosbag1_format as fmt
+
+    fields = {"op": bytes([fmt.OP_CHUNK]), "size": fmt.U32.pack(len(records))}
+    if compression is None:
+        return fmt.encode_record(fields, records)
+    fields["compression"] = compression.encode()
+    return fmt.encode_record(fields, fmt.compress(compression, records))
+
+
+def handmade_bag(path: Path, records: bytes) -> Path:
+    """An unclosed ``.bag`` (index_pos 0, as rosbag leaves one while recording): the magic,
+    rosbag's padded bag header, then ``records``."""
+    from rostools.bag import rosbag1_format as fmt
+
+    header = fmt.encode_header(
+        {
+            "op": bytes([fmt.OP_BAG_HEADER]),
+            "index_pos": fmt.U64.pack(0),
+            "conn_count": fmt.U32.pack(0),
+            "chunk_count": fmt.U32.pack(0),
+        }
+    )
+    padding = b" " * (fmt.BAG_HEADER_SPACE - len(header))
+    head = fmt.U32.pack(len(header)) + header + fmt.U32.pack(len(padding)) + padding
+    path.write_bytes(fmt.MAGIC + head + records)
+    return path

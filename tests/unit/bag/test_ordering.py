@@ -35,9 +35,7 @@ def make_blocks(
             loads.append(order)
             return entries
 
-        start = entries[0][0] if entries else 0
-        end = entries[-1][0] if entries else 0
-        blocks.append(Block(start, end, order, load))
+        blocks.append(Block(entries[0][0] if entries else 0, order, load))
     expected.sort()
     return blocks, expected
 
@@ -61,7 +59,7 @@ def test_disjoint_blocks_are_loaded_one_at_a_time() -> None:
             opened.append(order)
             return entries
 
-        return Block(times[0], times[-1], order, load)
+        return Block(times[0], order, load)
 
     stream = ordered([block(1, [10, 11, 12]), block(0, [1, 2, 3]), block(2, [20])])
     assert next(stream)[1] == 1

@@ -84,7 +84,11 @@ def run(
     stop_after: float | None = None,
     limit: float = 20.0,
 ) -> Output:
-    """Run ``argv`` once; SIGINT after ``stop_after``, or recorded as hung past ``limit``."""
+    """Run ``argv`` once; SIGINT after ``stop_after``, or recorded as hung past ``limit``.
+
+    The command gets SIGINT's default action even where this process ignores it (a shell's
+    background job does): its stop is a user's Ctrl-C, which the command must be able to take.
+    """
     proc = subprocess.Popen(
         argv,
         env=env,
@@ -93,6 +97,7 @@ def run(
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
         start_new_session=True,
+        preexec_fn=_default_sigint if signal.getsignal(signal.SIGINT) == signal.SIG_IGN else None,
     )
     wait = stop_after if stop_after is not None else limit
     stopped = hung = False
@@ -105,6 +110,11 @@ def run(
     if hung or code is None or code == -signal.SIGKILL:
         code = None  # it had to be killed: it hung
     return Output(code, out.decode(errors="replace"), err.decode(errors="replace"), stopped)
+
+
+def _default_sigint() -> None:
+    """In the child, before it runs: SIGINT ends it, whatever its parent did with SIGINT."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
 
 
 def _stop(proc: subprocess.Popen[bytes]) -> tuple[bytes, bytes]:

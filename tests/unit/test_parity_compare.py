@@ -8,6 +8,7 @@ ROS 1 tool that hangs or crashes is a ROS 1 failure, anything else is a defect.
 from __future__ import annotations
 
 import os
+import signal
 import sys
 from pathlib import Path
 from typing import Any
@@ -290,6 +291,18 @@ def test_every_documented_difference_cites_text_that_readme_has(tmp_path: Path) 
 def test_normalise_text_masks_anonymous_names_of_every_tool() -> None:
     text = "/rostools_echo_12_345 /rosnode_1_2 /record_3_4 Pid: 99"
     assert normalise_text(text) == "/rostools_echo_ANON /rosnode_ANON /record_ANON Pid: PID"
+
+
+def test_a_planned_stop_ends_a_command_where_sigint_is_ignored(tmp_path: Path) -> None:
+    # the defect: under a shell's background job (the release check in .ci/run), SIGINT is
+    # ignored, the command inherited that, took no Ctrl-C and was counted as hung
+    sleeper = [sys.executable, "-c", "import time; print('up', flush=True); time.sleep(30)"]
+    before = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        stopped = run(sleeper, dict(os.environ), tmp_path, stop_after=2.0)
+    finally:
+        signal.signal(signal.SIGINT, before)
+    assert stopped.stopped and stopped.code == -signal.SIGINT, stopped
 
 
 def test_run_records_a_hang_and_a_planned_stop(tmp_path: Path) -> None:

@@ -13,7 +13,7 @@ import typer
 from rostools.bag.model import counted
 from rostools.cli import output
 from rostools.cli.bag.options import OutputFile, Receiving, Splitting, TopicOptions
-from rostools.cli.bag.shared import human_size
+from rostools.cli.bag.shared import LiveView, human_size
 from rostools.cli.common import FormatOpt, node_session, output_format
 from rostools.cli.declare import command
 from rostools.cli.output import Format, check_writable, render
@@ -56,34 +56,19 @@ def summary_text(data: dict[str, Any]) -> str:
     return "\n".join(lines)
 
 
-class LiveTable:
+class LiveTable(LiveView):
     """The terminal view: per topic messages, rate, bandwidth and drops; file size and disk."""
 
     def __init__(self) -> None:
-        from rich.console import Console
-        from rich.live import Live
-
-        self.live = Live(console=Console(stderr=True), auto_refresh=False, transient=False)
-        self.last: dict[str, tuple[float, int, int]] = {}
-        self.rates: dict[str, tuple[float, float]] = {}
+        super().__init__()
         self.pubs: dict[str, int] = {}
-        self.next_draw = 0.0
-
-    def __enter__(self) -> LiveTable:
-        self.live.__enter__()
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        self.live.__exit__(None, None, None)
 
     def tick(self, rec: Recorder) -> None:
         """Redraw, at most twice a second."""
-        now = time.monotonic()
-        if now < self.next_draw:
+        if not self.due():
             return
-        self.next_draw = now + 0.5
         self.pubs = {topic: rec.publishers(topic) for topic in rec.stats}
-        self._draw(rec, now)
+        self._draw(rec, time.monotonic())
 
     def last_frame(self, rec: Recorder) -> None:
         """The frame left on screen: what was written, and the publishers recorded from.
@@ -93,11 +78,7 @@ class LiveTable:
         self._draw(rec, time.monotonic())
 
     def _draw(self, rec: Recorder, now: float) -> None:
-        for topic, s in rec.stats.items():
-            t0, m0, b0 = self.last.get(topic, (rec.started, 0, 0))
-            if now - t0 >= 1.0:
-                self.rates[topic] = ((s.messages - m0) / (now - t0), (s.bytes - b0) / (now - t0))
-                self.last[topic] = (now, s.messages, s.bytes)
+        self.measure(rec.stats, rec.started, now)
         self.live.update(self._table(rec, now), refresh=True)
 
     def _table(self, rec: Recorder, now: float) -> Any:

@@ -10,7 +10,7 @@ from __future__ import annotations
 import time
 from typing import TYPE_CHECKING, Any
 
-from rostools.cli.bag.shared import human_size as size_text
+from rostools.cli.bag.shared import LiveView, human_size as size_text
 from rostools.errors import one_line
 
 if TYPE_CHECKING:
@@ -70,25 +70,12 @@ def progress_text(job: SnapshotJob) -> str:
     return f"writing {name}: {count} messages, live {until}"
 
 
-class SnapshotTable:
+class SnapshotTable(LiveView):
     """The terminal view of a snapshot recorder, redrawn twice a second."""
 
     def __init__(self) -> None:
-        from rich.console import Console
-        from rich.live import Live
-
-        self.live = Live(console=Console(stderr=True), auto_refresh=False, transient=False)
-        self.last: dict[str, tuple[float, int]] = {}
-        self.rates: dict[str, float] = {}
+        super().__init__()
         self.files: list[str] = []
-        self.next_draw = 0.0
-
-    def __enter__(self) -> SnapshotTable:
-        self.live.__enter__()
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        self.live.__exit__(None, None, None)
 
     def written(self, job: SnapshotJob) -> None:
         """A file is complete (or failed): list it under the table."""
@@ -97,15 +84,9 @@ class SnapshotTable:
 
     def tick(self, snap: Snapshotter, force: bool = False) -> None:
         """Redraw, at most twice a second unless ``force``."""
-        now = time.monotonic()
-        if now < self.next_draw and not force:
+        if not self.due(force):
             return
-        self.next_draw = now + 0.5
-        for topic, s in snap.stats.items():
-            t0, m0 = self.last.get(topic, (snap.started, 0))
-            if now - t0 >= 1.0:
-                self.rates[topic] = (s.messages - m0) / (now - t0)
-                self.last[topic] = (now, s.messages)
+        self.measure(snap.stats, snap.started, time.monotonic())
         self.live.update(self._view(snap), refresh=True)
 
     def _view(self, snap: Snapshotter) -> Any:
@@ -130,7 +111,7 @@ class SnapshotTable:
             table.add_row(
                 escape(one_line(topic)), kind, str(snap.publishers(topic)),
                 str(len(tb.entries)), size_text(tb.bytes), f"{tb.span():.1f} s",
-                f"{self.rates.get(topic, 0.0):.1f} Hz", str(tb.evicted),
+                f"{self.rates.get(topic, (0.0, 0.0))[0]:.1f} Hz", str(tb.evicted),
             )  # fmt: skip
         lines = [KEYS, *(progress_text(job) for job in snap.jobs), *self.files]
         return Group(table, *(Text(line) for line in lines))

@@ -22,7 +22,6 @@ if TYPE_CHECKING:
     from rostools.cli.common import FormatOpt, MsgPathOpt
     from rostools.cli.service.options import ServiceArg, TimeoutOpt
     from rostools.cli.settings import Settings
-    from rostools.msgs.store import TypeStore
 
 
 @command("list", quick=True)
@@ -116,8 +115,10 @@ def info(
         raise NotFoundError(f"unknown service {name}")
     found_uri = proxy.lookup_service(name)
     kind, md5 = type_of(proxy, name, timeout)
-    store = type_store(msg_path)
-    request = [f.name for f in store.srv(kind).request.fields] if _has_srv(store, kind) else None
+    try:
+        request: list[str] | None = [f.name for f in type_store(msg_path).srv(kind).request.fields]
+    except NotFoundError:  # a type not installed here: the rest is still worth showing
+        request = None
     data = {
         "service": name,
         "node": providers[0],
@@ -129,14 +130,6 @@ def info(
     shown = [f"Node: {providers[0]}", f"URI: {found_uri}", f"Type: {kind}"]
     shown.append(f"Args: {' '.join(request or [])}")
     emit(s.output_format(fmt), data, lambda _: lines(shown))
-
-
-def _has_srv(store: TypeStore, kind: str) -> bool:
-    try:
-        store.srv(kind)
-    except NotFoundError:
-        return False
-    return True
 
 
 @command()

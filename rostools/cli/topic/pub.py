@@ -173,28 +173,17 @@ def pub(
     msg_path: MsgPathOpt = None,
 ) -> None:
     """Publish messages (rostopic pub). By default: once, latched, until Ctrl-C."""
-    from rostools.msgs.message import Time
-
     if rate is not None and not 0 < rate < math.inf:  # nan compares false both ways
         raise UsageError("--rate must be a number above 0")
     if once and rate is not None:
         raise UsageError("-1 and -r cannot be combined")
     name = script_resolve(topic, "rostopic")
-    plan = _Plan(name, _store_for(ctx, name, msg_type, msg_path), msg_type, args or [], file)
-    plan.substitute, plan.once, plan.timeout = substitute, once, timeout
-    source, plan.repeated = plan.messages(Time.now)
-    plan.streamed = file is not None or (not args and not plan.repeated)
-    if file is not None and rate is None:
-        plan.repeated = False  # a file's documents are sent once each unless a rate is given
-    if plan.streamed and rate is None:
-        rate = STREAM_RATE
-    plan.rate = rate
-    plan.latched = latch or (rate is None and not plan.streamed) or once
-    if verbose:
-        from rostools.msgs.text import formatter, message_type
-
-        plan.show = formatter(plan.filler.codec, message_type(msg_type))
-    node_session(ctx, partial(_publish, plan, source, use_rostime), "rostools_pub")
+    plan = _Plan(
+        name, _store_for(ctx, name, msg_type, msg_path), msg_type, args or [], file,
+        rate=rate, once=once, latch=latch, substitute=substitute, verbose=verbose,
+        timeout=timeout,
+    )  # fmt: skip
+    node_session(ctx, partial(_publish, plan, use_rostime), "rostools_pub")
 
 
 def _store_for(ctx: typer.Context, name: str, msg_type: str, msg_path: list[Path] | None) -> Any:
@@ -219,19 +208,38 @@ class _Plan:
     """What ``pub`` publishes and how: the command line, read once."""
 
     def __init__(
-        self, name: str, store: Any, msg_type: str, args: list[str], file: Path | None
+        self,
+        name: str,
+        store: Any,
+        msg_type: str,
+        args: list[str],
+        file: Path | None,
+        *,
+        rate: float | None,
+        once: bool,
+        latch: bool,
+        substitute: bool,
+        verbose: bool,
+        timeout: float | None,
     ) -> None:
         from rostools.msgs.codec import Codec
         from rostools.msgs.fill import Filler
+        from rostools.msgs.message import Time
+        from rostools.msgs.text import formatter, message_type
         from rostools.msgs.topictype import TopicType
 
         self.name, self.msg_type, self.args, self.file = name, msg_type, args, file
         self.filler = Filler(Codec.of(store))
         self.ttype = TopicType.of(store, msg_type)
-        self.substitute = self.once = self.repeated = self.streamed = self.latched = False
-        self.rate: float | None = None
-        self.timeout: float | None = None
-        self.show: Callable[[Any], str] | None = None  # -v
+        self.substitute, self.once, self.timeout = substitute, once, timeout
+        self.source, repeated = self.messages(Time.now)
+        self.streamed = file is not None or (not args and not repeated)
+        # a file's documents are sent once each unless a rate is given
+        self.repeated = repeated and not (file is not None and rate is None)
+        self.rate = STREAM_RATE if self.streamed and rate is None else rate
+        self.latched = latch or (self.rate is None and not self.streamed) or once
+        #: -v: each message as rostopic prints it
+        self.show = formatter(self.filler.codec, message_type(msg_type)) if verbose else None
 
     def messages(self, now: Callable[[], Any]) -> tuple[Callable[[], Iterator[Any]], bool]:
         """The source of messages (``now`` stands for ``now``/``auto``), and if it repeats one."""
@@ -240,13 +248,7 @@ class _Plan:
         )
 
 
-async def _publish(
-    plan: _Plan,
-    source: Callable[[], Iterator[Any]],
-    use_rostime: bool,
-    node: LiveNode,
-    stop: asyncio.Event,
-) -> None:
+async def _publish(plan: _Plan, use_rostime: bool, node: LiveNode, stop: asyncio.Event) -> None:
     """Advertise, then publish one latched message or a paced stream, until done or stopped."""
     known = await node.master.topic_types()  # before ours replaces it
     publisher = await node.advertise(plan.name, plan.ttype, latch=plan.latched, queue_size=1000)
@@ -256,6 +258,7 @@ async def _publish(
     def left() -> float | None:
         return None if deadline is None else max(deadline - time.monotonic(), 0)
 
+    source = plan.source
     if use_rostime:
         now = await _ros_now(node, stop, left())
         plan.filler.now = now()

@@ -23,7 +23,7 @@ from rostools._api.messages import Values
 from rostools.errors import NotFoundError, RostoolsError, TimeoutExpired, UsageError, one_line
 from rostools.msgs.message import Message
 from rostools.node.connection import Frame, InboundConnection
-from rostools.node.node import LiveNode as CoreNode
+from rostools.node.node import LiveNode
 from rostools.node.notice import Notice
 from rostools.node.publisher import TopicPublisher as CorePublisher
 from rostools.node.service import ServiceClient, ServiceServer, ServiceType
@@ -270,7 +270,7 @@ class AsyncNode:
         anonymous: bool = True,
         namespace: str | None = None,
     ) -> None:
-        self.core = CoreNode(
+        self.core = LiveNode(
             name, master_uri or default_master_uri(), anonymous_name=anonymous, ns=namespace
         )
         self.core.notify = _warn

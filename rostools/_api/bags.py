@@ -10,7 +10,6 @@ import asyncio
 import time
 from collections.abc import Collection, Iterator, Sequence
 from pathlib import Path
-from types import TracebackType
 from typing import NamedTuple
 
 from rostools._api import loop, messages
@@ -20,7 +19,7 @@ from rostools.bag.follow import Follower
 from rostools.bag.recorder import Recorder, RecordOptions
 from rostools.errors import RostoolsError, TimeoutExpired, UsageError
 from rostools.msgs.message import Message, Time
-from rostools.node.node import LiveNode as CoreNode
+from rostools.node.node import LiveNode
 
 #: How long a recording may take to subscribe and open its file before it gives up.
 START_TIMEOUT = 10.0
@@ -43,7 +42,7 @@ def read_bag(path: str | Path, topics: Collection[str] | None = None) -> Iterato
             yield BagMessage(conn.topic, decode(data), Time.from_nsec(t_ns))
 
 
-class LiveRecorder:
+class LiveRecorder(loop.Lifecycle):
     """A recorder of the live graph on a node of its own, on the API's loop or the caller's.
 
     A subclass makes the recorder (``_make``) and says when it is under way (``_ready``).
@@ -54,15 +53,15 @@ class LiveRecorder:
 
     def __init__(self, master_uri: str | None) -> None:
         self.master_uri = master_uri
-        self._node: CoreNode | None = None
+        self._node: LiveNode | None = None
         self._stop: asyncio.Event | None = None
         self._task: asyncio.Task[None] | None = None
         self._on_api_loop = False
 
-    def _make(self, node: CoreNode) -> Follower:
+    def _make(self, node: LiveNode) -> Follower:
         raise NotImplementedError
 
-    def _ready(self, node: CoreNode) -> bool:
+    def _ready(self, node: LiveNode) -> bool:
         raise NotImplementedError
 
     @property
@@ -71,7 +70,7 @@ class LiveRecorder:
         return self._task is not None and not self._task.done()
 
     async def _start(self, what: str) -> None:
-        node = CoreNode(self.node_name, self.master_uri or default_master_uri(),
+        node = LiveNode(self.node_name, self.master_uri or default_master_uri(),
                         anonymous_name=True)  # fmt: skip
         await node.start()
         try:
@@ -131,7 +130,7 @@ class Recording(LiveRecorder):
         self.compression = compression
         self._recorder: Recorder | None = None
 
-    def _make(self, node: CoreNode) -> Follower:
+    def _make(self, node: LiveNode) -> Follower:
         opts = RecordOptions(
             topics=list(self.topics),
             base=self.path,
@@ -142,7 +141,7 @@ class Recording(LiveRecorder):
         self._recorder = Recorder(node, opts)
         return self._recorder
 
-    def _ready(self, node: CoreNode) -> bool:
+    def _ready(self, node: LiveNode) -> bool:
         rec = self._recorder
         return (
             rec is not None
@@ -181,22 +180,6 @@ class Recording(LiveRecorder):
         if self.running:
             raise UsageError("stop() the recording before reading it")
         return list(read_bag(self.path, topics))
-
-    def __enter__(self) -> Recording:
-        return self.start()
-
-    def __exit__(
-        self, kind: type[BaseException] | None, err: BaseException | None, tb: TracebackType | None
-    ) -> None:
-        self.stop()
-
-    async def __aenter__(self) -> Recording:
-        return await self.start_async()
-
-    async def __aexit__(
-        self, kind: type[BaseException] | None, err: BaseException | None, tb: TracebackType | None
-    ) -> None:
-        await self.stop_async()
 
 
 def record(

@@ -12,6 +12,7 @@ import concurrent.futures
 import contextlib
 import threading
 from collections.abc import Callable, Coroutine
+from types import TracebackType
 from typing import Any, TypeVar
 
 from rostools.errors import TimeoutExpired, UsageError
@@ -97,3 +98,46 @@ def _shutdown() -> None:
     # leaving anyway: a master forgets a node it cannot reach
     with contextlib.suppress(Exception):
         asyncio.run_coroutine_threadsafe(everything(), _loop).result(EXIT_TIMEOUT)
+
+
+S = TypeVar("S", bound="Lifecycle")
+
+
+class Lifecycle:
+    """``with`` and ``async with`` over ``start``/``stop`` and ``start_async``/``stop_async``.
+
+    The blocking pair runs on the API's loop, the async pair on the caller's: a subclass
+    writes those four, and the statements come from here.
+    """
+
+    def start(self: S) -> S:
+        """Start on the API's background loop."""
+        raise NotImplementedError
+
+    def stop(self) -> object:
+        """Stop what ``start`` started."""
+        raise NotImplementedError
+
+    async def start_async(self: S) -> S:
+        """Start on the caller's event loop."""
+        raise NotImplementedError
+
+    async def stop_async(self) -> object:
+        """Stop what ``start_async`` started."""
+        raise NotImplementedError
+
+    def __enter__(self: S) -> S:
+        return self.start()
+
+    def __exit__(
+        self, kind: type[BaseException] | None, err: BaseException | None, tb: TracebackType | None
+    ) -> None:
+        self.stop()
+
+    async def __aenter__(self: S) -> S:
+        return await self.start_async()
+
+    async def __aexit__(
+        self, kind: type[BaseException] | None, err: BaseException | None, tb: TracebackType | None
+    ) -> None:
+        await self.stop_async()

@@ -6,15 +6,13 @@ on the caller's own loop. Either way ``m.uri`` is what nodes are given.
 
 from __future__ import annotations
 
-from types import TracebackType
-
 from rostools._api import loop
 from rostools.errors import UsageError
 from rostools.master.core import start_master
 from rostools.master.server import MasterServer
 
 
-class Master:
+class Master(loop.Lifecycle):
     """A ROS master and parameter server in this process.
 
     ``port=0`` (the default) takes a free port; ``host`` is where it listens and the
@@ -68,19 +66,3 @@ class Master:
         """Stop serving."""
         if self.core is not None and self._on_api_loop:
             loop.run(self.stop_async())
-
-    def __enter__(self) -> Master:
-        return self.start()
-
-    def __exit__(
-        self, kind: type[BaseException] | None, err: BaseException | None, tb: TracebackType | None
-    ) -> None:
-        self.stop()
-
-    async def __aenter__(self) -> Master:
-        return await self.start_async()
-
-    async def __aexit__(
-        self, kind: type[BaseException] | None, err: BaseException | None, tb: TracebackType | None
-    ) -> None:
-        await self.stop_async()

@@ -9,7 +9,6 @@ from __future__ import annotations
 import asyncio
 from collections.abc import Sequence
 from pathlib import Path
-from types import TracebackType
 
 from rostools._api import loop
 from rostools._api.bags import LiveRecorder
@@ -18,7 +17,7 @@ from rostools.bag.follow import Follower
 from rostools.bag.snapshot import SnapshotOptions, Snapshotter
 from rostools.bag.snapshot_srv import SnapshotRequest
 from rostools.errors import UsageError
-from rostools.node.node import LiveNode as CoreNode
+from rostools.node.node import LiveNode
 
 
 class SnapshotRecorder(LiveRecorder):
@@ -56,13 +55,13 @@ class SnapshotRecorder(LiveRecorder):
         self.poll_period = poll_period
         self._snap: Snapshotter | None = None
 
-    def _make(self, node: CoreNode) -> Follower:
+    def _make(self, node: LiveNode) -> Follower:
         self._snap = Snapshotter(node, self.options)
         if self.poll_period is not None:
             self._snap.poll_period = self.poll_period
         return self._snap
 
-    def _ready(self, node: CoreNode) -> bool:
+    def _ready(self, node: LiveNode) -> bool:
         snap = self._snap
         return (
             snap is not None
@@ -134,22 +133,6 @@ class SnapshotRecorder(LiveRecorder):
         """Buffer new messages again."""
         if self._snap is not None:
             self._snap.set_paused(False)
-
-    def __enter__(self) -> SnapshotRecorder:
-        return self.start()
-
-    def __exit__(
-        self, kind: type[BaseException] | None, err: BaseException | None, tb: TracebackType | None
-    ) -> None:
-        self.stop()
-
-    async def __aenter__(self) -> SnapshotRecorder:
-        return await self.start_async()
-
-    async def __aexit__(
-        self, kind: type[BaseException] | None, err: BaseException | None, tb: TracebackType | None
-    ) -> None:
-        await self.stop_async()
 
 
 def snapshot(

@@ -24,6 +24,8 @@ from rostools.errors import RostoolsError, UsageError
 from rostools.node.clock import RosClock
 from rostools.node.connection import Frame, InboundConnection
 from rostools.node.node import LiveNode
+from rostools.node.notice import Notice
+from rostools.rosgraph.masterapi import master_timeout
 
 log = logging.getLogger(__name__)
 
@@ -135,6 +137,9 @@ class Follower:
         #: Called with each topic as it is subscribed to (rosbag's "Subscribing to" lines).
         self.on_subscribe: Callable[[str], None] | None = None
         self._space_warned = False
+        #: How long the next poll may wait for the master, and whether the last was too slow.
+        self._poll_limit = master_timeout()
+        self._poll_slow = False
 
     # what a subclass provides -------------------------------------------------------------
 
@@ -163,16 +168,13 @@ class Follower:
         if not await self._clock_valid(stop):
             return
         self.start_ns = self.clock.now()
-        await self._poll()
+        await self._poll_until(stop)
         await self._begin()
         next_poll = time.monotonic() + self.poll_period
         try:
             while not stop.is_set() and not self._finished():
                 if time.monotonic() >= next_poll:
-                    try:
-                        await self._poll()
-                    except RostoolsError as err:  # the node says once that the master is gone
-                        log.debug("recording goes on; the master did not answer: %s", err)
+                    await self._poll_until(stop)
                     next_poll = time.monotonic() + self.poll_period
                 if tick is not None:
                     tick(self)
@@ -204,18 +206,58 @@ class Follower:
         sub = self.node.subscribers.get(topic)
         return len(sub.connections) if sub is not None else 0
 
-    async def _poll(self) -> None:
-        """Subscribe to every wanted topic the master knows of (new ones as they appear)."""
+    async def _poll_until(self, stop: asyncio.Event) -> None:
+        """Poll, unless ``stop`` comes first; a master too slow to answer is asked again later.
+
+        The next poll gives the master twice as long (``registration.longer``), and the first
+        slow one is said in one line (``poll_slow``), unless the node has said the master is
+        gone. Recording goes on meanwhile.
+        """
+        from rostools.node.registration import NOT_YET, longer
+
+        poll = asyncio.ensure_future(self._poll(self._poll_limit))
+        waiting = asyncio.ensure_future(stop.wait())
+        try:
+            await asyncio.wait((poll, waiting), return_when=asyncio.FIRST_COMPLETED)
+        finally:
+            waiting.cancel()
+            if not poll.done():
+                poll.cancel()
+                await asyncio.wait((poll,))
+        err = None if poll.cancelled() else poll.exception()
+        if err is None:
+            self._poll_limit, self._poll_slow = master_timeout(), False
+            return
+        if not isinstance(err, RostoolsError):
+            raise err
+        log.debug("recording goes on; the master did not answer: %s", err)
+        if isinstance(err, NOT_YET):
+            self._poll_limit = longer(self._poll_limit)
+            if not self._poll_slow and not self.node.master_lost:
+                self.node.notify(
+                    Notice(
+                        "poll_slow",
+                        f"{err}; recording goes on, and new topics wait until it answers",
+                        {"uri": self.node.master_uri},
+                    )
+                )
+            self._poll_slow = True
+
+    async def _poll(self, limit: float) -> None:
+        """Subscribe to every wanted topic the master knows of (new ones as they appear).
+
+        Each question to the master may take ``limit`` seconds.
+        """
         if self.live_opts.node is not None:
-            candidates = await self._node_topics(self.live_opts.node)
+            candidates = await self._node_topics(self.live_opts.node, limit)
         elif self.selection.everything or self.selection.patterns or self.selection.types:
-            pubs, _, _ = await self.node.master.system_state()
+            pubs, _, _ = await self.node.master.system_state(limit)
             candidates = [topic for topic, _ in pubs]
         else:
             candidates = sorted(self.selection.names)  # subscribed before anyone publishes
         types: dict[str, str] = {}
         if self.selection.by_type:
-            types = await self.node.master.topic_types()
+            types = await self.node.master.topic_types(limit)
         for topic in candidates:
             if not self.selection.wants(topic, types.get(topic)):
                 continue
@@ -230,7 +272,7 @@ class Follower:
                 )
         if any(not s.type for s in self.stats.values()):
             # a topic with no message yet shows the type the master knows (it showed "?")
-            known = types or await self.node.master.topic_types()
+            known = types or await self.node.master.topic_types(limit)
             for topic, stats in self.stats.items():
                 if not stats.type and known.get(topic, "*") != "*":
                     stats.type = known[topic]
@@ -239,12 +281,12 @@ class Follower:
         if self.on_subscribe is not None:
             self.on_subscribe(topic)
 
-    async def _node_topics(self, name: str) -> list[str]:
+    async def _node_topics(self, name: str, limit: float) -> list[str]:
         """The topics node ``name`` subscribes to (rosbag record --node)."""
         from rostools.node.mastercalls import peer_value
 
         try:
-            uri = await self.node.master.lookup_node(self.node.resolve(name))
+            uri = await self.node.master.lookup_node(self.node.resolve(name), limit)
             subs = await peer_value(uri, self.node.name, "getSubscriptions")
         except (RostoolsError, OSError) as err:
             log.debug("node %s: %s", name, err)

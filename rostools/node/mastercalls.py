@@ -77,9 +77,9 @@ class LiveMaster:
         pubs, subs, srvs = await self.call("getSystemState", timeout=timeout)
         return pubs, subs, srvs
 
-    async def topic_types(self) -> dict[str, str]:
+    async def topic_types(self, timeout: float | None = None) -> dict[str, str]:
         """Topic -> type, for every topic the master has seen typed."""
-        return dict(await self.call("getTopicTypes"))
+        return dict(await self.call("getTopicTypes", timeout=timeout))
 
     async def lookup_node(self, name: str, timeout: float | None = None) -> str:
         """A node's XML-RPC URI; ``NotFoundError`` for an unknown node."""
@@ -105,21 +105,28 @@ class LiveMaster:
         """Delete a parameter; ``NotFoundError`` when unset."""
         await self.call("deleteParam", key)
 
-    async def register_publisher(self, topic: str, type_name: str, api: str) -> list[str]:
+    async def register_publisher(
+        self, topic: str, type_name: str, api: str, timeout: float | None = None
+    ) -> list[str]:
         """Register a publication; the subscribers' slave API URIs."""
-        return _uris(await self.call("registerPublisher", topic, type_name, api))
+        return _uris(await self.call("registerPublisher", topic, type_name, api, timeout=timeout))
 
-    async def register_subscriber(self, topic: str, type_name: str, api: str) -> list[str]:
+    async def register_subscriber(
+        self, topic: str, type_name: str, api: str, timeout: float | None = None
+    ) -> list[str]:
         """Register a subscription; the publishers' slave API URIs."""
-        return _uris(await self.call("registerSubscriber", topic, type_name, api))
+        answer = await self.call("registerSubscriber", topic, type_name, api, timeout=timeout)
+        return _uris(answer)
 
     async def unregister_subscriber(self, topic: str, api: str) -> None:
         """Withdraw a subscription."""
         await self.call("unregisterSubscriber", topic, api)
 
-    async def register_service(self, name: str, service_uri: str, api: str) -> None:
+    async def register_service(
+        self, name: str, service_uri: str, api: str, timeout: float | None = None
+    ) -> None:
         """Register a service."""
-        await self.call("registerService", name, service_uri, api)
+        await self.call("registerService", name, service_uri, api, timeout=timeout)
 
 
 def _uris(value: Any) -> list[str]:

@@ -20,6 +20,7 @@ from rostools.node.listen import Listener, listen
 from rostools.node.mastercalls import LiveMaster
 from rostools.node.notice import Notice, to_stderr
 from rostools.node.publisher import TopicPublisher
+from rostools.node.registration import Registrar
 from rostools.node.rpc import XmlRpcServer
 from rostools.node.service import ServiceHandler, ServiceServer, ServiceType
 from rostools.node.subscriber import FramesCallback, Subscriber
@@ -86,6 +87,8 @@ class LiveNode:
         self._xmlrpc: XmlRpcServer | None = None
         self._tcpros: Listener | None = None
         self._watch: MasterWatch | None = None
+        #: Registrations, and those the master was too slow to take, tried again.
+        self.registrar = Registrar(self)
         #: Set while the master does not answer (see ``MasterWatch``).
         self.master_lost = False
         self._conn_ids = 0
@@ -131,6 +134,7 @@ class LiveNode:
         """Unregister everything, close every connection and server."""
         if self._watch is not None:
             self._watch.stop()
+        self.registrar.close()
         calls: list[tuple[str, tuple[Any, ...]]] = []
         for topic in self.publishers:
             calls.append(("unregisterPublisher", (topic, self.uri)))
@@ -163,10 +167,20 @@ class LiveNode:
         topic = self.resolve(topic)
         pub = self.publishers.get(topic)
         if pub is None:
-            pub = self.publishers[topic] = TopicPublisher(
+            new = self.publishers[topic] = TopicPublisher(
                 self, topic, topic_type, latch, queue_size
             )
-            pub.reported = await self.master.register_publisher(topic, topic_type.type, self.uri)
+
+            def take(uris: list[str]) -> None:
+                new.reported = uris
+
+            await self.registrar.register(
+                f"publication {topic}",
+                lambda limit: self.master.register_publisher(topic, new.type.type, self.uri, limit),
+                take,
+                lambda: self.publishers.get(topic) is new and not new.closed,
+            )
+            pub = new
         return pub
 
     async def subscribe(
@@ -190,7 +204,12 @@ class LiveNode:
         sub.on_header = on_header
         sub.coalesce, sub.reuse_frames = coalesce, reuse_frames
         self.subscribers[topic] = sub
-        sub.update(await self.master.register_subscriber(topic, topic_type.type, self.uri))
+        await self.registrar.register(
+            f"subscription {topic}",
+            lambda limit: self.master.register_subscriber(topic, topic_type.type, self.uri, limit),
+            sub.update,
+            lambda: self.subscribers.get(topic) is sub and not sub.closed,
+        )
         return sub
 
     async def advertise_service(
@@ -199,7 +218,12 @@ class LiveNode:
         """Serve ``name`` (registered with the master)."""
         name = self.resolve(name)
         server = self.services[name] = ServiceServer(self, name, srv_type, handler)
-        await self.master.register_service(name, server.uri, self.uri)
+        await self.registrar.register(
+            f"service {name}",
+            lambda limit: self.master.register_service(name, server.uri, self.uri, limit),
+            lambda _: None,
+            lambda: self.services.get(name) is server,
+        )
         return server
 
     # TCPROS ---------------------------------------------------------------------------

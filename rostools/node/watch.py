@@ -21,6 +21,7 @@ from rostools.rosgraph.network import explain, uri_host
 if TYPE_CHECKING:
     from rostools.node.endpoint import Owner
     from rostools.node.publisher import TopicPublisher
+    from rostools.node.registration import Registrar
     from rostools.node.service import ServiceServer
     from rostools.node.subscriber import Subscriber
 
@@ -38,6 +39,10 @@ if TYPE_CHECKING:
         @property
         def services(self) -> Mapping[str, ServiceServer]:
             """Service -> its server."""
+
+        @property
+        def registrar(self) -> Registrar:
+            """Its registrations, and those being tried again."""
 
 
 log = logging.getLogger(__name__)
@@ -105,7 +110,8 @@ class MasterWatch:
             known = False
         if self.stopped:
             return
-        if not known:
+        # unknown before the master took anything of ours: the registrar is still trying
+        if not known and node.registrar.confirmed:
             await self.register_again()
         elif node.master_lost:
             node.notify(Notice("master_back", f"the master at {node.master_uri} is back"))
@@ -139,6 +145,8 @@ class MasterWatch:
         for sub in subs:
             sub.master_restarted()
         results = await node.master.multicall(calls, WATCH_TIMEOUT * 5)
+        for name in list(node.registrar.pending):  # registered now, with everything else
+            node.registrar.forget(name)
         first_sub = len(node.publishers)
         for sub, result in zip(subs, results[first_sub : first_sub + len(subs)], strict=True):
             if isinstance(result, list):

@@ -41,6 +41,20 @@ def master_timeout() -> float:
         return DEFAULT_TIMEOUT
 
 
+def within(deadline: float | None) -> float:
+    """The limit of a master call made by a command that must be done by ``deadline``.
+
+    ``master_timeout()``, or what is left before ``deadline`` (``time.monotonic()``) if that is
+    less, so that a slow master cannot make a command overrun its ``--timeout``.
+    """
+    limit = master_timeout()
+    if deadline is None:
+        return limit
+    import time  # the quick path never gets here
+
+    return max(min(limit, deadline - time.monotonic()), 0.001)
+
+
 def connect(host: str, port: int, timeout: float) -> _socket.socket:
     """A TCP connection to the first address of ``host`` that accepts.
 
@@ -237,6 +251,12 @@ class XmlRpcNode:
             if not isinstance(err, Fault | OverflowError):
                 self.http.close()  # the connection is in no state to carry another call
             raise error from err
+
+    def limit(self, seconds: float) -> None:
+        """Give each call from now on at most ``seconds`` (``within`` a command's deadline)."""
+        self.timeout = self.http.timeout = seconds
+        if self.http.sock is not None:
+            self.http.sock.settimeout(seconds)
 
     def call(self, method: str, *args: Any) -> Any:
         """Call a ROS API method and return its value (``ros_value`` reads the answer)."""

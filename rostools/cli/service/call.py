@@ -100,10 +100,24 @@ def _say_waiting(what: str) -> None:
 
 
 def _wait_for(proxy: MasterProxy, name: str, timeout: float | None) -> None:
-    """Until the master lists ``name`` (rosservice call --wait): at most ``timeout``."""
+    """Until the master lists ``name`` (rosservice call --wait): at most ``timeout``.
+
+    Each question to the master takes at most what is left of ``timeout``.
+    """
+    from rostools.rosgraph.masterapi import master_timeout, within
+
     started = time.monotonic()
+    deadline = None if timeout is None else started + timeout
     told = False
-    while name not in services(proxy):
+    while True:
+        limit = within(deadline)
+        proxy.limit(limit)
+        try:
+            if name in services(proxy):
+                return
+        except TimeoutExpired:
+            if limit >= master_timeout():  # the master's own limit, not what was left of ours
+                raise
         waited = time.monotonic() - started
         if timeout is not None and waited > timeout:
             raise TimeoutExpired(f"service {name} did not appear within {timeout:g} s")

@@ -65,6 +65,8 @@ def echo(
         raise UsageError("--all needs --bag")
     if bag is not None and offset:
         raise UsageError("--offset does not apply to a bag")
+    if bag is not None and timeout is not None:
+        raise UsageError("--timeout does not apply to a bag (-b): it is read to its end")
     if topic is None and not all_topics:
         raise UsageError("give a topic")
     name = script_resolve(topic, "rostopic", field_path=True) if topic else ""

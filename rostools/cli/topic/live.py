@@ -49,15 +49,26 @@ FilterOpt = Annotated[
 async def wait_for_topic(
     node: LiveNode, name: str, store: TypeStore, deadline: float | None, stop: asyncio.Event
 ) -> Any:
-    """Wait until the topic is advertised; the topic and field path."""
+    """Wait until the topic is advertised; the topic and field path (None: stopped, or late).
+
+    Each question to the master takes at most what is left before ``deadline``.
+    """
     import asyncio
 
+    from rostools.errors import TimeoutExpired
     from rostools.msgs.topicpath import field_problem, split_field
+    from rostools.rosgraph.masterapi import master_timeout, within
 
     name = node.resolve(name)  # command-line remappings apply
     warned = False
     while True:
-        types = await node.master.topic_types()
+        limit = within(deadline)
+        try:
+            types = await node.master.topic_types(limit)
+        except TimeoutExpired:
+            if limit >= master_timeout():  # the master's own limit, not what was left of ours
+                raise
+            return None  # the command's own timeout, said in its own words
         ref = split_field(name, types, store)
         if ref is not None:
             return ref

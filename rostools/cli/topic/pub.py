@@ -250,10 +250,12 @@ class _Plan:
 
 async def _publish(plan: _Plan, use_rostime: bool, node: LiveNode, stop: asyncio.Event) -> None:
     """Advertise, then publish one latched message or a paced stream, until done or stopped."""
-    known = await node.master.topic_types()  # before ours replaces it
+    from rostools.rosgraph.masterapi import within
+
+    deadline = time.monotonic() + plan.timeout if plan.timeout is not None else None
+    known = await node.master.topic_types(within(deadline))  # before ours replaces it
     publisher = await node.advertise(plan.name, plan.ttype, latch=plan.latched, queue_size=1000)
     refused = _watch_types(known.get(plan.name), publisher, plan.name, plan.ttype)
-    deadline = time.monotonic() + plan.timeout if plan.timeout is not None else None
 
     def left() -> float | None:
         return None if deadline is None else max(deadline - time.monotonic(), 0)

@@ -1,0 +1,170 @@
+"""Registrations the master is too slow to take, tried again until it takes them.
+
+A master that answers ``registerSubscriber`` after our ``ROSTOOLS_MASTER_TIMEOUT`` (a busy
+rosmaster with a thousand topics, a machine under load) must not cost a topic. rospy and
+roscpp wait for the master however long it takes. A node of ours keeps the endpoint, says so
+in one line, and registers it again in the background until the master answers: the waits
+between tries and each try's limit both double, up to ``RETRY_MAX`` and ``LIMIT_MAX``. What
+bounds the wait is the command's own ``--timeout``, never this.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import logging
+import time
+from collections.abc import Awaitable, Callable
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, TypeVar
+
+from rostools.errors import RostoolsError, TimeoutExpired, UnreachableError
+from rostools.node.notice import Notice
+from rostools.rosgraph.masterapi import master_timeout
+
+if TYPE_CHECKING:
+    from rostools.node.endpoint import Owner
+
+log = logging.getLogger(__name__)
+
+T = TypeVar("T")
+
+#: The first wait before a registration is tried again, and the longest (s).
+RETRY_FIRST, RETRY_MAX = 0.5, 5.0
+#: Each try may take twice as long as the one before, up to this (s).
+LIMIT_MAX = 30.0
+#: The errors that mean "not yet": the master did not answer in time, or is away for now.
+NOT_YET = (TimeoutExpired, UnreachableError)
+
+
+def longer(limit: float) -> float:
+    """The limit of the next try of a call that took longer than ``limit``."""
+    return min(limit * 2, max(LIMIT_MAX, limit))
+
+
+@dataclass
+class _Episode:
+    """A time the master was slow: since when, registrations tried again, and taken."""
+
+    since: float = field(default_factory=time.monotonic)
+    retried: int = 1
+    taken: int = 0
+
+
+class Registrar:
+    """A node's registrations: made at once, or tried again in the background."""
+
+    def __init__(self, owner: Owner) -> None:
+        self.owner = owner
+        #: The registrations being tried again, by name.
+        self.pending: dict[str, asyncio.Task[None]] = {}
+        #: Whether the master has taken any registration of ours.
+        self.confirmed = False
+        self._episode: _Episode | None = None
+
+    async def register(
+        self,
+        name: str,
+        attempt: Callable[[float], Awaitable[T]],
+        take: Callable[[T], None],
+        current: Callable[[], bool],
+    ) -> None:
+        """Register ``name`` by ``attempt(limit)``, and give its answer to ``take``.
+
+        If the master does not answer in time, or cannot be reached, the registration is
+        tried again in the background while ``current()`` holds (the endpoint is still ours).
+        A refusal (a failure code) is raised, as before.
+        """
+        self.forget(name)
+        try:
+            value = await attempt(master_timeout())
+        except NOT_YET as err:
+            self._start_episode(err, name)
+            self.pending[name] = asyncio.get_running_loop().create_task(
+                self._again(name, attempt, take, current)
+            )
+            return
+        self.confirmed = True
+        take(value)
+
+    def forget(self, name: str) -> None:
+        """Stop trying ``name`` again (it was registered another way, or closed)."""
+        task = self.pending.pop(name, None)
+        if task is not None:
+            task.cancel()
+            self._end_episode()
+
+    def close(self) -> None:
+        """Stop every try (the node is closing)."""
+        for task in self.pending.values():
+            task.cancel()
+        self.pending.clear()
+
+    async def _again(
+        self,
+        name: str,
+        attempt: Callable[[float], Awaitable[T]],
+        take: Callable[[T], None],
+        current: Callable[[], bool],
+    ) -> None:
+        wait, limit = RETRY_FIRST, master_timeout()
+        try:
+            while current():
+                await asyncio.sleep(wait)
+                wait, limit = min(wait * 2, RETRY_MAX), longer(limit)
+                if not current():
+                    break
+                try:
+                    value = await attempt(limit)
+                except NOT_YET as err:
+                    log.debug("registering %s again: %s", name, err)
+                    continue
+                except RostoolsError as err:  # the master answered: it refuses
+                    self.owner.notify(
+                        Notice("register_refused", f"the master refused {name}: {err}")
+                    )
+                    break
+                self.confirmed = True
+                if current():
+                    take(value)
+                    if self._episode is not None:
+                        self._episode.taken += 1
+                break
+        finally:
+            if self.pending.get(name) is asyncio.current_task():
+                del self.pending[name]
+                self._end_episode()
+
+    def _start_episode(self, err: RostoolsError, name: str) -> None:
+        """One line when the first registration of an episode has to wait."""
+        if self._episode is not None:
+            self._episode.retried += 1
+            return
+        self._episode = _Episode()
+        self.owner.notify(
+            Notice(
+                "register_retry",
+                f"{err}; registering {name} again until it answers",
+                {"uri": self.owner.master_uri, "name": name},
+            )
+        )
+
+    def _end_episode(self) -> None:
+        """One line when the last registration of an episode is through.
+
+        Nothing when none went through: those left were closed, or refused (said already).
+        """
+        if self.pending or self._episode is None:
+            return
+        episode, self._episode = self._episode, None
+        if not episode.taken:
+            return
+        took = time.monotonic() - episode.since
+        of = "" if episode.taken == episode.retried else f" of {episode.retried}"
+        self.owner.notify(
+            Notice(
+                "registered",
+                f"the master at {self.owner.master_uri} has taken {episode.taken}{of} "
+                f"registration(s) it was slow to answer, after {took:.1f} s",
+                {"uri": self.owner.master_uri, "registrations": episode.taken, "seconds": took},
+            )
+        )

@@ -29,6 +29,7 @@ MODULES = [
     "benchmarks.bench_network",
     "benchmarks.bench_load",
     "benchmarks.bench_load_memory",
+    "benchmarks.bench_load_busy",
     "benchmarks.bench_snapshot",
     "benchmarks.bench_fixture",
 ]

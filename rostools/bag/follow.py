@@ -31,6 +31,8 @@ log = logging.getLogger(__name__)
 
 #: How often the master is asked for new topics (rosbag record: 1 s).
 POLL_PERIOD = 1.0
+#: Registrations of new topics in flight at once (a master answers several at a time).
+SUBSCRIBE_AT_ONCE = 16
 #: How often ``run`` checks its limits and calls its ``tick`` (the live table).
 TICK_PERIOD = 0.25
 
@@ -258,6 +260,7 @@ class Follower:
         types: dict[str, str] = {}
         if self.selection.by_type:
             types = await self.node.master.topic_types(limit)
+        new: list[str] = []
         for topic in candidates:
             if not self.selection.wants(topic, types.get(topic)):
                 continue
@@ -267,15 +270,30 @@ class Follower:
                     self.clock.forward = self._on_frames(topic)
             elif topic not in self.node.subscribers:
                 self._say_subscribing(topic)
-                await self.node.subscribe(
-                    topic, self._on_frames(topic), tcp_nodelay=self.live_opts.tcp_nodelay
-                )
+                new.append(topic)
+        await self._subscribe(new)
         if any(not s.type for s in self.stats.values()):
             # a topic with no message yet shows the type the master knows (it showed "?")
             known = types or await self.node.master.topic_types(limit)
             for topic, stats in self.stats.items():
                 if not stats.type and known.get(topic, "*") != "*":
                     stats.type = known[topic]
+
+    async def _subscribe(self, topics: list[str]) -> None:
+        """Subscribe to ``topics``, with ``SUBSCRIBE_AT_ONCE`` registrations in flight.
+
+        One at a time, a busy master's answer times were added up: 1,000 topics on a loaded
+        machine took minutes to follow.
+        """
+        gate = asyncio.Semaphore(SUBSCRIBE_AT_ONCE)
+
+        async def one(topic: str) -> None:
+            async with gate:
+                await self.node.subscribe(
+                    topic, self._on_frames(topic), tcp_nodelay=self.live_opts.tcp_nodelay
+                )
+
+        await asyncio.gather(*(one(topic) for topic in topics))
 
     def _say_subscribing(self, topic: str) -> None:
         if self.on_subscribe is not None:

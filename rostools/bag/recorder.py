@@ -46,6 +46,11 @@ DISK_PERIOD = 1.0
 ENTRY_OVERHEAD = 160
 #: The writer gives back the budget of what it has written in steps of this many bytes.
 RELEASE_STEP = 1024 * 1024
+#: The writer takes what is queued this often (s), or as soon as the queue holds a
+#: ``WAKE_STEP``: waking it for every batch (10,000 a second from 1,000 topics) cost more in
+#: thread switches than the writing, and a busy machine starved the node of the CPU.
+WRITE_PERIOD = 0.05
+WAKE_STEP = 1024 * 1024
 #: ``-p``: the name of each new file goes out latched on ``begin_write`` (rosbag record).
 BEGIN_WRITE = "begin_write"
 STRING = TopicType("std_msgs/String", "992ce8a1687cec8c8bd883ec73ca41d1", "string data\n")
@@ -143,8 +148,8 @@ class _Writer(threading.Thread):
                 rec.check_disk()  # raises, and so closes the file, when the disk is nearly full
                 last_disk_check = time.monotonic()
             with rec.cond:
-                if not rec.queue and not rec.closing:
-                    rec.cond.wait(0.5)
+                if rec.queued_bytes < rec.wake_at and not rec.closing:
+                    rec.cond.wait(WRITE_PERIOD)
                 batch = rec.queue
                 rec.queue = collections.deque()
                 rec.writing_bytes, rec.queued_bytes = rec.queued_bytes, 0
@@ -207,6 +212,8 @@ class Recorder(Follower):
         self.closed_files: list[Path] = []
         self.done_topics: set[str] = set()
         self._writer = _Writer(self)
+        #: Queued bytes that wake the writer before its period (a quarter of ``-b`` at most).
+        self.wake_at = min(WAKE_STEP, opts.buffer_bytes // 4) if opts.buffer_bytes else WAKE_STEP
         self._begin_write: TopicPublisher | None = None
         self._loop: asyncio.AbstractEventLoop | None = None
 
@@ -261,7 +268,8 @@ class Recorder(Follower):
                     _, _, old_topic, _, old = self.queue.popleft()
                     self.queued_bytes -= len(old) + ENTRY_OVERHEAD
                     self.stats[old_topic].drops += 1
-                self.cond.notify()
+                if self.queued_bytes >= self.wake_at:
+                    self.cond.notify()
 
         return on_frames
 

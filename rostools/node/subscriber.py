@@ -12,6 +12,7 @@ import asyncio
 import contextlib
 import logging
 import time
+import weakref
 from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
@@ -19,6 +20,8 @@ from rostools.msgs.topictype import TopicType
 from rostools.node.connection import Frame, InboundConnection
 from rostools.node.mastercalls import peer_value
 from rostools.node.notice import Notice
+from rostools.node.registration import longer
+from rostools.node.rpc import CALL_TIMEOUT
 from rostools.rosgraph.masterapi import MasterError
 from rostools.rosgraph.network import Failure, explain, uri_host
 from rostools.wire.tcpros import MAX_FRAME, subscriber_header
@@ -35,6 +38,23 @@ RETRY_FIRST, RETRY_MAX = 0.2, 5.0
 REPORT_AFTER = 1.0
 #: How long a TCP connect to a publisher may take: the OS's own wait is minutes.
 CONNECT_TIMEOUT = 5.0
+#: ``requestTopic`` calls in flight to one publisher at once. A recorder of a thousand topics
+#: of one node asked them all at once; a busy roscpp node, answering one at a time, let most
+#: time out, was asked again, and in the end answered hardly any in time.
+PEER_CALLS = 4
+#: The gate of each publisher's slave API, per event loop (gone once nobody waits at it).
+_gates: weakref.WeakValueDictionary[tuple[asyncio.AbstractEventLoop, str], asyncio.Semaphore] = (
+    weakref.WeakValueDictionary()
+)
+
+
+def _gate(uri: str) -> asyncio.Semaphore:
+    """The gate that keeps ``PEER_CALLS`` calls at most in flight to the node at ``uri``."""
+    key = (asyncio.get_running_loop(), uri)
+    gate = _gates.get(key)
+    if gate is None:
+        gate = _gates[key] = asyncio.Semaphore(PEER_CALLS)
+    return gate
 
 
 class Subscriber:
@@ -69,6 +89,8 @@ class Subscriber:
         self.orphans: set[str] = set()
         #: The name each publisher gave in its header, by URI: who to name when it goes away.
         self.names: dict[str, str] = {}
+        #: How long the next ``requestTopic`` to a publisher that was slow to answer may take.
+        self.limits: dict[str, float] = {}
 
     def update(self, uris: list[str]) -> None:
         """The publishers now (from registerSubscriber or publisherUpdate)."""
@@ -153,14 +175,38 @@ class Subscriber:
         )
 
     async def _connect(self, uri: str) -> InboundConnection | Failure:
-        host = uri_host(uri)
+        """Ask ``uri`` for the topic and connect, ``PEER_CALLS`` at a time per publisher.
+
+        Both steps may take ``CALL_TIMEOUT`` and ``CONNECT_TIMEOUT``, twice as long after each
+        time out (a busy publisher), with no limit on the wait at the gate.
+        """
+        async with _gate(uri):
+            result = await self._ask(uri)
+            if isinstance(result, Failure):
+                return result
+            conn = await self._open(uri, *result)
+        if isinstance(conn, InboundConnection):
+            self.limits.pop(uri, None)
+        return conn
+
+    def _slow(self, uri: str, err: BaseException, first: float) -> None:
+        """A call to ``uri`` that failed with ``err``: after a time out, the next waits longer."""
+        if isinstance(err, TimeoutError | asyncio.TimeoutError):
+            self.limits[uri] = longer(self.limits.get(uri, first))
+
+    async def _ask(self, uri: str) -> tuple[str, int] | Failure:
+        """``requestTopic``: the publisher's TCPROS host and port, or why not."""
+        limit = self.limits.get(uri, CALL_TIMEOUT)
         try:
-            proto = await peer_value(uri, self.node.name, "requestTopic", self.topic, [["TCPROS"]])
+            proto = await peer_value(
+                uri, self.node.name, "requestTopic", self.topic, [["TCPROS"]], timeout=limit
+            )
         except MasterError as err:
             refused = str(err)
         except Exception as err:  # noqa: BLE001 - any failure means: report, try again later
             log.debug("requestTopic %s at %s failed: %s", self.topic, uri, err)
-            return explain(err, host)
+            self._slow(uri, err, CALL_TIMEOUT)
+            return explain(err, uri_host(uri))
         else:
             ok = isinstance(proto, list) and len(proto) >= 3 and proto[0] == "TCPROS"
             refused = "" if ok else f"no TCPROS in {proto!r}"
@@ -171,7 +217,10 @@ class Subscriber:
             return Failure(f"it refused the topic: {refused}", lasting=False)
         if type(proto[2]) is not int or not 0 < proto[2] < 65536:
             return Failure(f"it gave no port to connect to: {proto!r}")
-        host, port = str(proto[1]), proto[2]
+        return str(proto[1]), proto[2]
+
+    async def _open(self, uri: str, host: str, port: int) -> InboundConnection | Failure:
+        """The TCPROS connection to the publisher at ``uri``, or why not."""
         header = subscriber_header(
             self.node.name, self.topic, self.type.md5sum, self.type.type, self.type.definition,
             self.tcp_nodelay,
@@ -184,10 +233,11 @@ class Subscriber:
                     host,
                     port,
                 ),
-                CONNECT_TIMEOUT,
+                self.limits.get(uri, CONNECT_TIMEOUT),
             )
         except (OSError, asyncio.TimeoutError) as err:
             log.debug("connecting to %s:%s for %s failed: %s", host, port, self.topic, err)
+            self._slow(uri, err, CONNECT_TIMEOUT)
             failure = explain(err, host)
             return Failure(f"its TCPROS port {host}:{port}: {failure.reason}", failure.hint,
                            failure.lasting)  # fmt: skip

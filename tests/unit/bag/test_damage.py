@@ -266,11 +266,22 @@ def test_mcap_a_damaged_record_mid_chunk_hides_nothing_else(tmp_path: Path) -> N
         at for at, op, _, _ in mcap_format.records(raw, inner, stop) if op == mcap_format.OP_MESSAGE
     ]
     victim = messages[100]
+    # Opcode and length zeroed, and the chunk's CRC (else the chunk fails it and is left out
+    # whole): as a writer that computes none leaves it.
+    raw = raw[:start] + bytes(_mcap_crc_zeroed(raw, start)) + raw[start + 28 :]
     bad = tmp_path / "bad.mcap"
-    bad.write_bytes(raw[:victim] + bytes(9) + raw[victim + 9 :])  # opcode and length zeroed
+    bad.write_bytes(raw[:victim] + bytes(9) + raw[victim + 9 :])
     got, reader = _mcap_messages(bad)
     assert got == sample.stream[:100] + sample.stream[101:]
-    assert reader.damage
+    assert len(reader.damage) == 2 and "the data section's CRC does not match its bytes" in (
+        reader.damage
+    )
+    assert any(d.startswith(f"chunk at {chunk}: ") for d in reader.damage), reader.damage
+
+
+def _mcap_crc_zeroed(raw: bytes, start: int) -> bytes:
+    """A chunk record's fixed fields (times, size, CRC) from ``start``, its CRC zeroed."""
+    return raw[start : start + 24] + bytes(4)
 
 
 def test_mcap_chunk_times_that_disagree_with_the_messages_are_noted(tmp_path: Path) -> None:
@@ -282,7 +293,9 @@ def test_mcap_chunk_times_that_disagree_with_the_messages_are_noted(tmp_path: Pa
     bad = tmp_path / "bad.mcap"
     bad.write_bytes(bytes(raw))
     got, reader = _mcap_messages(bad)
-    assert got == sample.stream and not reader.damage
+    assert got == sample.stream
+    # Only the data section's CRC covers a chunk's header: a whole read finds it.
+    assert reader.damage == ["the data section's CRC does not match its bytes"]
     assert any("header says" in n for n in reader.notes), reader.notes
 
 

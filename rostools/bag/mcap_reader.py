@@ -86,6 +86,10 @@ class _SectionCrc:
         if end > start:
             self.pieces[start] = (fmt.crc32(memoryview(buf)[start:end]), end - start)
 
+    def expect(self, rec: int) -> None:
+        """The chunk record at ``rec`` is a piece, to come when its block is loaded."""
+        self.waiting.add(rec)
+
     def chunk(self, rec: int, crc: int, length: int) -> None:
         """The CRC of the chunk record at ``rec``."""
         self.pieces[rec] = (crc, length)
@@ -106,12 +110,8 @@ class _SectionCrc:
             crc = fmt.crc32_combine(crc, piece, length)
         # A chunk that failed its own CRC already says where the damage is.
         if crc != self.expected and not self.reader.crc_failed:
-            self.reader.damaged(SECTION_CRC_DAMAGE)
+            self.reader.damaged("the data section's CRC does not match its bytes")
         self.expected = None
-
-
-#: What a read says of a data section that fails its CRC.
-SECTION_CRC_DAMAGE = "the data section's CRC does not match its bytes"
 
 
 class McapReader(BagReader):
@@ -580,7 +580,7 @@ class McapReader(BagReader):
                     continue
                 if section is not None:
                     section.between(mm, between, rec)
-                    section.waiting.add(rec)
+                    section.expect(rec)
                     between = stop
                 load = partial(
                     self._entries,

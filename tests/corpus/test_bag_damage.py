@@ -226,10 +226,11 @@ def test_d_a_chunk_info_naming_another_chunk_hides_nothing(tmp_path: Path) -> No
     assert len(misread) == 6121 and len({tuple(m) for m in misread}) < 6121
     assert sorted(views[str(theirs)]["stream"]) == sorted(reference) and len(reference) == 6121
     assert ours(bad) == reference
+    index_pos = fmt.u64_field(bag_records(bad.read_bytes())[0][2], "index_pos")
     with open_bag(bad) as reader:
         assert reader.notes == [
-            f"unindexed: its index at {reader._index_pos} is damaged (no chunk info names the"
-            f" chunk at {lost}); read by scanning its chunks"
+            f"unindexed: its index at {index_pos} is damaged (no chunk info names the chunk at"
+            f" {lost}); read by scanning its chunks"
         ]
     checkup = doctor(bad)
     assert not checkup.clean and checkup.messages == 6121

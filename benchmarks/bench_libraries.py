@@ -6,8 +6,9 @@ Rows, each ours beside the library (``theirs``), in one process, runs interleave
   and ``serialize_ros1``, for a small message and a camera image (rosbags decodes arrays as
   numpy views, without a copy; ours copies them into the message);
 - MCAP: our writer and reader beside the ``mcap`` package's ``Writer`` and ``make_reader``
-  (small messages, zstd chunks as both write by default; 1 MB messages, uncompressed), what
-  each reads of a file cut mid-chunk and of one still being written, and how many of the MCAP
+  (small messages, zstd chunks as both write by default; 1 MB messages, uncompressed), each
+  reader with chunk CRCs checked and without, and what the check costs ours; what each reads
+  of a file cut mid-chunk and of one still being written, and how many of the MCAP
   conformance suite's files each reads to the messages the suite expects;
 - .bag: our writer and reader beside ``rosbags.rosbag1``'s, uncompressed (its LZ4 chunks are
   ones real ROS cannot read, so they are not a fair comparison), and what each reads of a bag
@@ -95,18 +96,19 @@ def mcap_package_write(path: Path, kind: str, compression: str) -> int:
     return n
 
 
-def ours_read(path: Path) -> int:
+def ours_read(path: Path, check_crcs: bool = True) -> int:
     from rostools.bag.access import open_bag
 
-    with open_bag(path) as reader:
+    with open_bag(path, check_crcs=check_crcs) as reader:
         return sum(1 for _ in reader.messages())
 
 
-def mcap_package_read(path: Path) -> int:
+def mcap_package_read(path: Path, validate_crcs: bool = False) -> int:
     from mcap.reader import make_reader
 
     with path.open("rb") as f:
-        return sum(1 for _ in make_reader(f).iter_messages(log_time_order=True))
+        reader = make_reader(f, validate_crcs=validate_crcs)
+        return sum(1 for _ in reader.iter_messages(log_time_order=True))
 
 
 def ours_bag_write(path: Path, kind: str) -> int:
@@ -186,7 +188,12 @@ def bench_mcap_speed() -> list[Result]:
         )
         # Both read the file the mcap package wrote: neither reads its own writer's layout.
         reads = _rates(
-            {"ours": lambda: ours_read(their_file), "theirs": lambda: mcap_package_read(their_file)}
+            {
+                "ours": lambda: ours_read(their_file),
+                "theirs": lambda: mcap_package_read(their_file, validate_crcs=True),
+                "ours unchecked": lambda: ours_read(their_file, check_crcs=False),
+                "theirs unchecked": lambda: mcap_package_read(their_file),
+            }
         )
         label = f"{_label(kind)}, {compression}"
         note = f"in-process, median of {REPEATS} interleaved runs; both write chunk CRCs"
@@ -200,21 +207,105 @@ def bench_mcap_speed() -> list[Result]:
             )
         )
         note = (
-            f"in-process, median of {REPEATS}; both read the mcap package's file in time order,"
-            " CRCs unchecked; ours yields views, theirs bytes"
+            f"in-process, median of {REPEATS} interleaved runs; both read the mcap package's"
+            " file in time order; ours yields views, theirs bytes"
         )
         results.append(
             _row(
-                f"MCAP read, {label}, vs mcap package",
+                f"MCAP read, {label}, chunk CRCs checked, vs mcap package",
                 reads["ours"],
                 reads["theirs"],
+                "mcap make_reader(validate_crcs=True)",
+                note,
+            )
+        )
+        results.append(
+            _row(
+                f"MCAP read, {label}, CRCs unchecked (--no-crc-check), vs mcap package",
+                reads["ours unchecked"],
+                reads["theirs unchecked"],
                 "mcap make_reader",
                 note,
             )
         )
+        results.append(
+            Result(
+                f"MCAP read, {label}: checking CRCs, vs not (ours)",
+                "msgs/s",
+                reads["ours"],
+                reads["ours unchecked"],
+                "what the check costs: --no-crc-check skips it where that is more than a few %",
+                None,
+                note + "; unchecked, ours never touches the bytes of a message it yields",
+            )
+        )
+    results += _subset_reads(their_file)
     ours_file.unlink(missing_ok=True)
     their_file.unlink(missing_ok=True)
     return results
+
+
+#: Small messages on /imu for each 1 MB one on /cam, in the mixed file of ``_subset_reads``.
+IMU_PER_IMAGE = 20
+
+
+def _subset_reads(path: Path) -> list[Result]:
+    """Reading a small topic out of a file of images: where a CRC check costs the most.
+
+    A read of /imu alone never touches the images; a check of the chunks' CRCs passes over
+    every byte of them.
+    """
+    from mcap.reader import make_reader
+    from mcap.writer import CompressionType, Writer
+
+    _, images = _payloads("large")
+    with path.open("wb") as f:
+        writer = Writer(f, compression=CompressionType.NONE)
+        writer.start("ros1", "bench")
+        schema = writer.register_schema("std_msgs/String", "ros1msg", STRING_DEF.encode())
+        cam, imu = (
+            writer.register_channel(t, "ros1", schema, {"md5sum": STRING_MD5})
+            for t in ("/cam", "/imu")
+        )
+        for i in range(LARGE_COUNT):
+            t = T0 + i * 50_000_000
+            writer.add_message(cam, t, images[i % len(images)], t)
+            for k in range(IMU_PER_IMAGE):
+                writer.add_message(imu, t + k * 2_500_000, _small(k), t + k * 2_500_000)
+        writer.finish()
+
+    def ours(check: bool) -> int:
+        from rostools.bag.access import open_bag
+
+        with open_bag(path, check_crcs=check) as reader:
+            return sum(1 for _ in reader.messages(topics=["/imu"]))
+
+    def theirs(validate: bool) -> int:
+        with path.open("rb") as f:
+            reader = make_reader(f, validate_crcs=validate)
+            return sum(1 for _ in reader.iter_messages(topics=["/imu"], log_time_order=True))
+
+    reads = _rates(
+        {
+            "ours": lambda: ours(True),
+            "theirs": lambda: theirs(True),
+            "ours unchecked": lambda: ours(False),
+            "theirs unchecked": lambda: theirs(False),
+        }
+    )
+    label = f"MCAP read of /imu out of {LARGE_COUNT} x 1 MB images (none)"
+    note = (
+        f"in-process, median of {REPEATS} interleaved runs; {IMU_PER_IMAGE} small /imu messages"
+        " per image, in the mcap package's chunks"
+    )
+    return [
+        _row(f"{label}, CRCs checked, vs mcap package", reads["ours"], reads["theirs"],
+             "mcap make_reader(validate_crcs=True)", note),
+        _row(f"{label}, CRCs unchecked, vs mcap package", reads["ours unchecked"],
+             reads["theirs unchecked"], "mcap make_reader", note),
+        Result(f"{label}: checking CRCs, vs not (ours)", "msgs/s", reads["ours"],
+               reads["ours unchecked"], "what the check costs", None, note),
+    ]  # fmt: skip
 
 
 def bench_bag_speed() -> list[Result]:

@@ -57,16 +57,24 @@ def _is_ros2(path: Path) -> bool:
     return (path / "metadata.yaml").is_file()
 
 
-def open_bag(path: str | Path) -> BagReader:
-    """Open a ``.bag`` or MCAP file for reading, whatever its name."""
+def open_bag(path: str | Path, *, from_records: bool = False, check_crcs: bool = True) -> BagReader:
+    """Open a ``.bag`` or MCAP file for reading, whatever its name.
+
+    ``from_records``: a ``.bag`` is read by walking its chunks even when its index is whole,
+    and the index is checked against them (what ``recover`` rebuilds from); an MCAP file's
+    messages are always read from its records. ``check_crcs`` False: an MCAP file's chunk
+    and data section CRCs are not checked (``--no-crc-check``; a ``.bag`` has none).
+    """
     kind = detect_format(path)
     if kind == "mcap":
         from rostools.bag.mcap_reader import McapReader
 
-        return McapReader(path)
+        reader = McapReader(path)
+        reader.check_crcs = check_crcs
+        return reader
     from rostools.bag.rosbag1_reader import Bag1Reader
 
-    return Bag1Reader(path)
+    return Bag1Reader(path, from_records=from_records)
 
 
 def format_for_name(path: str | Path) -> str:

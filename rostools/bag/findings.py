@@ -4,9 +4,10 @@ What it checks: that the file opens and reads to the end (record lengths, bytes 
 parse and what the reader skipped, cut-short or unindexed tails, and whether ``bag recover``
 would help); the index against the records (each index entry's time and connection against
 its record, chunk time ranges, the message count of each connection against the messages
-read); MCAP CRCs: each chunk's, the data section's and the summary's; each ROS 1
-connection's md5sum against its definition text, and that the text parses; and every message
-against its type (shorter or longer than it).
+read, each connection record in a chunk against the index's copy); MCAP CRCs: each chunk's,
+the data section's and the summary's; each ROS 1 connection's md5sum against its definition
+text, and that the text parses; and every message against its type (shorter or longer than
+it).
 Messages out of time order within a chunk are a note, not a finding: the formats allow it.
 Library code: no printing.
 """
@@ -70,17 +71,19 @@ def doctor(path: str | Path, progress: Callable[[int, int], None] | None = None)
     with reader:
         _connections(reader, report)
         _messages(reader, report, progress)
+        problems: list[str] = []
+        if isinstance(reader, McapReader):
+            problems, report.notes = reader.chunk_checks()
+        elif isinstance(reader, Bag1Reader):
+            # Walks every chunk: a connection record there unlike the index's is noted too.
+            report.notes = reader.order_notes()
         for note in reader.notes:
             report.findings.append(note)
             report.recover_helps = True
         for damage in reader.damage:
             report.findings.append(damage)
             report.recover_helps = True
-        if isinstance(reader, McapReader):
-            problems, report.notes = reader.chunk_checks()
-            report.findings += problems
-        elif isinstance(reader, Bag1Reader):
-            report.notes = reader.order_notes()
+        report.findings += problems
     if report.recover_helps:
         report.findings.append("bag recover would rebuild what can be read into a new file")
     return report

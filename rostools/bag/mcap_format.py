@@ -13,9 +13,13 @@ from __future__ import annotations
 
 import mmap
 import struct
-import zlib
 from collections.abc import Collection, Iterator, Mapping
 from typing import Final, NamedTuple
+
+# The one CRC-32 of the MCAP code, zlib-ng's: 20 to 30 GB/s here where zlib's is 2 to 4 (it
+# folds with carry-less multiplies), which is what lets every read check every chunk's CRC;
+# and crc32_combine (the CRC of a + b from those of a and b), which Python's zlib lacks.
+from zlib_ng.zlib_ng import crc32 as crc32, crc32_combine as crc32_combine
 
 from rostools.bag.model import BagFormatError, UnsupportedBagError
 
@@ -600,7 +604,7 @@ def encode_attachment(att: Attachment) -> bytes:
         + _U64.pack(len(att.data))
         + att.data
     )
-    return _record(OP_ATTACHMENT, content + _U32.pack(zlib.crc32(content)))
+    return _record(OP_ATTACHMENT, content + _U32.pack(crc32(content)))
 
 
 def encode_attachment_index(index: AttachmentIndex) -> bytes:
@@ -637,54 +641,8 @@ def encode_data_end(crc: int = 0) -> bytes:
 def encode_footer(summary_start: int, summary_offset_start: int, summary: bytes) -> bytes:
     """The Footer record and closing magic; ``summary`` is every byte since summary_start."""
     head = PREFIX.pack(OP_FOOTER, 20) + _U64.pack(summary_start) + _U64.pack(summary_offset_start)
-    crc = zlib.crc32(head, zlib.crc32(summary)) if summary_start else 0
+    crc = crc32(head, crc32(summary)) if summary_start else 0
     return head + _U32.pack(crc) + MAGIC
-
-
-def _crc_times(a: int, b: int) -> int:
-    """The product of two polynomials modulo CRC-32's, both in its reflected bit order."""
-    product = 0
-    bit = 1 << 31
-    while a:
-        if a & bit:
-            product ^= b
-            a ^= bit
-        bit >>= 1
-        b = (b >> 1) ^ _CRC_POLY if b & 1 else b >> 1
-    return product
-
-
-#: CRC-32's polynomial, reflected.
-_CRC_POLY: Final = 0xEDB88320
-
-
-def _crc_squares() -> tuple[int, ...]:
-    """x^(2^k) modulo CRC-32's polynomial, k = 0..63 (reflected: x^0 is bit 31)."""
-    power, out = 1 << 30, []  # x^1
-    for _ in range(64):
-        out.append(power)
-        power = _crc_times(power, power)
-    return tuple(out)
-
-
-_CRC_SQUARES: Final = _crc_squares()
-
-
-def crc32_combine(crc1: int, crc2: int, len2: int) -> int:
-    """The CRC-32 of ``a + b`` from ``crc32(a)``, ``crc32(b)`` and ``len(b)``.
-
-    What zlib's ``crc32_combine`` does (Python's zlib lacks it): appending ``len2`` bytes
-    multiplies ``crc1`` by x^(8 * len2), so the writer need not pass over a chunk's bytes twice
-    for the data section's CRC when they are stored uncompressed. About 60 us per call.
-    """
-    shift = 1 << 31  # x^0
-    bits, k = len2 << 3, 0
-    while bits:
-        if bits & 1:
-            shift = _crc_times(_CRC_SQUARES[k], shift)
-        bits >>= 1
-        k += 1
-    return _crc_times(shift, crc1) ^ crc2
 
 
 def parse_footer(tail: Buffer) -> Footer | None:

@@ -12,14 +12,13 @@ killed writer leaves everything but the open chunk recoverable.
 
 Every CRC the format has is written: each chunk's (over its uncompressed records), the data
 section's (in DataEnd) and the summary's (in the footer), so ``bag doctor`` and other readers
-can tell a flipped bit. They cost one pass of ``zlib.crc32`` over what is written; a chunk
-stored uncompressed is passed over once, its CRC folded into the data section's
-(``crc32_combine``).
+can tell a flipped bit. They cost one pass of ``crc32`` (zlib-ng's, ``mcap_format``) over
+what is written; a chunk stored uncompressed is passed over once, its CRC folded into the data
+section's (``crc32_combine``).
 """
 
 from __future__ import annotations
 
-import zlib
 from array import array
 from collections.abc import Callable, Mapping
 from pathlib import Path
@@ -251,7 +250,7 @@ class McapWriter(BagWriter):
 
     def _write(self, data: _Chunk) -> None:
         """Append bytes of the data section, counting them into its CRC."""
-        self._data_crc = zlib.crc32(data, self._data_crc)
+        self._data_crc = fmt.crc32(data, self._data_crc)
         self._sink.write(data)
 
     def _statistics(self) -> fmt.Statistics:
@@ -281,7 +280,7 @@ class McapWriter(BagWriter):
         chunk_pos = sink.tell()
         crc = 0
         for piece in pieces:
-            crc = zlib.crc32(piece, crc)
+            crc = fmt.crc32(piece, crc)
         stored_pieces = self._compress(pieces)
         stored = sum(len(p) for p in stored_pieces)
         self._write(fmt.encode_chunk_head(start, end, size, compression, stored, crc))

@@ -86,16 +86,18 @@ def merge(
     progress: Progress | None = None,
     overwrite: bool = False,
     renames: Renames | None = None,
+    check_crcs: bool = True,
 ) -> CopyReport:
     """Write the messages of every source into ``dst``, in time order (ties: argument order).
 
     ``topics``, ``start``/``end`` (ns, inclusive) and ``expression`` select as in
     ``ops.filter_bag``, on the input's names; ``renames`` applies as messages are written.
     MCAP attachments and metadata of every input are copied into an MCAP output.
+    ``check_crcs`` as ``open_bag``'s.
     """
     paths, dst = _checked_paths(sources, Path(dst))
     with contextlib.ExitStack() as stack:
-        readers = [stack.enter_context(open_bag(p)) for p in paths]
+        readers = [stack.enter_context(open_bag(p, check_crcs=check_crcs)) for p in paths]
         kind = format_for_name(dst)
         if kind != "mcap" or expression:  # an MCAP output takes any encoding as it is
             for reader in readers:

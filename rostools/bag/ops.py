@@ -83,16 +83,18 @@ def convert(
     progress: Progress | None = None,
     overwrite: bool = False,
     renames: Renames | None = None,
+    check_crcs: bool = True,
 ) -> CopyReport:
     """Copy every connection and message of ``src`` into ``dst`` (``.bag`` <-> MCAP).
 
     Lossless in connection headers (callerid, latching, definitions, extra fields), message
     bytes and times. The output format follows ``dst``'s name unless ``format`` is given.
-    ``renames`` renames topics and types on the way.
+    ``renames`` renames topics and types on the way. ``check_crcs`` as ``open_bag``'s, as
+    for every function here that reads.
     """
     return _copy(
         src, dst, compression, chunk_size, format, progress, overwrite, eager=True,
-        renames=renames,
+        renames=renames, check_crcs=check_crcs,
     )  # fmt: skip
 
 
@@ -104,10 +106,14 @@ def compress(
     chunk_size: int | None = None,
     progress: Progress | None = None,
     overwrite: bool = False,
+    check_crcs: bool = True,
 ) -> CopyReport:
     """Rewrite a bag with chunk ``compression`` (``.bag``: bz2 or lz4; MCAP: zstd or lz4)."""
     fmt = _same_format(src)
-    return _copy(src, dst, compression, chunk_size, fmt, progress, overwrite, eager=True)
+    return _copy(
+        src, dst, compression, chunk_size, fmt, progress, overwrite, eager=True,
+        check_crcs=check_crcs,
+    )  # fmt: skip
 
 
 def decompress(
@@ -117,10 +123,14 @@ def decompress(
     chunk_size: int | None = None,
     progress: Progress | None = None,
     overwrite: bool = False,
+    check_crcs: bool = True,
 ) -> CopyReport:
     """Rewrite a bag with uncompressed chunks."""
     fmt = _same_format(src)
-    return _copy(src, dst, "none", chunk_size, fmt, progress, overwrite, eager=True)
+    return _copy(
+        src, dst, "none", chunk_size, fmt, progress, overwrite, eager=True,
+        check_crcs=check_crcs,
+    )  # fmt: skip
 
 
 def _same_format(src: str | Path) -> str:
@@ -144,6 +154,7 @@ def filter_bag(
     show: tuple[str, Callable[[bool, Any], None]] | None = None,
     latched: bool = False,
     renames: Renames | None = None,
+    check_crcs: bool = True,
 ) -> CopyReport:
     """Copy the messages of ``src`` that pass the filters into ``dst``.
 
@@ -174,6 +185,7 @@ def filter_bag(
         keep=keep,
         latched=latched,
         renames=renames,
+        check_crcs=check_crcs,
     )
 
 
@@ -255,12 +267,13 @@ def _copy(
     keep: Callable[[Connection, int, memoryview], bool] | None = None,
     latched: bool = False,
     renames: Renames | None = None,
+    check_crcs: bool = True,
 ) -> CopyReport:
     src, dst = Path(src), Path(dst)
     if dst.exists() and src.resolve() == dst.resolve():
         raise BagUsageError(f"cannot use the same file as input and output: {src}")
     kind = format or format_for_name(dst)
-    with open_bag(src) as reader:
+    with open_bag(src, check_crcs=check_crcs) as reader:
         to_ros1 = _ros2_to_ros1(reader, kind, topics, keep is not None)
         total = reader.info().message_count
         profile = mcap_profile([reader], topics)

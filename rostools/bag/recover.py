@@ -1,7 +1,10 @@
 """Recovering unindexed, unfinished or cut-short bags (``rosbag reindex``, ``mcap recover``).
 
 The readers already read such files by walking them; recovery copies everything they salvage
-into a new, fully indexed file and reports what could not be read. Unlike ``rosbag reindex``
+into a new, fully indexed file and reports what could not be read. It rebuilds from the
+records, as ``rosbag reindex`` does: a ``.bag`` is walked chunk by chunk even when its index is
+whole, and where a connection's record in a chunk differs from the index's, the chunk's is
+kept (it travels with the messages). Unlike ``rosbag reindex``
 it never truncates the source, and it keeps the records of a chunk that was never closed
 (rosbag throws that whole chunk away) and whatever decompresses of a cut-short one.
 """
@@ -61,16 +64,19 @@ def recover(
     compression: str | None = None,
     chunk_size: int | None = None,
     overwrite: bool = False,
+    check_crcs: bool = True,
 ) -> RecoverReport:
     """Write every message that can be salvaged from ``src`` into a new indexed ``dst``.
 
     The output format follows ``dst``'s name. ``compression`` defaults to the source's most
-    used chunk compression (``.bag`` into ``.bag``) or the writer's default.
+    used chunk compression (``.bag`` into ``.bag``) or the writer's default. An MCAP chunk
+    that fails its CRC is left out (and listed), unless ``check_crcs`` is False.
     """
     src, dst = Path(src), Path(dst)
     if dst.exists() and src.resolve() == dst.resolve():
         raise BagUsageError(f"cannot recover {src} into itself; give another output file")
-    with open_bag(src) as reader:
+    # never from an index that disagrees with the records
+    with open_bag(src, from_records=True, check_crcs=check_crcs) as reader:
         kind = format_for_name(dst)
         if kind != "mcap":  # an MCAP output takes any encoding as it is
             require_ros1(reader, f"writing to .{kind}")

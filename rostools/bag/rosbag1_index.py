@@ -5,7 +5,8 @@ messages. The records are the truth (rosbag returns a record's own time too):
 ``checked_entries`` reads each message through its entry and checks that the record there is a
 message of that connection and time, and that the counts are those of the chunk info. It
 costs a comparison or two per message beside reading the record's header, which the read
-does anyway. ``Disagreement`` says how the index and the records differ.
+does anyway. ``Disagreement`` says how the index and the records differ. ``message_head``
+reads a message record's header the same quick way for a walk over a chunk's records.
 """
 
 from __future__ import annotations
@@ -48,6 +49,34 @@ def _prefixes(conn_id: int) -> tuple[bytes, bytes]:
 
 #: An entry's position in its chunk.
 _OFFSET = itemgetter(2)
+#: A 38-byte message record's fixed bytes around its connection id, in the C++ writer's
+#: layout (conn, op, time) and the Python writer's (op, conn, time): (before, after, where
+#: the id is).
+_LAYOUTS = (
+    (b"&\x00\x00\x00\t\x00\x00\x00conn=", b"\x04\x00\x00\x00op=\x02\r\x00\x00\x00time=", 13),
+    (b"&\x00\x00\x00\x04\x00\x00\x00op=\x02\t\x00\x00\x00conn=", b"\r\x00\x00\x00time=", 21),
+)
+_TAIL = struct.Struct("<IIi")  # the time's secs and nsecs, the data length
+
+
+def message_head(buf: Buffer, pos: int, end: int) -> tuple[int, int, int] | None:
+    """(time ns, connection, record end) of the message record at ``pos``, or None.
+
+    None for any record not laid out as rosbag writes message records (a 38-byte header):
+    read that one whole. What walking a chunk spends its time on, without parsing the header
+    into fields.
+    """
+    if pos + _HEAD > end:
+        return None
+    for before, after, at in _LAYOUTS:
+        if buf[pos : pos + at] == before and buf[pos + at + 4 : pos + 34] == after:
+            conn = int.from_bytes(buf[pos + at : pos + at + 4], "little")
+            secs, nsecs, dlen = _TAIL.unpack_from(buf, pos + 34)
+            stop = pos + _HEAD + dlen
+            if dlen < 0 or stop > end:
+                return None  # said as the whole record's parse says it
+            return secs * _NS + nsecs, conn, stop
+    return None
 
 
 class Disagreement(Exception):  # noqa: N818 - a finding, not an error: readers note it

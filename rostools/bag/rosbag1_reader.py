@@ -10,7 +10,12 @@ chunk that was never closed and the decompressible part of one that was cut shor
 Damage never comes out silently wrong. The message records are the truth: times and connections
 come from them, and each index entry is checked against the record it points at as the chunk is
 read (``rosbag1_index``). A chunk whose index disagrees with its records is read by walking the
-records, and the disagreement is noted. Bytes that do not parse, at the top level or inside a
+records, and the disagreement is noted. The chunk infos must name the file's chunks one for one
+(checked on opening, ``_misfit``): one that names another chunk would have that chunk read twice
+and its own never, so such an index is not used, and the file is read by walking its chunks.
+Two copies of a connection record that differ (the index's and a chunk's) are noted; a read
+through the index uses the index's, as rosbag does, and ``from_records`` (``recover``) the
+chunk's, which travels with the messages. Bytes that do not parse, at the top level or inside a
 chunk, are skipped to the next whole record (``rosbag1_format.next_record``), and what they
 held is listed in ``damage``; a chunk that does not decompress is left out and listed there.
 """
@@ -39,7 +44,13 @@ from rostools.bag.model import (
     summarize,
 )
 from rostools.bag.ordering import Block, Entry, RawMessage, ordered, out_of_order
-from rostools.bag.rosbag1_index import Buffer, Disagreement, checked_entries, index_times
+from rostools.bag.rosbag1_index import (
+    Buffer,
+    Disagreement,
+    checked_entries,
+    index_times,
+    message_head,
+)
 from rostools.wire.header import HeaderError, split_fields
 
 _U32 = fmt.U32
@@ -53,6 +64,10 @@ _CHUNK_OPS = frozenset((fmt.OP_MSG_DATA, fmt.OP_CONNECTION))
 _INDEX_OP = b"\x04\x00\x00\x00op=\x04"
 #: What an unindexed bag is read by.
 _CHUNKS = "its chunks"
+#: The bytes of an INDEX_DATA record besides its entries, as rosbag writes it: the header's
+#: length, its four fields (op, ver, conn, count: 8 + 12 + 13 + 14 bytes), the data's length.
+_INDEX_RECORD = 4 + 47 + 4
+_POS = attrgetter("pos")
 
 
 @dataclass
@@ -77,14 +92,23 @@ class Bag1Chunk:
 
 
 class Bag1Reader(BagReader):
-    """A rosbag v2.0 file; see the module docstring for how it is read."""
+    """A rosbag v2.0 file; see the module docstring for how it is read.
+
+    ``from_records``: read by walking the chunks even when the index is whole (what
+    ``recover`` rebuilds from), with each chunk info and connection record of the index
+    checked against what the walk found (a difference is a note).
+    """
 
     format = "bag"
 
-    def __init__(self, path: str | Path) -> None:
+    def __init__(self, path: str | Path, *, from_records: bool = False) -> None:
         super().__init__(path)
+        self.from_records = from_records
         self.chunks: list[Bag1Chunk] = []
         self._by_id: dict[int, Connection] = {}
+        #: Where each connection's record was read (``_add_connection``), for a note.
+        self._where: dict[int, str] = {}
+        self._index_pos = 0
         #: (chunk position, start, end, messages per connection) as the index lists them.
         self._infos: list[tuple[int, int, int, dict[int, int]]] = []
         mm, self.size = map_file(self.path)
@@ -116,17 +140,22 @@ class Bag1Reader(BagReader):
                 f"{self.path} is encrypted (rosbag encrypt); decrypt it first"
             )
         self._records_start = data + dlen
-        index_pos = _u64_or(fields, "index_pos", 0)
+        index_pos = self._index_pos = _u64_or(fields, "index_pos", 0)
         if self._records_start <= index_pos <= self.size:
             try:
                 # Without its counts the index cannot be read: rosbag too reads it unindexed.
                 counts = fmt.u32_field(fields, "conn_count"), fmt.u32_field(fields, "chunk_count")
                 self._read_index(index_pos, *counts)
+                why = self._misfit(index_pos)
+                if why is not None:
+                    raise fmt.RecordError(why)
                 self.indexed = True
+                if self.from_records:
+                    self._rebuild()
                 return
             except (fmt.RecordError, HeaderError, struct.error) as err:
                 self.read_unindexed(f"its index at {index_pos} is damaged ({err})", _CHUNKS)
-                self.connections, self.chunks, self._by_id = [], [], {}
+                self.connections, self.chunks, self._by_id, self._where = [], [], {}, {}
         elif index_pos == 0:
             self.read_unindexed("an unclosed recording", _CHUNKS)
         else:
@@ -149,7 +178,7 @@ class Bag1Reader(BagReader):
             fields, data, dlen = fmt.read_record(mm, pos, size, max_data=fmt.MAX_CONNECTION_HEADER)
             if fmt.op_of(fields) != fmt.OP_CONNECTION:
                 raise fmt.RecordError(f"expected a connection record at {pos}")
-            self._add_connection(fields, data, dlen)
+            self._add_connection(fields, data, dlen, where="the index")
             pos = data + dlen
         infos: list[tuple[int, int, int, dict[int, int]]] = []
         for _ in range(chunk_count):
@@ -180,6 +209,82 @@ class Bag1Reader(BagReader):
             chunk.index_pos = chunk.data_pos + chunk.data_len
             self.chunks.append(chunk)
 
+    def _misfit(self, index_pos: int) -> str | None:
+        """Why the chunk infos do not name the file's chunks one for one, or None.
+
+        Each must name a chunk of its own, and every chunk before the index must be named:
+        else a read through the index reads one chunk twice and another never. In rosbag's
+        files each chunk's index records are followed by the next chunk, so this costs a sum
+        per chunk; other bytes between them (connection records, or index records unlike
+        rosbag's) are walked.
+        """
+        cursor, last = self._records_start, None
+        for chunk in sorted(self.chunks, key=_POS):
+            if last is not None and chunk.pos == last.pos:
+                return f"two chunk infos name the chunk at {chunk.pos}"
+            if chunk.pos < cursor:
+                return f"a chunk info names {chunk.pos}, inside the chunk before it"
+            if chunk.pos != cursor + _index_size(last):
+                stray = self._stray_chunk(cursor, chunk.pos)
+                if stray is not None:
+                    return f"no chunk info names the chunk at {stray}"
+            last, cursor = chunk, chunk.index_pos
+        if index_pos != cursor + _index_size(last):
+            stray = self._stray_chunk(cursor, index_pos)
+            if stray is not None:
+                return f"no chunk info names the chunk at {stray}"
+        return None
+
+    def _stray_chunk(self, pos: int, end: int) -> int | None:
+        """The first chunk record from ``pos`` to ``end`` (top-level records), or None.
+
+        Bytes that do not parse are searched for the next whole record; what they are is
+        said when they are read (or not: a read through the index never goes there).
+        """
+        mm = self._mm
+        while pos < end:
+            try:
+                fields, data, dlen = fmt.read_record(mm, pos, end)
+                op = fmt.op_of(fields)
+            except fmt.RecordError:
+                nxt = fmt.next_record(mm, pos + 1, end, _TOP_OPS)
+                if nxt is None:
+                    return None
+                pos = nxt
+                continue
+            if op == fmt.OP_CHUNK:
+                return pos
+            if op == fmt.OP_INDEX_DATA:
+                dlen = fmt.INDEX_ENTRY_SIZE * _u32_or(fields, "count", dlen // 12)
+            pos = data + dlen
+        return None
+
+    def _rebuild(self) -> None:
+        """Read the chunks by walking them (``from_records``), and check the index against them.
+
+        The chunk copies of the connection records come first, so they are the ones used;
+        the index's are met last, and a copy that differs is noted. A chunk whose chunk info
+        says what the walk found is read through its index records, checked as ever.
+        """
+        infos = self._infos
+        self.connections, self.chunks, self._by_id, self._where = [], [], {}, {}
+        self._scan()
+        found = {c.pos: c for c in self.chunks}
+        for chunk_pos, start, end, counts in infos:
+            chunk = found.get(chunk_pos)
+            walked = None if chunk is None else (chunk.start_ns, chunk.end_ns, chunk.counts)
+            if chunk is not None and walked == (start, end, counts):
+                # Its index records are read, each entry checked against its record (and
+                # the chunk read from its records where one disagrees, noted): it is faster.
+                chunk.index_pos = chunk.data_pos + chunk.data_len
+            else:
+                self.note(
+                    f"the chunk info of the chunk at {chunk_pos} disagrees with its records"
+                    f" ({_said(start, end, counts)}; the records: "
+                    + ("none" if walked is None else _said(*walked))
+                    + "); read from the records"
+                )
+
     def _chunk_header(self, pos: int) -> Bag1Chunk:
         fields, data, dlen = fmt.read_record(self._mm, pos, self.size)
         if fmt.op_of(fields) != fmt.OP_CHUNK:
@@ -193,17 +298,23 @@ class Bag1Reader(BagReader):
         )
 
     def _add_connection(
-        self, fields: Mapping[str, bytes], data: int, dlen: int, buf: Buffer | None = None
+        self,
+        fields: Mapping[str, bytes],
+        data: int,
+        dlen: int,
+        buf: Buffer | None = None,
+        where: str = "",
     ) -> Connection:
         """Register the connection record whose header is ``buf[data:data + dlen]``.
 
-        ``buf`` is the file map unless the record sits in a decompressed chunk. The first
-        record of an id wins (the index repeats those in the chunks).
+        ``buf`` is the file map unless the record sits in a decompressed chunk; ``where`` says
+        where the record is, for a note. The first record of an id wins (the index repeats
+        those in the chunks); a later one that differs from it is noted.
         """
         conn_id = fmt.u32_field(fields, "conn")
         existing = self._by_id.get(conn_id)
-        if existing is not None:
-            return existing
+        if existing is not None and self._where.get(conn_id) == where:
+            return existing  # rosbag repeats a record per chunk: compare it once per place
         try:
             view = self._view if buf is None else memoryview(buf)
             header = split_fields(view[data : data + dlen])
@@ -212,9 +323,25 @@ class Bag1Reader(BagReader):
         text = {k: v.decode("utf-8", "replace") for k, v in header.items()}
         topic = fields.get("topic", header.get("topic", b"")).decode("utf-8", "replace")
         conn = connection_from_header(conn_id, topic, text)
+        if existing is not None:
+            self._compare(existing, conn, where)
+            return existing
         self.connections.append(conn)
         self._by_id[conn_id] = conn
+        self._where[conn_id] = where
         return conn
+
+    def _compare(self, first: Connection, other: Connection, where: str) -> None:
+        """Note a second copy of a connection record that differs from the one in use."""
+        a, b = {"topic": first.topic, **first.header()}, {"topic": other.topic, **other.header()}
+        differ = [k for k in sorted(a.keys() | b.keys()) if a.get(k) != b.get(k)]
+        if differ:
+            used = self._where.get(first.id) or "the file"
+            said = ", ".join(_difference(k, b.get(k), a.get(k)) for k in differ)
+            self.note(
+                f"connection {first.id} ({first.topic}): its record in {where or 'the file'}"
+                f" differs from the one in {used} ({said}); the one in {used} is used"
+            )
 
     def _scan(self) -> None:
         """Walk the records after the bag header: chunks, their connections and messages.
@@ -240,8 +367,9 @@ class Bag1Reader(BagReader):
                     break
                 self._add_scanned(chunk)
             elif op == fmt.OP_CONNECTION:
+                where = "the index" if 0 < self._index_pos <= pos else f"the record at {pos}"
                 try:
-                    self._add_connection(fields, data, dlen)
+                    self._add_connection(fields, data, dlen, where=where)
                 except fmt.RecordError as err:
                     self.damaged(f"skipped a damaged connection record at {pos}: {err}")
             elif op == fmt.OP_INDEX_DATA:
@@ -407,6 +535,11 @@ class Bag1Reader(BagReader):
         """
         pos = base
         while pos < end:
+            head = message_head(buf, pos, end)
+            if head is not None:
+                yield head[0], head[1], pos - base
+                pos = head[2]
+                continue
             try:
                 fields, data, dlen = fmt.read_record(buf, pos, end)
                 op = fmt.op_of(fields)
@@ -420,7 +553,7 @@ class Bag1Reader(BagReader):
                 yield found[0], found[1], pos - base
             elif op == fmt.OP_CONNECTION:
                 try:
-                    self._add_connection(fields, data, dlen, buf)
+                    self._add_connection(fields, data, dlen, buf, f"the chunk at {chunk.pos}")
                 except fmt.RecordError as err:
                     self.damaged(
                         f"chunk at {chunk.pos}: skipped a damaged connection record: {err}"
@@ -532,7 +665,7 @@ class Bag1Reader(BagReader):
 
         What ``info --freq`` needs, without decompressing a chunk (unindexed bags: a full read).
         """
-        if not self.indexed:
+        if not self.indexed or self.from_records:
             yield from self.messages(topics=topics)
             return
         wanted = self.wanted(topics, None)
@@ -644,6 +777,8 @@ class Bag1Reader(BagReader):
         Raises ``RecordError`` when they do not parse.
         """
         pos = chunk.index_pos
+        if pos < 0:
+            raise fmt.RecordError(f"the chunk at {chunk.pos} was read without its index")
         for _ in range(len(chunk.counts)):
             fields, data, _dlen = fmt.read_record(self._mm, pos, self.size)
             if fmt.op_of(fields) != fmt.OP_INDEX_DATA:
@@ -681,3 +816,24 @@ def _u32_or(fields: Mapping[str, bytes], name: str, default: int) -> int:
 def _u64_or(fields: Mapping[str, bytes], name: str, default: int) -> int:
     raw = fields.get(name)
     return int(fmt.U64.unpack(raw)[0]) if raw is not None and len(raw) == 8 else default
+
+
+def _said(start: int, end: int, counts: Mapping[int, int]) -> str:
+    """A chunk's time range and messages per connection, for a note."""
+    per = ", ".join(f"{n} of connection {c}" for c, n in sorted(counts.items()))
+    return f"{start} to {end} ns, {per or 'no messages'}"
+
+
+def _difference(key: str, value: str | None, used: str | None) -> str:
+    """How a field of a second connection record differs from the one in use, for a note."""
+    shown = [v for v in (value, used) if v is not None]
+    if all(len(v) <= 40 for v in shown):
+        return f"{key} {value!r} against {used!r}" if len(shown) == 2 else f"{key} in one only"
+    return key  # a definition: too long to quote
+
+
+def _index_size(chunk: Bag1Chunk | None) -> int:
+    """The bytes of a chunk's index records as rosbag writes them (0 before the first chunk)."""
+    if chunk is None:
+        return 0
+    return sum(_INDEX_RECORD + fmt.INDEX_ENTRY_SIZE * n for n in chunk.counts.values())

@@ -180,11 +180,13 @@ def split(
     progress: Progress | None = None,
     overwrite: bool = False,
     renames: Renames | None = None,
+    check_crcs: bool = True,
 ) -> SplitReport:
     """Write ``src``'s messages into parts named after ``base`` (its suffix picks the format).
 
     ``repeat_latched``: each part after the first starts with the last message so far of every
     latched connection, stamped at the part's first message, as ``record --split`` does.
+    ``check_crcs`` as ``open_bag``'s.
     """
     cut.check()
     src, base = Path(src), Path(base)
@@ -193,7 +195,7 @@ def split(
     if first.exists() and not overwrite:
         raise BagUsageError(f"{first} exists (use -f to overwrite)")
     report = SplitReport(src)
-    with open_bag(src) as reader:
+    with open_bag(src, check_crcs=check_crcs) as reader:
         if kind != "mcap":  # an MCAP output takes any encoding as it is
             require_ros1(reader, "bag split")
         info = reader.info()

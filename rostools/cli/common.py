@@ -84,6 +84,15 @@ def node_session(
     return run_node(main, s.resolved_master_uri(), name, remappings=s.remappings, notify=notify)
 
 
+#: Every command that reads MCAP messages takes it (bag doctor always checks).
+NoCrcCheckOpt = Annotated[
+    bool,
+    typer.Option(
+        "--no-crc-check",
+        help="Read MCAP chunks without checking their CRCs (faster for big uncompressed"
+        " messages; a damaged chunk then reads as it is).",
+    ),
+]
 FormatOpt = Annotated[
     Format | None,
     typer.Option(

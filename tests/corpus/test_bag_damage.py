@@ -5,6 +5,13 @@ what it left out and exits 6; ``doctor`` flags each damage. The real rosbag give
 - (b) 1,764 zeroed bytes over a chunk header mid-file: reading goes on at the next record;
 - (c) two whole chunks (with their index records) swapped in a bz2 bag: all 6,121 messages,
   as ``rosbag reindex`` gets them.
+
+Issue 32, item 2: an index that points at the wrong records.
+
+- (d) a bz2 bag whose chunk info names the next chunk: rosbag reads that chunk twice and the
+  other never; ours and ``rosbag reindex`` read all 6,121 messages once;
+- (e) a connection record whose index copy has another md5sum (and definition) than the
+  chunk's: ``doctor`` says so, and ``recover`` keeps the chunk's.
 """
 
 from __future__ import annotations
@@ -19,6 +26,8 @@ from rostools.bag import rosbag1_format as fmt
 from rostools.bag.access import open_bag
 from rostools.bag.findings import doctor
 from rostools.bag.recover import recover
+from rostools.msgs.store import md5_of
+from rostools.wire.header import encode_fields, split_fields
 from tests.support.bagdata import bag_records, chunk_spans, digest, swap_spans
 from tests.support.env import CORPUS, SYSTEM_PYTHON, needs_corpus, needs_ros1, run_cli
 
@@ -63,6 +72,44 @@ def swap_chunks(src: Path, dst: Path, i: int, j: int) -> None:
     data = src.read_bytes()
     spans = chunk_spans(data)
     dst.write_bytes(swap_spans(data, spans[i], spans[j]))
+
+
+def point_info_elsewhere(src: Path, dst: Path, nth: int, other: int) -> tuple[int, int]:
+    """Make the chunk info of chunk ``nth`` name chunk ``other``; (their positions)."""
+    data = bytearray(src.read_bytes())
+    records = bag_records(bytes(data))
+    chunks = [r[0] for r in records if r[1] == fmt.OP_CHUNK]
+    info = next(
+        r
+        for r in records
+        if r[1] == fmt.OP_CHUNK_INFO and fmt.u64_field(r[2], "chunk_pos") == chunks[nth]
+    )
+    at = data.index(b"chunk_pos=" + fmt.U64.pack(chunks[nth]), info[0]) + len(b"chunk_pos=")
+    data[at : at + 8] = fmt.U64.pack(chunks[other])
+    dst.write_bytes(bytes(data))
+    return chunks[nth], chunks[other]
+
+
+def retype_index_copy(src: Path, dst: Path) -> tuple[str, str]:
+    """Give the index's copy of connection 0 another definition, with its own md5sum.
+
+    The copy stays consistent (its md5sum is its definition's), so only a look at the chunk's
+    copy tells them apart. (the chunk's md5sum, the index's).
+    """
+    raw = src.read_bytes()
+    index_pos = fmt.u64_field(bag_records(raw)[0][2], "index_pos")
+    pos, op, fields, data, dlen = bag_records(raw, index_pos)[0]
+    assert op == fmt.OP_CONNECTION and fmt.u32_field(fields, "conn") == 0
+    header = {k: v.decode() for k, v in split_fields(raw[data : data + dlen]).items()}
+    theirs = header["md5sum"]
+    header["message_definition"] = header["message_definition"].replace(
+        " orientation\n", " attitude\n", 1
+    )
+    header["md5sum"] = md5_of(header["type"], header["message_definition"])
+    assert header["md5sum"] not in ("", theirs)
+    record = fmt.encode_record(fields, encode_fields(header))
+    dst.write_bytes(raw[:pos] + record + raw[data + dlen :])  # the index's first record
+    return theirs, header["md5sum"]
 
 
 def ours(path: Path) -> list[list[Any]]:
@@ -162,3 +209,69 @@ def test_c_swapped_chunks_as_rosbag_reindex_reads_them(tmp_path: Path) -> None:
     assert "note:" in done.stderr
     checkup = doctor(bad)
     assert not checkup.clean and checkup.messages == 6121
+
+
+@needs_ros1
+def test_d_a_chunk_info_naming_another_chunk_hides_nothing(tmp_path: Path) -> None:
+    bad = tmp_path / "misplaced.bag"
+    lost, _ = point_info_elsewhere(TEST2, bad, 2, 3)
+    theirs = tmp_path / "reindexed.bag"
+    shutil.copy(bad, theirs)
+    subprocess.run(["rosbag", "reindex", str(theirs)], capture_output=True, check=True)
+    views = rosbag_streams(bad, theirs, TEST2)
+    reference = views[str(TEST2)]["stream"]
+    # rosbag reads the next chunk twice and the one at `lost` never; its reindex gets every
+    # message back.
+    misread = views[str(bad)]["stream"]
+    assert len(misread) == 6121 and len({tuple(m) for m in misread}) < 6121
+    assert sorted(views[str(theirs)]["stream"]) == sorted(reference) and len(reference) == 6121
+    assert ours(bad) == reference
+    index_pos = fmt.u64_field(bag_records(bad.read_bytes())[0][2], "index_pos")
+    with open_bag(bad) as reader:
+        assert reader.notes == [
+            f"unindexed: its index at {index_pos} is damaged (no chunk info names the chunk at"
+            f" {lost}); read by scanning its chunks"
+        ]
+    checkup = doctor(bad)
+    assert not checkup.clean and checkup.messages == 6121
+    assert any(str(lost) in f for f in checkup.findings), checkup.findings
+    report = recover(bad, tmp_path / "recovered.bag")
+    assert report.messages == 6121 and report.complete
+    assert ours(tmp_path / "recovered.bag") == reference
+    assert (
+        rosbag_streams(tmp_path / "recovered.bag")[str(tmp_path / "recovered.bag")]["stream"]
+        == reference
+    )
+    for args in (
+        ["cat", str(bad), "--raw"],
+        ["merge", str(tmp_path / "m.bag"), str(bad)],
+        ["reindex", str(bad)],
+    ):
+        done = run_cli("bag", *args)
+        assert done.returncode == 0 and f"chunk at {lost}" in done.stderr, (args, done.stderr)
+    assert ours(tmp_path / "m.bag") == reference
+    assert ours(bad) == reference and ours(tmp_path / "misplaced.orig.bag") == reference
+    assert doctor(bad).clean  # reindexed in place
+
+
+@needs_ros1
+def test_e_a_chunks_connection_record_unlike_the_index_copy(tmp_path: Path) -> None:
+    bad = tmp_path / "retyped.bag"
+    chunk_md5, index_md5 = retype_index_copy(TEST2, bad)
+    views = rosbag_streams(bad, TEST2)
+    # rosbag takes the index's copy; the messages are the chunk's type
+    assert views[str(bad)]["headers"][0][1]["md5sum"] == index_md5
+    checkup = doctor(bad)
+    assert not checkup.clean, checkup.findings
+    said = f"md5sum {chunk_md5!r} against {index_md5!r}"
+    assert [f for f in checkup.findings if said in f] == [
+        f"connection 0 (/imu/data): its record in the chunk at 4117 differs from the one in"
+        f" the index ({said}, message_definition); the one in the index is used"
+    ]
+    report = recover(bad, tmp_path / "recovered.bag")
+    assert report.complete and report.messages == 6121
+    assert any("the one in the chunk at 4117 is used" in n for n in report.notes), report.notes
+    fixed = rosbag_streams(tmp_path / "recovered.bag")[str(tmp_path / "recovered.bag")]
+    assert fixed["headers"] == views[str(TEST2)]["headers"]
+    assert fixed["stream"] == views[str(TEST2)]["stream"]
+    assert doctor(tmp_path / "recovered.bag").clean

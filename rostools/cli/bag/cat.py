@@ -22,6 +22,7 @@ from rostools.bag.model import counted
 from rostools.cli import output
 from rostools.cli.bag.options import EndOpt, FilterExprOpt, StartOpt
 from rostools.cli.bag.shared import check_read, time_window
+from rostools.cli.common import NoCrcCheckOpt
 from rostools.cli.declare import command
 from rostools.cli.render import Renderer
 from rostools.errors import InvalidDataError, UsageError
@@ -129,6 +130,7 @@ def cat(
     start: StartOpt = None,
     end: EndOpt = None,
     expression: FilterExprOpt = None,
+    no_crc_check: NoCrcCheckOpt = False,
 ) -> None:
     """Print the messages of bags, one JSON object per line, in time order across files."""
     from rostools.bag.access import open_bag
@@ -143,7 +145,7 @@ def cat(
     if raw and fmt is CatFormat.csv:
         raise UsageError("--raw goes with JSON, not CSV")
     with contextlib.ExitStack() as stack:
-        readers = [stack.enter_context(open_bag(p)) for p in paths]
+        readers = [stack.enter_context(open_bag(p, check_crcs=not no_crc_check)) for p in paths]
         cdr = [_cdr_connections(r, topics, fmt, raw) for r in readers]
         if fmt is CatFormat.csv:
             found = {

@@ -27,7 +27,7 @@ from rostools.cli.bag.options import (
     QuietOpt,
 )
 from rostools.cli.bag.shared import check_read, copy_command, recovered_name
-from rostools.cli.common import FormatOpt, output_format
+from rostools.cli.common import FormatOpt, NoCrcCheckOpt, output_format
 from rostools.cli.declare import command
 from rostools.cli.output import Format, emit, render
 from rostools.errors import UsageError, one_line
@@ -47,6 +47,7 @@ def info(
         str | None,
         typer.Option("--key", "-k", help="Only this key, e.g. duration or topics[0].messages."),
     ] = None,
+    no_crc_check: NoCrcCheckOpt = False,
     fmt: FormatOpt = None,
 ) -> None:
     """Summarise bags from their index alone (rosbag info); exit 1 if unindexed, 6 if damaged."""
@@ -66,7 +67,7 @@ def info(
     results = []
     readers = []
     for name in bags:
-        with open_bag(name) as reader:
+        with open_bag(name, check_crcs=not no_crc_check) as reader:
             summary = reader.info()
             freqs = topic_frequencies(reader) if freq else None
         results.append((summary, freqs, name))
@@ -128,7 +129,7 @@ def filter_(
     copy_command(out, how.quiet or show is not None, "filter", lambda progress: filter_bag(
         src, dst, topics=window.topics or None, start=lo, end=hi, expression=expression,
         compression=how.compression, progress=progress, overwrite=how.force, show=show,
-        latched=latched, renames=rules,
+        latched=latched, renames=rules, check_crcs=not how.no_crc_check,
     ))  # fmt: skip
 
 
@@ -154,7 +155,7 @@ def convert(
     rules = how.renames()
     copy_command(output_format(ctx, fmt), how.quiet, "convert", lambda progress: run_convert(
         src, dst, compression=how.compression, chunk_size=size, progress=progress,
-        overwrite=how.force, renames=rules,
+        overwrite=how.force, renames=rules, check_crcs=not how.no_crc_check,
     ))  # fmt: skip
 
 
@@ -197,6 +198,7 @@ def compress(
     output_dir: OutputDirOpt = None,
     force: ForceOpt = False,
     quiet: QuietOpt = False,
+    no_crc_check: NoCrcCheckOpt = False,
     fmt: FormatOpt = None,
 ) -> None:
     """Compress bags in place, keeping the original as x.orig.bag (rosbag compress)."""
@@ -208,7 +210,9 @@ def compress(
 
     def run(src: Path, dst: Path, progress: Any) -> CopyReport:
         kind = "lz4" if lz4 else ("bz2" if detect_format(src) == "bag" else "zstd")
-        return run_compress(src, dst, kind, progress=progress, overwrite=True)
+        return run_compress(
+            src, dst, kind, progress=progress, overwrite=True, check_crcs=not no_crc_check
+        )
 
     _in_place(ctx, bags, output_dir, force, fmt, quiet, "compress", run)
 
@@ -220,13 +224,16 @@ def decompress(
     output_dir: OutputDirOpt = None,
     force: ForceOpt = False,
     quiet: QuietOpt = False,
+    no_crc_check: NoCrcCheckOpt = False,
     fmt: FormatOpt = None,
 ) -> None:
     """Decompress bags in place, keeping the original as x.orig.bag (rosbag decompress)."""
     from rostools.bag.ops import decompress as run_decompress
 
     def run(src: Path, dst: Path, progress: Any) -> CopyReport:
-        return run_decompress(src, dst, progress=progress, overwrite=True)
+        return run_decompress(
+            src, dst, progress=progress, overwrite=True, check_crcs=not no_crc_check
+        )
 
     _in_place(ctx, bags, output_dir, force, fmt, quiet, "decompress", run)
 
@@ -237,12 +244,14 @@ def recover(
     src: BagArg,
     dst: DstOpt = None,
     force: ForceOpt = False,
+    no_crc_check: NoCrcCheckOpt = False,
     fmt: FormatOpt = None,
 ) -> None:
     """Rebuild an unindexed or cut-short bag or MCAP; exit 6 if anything was lost."""
     from rostools.bag.recover import recover as run_recover
 
-    report = run_recover(src, dst or recovered_name(src), overwrite=force)
+    dst = dst or recovered_name(src)
+    report = run_recover(src, dst, overwrite=force, check_crcs=not no_crc_check)
     _recover_report(output_format(ctx, fmt), report)
     report.raise_if_lost()
 
@@ -256,6 +265,7 @@ def reindex(
         bool, typer.Option("--force", "-f", help="Replace an existing x.orig.bag backup.")
     ] = False,
     quiet: Annotated[bool, typer.Option("--quiet", "-q", help="No report line.")] = False,
+    no_crc_check: NoCrcCheckOpt = False,
     fmt: FormatOpt = None,
 ) -> None:
     """Reindex bags in place, keeping each original as x.orig.bag (rosbag reindex).
@@ -269,7 +279,7 @@ def reindex(
     fmt = output_format(ctx, fmt)
 
     def one(path: Path, dst: Path, keep: Path | None) -> list[str]:
-        report = run_recover(path, dst, overwrite=True)
+        report = run_recover(path, dst, overwrite=True, check_crcs=not no_crc_check)
         swap(path, dst, keep)
         _recover_report(fmt, dataclasses.replace(report, output=keep or dst), quiet)
         return [f"{path}: {what}" for what in report.lost]

@@ -12,7 +12,7 @@ from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
-from rostools.cli.common import FINITE
+from rostools.cli.common import FINITE, NoCrcCheckOpt
 from rostools.cli.declare import options_record
 from rostools.errors import UsageError
 
@@ -345,7 +345,8 @@ class CopyWindow:
 class CopyOutput:
     """How a copying command writes (filter, convert, merge, split).
 
-    Renames, compression, overwriting, and the progress bar.
+    Renames, compression, overwriting, the progress bar, and whether it checks MCAP CRCs as
+    it reads.
     """
 
     rename: RenameOpt = None
@@ -353,6 +354,7 @@ class CopyOutput:
     compression: CompressionOpt = None
     force: ForceOpt = False
     quiet: QuietOpt = False
+    no_crc_check: NoCrcCheckOpt = False
 
     def renames(self) -> Renames | None:
         """The rules of ``--rename`` and ``--rename-type``, or None when there are none."""

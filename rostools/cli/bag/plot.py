@@ -18,7 +18,7 @@ from rostools.bag.model import counted
 from rostools.cli import output
 from rostools.cli.bag.options import EndOpt, StartOpt
 from rostools.cli.bag.shared import check_read, time_window
-from rostools.cli.common import FormatOpt, output_format
+from rostools.cli.common import FormatOpt, NoCrcCheckOpt, output_format
 from rostools.cli.declare import command
 from rostools.cli.output import Format
 from rostools.errors import InvalidDataError, NotFoundError, one_line
@@ -56,6 +56,7 @@ def plot_cmd(
         Path | None,
         typer.Option("--output", "-o", help="Draw into an image: .png, .svg or .pdf."),
     ] = None,
+    no_crc_check: NoCrcCheckOpt = False,
     fmt: FormatOpt = None,
 ) -> None:
     """Plot fields of a bag's topics in the terminal or into an image (one pass)."""
@@ -72,7 +73,7 @@ def plot_cmd(
 
         keep = compile_expression(filter_expr)
     plot = SeriesSet()
-    with open_bag(bag) as reader:
+    with open_bag(bag, check_crcs=not no_crc_check) as reader:
         paths = _topics(reader, fields, plot)
         require_ros1(reader, "bag plot", list(paths))
         samplers = _samplers(reader, paths, plot, stamp, keep)

@@ -47,6 +47,7 @@ def merge(
     copy_command(output_format(ctx, fmt), how.quiet, "merge", lambda progress: run_merge(
         sources, dst, topics=window.topics or None, start=lo, end=hi, expression=expression,
         compression=how.compression, progress=progress, overwrite=how.force, renames=rules,
+        check_crcs=not how.no_crc_check,
     ))  # fmt: skip
 
 
@@ -122,6 +123,7 @@ def split(
         report = run_split(
             src, out or src, cut, repeat_latched=repeat_latched, compression=how.compression,
             progress=progress, overwrite=how.force, renames=how.renames(),
+            check_crcs=not how.no_crc_check,
         )  # fmt: skip
     finally:
         progress.done()

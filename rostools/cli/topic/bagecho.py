@@ -13,8 +13,13 @@ if TYPE_CHECKING:
     from rostools.msgs.store import TypeStore
 
 
-def echo_bag(path: Path, name: str | None, store: TypeStore, opts: EchoOptions) -> None:
-    """Print the messages of ``name`` (a topic, maybe with a field path), or of every topic."""
+def echo_bag(
+    path: Path, name: str | None, store: TypeStore, opts: EchoOptions, check_crcs: bool = True
+) -> None:
+    """Print the messages of ``name`` (a topic, maybe with a field path), or of every topic.
+
+    ``check_crcs`` False: ``--no-crc-check``.
+    """
     from rostools.bag.access import open_bag, require_ros1
     from rostools.bag.base import after_reading
     from rostools.bag.model import counted
@@ -22,7 +27,7 @@ def echo_bag(path: Path, name: str | None, store: TypeStore, opts: EchoOptions) 
     from rostools.errors import InvalidDataError
     from rostools.msgs.topicpath import split_field
 
-    with open_bag(path) as bag:
+    with open_bag(path, check_crcs=check_crcs) as bag:
         resolved = {c.topic: _resolved(c.topic) for c in bag.connections}
         types = {resolved[c.topic]: c.type for c in bag.connections}
         topics = None

@@ -8,7 +8,13 @@ from typing import TYPE_CHECKING, Annotated
 
 import typer
 
-from rostools.cli.common import FormatOpt, MsgPathOpt, node_session, output_format
+from rostools.cli.common import (
+    FormatOpt,
+    MsgPathOpt,
+    NoCrcCheckOpt,
+    node_session,
+    output_format,
+)
 from rostools.cli.declare import command
 from rostools.cli.settings import type_store
 from rostools.cli.topic.live import (
@@ -54,6 +60,7 @@ def echo(
     all_topics: Annotated[
         bool, typer.Option("--all", "-a", help="Every topic of the bag (-b).")
     ] = False,
+    no_crc_check: NoCrcCheckOpt = False,
     timeout: TimeoutOpt = None,
     strict: StrictOpt = False,
     fmt: FormatOpt = None,
@@ -63,6 +70,8 @@ def echo(
     fmt = output_format(ctx, fmt)
     if all_topics and bag is None:
         raise UsageError("--all needs --bag")
+    if no_crc_check and bag is None:
+        raise UsageError("--no-crc-check needs --bag")
     if bag is not None and offset:
         raise UsageError("--offset does not apply to a bag")
     if bag is not None and timeout is not None:
@@ -75,7 +84,7 @@ def echo(
         from rostools.cli.topic.bagecho import echo_bag
 
         opts = echo_options(fmt, "", count, filter_expr, plot, nostr, noarr, clear, offset, width)
-        echo_bag(bag, name if not all_topics else None, store, opts)
+        echo_bag(bag, name if not all_topics else None, store, opts, not no_crc_check)
         return
     opts = echo_options(fmt, "", count, filter_expr, plot, nostr, noarr, clear, offset, width)
     result = node_session(

@@ -12,6 +12,7 @@ import pytest
 
 from rostools.bag import mcap_format, rosbag1_format as fmt
 from rostools.bag.access import bag_info, open_bag, open_writer
+from rostools.bag.findings import doctor
 from rostools.bag.mcap_reader import McapReader
 from rostools.bag.ops import convert
 from rostools.bag.recover import recover
@@ -23,6 +24,7 @@ from tests.support.bagdata import (
     Sample,
     bag_records,
     chunk_spans,
+    headers,
     read_stream,
     swap_spans,
     write_sample,
@@ -264,11 +266,22 @@ def test_mcap_a_damaged_record_mid_chunk_hides_nothing_else(tmp_path: Path) -> N
         at for at, op, _, _ in mcap_format.records(raw, inner, stop) if op == mcap_format.OP_MESSAGE
     ]
     victim = messages[100]
+    # Opcode and length zeroed, and the chunk's CRC (else the chunk fails it and is left out
+    # whole): as a writer that computes none leaves it.
+    raw = raw[:start] + bytes(_mcap_crc_zeroed(raw, start)) + raw[start + 28 :]
     bad = tmp_path / "bad.mcap"
-    bad.write_bytes(raw[:victim] + bytes(9) + raw[victim + 9 :])  # opcode and length zeroed
+    bad.write_bytes(raw[:victim] + bytes(9) + raw[victim + 9 :])
     got, reader = _mcap_messages(bad)
     assert got == sample.stream[:100] + sample.stream[101:]
-    assert reader.damage
+    assert len(reader.damage) == 2 and "the data section's CRC does not match its bytes" in (
+        reader.damage
+    )
+    assert any(d.startswith(f"chunk at {chunk}: ") for d in reader.damage), reader.damage
+
+
+def _mcap_crc_zeroed(raw: bytes, start: int) -> bytes:
+    """A chunk record's fixed fields (times, size, CRC) from ``start``, its CRC zeroed."""
+    return raw[start : start + 24] + bytes(4)
 
 
 def test_mcap_chunk_times_that_disagree_with_the_messages_are_noted(tmp_path: Path) -> None:
@@ -280,7 +293,9 @@ def test_mcap_chunk_times_that_disagree_with_the_messages_are_noted(tmp_path: Pa
     bad = tmp_path / "bad.mcap"
     bad.write_bytes(bytes(raw))
     got, reader = _mcap_messages(bad)
-    assert got == sample.stream and not reader.damage
+    assert got == sample.stream
+    # Only the data section's CRC covers a chunk's header: a whole read finds it.
+    assert reader.damage == ["the data section's CRC does not match its bytes"]
     assert any("header says" in n for n in reader.notes), reader.notes
 
 
@@ -370,3 +385,77 @@ def test_a_chunk_info_that_lists_fewer_connections_than_the_chunk_has(tmp_path: 
     got, reader = _messages_and_reader(bad)
     assert got == sample.stream
     assert any("more index records" in n for n in reader.notes), reader.notes
+
+
+def _name_another_chunk(raw: bytes, nth: int, other: int) -> tuple[bytes, int, int]:
+    """``raw`` with the chunk info of chunk ``nth`` naming chunk ``other``; their positions."""
+    chunks = [r[0] for r in bag_records(raw) if r[1] == fmt.OP_CHUNK]
+    tag = b"chunk_pos=" + fmt.U64.pack(chunks[nth])
+    assert raw.count(tag) == 1
+    return raw.replace(tag, b"chunk_pos=" + fmt.U64.pack(chunks[other])), chunks[nth], chunks[other]
+
+
+@pytest.mark.parametrize("compression", BAG_CASES)
+@pytest.mark.parametrize(
+    ("nth", "other", "said"),
+    [
+        (1, 2, "no chunk info names the chunk at {lost}"),
+        (-1, -2, "two chunk infos name the chunk at {twice}"),
+    ],
+)
+def test_a_chunk_info_naming_another_chunk_hides_nothing(
+    tmp_path: Path, compression: str, nth: int, other: int, said: str
+) -> None:
+    """Issue 32: one chunk was read twice and the one the chunk info stood for never."""
+    sample, raw = _sample(tmp_path, compression)
+    damaged, lost, twice = _name_another_chunk(raw, nth, other)
+    bad = tmp_path / "bad.bag"
+    bad.write_bytes(damaged)
+    got, reader = _messages_and_reader(bad)
+    assert got == sample.stream
+    assert not reader.damage and not reader.indexed
+    assert reader.unindexed is not None
+    assert said.format(lost=lost, twice=twice) in reader.unindexed
+    report = recover(bad, tmp_path / "out.bag")
+    assert report.complete and read_stream(tmp_path / "out.bag") == sample.stream
+
+
+def test_a_last_chunk_that_no_chunk_info_names(tmp_path: Path) -> None:
+    """The bag header counts one chunk info fewer: the last chunk lies unnamed before the index."""
+    sample, raw = _sample(tmp_path, "none")
+    chunks = [r[0] for r in bag_records(raw) if r[1] == fmt.OP_CHUNK]
+    count = b"chunk_count=" + fmt.U32.pack(len(chunks))
+    assert raw.index(count) < chunks[0]
+    bad = tmp_path / "bad.bag"
+    bad.write_bytes(raw.replace(count, b"chunk_count=" + fmt.U32.pack(len(chunks) - 1), 1))
+    got, reader = _messages_and_reader(bad)
+    assert got == sample.stream
+    assert reader.unindexed is not None
+    assert f"no chunk info names the chunk at {chunks[-1]}" in reader.unindexed
+
+
+def test_a_chunks_connection_record_unlike_the_index_copy(tmp_path: Path) -> None:
+    """Issue 32: ``doctor`` called it clean; ``recover`` keeps the chunk's copy."""
+    sample, raw = _sample(tmp_path, "none")
+    index_pos = fmt.u64_field(bag_records(raw)[0][2], "index_pos")
+    inside = raw.index(b"md5sum=" + INT32_MD5.encode()) + len(b"md5sum=")
+    assert inside < index_pos  # the first copy: the chunk's
+    other = "0" * 32
+    chunk = next(r[0] for r in bag_records(raw) if r[1] == fmt.OP_CHUNK)
+    bad = tmp_path / "bad.bag"
+    bad.write_bytes(raw[:inside] + other.encode() + raw[inside + 32 :])
+    report = doctor(bad)
+    assert [f for f in report.findings if "differs" in f] == [
+        f"connection 2 (/count): its record in the chunk at {chunk} differs from the one in the"
+        f" index (md5sum {other!r} against {INT32_MD5!r}); the one in the index is used"
+    ]
+    assert report.recover_helps
+    assert headers(bad)[2][1]["md5sum"] == INT32_MD5  # a read goes by the index, as rosbag
+    done = recover(bad, tmp_path / "out.bag")
+    assert done.complete and read_stream(tmp_path / "out.bag") == sample.stream
+    assert headers(tmp_path / "out.bag")[2][1]["md5sum"] == other
+    assert [n for n in done.notes if "differs" in n] == [
+        f"connection 2 (/count): its record in the index differs from the one in the chunk at"
+        f" {chunk} (md5sum {INT32_MD5!r} against {other!r}); the one in the chunk at {chunk}"
+        " is used"
+    ]

@@ -155,15 +155,20 @@ def test_a_flipped_bit_in_a_chunk_is_caught(tmp_path: Path, compression: str) ->
     report = doctor(bad)
     assert not report.clean
     if compression == "none":
+        inner = sum(op == fmt.OP_MESSAGE for _, op, _, _ in fmt.records(raw, lo, hi))
         crc = f"chunk at {rec}: its CRC does not match its records"
-        assert [f for f in report.findings if f.startswith(crc)] == [
-            f"{crc}; its messages are given as they are"
+        # None of the chunk's messages can be shown intact: every one is left out, and said.
+        assert [f for f in report.findings if "CRC" in f] == [
+            f"{crc}; its {inner} messages are left out"
         ]
-        # Our reader salvages: every message comes out, and the mismatch is damage, not silence.
+        assert f"the index counts 60 messages but {60 - inner} were read" in report.findings
+        assert report.messages == 60 - inner
         with McapReader(bad) as reader:
-            reader.check_crcs = True
-            assert len(list(reader.messages())) == 60
-            assert any(d.startswith(f"chunk at {rec}: its CRC") for d in reader.damage)
+            assert len(list(reader.messages())) == 60 - inner
+            assert reader.damage == [f"{crc}; its {inner} messages are left out"]
+        with McapReader(bad) as reader:
+            reader.check_crcs = False  # --no-crc-check: read as it is
+            assert len(list(reader.messages())) == 60 and not reader.damage
 
 
 def test_doctor_names_a_data_section_crc_mismatch(tmp_path: Path) -> None:
@@ -209,3 +214,25 @@ def test_recover_and_merge_write_crcs(tmp_path: Path) -> None:
     for name, count in (("recovered.mcap", 3000), ("merged.mcap", 3500)):
         assert check_crcs(tmp_path / name) > 2
         assert len(_mcap_package_reads(tmp_path / name)) == count
+
+
+def test_a_file_without_summary_counts_no_chunk_that_fails_its_crc(tmp_path: Path) -> None:
+    """An unfinished file is counted by a scan of its chunks: the scan checks their CRCs."""
+    sample = write_sample(
+        tmp_path / "x.mcap", 400, compression="none", chunk_size=3000, close=False
+    )
+    raw = sample.path.read_bytes()
+    rec, _, start, _ = next(r for r in top_records(raw) if r[1] == fmt.OP_CHUNK)
+    lo, hi = chunk_records_span(raw, start)
+    inner = [at for at, op, _, _ in fmt.records(raw, lo, hi) if op == fmt.OP_MESSAGE]
+    bad = flip(sample.path, inner[0] + 31 + 4)  # a byte of the first message's data
+    said = (
+        f"chunk at {rec}: its CRC does not match its records; its {len(inner)} messages are"
+        " left out"
+    )
+    with McapReader(bad) as reader:
+        assert reader.unindexed is not None
+        assert reader.info().message_count == 400 - len(inner)
+        assert reader.damage == [said]
+        assert len(list(reader.messages())) == 400 - len(inner)
+        assert reader.damage == [said]  # said once, by the scan and the read alike

@@ -51,6 +51,7 @@ if TYPE_CHECKING:  # the stable API: type checkers read these imports, rostools.
         snapshot as snapshot,
     )
     from rostools.errors import (
+        DataLossError as DataLossError,
         NotFoundError as NotFoundError,
         RostoolsError as RostoolsError,
         ServiceError as ServiceError,

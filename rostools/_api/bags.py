@@ -16,6 +16,7 @@ from rostools._api import loop, messages
 from rostools._api.asyncnode import default_master_uri
 from rostools.bag.access import format_for_name, open_bag, require_ros1
 from rostools.bag.follow import Follower
+from rostools.bag.model import lost_data
 from rostools.bag.recorder import Recorder, RecordOptions
 from rostools.errors import RostoolsError, TimeoutExpired, UsageError
 from rostools.msgs.message import Message, Time
@@ -34,12 +35,20 @@ class BagMessage(NamedTuple):
 
 
 def read_bag(path: str | Path, topics: Collection[str] | None = None) -> Iterator[BagMessage]:
-    """The messages of a ``.bag`` or MCAP file in time order, optionally of some topics."""
+    """The messages of a ``.bag`` or MCAP file in time order, optionally of some topics.
+
+    A damaged file gives every message that reads, then raises ``DataLossError`` (the CLI's
+    exit 6) naming what it left out.
+    """
     with open_bag(path) as reader:
         require_ros1(reader, "read_bag", topics)
+        count = 0
         for conn, t_ns, data in reader.messages(topics=topics):
             decode = messages.decoder(conn.type, conn.md5sum, conn.definition)
+            count += 1
             yield BagMessage(conn.topic, decode(data), Time.from_nsec(t_ns))
+        if reader.damage:
+            raise lost_data(f"read {count} messages of {path}", reader.damage)
 
 
 class LiveRecorder(loop.Lifecycle):

@@ -187,3 +187,19 @@ def test_a_whole_read_checks_the_data_section_crc(tmp_path: Path) -> None:
     # Reading part of the file reads only part of the data section: no check.
     part = run_cli("bag", "cat", str(bad), "--raw", "--start", "0.00001")
     assert part.returncode == 0, part.stderr
+
+
+def test_the_api_reads_what_is_intact_then_says_what_it_left_out(
+    flipped: tuple[Path, int, list[tuple[int, bytes]]],
+) -> None:
+    # rostools.read_bag gave the intact messages and ended as if the file were whole.
+    import rostools
+
+    bad, rec, intact = flipped
+    got = []
+    with pytest.raises(rostools.DataLossError) as caught:
+        for message in rostools.read_bag(bad):
+            got.append(message.time.to_nsec())
+    assert got == [t for t, _ in intact]
+    assert said(rec, COUNT - len(intact)) in str(caught.value)
+    assert caught.value.exit_code == DATA_LOSS

@@ -284,9 +284,19 @@ def _missing(got: list[float], everything: list[float]) -> int:
     return len(set(inside) - set(got))
 
 
+def _started(pub: subprocess.Popen[bytes]) -> None:
+    """Until ``pub_rate`` says its clock started (both recorders linked)."""
+    assert pub.stdout is not None
+    for line in pub.stdout:
+        if line.strip() == b"started":
+            return
+    raise RuntimeError("pub_rate ended before it started publishing")
+
+
 def bench_snapshot_four_writes() -> list[Result]:
     """70 MB/s of images, --size 40, four overlapping triggers: messages lost, peak memory."""
     topic = FOUR_TOPIC + "0"
+    window = FOUR_BEFORE + FOUR_AFTER
     run = 8.0 + FOUR_FILES * 0.5 + FOUR_AFTER
     images = [cpp_peer("pub_rate"), topic, "sensor_msgs/Image", str(IMAGE), str(FOUR_RATE),
               str(run), "--wait-subscribers", "2", "--linger", "2"]  # fmt: skip
@@ -303,7 +313,8 @@ def bench_snapshot_four_writes() -> list[Result]:
             try:
                 _wait_subscribed(uri, procs, FOUR_TOPIC, 1)
                 idle_mb = status_kb(procs["snapshot"].pid) / 1024
-                time.sleep(4.0)  # the publisher's clock starts once both are linked; fill up
+                _started(pub)
+                time.sleep(2.0)  # the buffer fills (--size 40 at 70 MB/s: 0.6 s)
                 triggers = []
                 for i in range(FOUR_FILES):
                     triggers.append(subprocess.Popen(
@@ -324,6 +335,9 @@ def bench_snapshot_four_writes() -> list[Result]:
     if len(summaries) != FOUR_FILES:
         errors = [err.decode()[-300:] for _, err in answers]
         raise RuntimeError(f"bag trigger gave no summary: {errors}")
+    short = [s["name"] for s in summaries if int(s["messages"]) < 0.9 * FOUR_RATE * window]
+    if short:
+        raise RuntimeError(f"files short of their window, lost uncounted: {short}")
     lost = sum(int(s.get("lost", s["drops"])) for s in summaries)  # an older recorder: drops only
     everything = _stamps(BUILD / "peer.bag")
     gaps, windows = 0, []

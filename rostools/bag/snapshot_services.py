@@ -8,7 +8,8 @@
 - ``~pause``, ``~resume`` (std_srvs/Trigger);
 - ``~stop`` (std_srvs/Trigger): ends every file written until stopped (``--continue``);
 - ``~written`` (std_msgs/String): one JSON object per file once complete or failed:
-  ``name``, ``messages``, ``bytes``, ``start``, ``end``, ``duration``, ``drops``, ``error``.
+  ``name``, ``messages``, ``bytes``, ``start``, ``end``, ``duration``, ``window_ns``,
+  ``seconds``, ``lost`` (``lost_exact``, ``evicted``, ``drops``), ``error``.
 """
 
 from __future__ import annotations

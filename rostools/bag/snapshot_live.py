@@ -71,8 +71,9 @@ class LiveQueue:
 
     def wanted(self, topic: str) -> bool:
         """Whether some live file wants messages of ``topic`` (cheap: a few files at most)."""
-        return any(r.end_at is None and (r.topics is None or topic in r.topics)
-                   for r in self.readers)  # fmt: skip
+        with self.cond:  # a file's thread may be closing its reader
+            return any(r.end_at is None and (r.topics is None or topic in r.topics)
+                       for r in self.readers)  # fmt: skip
 
     def push(self, conn: ConnInfo, t_ns: int, frames: list[Frame]) -> None:
         """Messages received at ``t_ns`` (event loop); past ``limit``, the oldest go."""

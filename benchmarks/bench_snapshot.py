@@ -14,6 +14,14 @@ the complete file is reported beside what this machine writes into its page cach
 small topic goes on all the while: what the snapshot's buffer and ``bag record``'s file hold
 of it, against what was published, is what each lost live (goal 0).
 
+``snapshot_four_writes``: a roscpp ``pub_rate`` floods 1 MB images at 70 Hz (70 MB/s) into
+``bag snapshot --size 40`` and, beside it, the real ``rosbag record``. Four ``bag trigger
+--before 0.3 --after 3`` start 0.5 s apart, so four files are written at once. Reported: the
+messages of the four windows lost (goal 0; the recorder's exact count, cross-checked against
+the images rosbag record got, by their stamps), beside what ``rosbag record`` lost of the same
+flood; and the snapshot's peak RSS against the README's bound: idle + --size x (2 + files) +
+4 MB a file.
+
 Every process is stopped through its PID; files go to benchmarks/build/snapshot/ (gitignored)
 and are deleted once counted.
 """
@@ -241,7 +249,131 @@ def bench_snapshot_write_1g() -> list[Result]:
     ]  # fmt: skip
 
 
+FOUR_TOPIC = "/snap_four_"  # the images go on FOUR_TOPIC + "0"
+FOUR_RATE = 70.0
+FOUR_SIZE_MB = 40
+FOUR_FILES = 4
+FOUR_BEFORE, FOUR_AFTER = 0.3, 3.0
+BATCH_MB = 4  # snapshot_live.BATCH_BYTES: what a file's thread holds beyond the queue
+
+
+def snapshot_bound_mb(idle_mb: float, size_mb: float, files: int) -> float:
+    """The README's bound on a snapshot recorder's memory while ``files`` are written.
+
+    The process idle, the buffer (--size), the live queue all files share (--size), the part
+    of the buffer each file has yet to write (--size at most), and each file's batch in hand.
+    """
+    return idle_mb + size_mb * (2 + files) + BATCH_MB * files
+
+
+def _stamps(path: Path) -> list[float]:
+    """The header stamps of the images in ``path``, sorted (each image has its own)."""
+    from rostools.bag.access import open_bag
+
+    with open_bag(path) as reader:
+        stamps = [int.from_bytes(d[4:8], "little") + int.from_bytes(d[8:12], "little") / 1e9
+                  for _, _, d in reader.messages()]  # fmt: skip
+    return sorted(stamps)
+
+
+def _missing(got: list[float], everything: list[float]) -> int:
+    """Images of ``everything`` (rosbag record's) between ``got``'s first and last, not in it."""
+    if not got:
+        return 0
+    inside = [t for t in everything if got[0] <= t <= got[-1]]
+    return len(set(inside) - set(got))
+
+
+def _started(pub: subprocess.Popen[bytes]) -> None:
+    """Until ``pub_rate`` says its clock started (both recorders linked)."""
+    assert pub.stdout is not None
+    for line in pub.stdout:
+        if line.strip() == b"started":
+            return
+    raise RuntimeError("pub_rate ended before it started publishing")
+
+
+def bench_snapshot_four_writes() -> list[Result]:
+    """70 MB/s of images, --size 40, four overlapping triggers: messages lost, peak memory."""
+    topic = FOUR_TOPIC + "0"
+    window = FOUR_BEFORE + FOUR_AFTER
+    run = 8.0 + FOUR_FILES * 0.5 + FOUR_AFTER
+    images = [cpp_peer("pub_rate"), topic, "sensor_msgs/Image", str(IMAGE), str(FOUR_RATE),
+              str(run), "--wait-subscribers", "2", "--linger", "2"]  # fmt: skip
+    recorders = {
+        "snapshot": [*rostools_cmd(), "bag", "snapshot", topic, "-F", "json", "-L", "0",
+                     "--size", str(FOUR_SIZE_MB), "-d", "600", "__name:=bench_snap"],
+        "rosbag": ["rosbag", "record", topic, "-O", "peer.bag"],
+    }  # fmt: skip
+    with master() as uri:
+        env = ros_env(uri)
+        procs, samplers = _start_all(env, recorders)
+        try:
+            pub = start(images, env, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+            try:
+                _wait_subscribed(uri, procs, FOUR_TOPIC, 1)
+                idle_mb = status_kb(procs["snapshot"].pid) / 1024
+                _started(pub)
+                time.sleep(2.0)  # the buffer fills (--size 40 at 70 MB/s: 0.6 s)
+                triggers = []
+                for i in range(FOUR_FILES):
+                    triggers.append(subprocess.Popen(
+                        [*rostools_cmd(), "bag", "trigger", "/bench_snap", "-F", "json", "-O",
+                         f"four{i}.bag", "--before", str(FOUR_BEFORE), "--after", str(FOUR_AFTER)],
+                        env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, cwd=BUILD,
+                    ))  # fmt: skip
+                    time.sleep(0.5)
+                answers = [t.communicate(timeout=300) for t in triggers]
+                codes = [t.returncode for t in triggers]
+                pub_out, _ = pub.communicate(timeout=run + 300)
+            finally:
+                stop(pub)
+        finally:
+            peaks = _stop_all(procs, samplers)
+    published = int(_truth(pub_out)["published"])
+    summaries = [json.loads(out) for out, _ in answers if out.strip()]
+    if len(summaries) != FOUR_FILES:
+        errors = [err.decode()[-300:] for _, err in answers]
+        raise RuntimeError(f"bag trigger gave no summary: {errors}")
+    got = [int(s["messages"]) + int(s.get("lost", s["drops"])) for s in summaries]
+    if min(got) < 0.9 * FOUR_RATE * window:  # the flood had not begun, or lost uncounted
+        raise RuntimeError(f"files short of their window: {summaries}")
+    lost = sum(int(s.get("lost", s["drops"])) for s in summaries)  # an older recorder: drops only
+    everything = _stamps(BUILD / "peer.bag")
+    gaps, windows = 0, []
+    for i, summary in enumerate(summaries):
+        got = _stamps(BUILD / f"four{i}.bag")
+        gaps += _missing(got, everything)
+        evicted = summary.get("evicted", "?")
+        windows.append(f"{len(got)} ({evicted} evicted, {summary['drops']} dropped)")
+        (BUILD / f"four{i}.bag").unlink()
+    peer_lost = published - _count(BUILD / "peer.bag", topic)
+    bound = snapshot_bound_mb(idle_mb, FOUR_SIZE_MB, FOUR_FILES)
+    peak = peaks["snapshot"] / 1024
+    setup = (
+        f"1 MB images at {FOUR_RATE:g} Hz from roscpp pub_rate, {published} published over "
+        f"{run:g} s; bag snapshot --size {FOUR_SIZE_MB}; {FOUR_FILES} bag trigger --before "
+        f"{FOUR_BEFORE:g} --after {FOUR_AFTER:g}, 0.5 s apart (exit codes {codes})"
+    )
+    return [
+        Result(
+            "snapshot: messages lost, four overlapping writes at 70 MB/s", "msgs", lost,
+            peer_lost, "0", lost == 0 and gaps == 0,
+            f"{setup}; messages per file: {', '.join(windows)}; images rosbag record has between "
+            f"a file's first and last that the file lacks: {gaps}; 'ROS 1' is what rosbag "
+            "record lost of the whole flood, in the same run",
+        ),
+        Result(
+            f"snapshot peak RSS, four writes at 70 MB/s, --size {FOUR_SIZE_MB}", "MB", peak,
+            peaks["rosbag"] / 1024, f"<= {bound:.0f} MB (README bound)", peak <= bound,
+            f"{setup}; bound = idle {idle_mb:.0f} MB + {FOUR_SIZE_MB} MB x (2 + "
+            f"{FOUR_FILES}) + {BATCH_MB} MB x {FOUR_FILES}; 'ROS 1' is rosbag record's peak",
+        ),
+    ]  # fmt: skip
+
+
 BENCHMARKS = {
     "snapshot_buffering": bench_snapshot_buffering,
     "snapshot_write_1g": bench_snapshot_write_1g,
+    "snapshot_four_writes": bench_snapshot_four_writes,
 }

@@ -15,7 +15,7 @@ from rostools._api.bags import LiveRecorder
 from rostools.bag.bagfile import write_failure
 from rostools.bag.follow import Follower
 from rostools.bag.snapshot import SnapshotOptions, Snapshotter
-from rostools.bag.snapshot_srv import SnapshotRequest
+from rostools.bag.snapshot_srv import SnapshotRequest, window
 from rostools.errors import UsageError
 from rostools.node.node import LiveNode
 
@@ -103,9 +103,7 @@ class SnapshotRecorder(LiveRecorder):
         snap = self._snap
         if snap is None or not self.running:
             raise UsageError("start() the snapshot recorder before writing")
-        now = snap.clock.now()
-        start = max(now - round(before * 1e9), 1) if before is not None else 0
-        stop = now + round(after * 1e9) if after else 0
+        start, stop = window(snap.clock.now(), before, after)
         job = snap.trigger(SnapshotRequest(name or "", list(topics), start, stop), remote=False)
         while job.is_alive() or job in snap.jobs:
             await asyncio.sleep(0.01)

@@ -10,6 +10,12 @@ Memory is counted as ``bag record -b`` counts it: each message's bytes plus
 ``ENTRY_OVERHEAD`` for what holding it costs, so the limits bound what the process holds.
 The last message of every latched publisher is kept aside, whatever the limits evict, and
 counted too.
+
+What the limits let go is remembered by receive time (``TopicBuffer.gone``, runs of messages
+received at the same time, the last ``GONE_KEPT`` runs of each topic), so a trigger whose
+window starts before the oldest message left is told exactly how many it lost (``lost``): a
+remote trigger reaches the buffer some time after it read its clock, and a small buffer at a
+high rate spans less than that.
 """
 
 from __future__ import annotations
@@ -36,12 +42,22 @@ class ConnInfo:
 
 #: One buffered message: receive time (ns), its connection, its bytes.
 Entry = tuple[int, ConnInfo, Frame]
+#: Runs of evicted messages each topic remembers (a run: messages received at the same time).
+GONE_KEPT = 256
+
+
+@dataclass(frozen=True)
+class Lost:
+    """Messages of a window the limits let go: how many, and whether that is all (or at least)."""
+
+    count: int = 0
+    exact: bool = True
 
 
 class TopicBuffer:
     """The messages of one topic, oldest first; ``bytes`` counts ``ENTRY_OVERHEAD`` each."""
 
-    __slots__ = ("bytes", "entries", "evicted", "skip", "topic")
+    __slots__ = ("bytes", "entries", "evicted", "gone", "skip", "topic")
 
     def __init__(self, topic: str) -> None:
         self.topic = topic
@@ -49,6 +65,30 @@ class TopicBuffer:
         self.skip = 0  # slots in ``order`` whose message this topic has already let go
         self.bytes = 0
         self.evicted = 0  # messages the limits pushed out
+        #: The latest runs of evicted messages: (receive time, how many), oldest first.
+        self.gone: collections.deque[tuple[int, int]] = collections.deque(maxlen=GONE_KEPT)
+
+    def evict(self) -> Entry:
+        """Let go of the oldest message (the limits): counted, and remembered by its time."""
+        entry = self.entries.popleft()
+        self.bytes -= len(entry[2]) + ENTRY_OVERHEAD
+        self.evicted += 1
+        gone = self.gone
+        if gone and gone[-1][0] == entry[0]:
+            gone[-1] = (entry[0], gone[-1][1] + 1)
+        else:
+            gone.append((entry[0], 1))
+        return entry
+
+    def lost_since(self, start_ns: int) -> Lost:
+        """Messages received at ``start_ns`` or later that the limits let go."""
+        count = 0
+        for t_ns, n in reversed(self.gone):
+            if t_ns < start_ns:
+                return Lost(count, True)
+            count += n
+        # every run remembered is in the window: exact if none was forgotten
+        return Lost(count, self.evicted == count)
 
     def span(self) -> float:
         """Seconds between its oldest and newest message."""
@@ -101,12 +141,23 @@ class Held:
         Those older than the window, and those the limits pushed out of the buffer (the
         buffer would have given the others).
         """
-        firsts = {tb.topic: q[0][0] for tb, (q, _) in self.topics.items() if q}
+        firsts = self._firsts()
         kept = []
         for t_ns, conn, data in self.latched:
             if t_ns < start or t_ns < firsts.get(conn.topic, t_ns + 1):
                 kept.append((max(t_ns, start), conn, data))
         return kept
+
+    def resent_since(self, start: int) -> list[str]:
+        """The topics of latched messages in the window that the limits let go (one each).
+
+        ``latched_before`` gives them back, so they are not lost.
+        """
+        firsts = self._firsts()
+        return [c.topic for t, c, _ in self.latched if start <= t < firsts.get(c.topic, t + 1)]
+
+    def _firsts(self) -> dict[str, int]:
+        return {tb.topic: q[0][0] for tb, (q, _) in self.topics.items() if q}
 
 
 class RingBuffer:
@@ -164,11 +215,9 @@ class RingBuffer:
 
     def _trim_topic(self, tb: TopicBuffer) -> None:
         while tb.bytes > self.topic_size and tb.entries:
-            _, _, data = tb.entries.popleft()
-            tb.bytes -= len(data) + ENTRY_OVERHEAD
+            _, _, data = tb.evict()
             self.bytes -= len(data)  # its slot in ``order`` is counted until it goes
             tb.skip += 1
-            tb.evicted += 1
 
     def _pop_oldest(self) -> None:
         tb = self.order.popleft()
@@ -176,10 +225,8 @@ class RingBuffer:
         if tb.skip:
             tb.skip -= 1
             return
-        _, _, data = tb.entries.popleft()
-        tb.bytes -= len(data) + ENTRY_OVERHEAD
+        _, _, data = tb.evict()
         self.bytes -= len(data)
-        tb.evicted += 1
 
     def evict_old(self, now_ns: int) -> None:
         """Let go of the messages older than ``duration_ns`` before ``now_ns``."""
@@ -190,6 +237,16 @@ class RingBuffer:
             if not tb.skip and tb.entries[0][0] >= cutoff:
                 return
             self._pop_oldest()
+
+    def lost_since(self, start_ns: int, topics: set[str] | None = None) -> Lost:
+        """Messages of ``topics`` (None: all) received at ``start_ns`` or later and evicted."""
+        count, exact = 0, True
+        for name, tb in self.topics.items():
+            if topics is None or name in topics:
+                lost = tb.lost_since(start_ns)
+                count += lost.count
+                exact = exact and lost.exact
+        return Lost(count, exact)
 
     def copy(self, topics: set[str] | None = None) -> Held:
         """References to what is held now, of ``topics`` (None: all)."""

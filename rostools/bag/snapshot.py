@@ -4,9 +4,12 @@ A ``Snapshotter`` follows topics as ``bag record`` does (``follow.Follower``) bu
 raw frames in a ``RingBuffer`` bounded by a duration and a size, oldest out first. A trigger
 (a service, a signal, a key: ``trigger``) takes references to the window's part of the
 buffer and hands them to a ``SnapshotJob``, a thread that writes them as ``NAME.active``;
-with a stop time ahead it goes on with the live messages, in the same file. The buffer is
+with a stop time ahead it goes on with the live messages, in the same file, read from the
+queue every file shares (``snapshot_live.LiveQueue``, bounded by ``size``). The buffer is
 not cleared by a write (unless ``clear_on_write``), so triggers close together each get
-their whole window, and at most ``max_writes`` files are written at once.
+their whole window, and at most ``max_writes`` files are written at once. Memory is bounded
+by ``size`` twice (the buffer, the live queue), the part of the buffer each file has yet to
+write, and what each file's thread has in hand (``snapshot_live.BATCH_BYTES``).
 """
 
 from __future__ import annotations
@@ -22,10 +25,11 @@ from pathlib import Path
 from rostools.bag.access import WRITE_COMPRESSIONS, format_for_name
 from rostools.bag.bagfile import active_name
 from rostools.bag.follow import Follower, FramesCallback, LiveOptions, TopicStats
-from rostools.bag.ringbuffer import ConnInfo, RingBuffer
+from rostools.bag.ringbuffer import ConnInfo, Held, Lost, RingBuffer
 from rostools.bag.snapshot_job import FileSpec, SnapshotJob, wait_joined
+from rostools.bag.snapshot_live import LiveQueue
 from rostools.bag.snapshot_services import serve
-from rostools.bag.snapshot_srv import NO_DATA_MESSAGE, SnapshotRequest
+from rostools.bag.snapshot_srv import NO_DATA_MESSAGE, SnapshotRequest, window
 from rostools.errors import RostoolsError, UsageError
 from rostools.node.connection import Frame, InboundConnection
 from rostools.node.node import LiveNode
@@ -87,12 +91,14 @@ class Snapshotter(Follower):
         super().__init__(node, opts)
         self.opts = opts
         self.ring = RingBuffer(round(opts.duration * 1e9), opts.size, opts.topic_size)
+        self.live = LiveQueue(opts.size)
         self.paused = False
         self.closing = False
         self.jobs: list[SnapshotJob] = []
-        #: The last files written (or failed), and how many failed in all.
+        #: The last files written (or failed), how many failed, and how many lost messages.
         self.finished: collections.deque[SnapshotJob] = collections.deque(maxlen=FINISHED_KEPT)
         self.failed = 0
+        self.lossy = 0
         #: Called on the event loop as each file is started and once it is complete.
         self.on_started: Callable[[SnapshotJob], None] | None = None
         self.on_written: Callable[[SnapshotJob], None] | None = None
@@ -116,9 +122,8 @@ class Snapshotter(Follower):
                 stats.type = stats.type or info.header.get("type", "")
             stats.messages += len(frames)
             stats.bytes += sum(map(len, frames))
-            for job in self.jobs:
-                if job.live and job.wants(topic):
-                    job.push(info, t_ns, frames)
+            if self.live.readers and self.live.wanted(topic):
+                self.live.push(info, t_ns, frames)
             if not self.paused and not self.closing:
                 self.ring.add(tb, info, t_ns, frames)
 
@@ -156,8 +161,9 @@ class Snapshotter(Follower):
             raise TriggerError(NO_DATA_MESSAGE)
         spec = self._file_spec(request.filename)
         until = now if stop is None else min(stop, now)
+        lost = _evicted(self.ring, held, request.start_ns, topics)
         job = SnapshotJob(
-            spec, held, start, until, stop, topics, self.opts.size, self._done_threadsafe
+            spec, held, start, until, stop, topics, self.live, self._done_threadsafe, lost
         )
         self.jobs.append(job)
         job.start()
@@ -169,10 +175,8 @@ class Snapshotter(Follower):
 
     def local_request(self) -> SnapshotRequest:
         """The window of a local trigger (a signal, a key, ``~trigger``): ``--before/--after``."""
-        now = self.clock.now()
-        before, after = self.opts.before, self.opts.after
-        start = now - round(before * 1e9) if before is not None else 0
-        return SnapshotRequest(start_ns=max(start, 0), stop_ns=now + round(after * 1e9))
+        start, stop = window(self.clock.now(), self.opts.before, self.opts.after)
+        return SnapshotRequest(start_ns=start, stop_ns=stop)
 
     def _topics(self, requested: list[str]) -> set[str] | None:
         """The buffered topics a request names (None: all), as rosbag_snapshot resolves them."""
@@ -272,7 +276,25 @@ class Snapshotter(Follower):
         self.jobs.remove(job)
         self.finished.append(job)
         self.failed += job.error is not None
+        self.lossy += job.error is None and job.lost > 0
         if self.announce is not None:
             self.announce(job)
         if self.on_written is not None:
             self.on_written(job)
+
+
+def _evicted(ring: RingBuffer, held: Held, start_ns: int, topics: set[str] | None) -> Lost:
+    """What the window starting at ``start_ns`` (0: the oldest held) lost to the limits.
+
+    A latched message let go is no loss: the file starts with its copy.
+    """
+    if not start_ns:
+        return Lost()
+    resent = collections.Counter(held.resent_since(start_ns))
+    count, exact = 0, True
+    for name, tb in ring.topics.items():
+        if topics is None or name in topics:
+            lost = tb.lost_since(start_ns)
+            count += max(lost.count - resent[name], 0)
+            exact = exact and lost.exact
+    return Lost(count, exact)

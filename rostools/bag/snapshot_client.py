@@ -53,14 +53,17 @@ async def call(node: LiveNode, service: str, kind: ServiceType, request: bytes) 
 async def request_snapshot(
     node: LiveNode,
     target: str | None,
-    request: SnapshotRequest,
+    request: Callable[[], SnapshotRequest],
     stop: asyncio.Event | None = None,
     on_named: Callable[[str], None] | None = None,
 ) -> dict[str, Any]:
     """Trigger a snapshot and wait until its file is complete; what it holds (``summary``).
 
-    When ``stop`` is set before then (Ctrl-C on ``--continue``), the recorder is asked to end
-    its open-ended files, and the wait goes on.
+    ``request`` is called just before the service is (its window starts from the time it
+    reads), so finding the recorder and connecting to ``~written`` take nothing from the
+    buffer: a small buffer at a high rate spans less than a second. When ``stop`` is set
+    before the file is complete (Ctrl-C on ``--continue``), the recorder is asked to end its
+    open-ended files, and the wait goes on.
     """
     service, recorder = await find_recorder(node, target)
     written: dict[str, dict[str, Any]] = {}
@@ -78,8 +81,9 @@ async def request_snapshot(
     listening = any(t == topic for t, _ in pubs)
     if listening:
         await _connected(node, topic, on_frames)
-    name = await call(node, service, TRIGGER_SNAPSHOT, request.encode())
-    name = name or request.filename
+    asked = request()
+    name = await call(node, service, TRIGGER_SNAPSHOT, asked.encode())
+    name = name or asked.filename
     if on_named is not None:
         on_named(name)
     if not listening:

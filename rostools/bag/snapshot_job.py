@@ -2,13 +2,15 @@
 
 The trigger hands the job references to what the buffer held (``ringbuffer.Held``), so the
 buffer goes on taking and evicting messages while the job writes; the live part (``--after``,
-``--continue``) reaches the job through ``push`` on the event loop, in a queue of its own.
-The file is ``NAME.active`` until it is complete, and handed to the OS every second.
+``--continue``) it reads from the queue all files share (``snapshot_live.LiveQueue``), from
+the moment of the trigger on. The file is ``NAME.active`` until it is complete, and handed to
+the OS every second. What the window lost is counted exactly: ``evicted``, messages the
+buffer's limits had let go before the trigger reached it; ``drops``, live messages the queue
+let go because the disk did not keep up.
 """
 
 from __future__ import annotations
 
-import collections
 import threading
 import time
 from collections.abc import Callable
@@ -17,9 +19,8 @@ from pathlib import Path
 from typing import Any
 
 from rostools.bag.bagfile import FLUSH_PERIOD, BagFile
-from rostools.bag.recorder import ENTRY_OVERHEAD
-from rostools.bag.ringbuffer import ConnInfo, Entry, Held
-from rostools.node.connection import Frame
+from rostools.bag.ringbuffer import Held, Lost
+from rostools.bag.snapshot_live import LiveQueue
 
 
 @dataclass
@@ -35,9 +36,10 @@ class FileSpec:
 class SnapshotJob(threading.Thread):
     """Writes one snapshot: messages held in [start_ns, until_ns], then live ones to stop_ns.
 
-    ``stop_ns`` None writes live messages until ``end()``; ``max_pending`` bounds the bytes
-    of live messages waiting for the disk (past it the oldest are dropped and counted).
-    ``on_done`` is called from the thread once the file is complete or has failed.
+    ``stop_ns`` None writes live messages until ``end()``; they come from ``live``, the queue
+    every file shares. ``evicted`` is what the window had already lost when the trigger
+    reached the buffer. ``on_done`` is called from the thread once the file is complete or
+    has failed.
     """
 
     def __init__(
@@ -48,8 +50,9 @@ class SnapshotJob(threading.Thread):
         until_ns: int,
         stop_ns: int | None,
         topics: set[str] | None,
-        max_pending: int,
+        live: LiveQueue,
         on_done: Callable[[SnapshotJob], None],
+        evicted: Lost | None = None,
     ) -> None:
         super().__init__(name=f"rostools-snapshot-{spec.path.name}", daemon=True)
         self.spec = spec
@@ -58,13 +61,13 @@ class SnapshotJob(threading.Thread):
         self.until_ns = until_ns
         self.stop_ns = stop_ns
         self.topics = topics
-        self.max_pending = max_pending
+        self.queue = live
         self.on_done = on_done
-        self.cond = threading.Condition()
-        self.pending: collections.deque[Entry] = collections.deque()
-        self.pending_bytes = 0
+        self.evicted = evicted if evicted is not None else Lost()
         self.ended = stop_ns is not None and stop_ns <= until_ns
-        self.drops = 0
+        self.reader = live.open(topics, stop_ns)
+        if self.ended:
+            live.end(self.reader)
         self.file: BagFile | None = None
         self.error: BaseException | None = None
         #: Progress of the buffered part: bytes of it written, of ``total`` (0 until known).
@@ -87,28 +90,20 @@ class SnapshotJob(threading.Thread):
         """Whether messages of ``topic`` belong in the file."""
         return self.topics is None or topic in self.topics
 
-    def push(self, conn: ConnInfo, t_ns: int, frames: list[Frame]) -> None:
-        """Live messages received at ``t_ns`` (event loop); past ``stop_ns`` the file ends."""
-        if self.ended:
-            return
-        if self.stop_ns is not None and t_ns > self.stop_ns:
-            self.end()
-            return
-        with self.cond:
-            for data in frames:
-                self.pending.append((t_ns, conn, data))
-                self.pending_bytes += len(data) + ENTRY_OVERHEAD
-            while self.pending_bytes > self.max_pending and len(self.pending) > 1:
-                _, _, old = self.pending.popleft()
-                self.pending_bytes -= len(old) + ENTRY_OVERHEAD
-                self.drops += 1
-            self.cond.notify()
+    @property
+    def drops(self) -> int:
+        """Live messages of the window let go before they were written (the disk was slow)."""
+        return self.reader.drops
+
+    @property
+    def lost(self) -> int:
+        """Messages of the window not in the file: evicted before the trigger, or dropped."""
+        return self.evicted.count + self.drops
 
     def end(self) -> None:
-        """No more live messages: the file is closed once what waits is written."""
-        with self.cond:
-            self.ended = True
-            self.cond.notify()
+        """No more live messages: the file is closed once those queued are written."""
+        self.ended = True
+        self.queue.end(self.reader)
 
     def run(self) -> None:
         """Write the file, then report."""
@@ -122,6 +117,7 @@ class SnapshotJob(threading.Thread):
             self.error = err
             self.end()
         finally:
+            self.queue.close(self.reader)
             self._result = self._summary()
             self.file = None  # the writer's index goes: the recorder keeps the job a while
             self.on_done(self)
@@ -141,18 +137,18 @@ class SnapshotJob(threading.Thread):
         self.done = self.total
 
     def _write_live(self, out: BagFile) -> None:
+        queue, reader = self.queue, self.reader
         while True:
-            with self.cond:
-                if not self.pending and not self.ended:
-                    self.cond.wait(FLUSH_PERIOD / 2)
-                batch, self.pending = self.pending, collections.deque()
-                self.pending_bytes = 0
-                ended = self.ended
-            while batch:
-                t_ns, conn, data = batch.popleft()
-                out.write(conn, conn.topic, conn.header, t_ns, data)
+            batch, done = queue.take(reader, FLUSH_PERIOD / 2)
+            for t_ns, conn, data in batch:
+                if reader.wants(conn.topic, t_ns):
+                    out.write(conn, conn.topic, conn.header, t_ns, data)
+                elif reader.stop_ns is not None and t_ns > reader.stop_ns:
+                    self.end()  # past the window: what follows is not wanted either
+            del batch
+            queue.written(reader)
             out.flush_if_due()
-            if ended and not self.pending:
+            if done:
                 return
 
     def summary(self) -> dict[str, Any]:
@@ -160,7 +156,10 @@ class SnapshotJob(threading.Thread):
 
         ``start`` and ``end`` are the first and last message's receive times (s);
         ``window_ns`` the range of receive times asked for (its end None: until stopped);
-        ``seconds`` how long the file took, from the trigger until complete.
+        ``seconds`` how long the file took, from the trigger until complete; ``lost`` the
+        messages of the window not in the file: ``evicted`` by the buffer's limits before the
+        trigger reached it (``lost_exact`` false: at least that many), ``drops`` let go
+        while waiting for the disk.
         """
         return self._result if self._result is not None else self._summary()
 
@@ -177,6 +176,9 @@ class SnapshotJob(threading.Thread):
             "duration": (last - first) / 1e9 if first is not None and last is not None else 0.0,
             "window_ns": [self.start_ns, self.stop_ns],
             "seconds": round(time.monotonic() - self.began, 3),
+            "lost": self.lost,
+            "lost_exact": self.evicted.exact,
+            "evicted": self.evicted.count,
             "drops": self.drops,
             "error": str(self.error) if self.error is not None else None,
         }

@@ -8,7 +8,8 @@
 - ``~pause``, ``~resume`` (std_srvs/Trigger);
 - ``~stop`` (std_srvs/Trigger): ends every file written until stopped (``--continue``);
 - ``~written`` (std_msgs/String): one JSON object per file once complete or failed:
-  ``name``, ``messages``, ``bytes``, ``start``, ``end``, ``duration``, ``drops``, ``error``.
+  ``name``, ``messages``, ``bytes``, ``start``, ``end``, ``duration``, ``window_ns``,
+  ``seconds``, ``lost`` (``lost_exact``, ``evicted``, ``drops``), ``error``.
 """
 
 from __future__ import annotations
@@ -62,8 +63,6 @@ async def serve(snap: Served) -> None:
         text = json.dumps(job.summary()).encode()
         written.publish_raw(struct.pack("<I", len(text)) + text)
 
-    snap.announce = announce
-
     def trigger_snapshot(request: bytes) -> bytes:
         try:
             job = snap.trigger(SnapshotRequest.decode(request))
@@ -97,3 +96,5 @@ async def serve(snap: Served) -> None:
     await node.advertise_service("~pause", TRIGGER, lambda _: pausing(True))
     await node.advertise_service("~resume", TRIGGER, lambda _: pausing(False))
     await node.advertise_service("~stop", TRIGGER, stop)
+    # last: ``announce`` set is how the API and the tests know every service can be called
+    snap.announce = announce

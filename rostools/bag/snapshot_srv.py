@@ -73,6 +73,21 @@ class SnapshotRequest:
         return cls(filename, topics, start, stop)
 
 
+def window(
+    now_ns: int, before: float | None, after: float, forever: bool = False
+) -> tuple[int, int]:
+    """``(start_ns, stop_ns)`` of a trigger at ``now_ns``: ``before`` s back, ``after`` s on.
+
+    Every trigger works its window out here: ``bag trigger``, ``~trigger``, SIGUSR1, the ``s``
+    key and the API. ``before`` None starts at the oldest message buffered (0); ``after`` 0
+    stops at the trigger (0: "up to now"); ``forever`` writes until stopped.
+    """
+    start = max(now_ns - round(before * 1e9), 1) if before is not None else 0
+    if forever:
+        return start, FOREVER_SECS * 1_000_000_000
+    return start, (now_ns + round(after * 1e9) if after else 0)
+
+
 def encode_answer(success: bool, message: str) -> bytes:
     """The response of ``TriggerSnapshot`` and of ``std_srvs/Trigger`` (the same fields)."""
     return struct.pack("<?", success) + _string(message)

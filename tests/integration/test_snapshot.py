@@ -63,6 +63,39 @@ async def graph(tmp_path: Path) -> AsyncIterator[tuple[Snapshotter, TopicPublish
             await pub_node.close()
 
 
+def test_the_recorder_is_ready_once_every_service_is_registered(tmp_path: Path) -> None:
+    """``announce`` (what ``graph``, and the API's readiness, wait on) comes after the services.
+
+    A master slow to register them (as under load) made ``/snap/pause`` unknown to the test.
+    """
+
+    async def main() -> None:
+        with MasterThread() as master:
+            node = await LiveNode("snap", master.uri).start()
+            registered: list[str] = []
+            register = node.master.register_service
+
+            async def slow(name: str, *args: str) -> None:
+                await asyncio.sleep(0.2)  # a loaded master; readiness must not depend on it
+                await register(name, *args)
+                registered.append(name)
+
+            node.master.register_service = slow  # type: ignore[method-assign,assignment]
+            opts = SnapshotOptions(topics=["/t"], base=tmp_path / "s.bag", min_space=0)
+            snap = Snapshotter(node, opts)
+            stop = asyncio.Event()
+            task = asyncio.ensure_future(snap.run(stop))
+            try:
+                await until(lambda: snap.announce)
+                assert set(registered) >= {"/snap/pause", "/snap/stop", "/trigger_snapshot"}
+            finally:
+                stop.set()
+                await task
+                await node.close()
+
+    asyncio.run(main())
+
+
 def test_services_pause_resume_and_end_an_open_ended_file(tmp_path: Path) -> None:
     async def main() -> None:
         async with graph(tmp_path) as (snap, pub):

@@ -139,3 +139,94 @@ def killed_while_writing(snap: Proc, folder: Path, env: dict[str, str]) -> None:
         hellos = numbers(got, topic)
         assert len(hellos) > RATE, topic  # everything buffered, and a second live at least
         assert hellos == list(range(hellos[0], hellos[0] + len(hellos))), topic  # none lost
+
+
+@needs_cpp
+def test_a_local_trigger_writes_its_before_and_after_in_seconds(
+    any_master: MasterInfo, tmp_path: Path
+) -> None:
+    """SIGUSR1 (as ``s`` and ``~trigger``): ``--before 2 --after 2`` is four seconds of talk."""
+    env = any_master.cli_env
+    snap = start_cli(
+        "bag", "snapshot", *TOPICS, "--before", "2", "--after", "2", "-F", "json",
+        "-O", "local.bag", "__name:=snap", env=env, cwd=tmp_path,
+    )  # fmt: skip
+    peers = [
+        start_ros1_node("talker.py", ["/py", str(RATE)], any_master.ros_env),
+        Proc([str(cppbuild.build("talker")), "/cpp", "--rate", str(RATE), "--name", "cpp"],
+             env=any_master.ros_env),
+    ]  # fmt: skip
+    try:
+        for topic in TOPICS:
+            wait_for(lambda t=topic: linked(any_master.uri, "/snap", t), 30, f"/snap on {topic}")
+        linked_at = int(peers[1].expect(r"^sent hello ", 10).split()[2])
+        peers[1].expect(rf"^sent hello {linked_at + 4 * RATE}$", 20)  # > --before buffered
+        snap.signal(signal.SIGUSR1)
+        record = written(snap, "local.bag")
+        start, stop = record["window_ns"]  # type: ignore[misc]
+        assert stop - start == 4 * NS, record  # seconds, both sides of the trigger
+        got = messages(tmp_path / "local.bag")
+        for topic in TOPICS:
+            hellos = numbers(got, topic)
+            assert abs(len(hellos) - 4 * RATE) <= 0.2 * 4 * RATE, (topic, len(hellos))
+            assert all(start <= t <= stop for top, t, _ in got if top == topic)
+        assert record["lost"] == 0, record
+    finally:
+        snap.stop()
+        for peer in peers:
+            peer.stop()
+
+
+def test_a_window_older_than_the_buffer_says_how_many_it_lost(
+    any_master: MasterInfo, tmp_path: Path
+) -> None:
+    """rospy 1 MB images into a 3 MB buffer: ``--before 600`` lost what the size evicted.
+
+    Each loss is counted exactly, in bag trigger's JSON and text and its exit 6, and in the
+    recorder's line and exit 6; the latched message the size evicted is no loss: it is written.
+    """
+    env = any_master.cli_env
+    snap = start_cli(
+        "bag", "snapshot", "/image", "/latched", "--size", "3", "-F", "json", "__name:=snap",
+        env=env, cwd=tmp_path,
+    )  # fmt: skip
+    latcher = start_ros1_node(
+        "talker.py", ["/latched", "10", "1", "1", "__name:=latcher"], any_master.ros_env
+    )
+    images = start_ros1_node("image_pub.py", [], any_master.ros_env)
+    try:
+        for topic in ("/image", "/latched"):
+            wait_for(lambda t=topic: linked(any_master.uri, "/snap", t), 30, f"/snap on {topic}")
+        for _ in range(12):  # the buffer holds two: the rest go, and the latched one
+            images.expect(r"^sent ", 20)
+        images.stop()
+        wait_for(lambda: not linked(any_master.uri, "/snap", "/image"), 20, "the images' end")
+        done = run_cli(
+            "bag", "trigger", "/snap", "-O", "old.bag", "--before", "600", "-F", "json",
+            env=env, timeout=60,
+        )  # fmt: skip
+        assert done.returncode == 6, done.stderr
+        summary = json.loads(done.stdout)
+        kept = messages(tmp_path / "old.bag")
+        assert [d[4:] for t, _, d in kept if t == "/latched"] == [b"hello 0"]
+        text = run_cli(
+            "bag", "trigger", "/snap", "-O", "old2.bag", "--before", "600", env=env, timeout=60
+        )
+        assert text.returncode == 6 and text.stdout.strip() == "old2.bag", text.stderr
+        snap.signal(signal.SIGINT)
+        assert snap.popen.wait(30) == 6
+        stopped = json.loads(snap.expect(r'"event": ?"stopped"', 10))
+        image_topic = stopped["topics"]["/image"]
+        received = image_topic["received"]
+        in_file = len([m for m in kept if m[0] == "/image"])
+        assert received - in_file >= 1  # (images sent before the link never came)
+        assert summary["evicted"] == received - in_file == summary["lost"]
+        assert summary["lost_exact"] is True and summary["drops"] == 0
+        line = f"old2.bag: {summary['lost']} messages of the window LOST ({summary['lost']} let go"
+        assert line in text.stderr, text.stderr
+        err = snap.output()[1]
+        assert f"2 snapshots not written whole: old.bag ({summary['lost']} lost)" in err, err
+    finally:
+        snap.stop()
+        images.stop()
+        latcher.stop()

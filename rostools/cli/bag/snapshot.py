@@ -25,6 +25,7 @@ from rostools.errors import DataLossError, RostoolsError, UsageError, one_line
 
 if TYPE_CHECKING:
     import asyncio
+    from collections.abc import Callable
 
     from rostools.bag.snapshot import SnapshotOptions, Snapshotter
     from rostools.bag.snapshot_job import SnapshotJob
@@ -49,7 +50,8 @@ def snapshot(
 
     Triggers: the trigger_snapshot service (rosbag_snapshot's; 'rostools bag trigger'),
     ~trigger (std_srvs/Trigger), SIGUSR1, and the s key. ~pause and ~resume (and the p and r
-    keys) stop and restart buffering. Exit 6 if a file could not be written whole.
+    keys) stop and restart buffering. Exit 6 if a file could not be written whole, or lost
+    messages of its window (each file's line says how many).
     """
     opts = snapshot_options(topics or [], choice, buffering, out, receiving)
     check_writable(opts.base)
@@ -62,9 +64,14 @@ def snapshot(
         write(fmt, {"event": "stopped", **data})
     elif not quiet:
         _line(stopped_text(data))
-    if snap.failed:
-        names = ", ".join(one_line(job.path) for job in snap.finished if job.error is not None)
-        raise DataLossError(f"{counted(snap.failed, 'snapshot')} not written whole: {names}")
+    if snap.failed or snap.lossy:
+        bad = [job for job in snap.finished if job.error is not None or job.lost]
+        names = ", ".join(
+            one_line(job.path) + (f" ({job.lost} lost)" if job.error is None else "") for job in bad
+        )
+        raise DataLossError(
+            f"{counted(snap.failed + snap.lossy, 'snapshot')} not written whole: {names}"
+        )
 
 
 def snapshot_options(
@@ -211,7 +218,7 @@ def trigger(
     """Ask a snapshot recorder for a file; print its name once it is complete.
 
     The recorder is 'rostools bag snapshot' or rosbag_snapshot. With --format json: the file's
-    name, message count and time span.
+    name, message count, time span and the messages of the window lost. Exit 6 if some were.
     """
     if continue_ and after:
         raise UsageError("--continue writes until stopped; it takes no --after")
@@ -242,22 +249,31 @@ def trigger(
     emit(out, summary, lambda d: one_line(d["name"]))
     if summary.get("error"):
         raise DataLossError(f"{summary['name']}: {summary['error']}")
+    if summary.get("lost"):
+        from rostools.cli.bag.snapview import lost_text
+
+        raise DataLossError(f"{summary['name']}: {lost_text(summary)}")
 
 
 async def _window(
     node: LiveNode, name: str, topics: list[str], spans: tuple[float | None, float], forever: bool
-) -> SnapshotRequest:
-    """The request: the window in ROS time as this node sees it (``/clock`` under sim time)."""
-    from rostools.bag.snapshot_srv import FOREVER_SECS, SnapshotRequest
+) -> Callable[[], SnapshotRequest]:
+    """The request, its window in ROS time as this node sees it (``/clock`` under sim time).
+
+    The clock is started here (under sim time it waits for ``/clock``); the window is read
+    from it when the request is made, just before the call.
+    """
+    from rostools.bag.snapshot_srv import SnapshotRequest, window
     from rostools.node.clock import RosClock
 
     clock = RosClock()
     await clock.start(node)
-    now = clock.now()
-    before, after = spans
-    start = max(now - round(before * 1e9), 1) if before is not None else 0
-    stop = FOREVER_SECS * 1_000_000_000 if forever else (now + round(after * 1e9) if after else 0)
-    return SnapshotRequest(name, topics, start, stop)
+
+    def request() -> SnapshotRequest:
+        start, stop = window(clock.now(), *spans, forever)
+        return SnapshotRequest(name, topics, start, stop)
+
+    return request
 
 
 def _say_continuing(name: str) -> None:

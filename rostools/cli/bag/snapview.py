@@ -23,12 +23,24 @@ KEYS = "keys: s snapshot, p pause, r resume"
 
 
 def written_text(summary: dict[str, Any]) -> str:
-    """``wrote NAME: N messages (SIZE), S s`` for a complete file."""
-    drops = f", {summary['drops']} DROPPED" if summary["drops"] else ""
+    """``wrote NAME: N messages (SIZE), S s`` for a complete file, and what it lost."""
+    lost = summary.get("lost")
     return (
         f"wrote {one_line(summary['name'])}: {summary['messages']} messages "
-        f"({size_text(summary['bytes'])}), {summary['duration']:.1f} s{drops}"
+        f"({size_text(summary['bytes'])}), {summary['duration']:.1f} s"
+        + (f", {lost_text(summary)}" if lost else "")
     )
+
+
+def lost_text(summary: dict[str, Any]) -> str:
+    """``N messages of the window LOST (...)``: where they went, from a file's summary."""
+    why = []
+    if summary.get("evicted"):
+        why.append(f"{summary['evicted']} let go by the buffer's limits before the trigger came")
+    if summary.get("drops"):
+        why.append(f"{summary['drops']} dropped waiting for the disk")
+    least = "" if summary.get("lost_exact", True) else "at least "
+    return f"{least}{summary['lost']} messages of the window LOST ({', '.join(why)})"
 
 
 def stopped_data(snap: Snapshotter) -> dict[str, Any]:

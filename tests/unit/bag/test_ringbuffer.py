@@ -5,7 +5,7 @@ from __future__ import annotations
 import tracemalloc
 
 from rostools.bag.recorder import ENTRY_OVERHEAD
-from rostools.bag.ringbuffer import ConnInfo, RingBuffer
+from rostools.bag.ringbuffer import GONE_KEPT, ConnInfo, Lost, RingBuffer
 
 NS = 1_000_000_000
 A = ConnInfo("/a", {"callerid": "/pa", "type": "std_msgs/String"})
@@ -86,3 +86,50 @@ def test_small_messages_hold_no_more_than_the_limit() -> None:
         tracemalloc.stop()
     assert held < 1.25 * limit, held
     assert tb.evicted > 190_000
+
+
+def test_a_latched_message_the_size_evicts_is_given_back_in_its_window() -> None:
+    """Evicted by --size (not by age) inside the window asked for: still written, not lost."""
+    ring = RingBuffer(duration_ns=100 * NS, size=4 * (8 + ENTRY_OVERHEAD) + 200)
+    ring.add(ring.topic("/tf_static"), STATIC, 5 * NS, [frame("tf")])
+    for i in range(6, 16):
+        ring.add(ring.topic("/a"), A, i * NS, [frame(f"m{i:03}")])
+    assert not ring.topics["/tf_static"].entries and ring.topics["/tf_static"].evicted == 1
+    held = ring.copy()
+    # the window starts before the latched message: it comes back at its own time
+    assert [(t, bytes(d[4:])) for t, _, d in held.latched_before(1 * NS)] == [(5 * NS, b"tf")]
+    assert held.resent_since(1 * NS) == ["/tf_static"]
+    assert ring.topics["/tf_static"].lost_since(1 * NS) == Lost(1, True)
+
+
+def test_the_size_counts_the_latched_copies() -> None:
+    """Big latched messages (maps) and the buffer together stay within --size."""
+    limit = 20_000
+    ring = RingBuffer(duration_ns=100 * NS, size=limit)
+    for i in range(3):  # three latched publishers of 4 kB maps
+        conn = ConnInfo("/map", {"callerid": f"/m{i}", "latching": "1"})
+        ring.add(ring.topic("/map"), conn, i * NS, [bytes(4000)])
+    for i in range(100):
+        ring.add(ring.topic("/a"), A, (3 + i) * NS, [bytes(100)])
+        assert ring.held <= limit, (i, ring.held)
+    assert ring.latched_bytes == 3 * (4000 + ENTRY_OVERHEAD)
+
+
+def test_what_the_limits_evict_is_counted_by_time_exactly() -> None:
+    ring = RingBuffer(duration_ns=100 * NS, size=3 * (8 + ENTRY_OVERHEAD))
+    tb = ring.topic("/a")
+    for i in range(10):  # two messages a read: runs of two at the same time
+        ring.add(tb, A, i * NS, [frame(f"m{i:03}"), frame(f"n{i:03}")])
+    assert tb.evicted == 17
+    assert ring.lost_since(0) == Lost(17, True)
+    assert ring.lost_since(7 * NS) == Lost(3, True)  # m007, n007, m008 (n008 on stays)
+    assert ring.lost_since(4 * NS, {"/b"}) == Lost(0, True)
+
+
+def test_past_what_it_remembers_the_count_is_a_least() -> None:
+    ring = RingBuffer(duration_ns=100 * NS, size=1 * (8 + ENTRY_OVERHEAD))
+    tb = ring.topic("/a")
+    for i in range(GONE_KEPT + 10):
+        ring.add(tb, A, (i + 1) * NS, [frame(f"m{i:03}")])
+    assert ring.lost_since(1 * NS) == Lost(GONE_KEPT, False)
+    assert ring.lost_since(20 * NS) == Lost(GONE_KEPT + 9 - 19, True)

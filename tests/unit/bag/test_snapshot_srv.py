@@ -10,11 +10,13 @@ import pytest
 
 from rostools.bag.snapshot import SnapshotOptions, Snapshotter, TriggerError, check_remote_name
 from rostools.bag.snapshot_srv import (
+    FOREVER_SECS,
     TRIGGER_SNAPSHOT,
     TRIGGER_SNAPSHOT_TEXT,
     SnapshotRequest,
     decode_answer,
     encode_answer,
+    window,
 )
 from rostools.errors import InvalidDataError
 from rostools.msgs.store import PathSource, TypeStore
@@ -35,6 +37,24 @@ def test_requests_and_answers_round_trip() -> None:
     request = SnapshotRequest("crash.bag", ["/a", "/tf"], 1_500_000_000, 2_250_000_001)
     assert SnapshotRequest.decode(request.encode()) == request
     assert decode_answer(encode_answer(True, "crash.bag")) == (True, "crash.bag")
+
+
+NS = 1_000_000_000
+
+
+def test_every_trigger_works_its_window_out_alike(tmp_path: Path) -> None:
+    """``--before`` and ``--after`` are seconds, from the remote ``bag trigger`` or a local one."""
+    now = 1_700_000_000 * NS
+    assert window(now, 20.0, 10.0) == (now - 20 * NS, now + 10 * NS)
+    assert window(now, 0.5, 0.0) == (now - NS // 2, 0)  # 0: up to the trigger
+    assert window(now, None, 2.0) == (0, now + 2 * NS)  # 0: from the oldest buffered
+    assert window(now, None, 0.0, forever=True)[1] == FOREVER_SECS * NS
+    node: Any = SimpleNamespace(resolve=lambda name: name)
+    opts = SnapshotOptions(topics=["/a"], base=tmp_path / "s.bag", before=3.0, after=2.0)
+    snap = Snapshotter(node, opts)  # the local path: a signal, a key, ~trigger
+    snap.clock = SimpleNamespace(now=lambda: now)  # type: ignore[assignment]
+    local = snap.local_request()
+    assert (local.start_ns, local.stop_ns) == (now - 3 * NS, now + 2 * NS)
 
 
 @pytest.mark.parametrize(

@@ -169,8 +169,9 @@ def test_echo_started_on_a_slow_master_prints(
             "getSystemState",
             "service /s did not appear within 1 s",
         ),
+        (["bag", "trigger"], "hasParam", "the snapshot was not complete within 1"),
     ],
-    ids=["echo", "hz", "service call --wait"],
+    ids=["echo", "hz", "service call --wait", "bag trigger"],
 )
 def test_a_slow_master_does_not_make_a_command_overrun_its_timeout(
     args: list[str],

@@ -235,11 +235,14 @@ def trigger(
 
         from rostools.bag.snapshot_client import request_snapshot
 
-        request = await _window(n, output_name_ or "", chosen, spans, continue_)
         say = _say_continuing if continue_ and out is Format.text else None
-        waiting = request_snapshot(n, node, request, stop, say)
-        try:
-            return await asyncio.wait_for(waiting, limit)
+
+        async def trigger() -> dict[str, Any]:
+            request = await _window(n, output_name_ or "", chosen, spans, continue_)
+            return await request_snapshot(n, node, request, stop, say)
+
+        try:  # every wait is within --timeout: the master's answers too
+            return await asyncio.wait_for(trigger(), limit)
         except asyncio.TimeoutError:
             from rostools.errors import TimeoutExpired
 

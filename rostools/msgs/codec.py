@@ -48,8 +48,24 @@ class EncodeError(InvalidDataError):
 DECODE_ERRORS = (struct.error, IndexError, ValueError, OverflowError, MemoryError)
 
 
+#: What the bytes were, for the errors a generated decoder can raise: Python's own texts
+#: ("unpack_from requires a buffer of at least 1 bytes") reached peers and users.
+SHORT = "message is shorter than its type says"
+
+
 def _short() -> None:
-    raise DecodeError("message is shorter than its type says")
+    raise DecodeError(SHORT)
+
+
+def why_not(err: BaseException) -> str:
+    """What is wrong with bytes a generated decoder raised ``err`` on, in one line of words."""
+    if isinstance(err, DecodeError):
+        return str(err)
+    if isinstance(err, struct.error | IndexError):
+        return SHORT
+    if isinstance(err, OverflowError | MemoryError):
+        return "a length in it is too large"
+    return "its bytes do not fit its type"
 
 
 class _Gen(GeneratedCode):
@@ -511,7 +527,7 @@ class Codec:
         try:
             return self.decoder(name)(data, 0)[0]
         except (DecodeError, *DECODE_ERRORS) as err:
-            raise DecodeError(f"cannot decode {name}: {err}") from err
+            raise DecodeError(f"cannot decode {name}: {why_not(err)}") from err
 
     def serialize(self, msg: Message) -> bytes:
         """Encode a message of a class from this codec."""

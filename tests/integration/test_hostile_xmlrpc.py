@@ -88,6 +88,45 @@ def test_a_body_that_is_no_call_is_a_fault(server_port: int, body: bytes, expect
     assert (fault.faultCode, fault.faultString) == (1, expected)
 
 
+def _call(value: str) -> bytes:
+    return (
+        "<?xml version='1.0'?><methodCall><methodName>getPid</methodName><params><param>"
+        f"<value>{value}</value></param></params></methodCall>"
+    ).encode()
+
+
+@pytest.mark.parametrize(
+    ("body", "expected"),
+    [
+        (_call("<int>abc</int>"), "<class 'ValueError'>:not a valid <int>: line 1, column 94"),
+        (
+            _call("<double>x</double>"),
+            "<class 'ValueError'>:not a valid <double>: line 1, column 95",
+        ),
+        (
+            _call("<base64>abc</base64>"),
+            "<class 'binascii.Error'>:not a valid <base64>: line 1, column 97",
+        ),
+        (
+            _call("<struct><member><value><int>1</int></value></member></struct>"),
+            "<class 'IndexError'>:not a valid <struct>: line 1, column 138",
+        ),
+        (b"<foo/>", "<class 'xmlrpc.client.ResponseError'>:the body is no complete XML-RPC call"),
+    ],
+    ids=["int", "double", "base64", "struct-without-name", "no-call"],
+)
+def test_a_value_that_does_not_read_is_named_with_its_place(
+    server_port: int, body: bytes, expected: str
+) -> None:
+    # the defect: Python's words, as rosmaster's server gives them too ("invalid literal for
+    # int() with base 10: 'abc'", "Incorrect padding", "list index out of range",
+    # "ResponseError()"): what was wrong, and where, was left to guess
+    status, answer = post(server_port, body)
+    assert status == b"HTTP/1.1 200 OK"
+    fault = fault_of(answer)
+    assert (fault.faultCode, fault.faultString) == (1, expected)
+
+
 def test_two_content_lengths_are_refused_at_once() -> None:
     # the defect: the last one won, and the connection was held for 30 s waiting for more
     with MasterThread() as master:

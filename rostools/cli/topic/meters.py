@@ -231,7 +231,7 @@ def _filter(
     if not expr:
         return None
     from rostools.msgs import learnt
-    from rostools.msgs.codec import DECODE_ERRORS, DecodeError
+    from rostools.msgs.codec import DECODE_ERRORS, DecodeError, why_not
     from rostools.msgs.expr import compile_expression
     from rostools.msgs.store import TypeStore
 
@@ -247,7 +247,7 @@ def _filter(
             try:
                 msg = decode(data, 0)[0]
             except (DecodeError, *DECODE_ERRORS) as err:
-                why = f"a message on {topic} does not decode as {kind}: {err}"
+                why = f"a message on {topic} does not decode as {kind}: {why_not(err)}"
                 skip(DecodeError(why), conn, data)
                 continue
             if wanted(topic, msg):

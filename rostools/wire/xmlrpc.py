@@ -84,10 +84,13 @@ class HttpParser:
     def next_message(self) -> HttpMessage | None:
         """The next complete message, or None until more bytes arrive."""
         end = self.buffer.find(b"\r\n\r\n")
-        if end < 0:
-            if len(self.buffer) > MAX_HEADERS:
-                raise HttpError(431, "Request Header Fields Too Large")
+        if end < 0 and len(self.buffer) <= MAX_HEADERS:
             return None
+        if end < 0 or end > MAX_HEADERS:  # however many reads it came in
+            eol = self.buffer.find(b"\r\n", 0, MAX_HEADERS + 2)
+            if eol < 0 or eol > MAX_HEADERS:  # rosmaster's words for each
+                raise HttpError(414, "Request-URI Too Long")
+            raise HttpError(431, "Request Header Fields Too Large")
         head = self.buffer[:end].decode("latin-1")
         lines = head.split("\r\n")
         headers: dict[str, str] = {}

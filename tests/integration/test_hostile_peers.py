@@ -245,9 +245,11 @@ def _service_answer(node_uri: str, service: str, request: bytes) -> tuple[int, b
     from rostools.wire.tcpros import service_request_header
 
     master_uri = xmlrpc.client.ServerProxy(node_uri).getMasterUri("/raw")[2]
-    host, port = xmlrpc.client.ServerProxy(master_uri).lookupService("/raw", service)[2][
-        len("rosrpc://") :
-    ].split(":")
+    host, port = (
+        xmlrpc.client.ServerProxy(master_uri)
+        .lookupService("/raw", service)[2][len("rosrpc://") :]
+        .split(":")
+    )
     with socket.create_connection((host, int(port)), timeout=10) as sock:
         sock.sendall(service_request_header("/raw", service, "*") + frame(request))
         (length,) = struct.unpack("<I", sock.recv(4, socket.MSG_WAITALL))

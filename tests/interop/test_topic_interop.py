@@ -262,3 +262,23 @@ def test_pub_of_a_type_of_100000_fields_costs_in_proportion(
     finally:
         for proc in (big, small, listener):
             proc.stop()
+
+
+def test_hz_and_bw_follow_a_remapped_topic(any_master: MasterInfo) -> None:
+    """``topic hz foo foo:=/chatter``, as a ROS 1 script would call rostopic hz: an internal
+    error (a KeyError: the meter was kept under /foo, the frames came for /chatter)."""
+    talker = start_ros1_node("talker.py", ["/chatter", "20"], any_master.ros_env)
+    env = any_master.cli_env
+    try:
+        wait_for(lambda: "/chatter" in run_cli("topic", "list", env=env).stdout, 20, "talker")
+        for verb, key in (("hz", "rate"), ("bw", "bytes_per_s")):
+            out = run_cli(
+                "topic", verb, "foo", "foo:=/chatter", "--timeout", "3", "-F", "json",
+                env=env, timeout=30,
+            )  # fmt: skip
+            assert out.returncode == 0, out.stderr
+            rows = [json.loads(line) for line in out.stdout.splitlines()]
+            assert rows and rows[-1]["topic"] == "/foo" and rows[-1][key] > 0, out.stdout
+            assert "subscribed to [/chatter]" in out.stderr
+    finally:
+        talker.stop()

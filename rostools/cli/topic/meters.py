@@ -122,8 +122,10 @@ class Meter:
             if ref.field:
                 raise UsageError(f"{topic}: field paths do not apply here; give the topic itself")
 
+            # the sink's key is the topic as given: hz keeps a meter per argument, and
+            # ``hz foo foo:=/chatter`` subscribes to /chatter (a KeyError before)
             def on_frames(
-                frames: list[Frame], conn: InboundConnection, now: float, t: str = ref.topic
+                frames: list[Frame], conn: InboundConnection, now: float, t: str = topic
             ) -> None:
                 if self.clock.sim:
                     if not self.clock.valid:

@@ -63,6 +63,9 @@ class RecordOptions(LiveOptions):
     limit: int | None = None
     buffer_bytes: int = 256 * 1024 * 1024  # 0: unlimited
     publish: bool = False  # announce each file on begin_write
+    #: The name for a file opened at a wall-clock time, when the name holds the date (``-o``,
+    #: or no name): each split after the first is named by its own start, as rosbag names it.
+    dated: Callable[[float], Path] | None = None
 
     def check(self) -> None:
         """Raise ``UsageError`` for combinations rosbag record refuses."""
@@ -100,7 +103,8 @@ class _Writer(threading.Thread):
 
     def _open_file(self, t_ns: int) -> BagFile:
         opts = self.rec.opts
-        path = file_name(opts.base, opts.split, self.index)
+        base = opts.base if opts.dated is None or not self.index else opts.dated(time.time())
+        path = file_name(base, opts.split, self.index)
         self.file = BagFile(path, opts.format, opts.compression, opts.chunk_size)
         self.file_start = t_ns
         self.rec.current_file = self.file.active

@@ -8,6 +8,7 @@ subscribers receive what ``bag play`` sends, latched topics included.
 
 from __future__ import annotations
 
+import itertools
 import re
 import signal
 import subprocess
@@ -346,3 +347,53 @@ def test_play_waits_for_the_subscribers_the_master_listed(
         assert report["received"] == 300, report
     finally:
         counter.stop()
+
+
+def _split_files(folder: Path, prefix: str) -> list[tuple[int, float, Path]]:
+    """The closed split files ``PREFIX_DATE_N.bag`` in ``folder``: (N, the date, the path)."""
+    import time
+
+    found = []
+    for path in folder.glob(f"{prefix}_*.bag"):
+        match = re.fullmatch(rf"{prefix}_(\d{{4}}(?:-\d\d){{5}})_(\d+)\.bag", path.name)
+        assert match, path.name
+        stamp = time.mktime(time.strptime(match[1], "%Y-%m-%d-%H-%M-%S"))
+        found.append((int(match[2]), stamp, path))
+    return sorted(found)
+
+
+def test_each_split_is_named_by_its_own_start_as_rosbag_names_it(
+    rostools_master: str, cli_env: dict[str, str], tmp_path: Path
+) -> None:
+    """``bag record --split -o PREFIX`` named every file with the recording's start; rosbag
+    names each by its own start (``PREFIX_<date-time>_N.bag``), and scripts pick or delete
+    splits by that time. Both run here on one rospy talker, and are held to the same rule."""
+    from tests.support.procs import ros_env
+
+    env = ros_env(rostools_master, tmp_path / "ros_home")
+    ours, theirs = tmp_path / "ours", tmp_path / "theirs"
+    ours.mkdir()
+    theirs.mkdir()
+    split = ["--split", "--duration", "2", "-o"]
+    talker = start_ros1_node("talker.py", ["/chatter", "20"], env)
+    recorders = [
+        start_cli("bag", "record", *split, "ours", "/chatter", env=cli_env, cwd=ours),
+        Proc(["rosbag", "record", *split, "theirs", "/chatter"], env=env, cwd=theirs),
+    ]
+    try:
+        for folder in (ours, theirs):  # three closed files, the fourth begun
+            wait_for(lambda f=folder: any(f.glob("*_3.bag*")), 60, f"a fourth split in {folder}")
+    finally:
+        for proc in recorders:
+            proc.stop()
+        talker.stop()
+    for folder, prefix in ((ours, "ours"), (theirs, "theirs")):
+        files = _split_files(folder, prefix)
+        assert [n for n, _, _ in files][:4] == [0, 1, 2, 3], files
+        for (_, before, _), (n, stamp, path) in itertools.pairwise(files[:4]):
+            # a file opens when a message comes 2 s after its predecessor's first: its date
+            # (whole seconds) is at least one second later, and not before its first message
+            assert stamp >= before + 1, (prefix, files)
+            with open_bag(path) as reader:
+                first = next(iter(reader.messages(["/chatter"])))[1] / 1e9
+            assert stamp >= first - 1, (prefix, n, stamp, first)

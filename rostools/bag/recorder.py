@@ -238,8 +238,8 @@ class Recorder(Follower):
             t_ns = self.clock.now()
             header = conn.header or {}
             key = (conn.id, topic)
-            if not stats.type:
-                stats.type = header.get("type", "")
+            if not stats.messages:  # what is recorded, over the master's word (it may be stale)
+                stats.type = header.get("type") or stats.type
             if self.closing:
                 return
             limit = self.opts.limit

@@ -9,6 +9,7 @@ subscribers receive what ``bag play`` sends, latched topics included.
 from __future__ import annotations
 
 import itertools
+import json
 import re
 import signal
 import subprocess
@@ -397,3 +398,33 @@ def test_each_split_is_named_by_its_own_start_as_rosbag_names_it(
             with open_bag(path) as reader:
                 first = next(iter(reader.messages(["/chatter"])))[1] / 1e9
             assert stamp >= first - 1, (prefix, n, stamp, first)
+
+
+def test_the_summary_gives_the_type_recorded_not_the_masters(
+    any_master: MasterInfo, tmp_path: Path
+) -> None:
+    """A rospy subscriber made the master list /x as std_msgs/String before anyone published;
+    the type a topic without messages shows is the master's, and it stayed once std_msgs/Int32
+    messages (real rostopic pub) came and were recorded: the summary said String."""
+    listener = start_ros1_node("listener.py", ["/x", "std_msgs/String"], any_master.ros_env)
+    listener.expect("^ready", 30)
+    rec = start_cli(
+        "bag", "record", "-O", "x.bag", "/x", "-F", "json", env=any_master.cli_env, cwd=tmp_path
+    )
+    pub: Proc | None = None
+    try:
+        rec.expect("Subscribing to /x", 30, stderr=True)
+        pub = Proc(
+            ["rostopic", "pub", "-r", "20", "/x", "std_msgs/Int32", "7"], env=any_master.ros_env
+        )
+        record_until(rec, [pub], tmp_path / "x.bag", {"/x": 3})
+        out, err = rec.output()
+    finally:
+        rec.stop()
+        listener.stop()
+        if pub is not None:
+            pub.stop()
+    with open_bag(tmp_path / "x.bag") as reader:
+        assert [c.type for c in reader.connections] == ["std_msgs/Int32"]
+    summary = json.loads(out)
+    assert summary["topics"]["/x"]["type"] == "std_msgs/Int32", (summary, err)

@@ -222,6 +222,24 @@ def test_a_bad_file_among_several_does_not_stop_the_run(tmp_path: Path, verb: st
     assert run_cli("bag", verb, "-q", "a.bag", cwd=tmp_path / "ours").stderr == ""
 
 
+@pytest.mark.parametrize("verb", ["compress", "decompress", "reindex"])
+def test_quiet_prints_nothing_as_rosbags(tmp_path: Path, verb: str) -> None:
+    """``rosbag compress -q x.bag`` prints nothing and does it; ours printed "wrote 60 of 60
+    messages to x.bag (bag, bz2)" all the same."""
+    for folder, run in (
+        ("ros1", lambda *a: rosbag(*a, cwd=tmp_path / "ros1")),
+        ("ours", lambda *a: run_cli("bag", *a, cwd=tmp_path / "ours")),
+    ):
+        (tmp_path / folder).mkdir()
+        write_sample(tmp_path / folder / "x.bag", 60)
+        if verb == "decompress":  # something to decompress, first
+            assert run("compress", "-q", "x.bag").returncode == 0
+            (tmp_path / folder / "x.orig.bag").unlink()
+        done = run(verb, "-q", "x.bag")
+        assert (done.returncode, done.stdout, done.stderr) == (0, "", ""), folder
+        assert _files(tmp_path / folder) == ["x.bag", "x.orig.bag"]
+
+
 STATUS = re.compile(r"^ \[(RUNNING|DONE   )\]  Bag Time: +[\d.]+   Duration: ([\d.]+) / ([\d.]+)$")
 
 

@@ -8,6 +8,7 @@ import sys
 from pathlib import Path
 
 import rostools
+import rostools.version
 
 ROOT = Path(__file__).resolve().parents[2]
 PYPROJECT = (ROOT / "pyproject.toml").read_text()
@@ -25,7 +26,9 @@ def _table(name: str) -> str:
 def test_the_version_has_one_source() -> None:
     project = _table("project")
     assert 'dynamic = ["version"]' in project and not re.search(r"^version\s*=", project, re.M)
-    assert 'version = { attr = "rostools.__version__" }' in _table("tool.setuptools.dynamic")
+    dynamic = _table("tool.setuptools.dynamic")
+    assert 'version = { attr = "rostools.version.__version__" }' in dynamic
+    assert rostools.__version__ is rostools.version.__version__
 
 
 def test_the_changelog_starts_with_this_version() -> None:

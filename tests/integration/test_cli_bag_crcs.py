@@ -203,3 +203,20 @@ def test_the_api_reads_what_is_intact_then_says_what_it_left_out(
     assert got == [t for t, _ in intact]
     assert said(rec, COUNT - len(intact)) in str(caught.value)
     assert caught.value.exit_code == DATA_LOSS
+
+
+def test_play_checks_crcs_unless_told_not_to(
+    flipped: tuple[Path, int, list[tuple[int, bytes]]],
+    rostools_master: str,
+    cli_env: dict[str, str],
+) -> None:
+    bad, rec, intact = flipped
+    checked = run_cli("bag", "play", str(bad), "-r", "1000", "-F", "json", env=cli_env)
+    assert checked.returncode == DATA_LOSS, checked.stderr
+    assert said(rec, COUNT - len(intact)) in checked.stderr
+    assert json.loads(checked.stdout) == {"published": len(intact)}
+    done = run_cli(
+        "bag", "play", str(bad), "-r", "1000", "--no-crc-check", "-F", "json", env=cli_env
+    )
+    assert done.returncode == 0, done.stderr
+    assert json.loads(done.stdout) == {"published": COUNT}

@@ -15,7 +15,7 @@ from rostools.cli import output
 from rostools.cli.bag.keys import keyboard
 from rostools.cli.bag.options import Playback
 from rostools.cli.bag.shared import check_read
-from rostools.cli.common import FormatOpt, node_session, output_format
+from rostools.cli.common import FormatOpt, NoCrcCheckOpt, node_session, output_format
 from rostools.cli.declare import command
 from rostools.cli.output import Format, render
 from rostools.errors import UsageError, one_line
@@ -71,6 +71,7 @@ def play(
         typer.Option("--bags", help="More bags (rosbag's form after --topics /a /b)."),
     ] = None,
     quiet: Annotated[bool, typer.Option("--quiet", "-q", help="No status line.")] = False,
+    no_crc_check: NoCrcCheckOpt = False,
     fmt: FormatOpt = None,
 ) -> None:
     """Publish the messages of bags at their recorded pace (rosbag play).
@@ -88,7 +89,7 @@ def play(
     out = output_format(ctx, fmt)
     show_status = not quiet and out is Format.text
     with contextlib.ExitStack() as stack:
-        readers = [stack.enter_context(open_bag(p)) for p in paths]
+        readers = [stack.enter_context(open_bag(p, check_crcs=not no_crc_check)) for p in paths]
         for reader in readers:
             require_ros1(reader, "bag play", wanted)
         run = partial(_play, readers, opts, paths if show_status else None)

@@ -119,7 +119,8 @@ class Snapshotter(Follower):
             if info is None:
                 self._forget_closed(topic, conns)
                 info = conns[conn.id] = ConnInfo(topic, conn.header or {})
-                stats.type = stats.type or info.header.get("type", "")
+                # what is buffered, over the master's word (it may be stale), as bag record
+                stats.type = info.header.get("type") or stats.type
             stats.messages += len(frames)
             stats.bytes += sum(map(len, frames))
             if self.live.readers and self.live.wanted(topic):

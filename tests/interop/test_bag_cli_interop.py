@@ -430,6 +430,34 @@ def test_the_summary_gives_the_type_recorded_not_the_masters(
     assert summary["topics"]["/x"]["type"] == "std_msgs/Int32", (summary, err)
 
 
+def test_the_snapshot_summary_gives_the_type_buffered_not_the_masters(
+    any_master: MasterInfo, tmp_path: Path
+) -> None:
+    """As ``bag record``'s: a master that listed /x as String before Int32 came."""
+    listener = start_ros1_node("listener.py", ["/x", "std_msgs/String"], any_master.ros_env)
+    listener.expect("^ready", 30)
+    snap = start_cli(
+        "bag", "snapshot", "/x", "-F", "json", "__name:=snap", env=any_master.cli_env, cwd=tmp_path
+    )
+    pub = Proc(["rostopic", "pub", "-r", "20", "/x", "std_msgs/Int32", "7"], env=any_master.ros_env)
+    try:
+
+        def buffered() -> bool:
+            done = run_cli("bag", "trigger", "/snap", "-F", "json", env=any_master.cli_env)
+            return done.returncode == 0 and json.loads(done.stdout)["messages"] >= 3
+
+        wait_for(buffered, 30, "three messages of /x buffered", 0.5)
+        snap.signal(signal.SIGINT)
+        out, err = snap.output()
+        assert snap.popen.returncode == 0, err
+    finally:
+        snap.stop()
+        listener.stop()
+        pub.stop()
+    summary = json.loads(out.splitlines()[-1])  # after a line for each file written
+    assert summary["topics"]["/x"]["type"] == "std_msgs/Int32", (summary, err)
+
+
 #: The pacing bag: bursts of 15 messages 10 ms apart, 350 ms between bursts, 8 bursts
 #: (3.8 s). Bursts tell a player that keeps each gap from one that only keeps the average
 #: rate: spaced evenly, the messages would be up to 350 ms off their times.

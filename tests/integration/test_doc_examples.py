@@ -44,7 +44,7 @@ from tests.support.procs import (
 #: A command that ends by itself must end within this (the longest, trigger --after 10s).
 FINITE_LIMIT = 120.0
 #: A command that runs until stopped must do what it is for within this.
-READY_LIMIT = 60.0
+READY_LIMIT = 30.0
 ALL = [b for doc in documents(ROOT) for b in blocks(doc) if b.lang in ("console", "sh", "python")]
 RUN = [b for b in ALL if "not run" not in b.markers and "excerpt" not in b.markers]
 
@@ -264,6 +264,7 @@ def run_block(block: Block, graph: Graph, scratch: Path) -> list[str]:
     return [f"{block.where}: {failure}" for failure in runner(block, graph, cwd)]
 
 
+@pytest.mark.timeout(900)  # the blocks side by side: about 30 s here, more under load
 def test_every_example_in_the_docs_runs(graph: Graph, tmp_path: Path) -> None:
     chosen = [b for b in RUN if "xfail" not in b.markers]
     assert len(chosen) >= 20, [b.where for b in chosen]
@@ -273,21 +274,16 @@ def test_every_example_in_the_docs_runs(graph: Graph, tmp_path: Path) -> None:
     assert not failures, "\n\n".join(failures)
 
 
-@pytest.mark.parametrize(
-    "block",
-    [
-        pytest.param(b, id=b.where, marks=pytest.mark.xfail(reason=b.markers["xfail"], strict=True))
-        for b in RUN
-        if "xfail" in b.markers
-    ]
-    or [pytest.param(None, id="none")],
-)
-def test_an_example_marked_xfail_still_fails(
-    block: Block | None, graph: Graph, tmp_path: Path
-) -> None:
-    if block is None:
-        return  # no example is known to fail: nothing to hold to it
-    assert run_block(block, graph, tmp_path) == []
+XFAIL = [b for b in RUN if "xfail" in b.markers]
+if XFAIL:  # an example known to fail, until what its marker names is fixed
+
+    @pytest.mark.parametrize(
+        "block",
+        [pytest.param(b, id=b.where, marks=pytest.mark.xfail(reason=b.markers["xfail"], strict=True))
+         for b in XFAIL],
+    )  # fmt: skip
+    def test_an_example_marked_xfail_still_fails(block: Block, graph: Graph, tmp_path: Path) -> None:
+        assert run_block(block, graph, tmp_path) == []
 
 
 def test_every_excerpt_matches_its_source() -> None:

@@ -80,8 +80,7 @@ class SnapshotRecorder(LiveRecorder):
 
     def start(self) -> SnapshotRecorder:
         """Start buffering (on the API's background loop)."""
-        self._on_api_loop = True
-        return loop.run(self.start_async())
+        return self._start_on_api_loop()
 
     def stop(self) -> None:
         """Stop buffering; files being written are completed first."""

@@ -91,10 +91,8 @@ def _start_snapshot(config: pytest.Config, master_uri: str) -> SnapshotRecorder 
         return None
     from rostools._api.snapshots import SnapshotRecorder
 
-    folder = _snapshot_folder(config)
-    folder.mkdir(parents=True, exist_ok=True)
     return SnapshotRecorder(
-        None, folder, master_uri, duration=seconds, poll_period=SNAPSHOT_POLL
+        None, _snapshot_folder(config), master_uri, duration=seconds, poll_period=SNAPSHOT_POLL
     ).start()
 
 

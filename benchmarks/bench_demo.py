@@ -63,8 +63,12 @@ def _theirs() -> float:
         procs = [start(["roscore", "-p", str(port)], env, **quiet)]
         try:
             _wait_for(lambda: _topic_listed(env, "/rosout"), "roscore")
-            procs.append(start([SYSTEM_PYTHON, str(NODES / "talker.py"), "/chatter", "10"], env))
-            procs.append(start([SYSTEM_PYTHON, str(NODES / "add_two_ints_server.py")], env))
+            procs.append(
+                start([SYSTEM_PYTHON, str(NODES / "talker.py"), "/chatter", "10"], env, **quiet)
+            )
+            procs.append(
+                start([SYSTEM_PYTHON, str(NODES / "add_two_ints_server.py")], env, **quiet)
+            )
             _step(["rosparam", "set", "/demo", "{robot_name: demo_bot, max_speed: 0.5}"], env, tmp)
             _wait_for(lambda: _service_listed(env, "/trigger"), "the service")
             record = start(

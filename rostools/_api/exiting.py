@@ -64,11 +64,6 @@ def forget(node: LiveNode) -> None:
     _open.pop(node, None)
 
 
-def open_nodes() -> list[LiveNode]:
-    """The nodes started and not closed."""
-    return list(_open)
-
-
 def take_sigterm() -> None:
     """On the main thread, once: handle SIGTERM if the program has not chosen what it does."""
     global _sigterm_decided

@@ -135,13 +135,7 @@ class LiveNode:
         if self._watch is not None:
             self._watch.stop()
         self.registrar.close()
-        calls: list[tuple[str, tuple[Any, ...]]] = []
-        for topic in self.publishers:
-            calls.append(("unregisterPublisher", (topic, self.uri)))
-        for topic in self.subscribers:
-            calls.append(("unregisterSubscriber", (topic, self.uri)))
-        for service, server in self.services.items():
-            calls.append(("unregisterService", (service, server.uri)))
+        calls = self.unregister_calls()
         if calls:
             try:
                 await self.master.multicall(calls)
@@ -157,6 +151,17 @@ class LiveNode:
             self._tcpros.close()
         if self._xmlrpc is not None:
             await self._xmlrpc.close()
+
+    def unregister_calls(self) -> list[tuple[str, tuple[Any, ...]]]:
+        """The master calls (method, arguments after the caller id) that undo our registrations."""
+        calls: list[tuple[str, tuple[Any, ...]]] = []
+        for topic in list(self.publishers):
+            calls.append(("unregisterPublisher", (topic, self.uri)))
+        for topic in list(self.subscribers):
+            calls.append(("unregisterSubscriber", (topic, self.uri)))
+        for service, server in list(self.services.items()):
+            calls.append(("unregisterService", (service, server.uri)))
+        return calls
 
     # master calls ---------------------------------------------------------------------
 

@@ -128,7 +128,10 @@ class Registrar:
             results = [no_answer(uri, "master", reg.method, limit) for reg, _ in batch]
         except Exception as err:  # noqa: BLE001 - the whole call failed: each registration did
             results = [err] * len(batch)
-        for (_, answer), result in zip(batch, results, strict=False):
+        if len(results) != len(batch):
+            wrong = f"bad answer from the master at {self.owner.master_uri} to system.multicall"
+            results = [RostoolsError(wrong)] * len(batch)
+        for (_, answer), result in zip(batch, results, strict=True):
             if answer.done():
                 continue
             if isinstance(result, BaseException):

@@ -207,3 +207,22 @@ def test_close_stops_every_try() -> None:
 
     asyncio.run(main())
     assert len(master.limits) == 1
+
+
+def test_a_multicall_answer_short_of_entries_fails_every_registration() -> None:
+    # Each registration awaited an answer of its own: one left without would wait forever.
+    class _Short(_Master):
+        async def multicall(
+            self, calls: list[tuple[str, tuple[Any, ...]]], timeout: float | None = None
+        ) -> list[Any]:
+            return [["uri"]]
+
+    async def main() -> list[Any]:
+        registrar = Registrar(_Owner(_Short([])))  # type: ignore[arg-type]
+        regs = (registrar.register(_reg(n, [])) for n in ("/a", "/b"))
+        return await asyncio.wait_for(asyncio.gather(*regs, return_exceptions=True), 5)
+
+    outcomes = asyncio.run(main())
+    assert [str(o) for o in outcomes] == [
+        "bad answer from the master at http://master:11311/ to system.multicall"
+    ] * 2

@@ -32,6 +32,7 @@ MODULES = [
     "benchmarks.bench_load_busy",
     "benchmarks.bench_snapshot",
     "benchmarks.bench_fixture",
+    "benchmarks.bench_demo",
 ]
 
 

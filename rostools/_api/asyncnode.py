@@ -18,7 +18,7 @@ from collections.abc import AsyncIterator, Awaitable, Callable, Coroutine
 from types import TracebackType
 from typing import Any
 
-from rostools._api import messages
+from rostools._api import exiting, messages
 from rostools._api.messages import Values
 from rostools.errors import (
     NotFoundError,
@@ -286,6 +286,7 @@ class AsyncNode:
         self._clients: dict[str, ServiceClient] = {}
         self.started = False
         self.closed = False
+        self._closing: asyncio.Future[None] | None = None
 
     @property
     def name(self) -> str:
@@ -312,15 +313,28 @@ class AsyncNode:
                     f"cannot open the node's sockets: {err.strerror or err}"
                 ) from err
             self.started = True
+            exiting.track(self.core, self.close)
         return self
 
     async def close(self) -> None:
-        """Unregister everything and close every connection."""
-        if self.started and not self.closed:
+        """Unregister everything and close every connection.
+
+        A close while another is under way (the process's end meets the script's) waits
+        for that one.
+        """
+        if self.started and self._closing is None:
             self.closed = True
+            self._closing = asyncio.ensure_future(self._close())
+        if self._closing is not None:
+            await asyncio.shield(self._closing)
+
+    async def _close(self) -> None:
+        try:
             for client in self._clients.values():
                 client.close()
             await self.core.close()
+        finally:
+            exiting.forget(self.core)
 
     async def __aenter__(self) -> AsyncNode:
         return await self.start()

@@ -10,9 +10,9 @@ import asyncio
 import time
 from collections.abc import Collection, Iterator, Sequence
 from pathlib import Path
-from typing import NamedTuple
+from typing import NamedTuple, TypeVar
 
-from rostools._api import loop, messages
+from rostools._api import exiting, loop, messages
 from rostools._api.asyncnode import default_master_uri
 from rostools.bag.access import format_for_name, open_bag, require_ros1
 from rostools.bag.follow import Follower
@@ -49,6 +49,9 @@ def read_bag(path: str | Path, topics: Collection[str] | None = None) -> Iterato
             yield BagMessage(conn.topic, decode(data), Time.from_nsec(t_ns))
         if reader.damage:
             raise lost_data(f"read {count} messages of {path}", reader.damage)
+
+
+R = TypeVar("R", bound="LiveRecorder")
 
 
 class LiveRecorder(loop.Lifecycle):
@@ -88,6 +91,7 @@ class LiveRecorder(loop.Lifecycle):
             await node.close()
             raise
         self._node, self._stop = node, asyncio.Event()
+        exiting.track(node, self._finish)  # the file is completed at exit too
         self._task = asyncio.get_running_loop().create_task(follower.run(self._stop))
         deadline = time.monotonic() + START_TIMEOUT
         while not self._ready(node):
@@ -107,8 +111,16 @@ class LiveRecorder(loop.Lifecycle):
                 await self._task
         finally:
             if self._node is not None:
-                await self._node.close()
-                self._node = None
+                node, self._node = self._node, None
+                try:
+                    await node.close()
+                finally:
+                    exiting.forget(node)
+
+    def _start_on_api_loop(self: R) -> R:
+        self._on_api_loop = True
+        exiting.take_sigterm()  # here, on the caller's thread: the start runs on the loop's
+        return loop.run(self.start_async())
 
     def _stop_on_api_loop(self) -> None:
         if self._on_api_loop and self._node is not None:
@@ -170,8 +182,7 @@ class Recording(LiveRecorder):
 
     def start(self) -> Recording:
         """Start recording (on the API's background loop)."""
-        self._on_api_loop = True
-        return loop.run(self.start_async())
+        return self._start_on_api_loop()
 
     def stop(self) -> Path:
         """Stop recording and close the bag; its path."""

@@ -14,7 +14,7 @@ from collections.abc import Callable, Iterator
 from types import TracebackType
 from typing import Any
 
-from rostools._api import loop, messages
+from rostools._api import exiting, loop, messages
 from rostools._api.asyncnode import AsyncNode, AsyncPublisher, AsyncSubscription, Callback, log
 from rostools._api.messages import Values
 from rostools.msgs.message import Message
@@ -126,7 +126,8 @@ class Node:
     """A ROS node for scripts: ``with Node("name") as node: node.publish(...)``.
 
     It starts at once, on ``master_uri`` (default: ``ROS_MASTER_URI``); ``close()`` (or the
-    end of the ``with``) unregisters it, and so does the end of the process.
+    end of the ``with``) unregisters it, and so does the end of the process, however it ends
+    (``exiting.py``).
     """
 
     def __init__(
@@ -138,8 +139,8 @@ class Node:
         namespace: str | None = None,
     ) -> None:
         self.aio = AsyncNode(name, master_uri, anonymous=anonymous, namespace=namespace)
+        exiting.take_sigterm()  # here, on the caller's thread: the start runs on the loop's
         loop.run(self.aio.start())
-        loop.at_exit(self.aio.close)
 
     @property
     def name(self) -> str:
@@ -163,7 +164,6 @@ class Node:
 
     def close(self) -> None:
         """Unregister everything and close every connection."""
-        loop.forget_at_exit(self.aio.close)
         if not self.aio.closed:
             loop.run(self.aio.close())
 

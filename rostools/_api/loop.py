@@ -1,20 +1,21 @@
 """One event loop on a daemon thread: where the blocking API runs the async one.
 
 Every blocking call of the API is a coroutine of the async API run here, so there is one
-implementation. The loop starts at the first call and lives as long as the process.
+implementation. The loop starts at the first call and lives as long as the process; its
+blocking work runs on ``workers.Workers``, which serve until the process ends, so the nodes
+can still reach their master as it exits (``exiting.py``).
 """
 
 from __future__ import annotations
 
 import asyncio
-import atexit
 import concurrent.futures
-import contextlib
 import threading
-from collections.abc import Callable, Coroutine
+from collections.abc import Coroutine
 from types import TracebackType
 from typing import Any, TypeVar
 
+from rostools._api.workers import Workers
 from rostools.errors import TimeoutExpired, UsageError
 
 T = TypeVar("T")
@@ -22,10 +23,6 @@ T = TypeVar("T")
 _lock = threading.Lock()
 _loop: asyncio.AbstractEventLoop | None = None
 _thread: threading.Thread | None = None
-#: Called (on the loop) before the interpreter exits: nodes unregister, as rospy's do.
-_at_exit: list[Callable[[], Coroutine[Any, Any, None]]] = []
-#: How long the exit hooks may take in all before the process leaves anyway.
-EXIT_TIMEOUT = 2.0
 
 
 def loop() -> asyncio.AbstractEventLoop:
@@ -38,6 +35,7 @@ def loop() -> asyncio.AbstractEventLoop:
 
             def serve() -> None:
                 new = asyncio.new_event_loop()
+                new.set_default_executor(Workers())
                 made.append(new)
                 ready.set()
                 new.run_forever()
@@ -46,7 +44,6 @@ def loop() -> asyncio.AbstractEventLoop:
             _thread.start()
             ready.wait()
             _loop = made[0]
-            atexit.register(_shutdown)
         return _loop
 
 
@@ -75,29 +72,6 @@ def run(coro: Coroutine[Any, Any, T], timeout: float | None = None) -> T:
     except BaseException:
         future.cancel()  # Ctrl-C in the caller: the work on the loop stops too
         raise
-
-
-def at_exit(hook: Callable[[], Coroutine[Any, Any, None]]) -> None:
-    """Run ``hook()`` on the loop when the interpreter exits."""
-    _at_exit.append(hook)
-
-
-def forget_at_exit(hook: Callable[[], Coroutine[Any, Any, None]]) -> None:
-    """Undo ``at_exit``."""
-    if hook in _at_exit:
-        _at_exit.remove(hook)
-
-
-def _shutdown() -> None:
-    if _loop is None or not _at_exit:
-        return
-
-    async def everything() -> None:
-        await asyncio.gather(*(hook() for hook in list(_at_exit)), return_exceptions=True)
-
-    # leaving anyway: a master forgets a node it cannot reach
-    with contextlib.suppress(Exception):
-        asyncio.run_coroutine_threadsafe(everything(), _loop).result(EXIT_TIMEOUT)
 
 
 S = TypeVar("S", bound="Lifecycle")

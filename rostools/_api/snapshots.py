@@ -16,7 +16,7 @@ from rostools.bag.bagfile import write_failure
 from rostools.bag.follow import Follower
 from rostools.bag.snapshot import SnapshotOptions, Snapshotter
 from rostools.bag.snapshot_srv import SnapshotRequest, window
-from rostools.errors import UsageError
+from rostools.errors import UsageError, cannot_write
 from rostools.node.node import LiveNode
 
 
@@ -70,9 +70,16 @@ class SnapshotRecorder(LiveRecorder):
         )
 
     async def start_async(self) -> SnapshotRecorder:
-        """Subscribe and start buffering, on the running loop."""
+        """Subscribe and start buffering, on the running loop (``folder`` is made if need be)."""
+        self._make_folder()
         await self._start("the snapshot recorder")
         return self
+
+    def _make_folder(self) -> None:
+        try:
+            self.folder.mkdir(parents=True, exist_ok=True)
+        except OSError as err:
+            raise cannot_write(self.folder, err.strerror or str(err)) from err
 
     async def stop_async(self) -> None:
         """Stop buffering (files being written are completed first)."""
@@ -80,8 +87,7 @@ class SnapshotRecorder(LiveRecorder):
 
     def start(self) -> SnapshotRecorder:
         """Start buffering (on the API's background loop)."""
-        self._on_api_loop = True
-        return loop.run(self.start_async())
+        return self._start_on_api_loop()
 
     def stop(self) -> None:
         """Stop buffering; files being written are completed first."""
@@ -103,6 +109,7 @@ class SnapshotRecorder(LiveRecorder):
         snap = self._snap
         if snap is None or not self.running:
             raise UsageError("start() the snapshot recorder before writing")
+        self._make_folder()  # again: it may have been cleaned away while buffering
         start, stop = window(snap.clock.now(), before, after)
         job = snap.trigger(SnapshotRequest(name or "", list(topics), start, stop), remote=False)
         while job.is_alive() or job in snap.jobs:
@@ -141,7 +148,7 @@ def snapshot(
     duration: float = 30.0,
     size_mb: int = 256,
 ) -> SnapshotRecorder:
-    """A snapshot recorder of ``topics`` (None: every topic) writing into ``folder``.
+    """A snapshot recorder of ``topics`` (None: every topic) into ``folder``, made if need be.
 
     Use it as a context manager (``with`` or ``async with``), or ``start()``/``stop()``;
     ``write(before=10)`` saves the last ten seconds.

@@ -31,8 +31,8 @@ log = logging.getLogger(__name__)
 
 #: How often the master is asked for new topics (rosbag record: 1 s).
 POLL_PERIOD = 1.0
-#: Registrations of new topics in flight at once (a master answers several at a time).
-SUBSCRIBE_AT_ONCE = 16
+#: Registrations of new topics in flight at once: one multicall (node/registration.py).
+SUBSCRIBE_AT_ONCE = 64
 #: How often ``run`` checks its limits and calls its ``tick`` (the live table).
 TICK_PERIOD = 0.25
 
@@ -250,15 +250,17 @@ class Follower:
 
         Each question to the master may take ``limit`` seconds.
         """
+        types: dict[str, str] = {}
         if self.live_opts.node is not None:
             candidates = await self._node_topics(self.live_opts.node, limit)
         elif self.selection.everything or self.selection.patterns or self.selection.types:
-            pubs, _, _ = await self.node.master.system_state(limit)
-            candidates = [topic for topic, _ in pubs]
+            # the published topics and their types: a poll of 1,000 topics parsed a
+            # getSystemState of every publisher and subscriber, a second, for their names alone
+            types = await self.node.master.published_topics(limit)
+            candidates = list(types)
         else:
             candidates = sorted(self.selection.names)  # subscribed before anyone publishes
-        types: dict[str, str] = {}
-        if self.selection.by_type:
+        if self.selection.by_type and not types:
             types = await self.node.master.topic_types(limit)
         new: list[str] = []
         for topic in candidates:

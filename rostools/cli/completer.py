@@ -5,8 +5,10 @@ The shell scripts in ``completions/`` call this with the words of the command li
 cursor is: a group, a command, an option, an option's value or a positional argument of some
 kind. Live names (topics, services, nodes, parameters) come from the master; types from the
 type store; a topic's type and a message's YAML template after ``topic pub /t``, as rosbash
-offered. Everything runs under a hard deadline (``DEADLINE``): a master that is down or slow
-costs at most that, and completes what it can offline.
+offered. The graph queries run under a hard deadline (``DEADLINE``), counted from the first
+query, not from the process's start: a master that is down or slow costs at most that, and
+what can be had offline is still offered. Offline words (groups, commands, options, option
+choices, files, types) have no deadline: a busy machine makes them slow, never empty.
 
 Output: one candidate per line, ``value<TAB>description``; or one directive line
 ``:files EXT...`` / ``:dirs`` asking the shell for its own file completion.
@@ -14,6 +16,7 @@ Output: one candidate per line, ``value<TAB>description``; or one directive line
 
 from __future__ import annotations
 
+import contextlib
 import json
 import os
 import signal
@@ -26,7 +29,9 @@ from typing import Any
 from rostools.cli import output
 from rostools.errors import one_line
 
-#: Seconds a completion may take in all, start-up included (``ROSTOOLS_COMPLETE_DEADLINE``).
+#: Seconds the graph queries of one completion may take in all, counted from the first query
+#: (``ROSTOOLS_COMPLETE_DEADLINE``). The interpreter's start-up is not counted: on a busy
+#: machine it alone took longer, and nothing was completed, not even a command's name.
 DEADLINE = 0.3
 TREE = Path(__file__).with_name("tree.json")
 Candidates = list[tuple[str, str]]
@@ -38,42 +43,21 @@ class _DeadlineError(Exception):
 
 def main(argv: Sequence[str]) -> int:
     """``SHELL CWORD WORDS...``: print the candidates for ``WORDS[CWORD]``."""
-    started = _process_start()
     if len(argv) < 2 or not argv[1].isdigit():
         sys.stderr.write("usage: rostools __complete SHELL CWORD WORDS...\n")
         return 2
     cword, words = int(argv[1]), list(argv[2:])
     budget = float(os.environ.get("ROSTOOLS_COMPLETE_DEADLINE", DEADLINE))
-    deadline = started + budget
-    lines: list[str] = []
-
-    def late(signum: int, frame: Any) -> None:
-        raise _DeadlineError
-
-    signal.signal(signal.SIGALRM, late)
-    signal.setitimer(signal.ITIMER_REAL, max(deadline - time.monotonic(), 0.001))
-    try:
-        for value, help_text in Completer(words, cword, deadline, argv[0]).complete():
-            lines.append(f"{value}\t{help_text}" if help_text else value)
-    except _DeadlineError:
-        pass  # print what there is
-    finally:
-        signal.setitimer(signal.ITIMER_REAL, 0)
+    lines = [
+        f"{value}\t{help_text}" if help_text else value
+        for value, help_text in Completer(words, cword, budget, argv[0]).complete()
+    ]
     output.put("".join(line + "\n" for line in lines))
     return 0
 
 
-def _process_start() -> float:
-    """When this process started, on the monotonic clock (the budget includes start-up)."""
-    try:
-        with open(f"/proc/{os.getpid()}/stat") as f:
-            ticks = int(f.read().rsplit(")", 1)[1].split()[19])
-        with open("/proc/uptime") as f:
-            uptime = float(f.read().split()[0])
-        age = uptime - ticks / os.sysconf("SC_CLK_TCK")
-        return time.monotonic() - max(min(age, 1.0), 0.0)
-    except (OSError, ValueError, IndexError):
-        return time.monotonic()
+def _late(signum: int, frame: Any) -> None:
+    raise _DeadlineError
 
 
 def load_tree() -> dict[str, Any]:
@@ -86,19 +70,50 @@ def load_tree() -> dict[str, Any]:
 class Completer:
     """What can go at ``words[cword]``."""
 
-    def __init__(self, words: list[str], cword: int, deadline: float, shell: str = "bash") -> None:
+    def __init__(
+        self, words: list[str], cword: int, budget: float = DEADLINE, shell: str = "bash"
+    ) -> None:
         self.shell = shell
         self.words, self.cword = _join_breaks(words, cword) if shell == "bash" else (words, cword)
         self.cur = self.words[self.cword] if self.cword < len(self.words) else ""
         #: What the shell replaces: bash only the part after "=" of ``--opt=value``.
         self.prefix = ""
-        self.deadline = deadline
+        #: Seconds the graph queries may take; the clock starts at the first (``left``).
+        self.budget = budget
+        self.deadline: float | None = None
         self.master_uri = os.environ.get("ROS_MASTER_URI") or "http://localhost:11311"
         self.positionals: list[str] = []
 
     def left(self) -> float:
-        """Seconds left before the deadline."""
+        """Seconds left before the deadline, which the first call starts."""
+        if self.deadline is None:
+            self.deadline = time.monotonic() + self.budget
         return max(self.deadline - time.monotonic(), 0.001)
+
+    @contextlib.contextmanager
+    def _querying(self) -> Iterator[Any]:
+        """A ``MasterProxy`` whose calls end by the deadline (its ``timeout``: what is left).
+
+        The sockets' timeouts bound each wait; the alarm bounds the whole, however the peer
+        trickles its answer, by raising ``_DeadlineError`` in the query: the caller offers
+        what it can without the answer. Offline work is never under the alarm.
+        """
+        # imported before the clock starts: on a busy machine, importing takes a while too
+        from rostools.rosgraph.masterapi import MasterProxy
+
+        left = self.left()
+        handler = signal.signal(signal.SIGALRM, _late)
+        timer, _ = signal.setitimer(signal.ITIMER_REAL, left)
+        started = time.monotonic()
+        try:
+            yield MasterProxy(self.master_uri, "/rostools_complete", timeout=left)
+        finally:
+            signal.setitimer(signal.ITIMER_REAL, 0)
+            signal.signal(signal.SIGALRM, handler)
+            if timer:  # a caller's own alarm (pytest-timeout's, in a test) rings as it would
+                signal.setitimer(
+                    signal.ITIMER_REAL, max(timer - (time.monotonic() - started), 0.001)
+                )
 
     def complete(self) -> Iterator[tuple[str, str]]:
         """The candidates that start with the current word.
@@ -180,18 +195,14 @@ class Completer:
         source = _KINDS.get(kind)
         return source(self) if source is not None else []
 
-    def _master(self) -> Any:
-        from rostools.rosgraph.masterapi import MasterProxy
-
-        return MasterProxy(self.master_uri, "/rostools_complete", timeout=self.left())
-
     def _ask(self, method: str) -> Any:
         """The master's answer to ``method``; None when it cannot say in time."""
         from rostools.errors import RostoolsError
 
         try:
-            return self._master().raw(method)[2]
-        except (RostoolsError, OSError, ValueError, TypeError):
+            with self._querying() as master:
+                return master.raw(method)[2]
+        except (RostoolsError, OSError, ValueError, TypeError, _DeadlineError):
             return None
 
     def _state(self) -> tuple[list[Any], list[Any], list[Any]]:
@@ -290,9 +301,10 @@ class Completer:
         name = self.positionals[0]
         name = name if name.startswith("/") else "/" + name
         try:
-            client = BlockingServiceClient(self._master(), name, timeout=self.left())
-            srv_type = client.probe("/rostools_complete").get("type", "")
-        except (RostoolsError, OSError):
+            with self._querying() as master:
+                client = BlockingServiceClient(master, name, timeout=master.timeout)
+                srv_type = client.probe("/rostools_complete").get("type", "")
+        except (RostoolsError, OSError, _DeadlineError):
             return []
         return self._template(lambda store: store.srv(srv_type).request)
 

@@ -337,7 +337,14 @@ class Receiver(Protocol):
 class InboundConnection(asyncio.BufferedProtocol):
     """A subscriber's connection to one publisher."""
 
-    def __init__(self, subscriber: Receiver, publisher_uri: str, conn_id: int, header: bytes):
+    def __init__(
+        self,
+        subscriber: Receiver,
+        publisher_uri: str,
+        conn_id: int,
+        header: bytes,
+        handshake: float = HANDSHAKE_TIMEOUT,
+    ) -> None:
         self.subscriber = subscriber
         self.publisher_uri = publisher_uri
         self.id = conn_id
@@ -352,6 +359,9 @@ class InboundConnection(asyncio.BufferedProtocol):
         self.peer = "?"
         #: Why we dropped the connection, when we did.
         self.failure: Failure | None = None
+        #: How long the publisher has to send its header, and whether it ran out.
+        self.handshake = handshake
+        self.timed_out = False
         self._deadline: asyncio.TimerHandle | None = None
 
     def connection_made(self, transport: asyncio.BaseTransport) -> None:
@@ -363,12 +373,13 @@ class InboundConnection(asyncio.BufferedProtocol):
         self.peer = f"{peer[0]}:{peer[1]}" if peer else "?"
         transport.write(self.request)
         loop = asyncio.get_running_loop()
-        self._deadline = loop.call_later(HANDSHAKE_TIMEOUT, self._handshake_expired)
+        self._deadline = loop.call_later(self.handshake, self._handshake_expired)
 
     def _handshake_expired(self) -> None:
         self._deadline = None
         if self.header is None and self.failure is None and not self.closed.done():
-            self._drop(f"no connection header within {HANDSHAKE_TIMEOUT:g} s")
+            self.timed_out = True
+            self._drop(f"no connection header within {self.handshake:g} s")
 
     def _handshake_over(self) -> None:
         if self._deadline is not None:

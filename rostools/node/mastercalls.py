@@ -77,6 +77,11 @@ class LiveMaster:
         pubs, subs, srvs = await self.call("getSystemState", timeout=timeout)
         return pubs, subs, srvs
 
+    async def published_topics(self, timeout: float | None = None) -> dict[str, str]:
+        """Topic -> type, for every topic with a publisher (a tenth of ``getSystemState``)."""
+        answer = await self.call("getPublishedTopics", "", timeout=timeout)
+        return {str(t[0]): str(t[1]) for t in answer if isinstance(t, list) and len(t) == 2}
+
     async def topic_types(self, timeout: float | None = None) -> dict[str, str]:
         """Topic -> type, for every topic the master has seen typed."""
         return dict(await self.call("getTopicTypes", timeout=timeout))
@@ -105,30 +110,11 @@ class LiveMaster:
         """Delete a parameter; ``NotFoundError`` when unset."""
         await self.call("deleteParam", key)
 
-    async def register_publisher(
-        self, topic: str, type_name: str, api: str, timeout: float | None = None
-    ) -> list[str]:
-        """Register a publication; the subscribers' slave API URIs."""
-        return _uris(await self.call("registerPublisher", topic, type_name, api, timeout=timeout))
-
-    async def register_subscriber(
-        self, topic: str, type_name: str, api: str, timeout: float | None = None
-    ) -> list[str]:
-        """Register a subscription; the publishers' slave API URIs."""
-        answer = await self.call("registerSubscriber", topic, type_name, api, timeout=timeout)
-        return _uris(answer)
-
     async def unregister_subscriber(self, topic: str, api: str) -> None:
         """Withdraw a subscription."""
         await self.call("unregisterSubscriber", topic, api)
 
-    async def register_service(
-        self, name: str, service_uri: str, api: str, timeout: float | None = None
-    ) -> None:
-        """Register a service."""
-        await self.call("registerService", name, service_uri, api, timeout=timeout)
 
-
-def _uris(value: Any) -> list[str]:
+def uris_of(value: Any) -> list[str]:
     """The URIs of a register call's answer (a peer's junk entries left out)."""
     return [u for u in value if isinstance(u, str)] if isinstance(value, list) else []

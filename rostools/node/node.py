@@ -17,10 +17,10 @@ from rostools.msgs.topictype import ANY, TopicType
 from rostools.names import anonymous, canonicalize, make_global_ns, resolve, ros_namespace
 from rostools.node.connection import ConnectionHandler, Pending, ServerConnection
 from rostools.node.listen import Listener, listen
-from rostools.node.mastercalls import LiveMaster
+from rostools.node.mastercalls import LiveMaster, uris_of
 from rostools.node.notice import Notice, to_stderr
 from rostools.node.publisher import TopicPublisher
-from rostools.node.registration import Registrar
+from rostools.node.registration import Registrar, Registration
 from rostools.node.rpc import XmlRpcServer
 from rostools.node.service import ServiceHandler, ServiceServer, ServiceType
 from rostools.node.subscriber import FramesCallback, Subscriber
@@ -135,13 +135,7 @@ class LiveNode:
         if self._watch is not None:
             self._watch.stop()
         self.registrar.close()
-        calls: list[tuple[str, tuple[Any, ...]]] = []
-        for topic in self.publishers:
-            calls.append(("unregisterPublisher", (topic, self.uri)))
-        for topic in self.subscribers:
-            calls.append(("unregisterSubscriber", (topic, self.uri)))
-        for service, server in self.services.items():
-            calls.append(("unregisterService", (service, server.uri)))
+        calls = self.unregister_calls()
         if calls:
             try:
                 await self.master.multicall(calls)
@@ -158,6 +152,17 @@ class LiveNode:
         if self._xmlrpc is not None:
             await self._xmlrpc.close()
 
+    def unregister_calls(self) -> list[tuple[str, tuple[Any, ...]]]:
+        """The master calls (method, arguments after the caller id) that undo our registrations."""
+        calls: list[tuple[str, tuple[Any, ...]]] = []
+        for topic in list(self.publishers):
+            calls.append(("unregisterPublisher", (topic, self.uri)))
+        for topic in list(self.subscribers):
+            calls.append(("unregisterSubscriber", (topic, self.uri)))
+        for service, server in list(self.services.items()):
+            calls.append(("unregisterService", (service, server.uri)))
+        return calls
+
     # master calls ---------------------------------------------------------------------
 
     async def advertise(
@@ -171,14 +176,17 @@ class LiveNode:
                 self, topic, topic_type, latch, queue_size
             )
 
-            def take(uris: list[str]) -> None:
-                new.reported = uris
+            def take(answer: Any) -> None:
+                new.reported = uris_of(answer)
 
             await self.registrar.register(
-                f"publication {topic}",
-                lambda limit: self.master.register_publisher(topic, new.type.type, self.uri, limit),
-                take,
-                lambda: self.publishers.get(topic) is new and not new.closed,
+                Registration(
+                    f"publication {topic}",
+                    "registerPublisher",
+                    (topic, topic_type.type, self.uri),
+                    take,
+                    lambda: self.publishers.get(topic) is new and not new.closed,
+                )
             )
             pub = new
         return pub
@@ -205,10 +213,13 @@ class LiveNode:
         sub.coalesce, sub.reuse_frames = coalesce, reuse_frames
         self.subscribers[topic] = sub
         await self.registrar.register(
-            f"subscription {topic}",
-            lambda limit: self.master.register_subscriber(topic, topic_type.type, self.uri, limit),
-            sub.update,
-            lambda: self.subscribers.get(topic) is sub and not sub.closed,
+            Registration(
+                f"subscription {topic}",
+                "registerSubscriber",
+                (topic, topic_type.type, self.uri),
+                lambda answer: sub.update(uris_of(answer)),
+                lambda: self.subscribers.get(topic) is sub and not sub.closed,
+            )
         )
         return sub
 
@@ -219,10 +230,13 @@ class LiveNode:
         name = self.resolve(name)
         server = self.services[name] = ServiceServer(self, name, srv_type, handler)
         await self.registrar.register(
-            f"service {name}",
-            lambda limit: self.master.register_service(name, server.uri, self.uri, limit),
-            lambda _: None,
-            lambda: self.services.get(name) is server,
+            Registration(
+                f"service {name}",
+                "registerService",
+                (name, server.uri, self.uri),
+                lambda _: None,
+                lambda: self.services.get(name) is server,
+            )
         )
         return server
 

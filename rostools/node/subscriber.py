@@ -20,11 +20,10 @@ from rostools.msgs.topictype import TopicType
 from rostools.node.connection import Frame, InboundConnection
 from rostools.node.mastercalls import peer_value
 from rostools.node.notice import Notice
-from rostools.node.registration import longer
 from rostools.node.rpc import CALL_TIMEOUT
 from rostools.rosgraph.masterapi import MasterError
 from rostools.rosgraph.network import Failure, explain, uri_host
-from rostools.wire.tcpros import MAX_FRAME, subscriber_header
+from rostools.wire.tcpros import HANDSHAKE_TIMEOUT, MAX_FRAME, subscriber_header
 
 if TYPE_CHECKING:
     from rostools.node.endpoint import Owner
@@ -38,6 +37,10 @@ RETRY_FIRST, RETRY_MAX = 0.2, 5.0
 REPORT_AFTER = 1.0
 #: How long a TCP connect to a publisher may take: the OS's own wait is minutes.
 CONNECT_TIMEOUT = 5.0
+#: A publisher that timed out may take twice as long the next time, up to this many times the
+#: usual limits (``CALL_TIMEOUT``, ``CONNECT_TIMEOUT``, ``HANDSHAKE_TIMEOUT``): a busy roscpp
+#: node under load took longer than them all, and each try from scratch cost it more work.
+MAX_SLOWNESS = 8.0
 #: ``requestTopic`` calls in flight to one publisher at once. A recorder of a thousand topics
 #: of one node asked them all at once; a busy roscpp node, answering one at a time, let most
 #: time out, was asked again, and in the end answered hardly any in time.
@@ -89,8 +92,8 @@ class Subscriber:
         self.orphans: set[str] = set()
         #: The name each publisher gave in its header, by URI: who to name when it goes away.
         self.names: dict[str, str] = {}
-        #: How long the next ``requestTopic`` to a publisher that was slow to answer may take.
-        self.limits: dict[str, float] = {}
+        #: How many times longer than usual a publisher that was slow may take (1, 2, 4, ...).
+        self.slowness: dict[str, float] = {}
 
     def update(self, uris: list[str]) -> None:
         """The publishers now (from registerSubscriber or publisherUpdate)."""
@@ -139,6 +142,8 @@ class Subscriber:
                     self.publishers.discard(uri)
                     return
                 failure = result.failure
+                if result.timed_out:
+                    self._slow(uri)
                 if failure is None:
                     failing_since, reported = None, False
             else:
@@ -177,26 +182,28 @@ class Subscriber:
     async def _connect(self, uri: str) -> InboundConnection | Failure:
         """Ask ``uri`` for the topic and connect, ``PEER_CALLS`` at a time per publisher.
 
-        Both steps may take ``CALL_TIMEOUT`` and ``CONNECT_TIMEOUT``, twice as long after each
-        time out (a busy publisher), with no limit on the wait at the gate.
+        The steps may take ``CALL_TIMEOUT``, ``CONNECT_TIMEOUT`` and then (the header,
+        after the gate) ``HANDSHAKE_TIMEOUT``, twice as long after each time out (a busy
+        publisher); the wait at the gate has no limit.
         """
         async with _gate(uri):
             result = await self._ask(uri)
             if isinstance(result, Failure):
                 return result
-            conn = await self._open(uri, *result)
-        if isinstance(conn, InboundConnection):
-            self.limits.pop(uri, None)
-        return conn
+            return await self._open(uri, *result)
 
-    def _slow(self, uri: str, err: BaseException, first: float) -> None:
-        """A call to ``uri`` that failed with ``err``: after a time out, the next waits longer."""
-        if isinstance(err, TimeoutError | asyncio.TimeoutError):
-            self.limits[uri] = longer(self.limits.get(uri, first))
+    def _limit(self, uri: str, usual: float) -> float:
+        """How long a step with ``uri`` may take: ``usual``, or longer if it was slow."""
+        return usual * self.slowness.get(uri, 1.0)
+
+    def _slow(self, uri: str, err: BaseException | None = None) -> None:
+        """A step with ``uri`` timed out (as ``err``, if given, says): the next may take longer."""
+        if err is None or isinstance(err, TimeoutError | asyncio.TimeoutError):
+            self.slowness[uri] = min(self.slowness.get(uri, 1.0) * 2, MAX_SLOWNESS)
 
     async def _ask(self, uri: str) -> tuple[str, int] | Failure:
         """``requestTopic``: the publisher's TCPROS host and port, or why not."""
-        limit = self.limits.get(uri, CALL_TIMEOUT)
+        limit = self._limit(uri, CALL_TIMEOUT)
         try:
             proto = await peer_value(
                 uri, self.node.name, "requestTopic", self.topic, [["TCPROS"]], timeout=limit
@@ -205,7 +212,7 @@ class Subscriber:
             refused = str(err)
         except Exception as err:  # noqa: BLE001 - any failure means: report, try again later
             log.debug("requestTopic %s at %s failed: %s", self.topic, uri, err)
-            self._slow(uri, err, CALL_TIMEOUT)
+            self._slow(uri, err)
             return explain(err, uri_host(uri))
         else:
             ok = isinstance(proto, list) and len(proto) >= 3 and proto[0] == "TCPROS"
@@ -229,15 +236,21 @@ class Subscriber:
         try:
             _, conn = await asyncio.wait_for(
                 loop.create_connection(
-                    lambda: InboundConnection(self, uri, self.node.next_connection_id(), header),
+                    lambda: InboundConnection(
+                        self,
+                        uri,
+                        self.node.next_connection_id(),
+                        header,
+                        self._limit(uri, HANDSHAKE_TIMEOUT),
+                    ),
                     host,
                     port,
                 ),
-                self.limits.get(uri, CONNECT_TIMEOUT),
+                self._limit(uri, CONNECT_TIMEOUT),
             )
         except (OSError, asyncio.TimeoutError) as err:
             log.debug("connecting to %s:%s for %s failed: %s", host, port, self.topic, err)
-            self._slow(uri, err, CONNECT_TIMEOUT)
+            self._slow(uri, err)
             failure = explain(err, host)
             return Failure(f"its TCPROS port {host}:{port}: {failure.reason}", failure.hint,
                            failure.lasting)  # fmt: skip
@@ -251,6 +264,7 @@ class Subscriber:
         """A publisher answered: learn the type if we asked for ``*``."""
         if self.type.md5sum == "*" and conn.header is not None:
             self.type = TopicType.from_header(conn.header)
+        self.slowness.pop(conn.publisher_uri, None)  # it answered in time
         caller = (conn.header or {}).get("callerid")
         if caller:
             self.names[conn.publisher_uri] = caller

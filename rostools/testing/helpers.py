@@ -16,6 +16,7 @@ from rostools._api import loop
 from rostools._api.functions import default_node
 from rostools.errors import TimeoutExpired
 from rostools.msgs.message import Message
+from rostools.testing.readable import readable
 
 #: The last message each helper saw, by topic: the plugin adds them to a failure's report.
 last_seen: dict[str, Message] = {}
@@ -32,6 +33,7 @@ def _field(msg: Any, path: str) -> Any:
 
 
 def _matches(msg: Message, predicate: Predicate) -> bool:
+    __tracebackhide__ = True  # a predicate that fails shows the test's line, then its own
     if predicate is None:
         return True
     if isinstance(predicate, Mapping):
@@ -52,6 +54,7 @@ def _publishers(topic: str) -> list[str]:
     return next((list(nodes) for t, nodes in state[0] if t == name), [])
 
 
+@readable
 def assert_message(
     topic: str,
     predicate: Predicate = None,
@@ -64,6 +67,7 @@ def assert_message(
     (``{"linear.x": 1.0}``), or None for any message. A latched message counts. Fails with
     how many messages came, the last of them, and who publishes the topic.
     """
+    __tracebackhide__ = True
     node = default_node()
     deadline = time.monotonic() + timeout
     seen = 0
@@ -86,12 +90,14 @@ def assert_message(
     )
 
 
+@readable
 def assert_topic_rate(topic: str, hz: float, tolerance: float = 0.1, within: float = 10.0) -> float:
     """Wait until ``topic`` is published at ``hz`` give or take ``tolerance`` (a fraction).
 
     The rate is measured over the last ``max(1 s, 10 intervals)`` of arrivals, for up to
     ``within`` seconds; it returns the measured rate. Messages are counted, not decoded.
     """
+    __tracebackhide__ = True
     if hz <= 0 or tolerance < 0:
         raise ValueError("hz must be above 0 and tolerance at least 0")
     node = default_node()

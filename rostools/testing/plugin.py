@@ -91,10 +91,8 @@ def _start_snapshot(config: pytest.Config, master_uri: str) -> SnapshotRecorder 
         return None
     from rostools._api.snapshots import SnapshotRecorder
 
-    folder = _snapshot_folder(config)
-    folder.mkdir(parents=True, exist_ok=True)
     return SnapshotRecorder(
-        None, folder, master_uri, duration=seconds, poll_period=SNAPSHOT_POLL
+        None, _snapshot_folder(config), master_uri, duration=seconds, poll_period=SNAPSHOT_POLL
     ).start()
 
 
@@ -178,10 +176,13 @@ def ros_record(
 ) -> Iterator[Callable[..., Recording]]:
     """``ros_record("/a", "/b", name="run.bag")``: a started recording in ``tmp_path``."""
     from rostools._api.bags import Recording
+    from rostools.testing.readable import readable
 
     started: list[Recording] = request.node.stash[_STATE].recordings
 
+    @readable
     def start(*topics: str, name: str | None = None) -> Recording:
+        __tracebackhide__ = True
         path = tmp_path / (name or f"recording{len(started) + 1}.bag")
         recording = Recording(list(topics), path, ros_master.uri).start()
         started.append(recording)
@@ -203,9 +204,11 @@ def ros_process(
     Its ``ROS_HOME`` and logs are kept in ``tmp_path``; it is stopped by its PID at the end.
     """
     from rostools.testing.process import RosProcess
+    from rostools.testing.readable import readable
 
     started: list[RosProcess] = request.node.stash[_STATE].processes
 
+    @readable
     def start(
         argv: list[str],
         *,
@@ -215,6 +218,7 @@ def ros_process(
         wait_for_topic: str | None = None,
         timeout: float = 10.0,
     ) -> RosProcess:
+        __tracebackhide__ = True
         child = dict(os.environ)
         home = tmp_path / "ros_home"
         child.setdefault("ROS_HOME", str(home))

@@ -24,6 +24,7 @@ from pathlib import Path
 
 from rostools.errors import NotFoundError
 from rostools.rosgraph.masterapi import MasterProxy
+from rostools.testing.readable import readable
 
 #: How long ``stop`` waits after SIGINT (rospy usually exits in a fraction of a second).
 STOP_WAIT = 3.0
@@ -164,6 +165,7 @@ class RosProcess:
         return code
 
     def _check_alive(self, waiting_for: str) -> None:
+        __tracebackhide__ = True
         if self.popen.poll() is not None:
             raise AssertionError(
                 f"{self.argv[0]} exited with {self.popen.returncode} before {waiting_for};"
@@ -171,6 +173,7 @@ class RosProcess:
             )
 
     def _wait(self, found: Callable[[MasterProxy], bool], what: str, timeout: float) -> None:
+        __tracebackhide__ = True
         master = MasterProxy(self.master_uri, "/rostools_testing", timeout=2.0)
         deadline = time.monotonic() + timeout
         while True:
@@ -184,8 +187,10 @@ class RosProcess:
                 )
             time.sleep(0.02)
 
+    @readable
     def wait_for_node(self, name: str, timeout: float = 10.0) -> RosProcess:
         """Until the master knows node ``name``; fails early if the process exits."""
+        __tracebackhide__ = True
 
         def known(master: MasterProxy) -> bool:
             try:
@@ -197,8 +202,10 @@ class RosProcess:
         self._wait(known, f"node {name}", timeout)
         return self
 
+    @readable
     def wait_for_topic(self, topic: str, timeout: float = 10.0) -> RosProcess:
         """Until ``topic`` has a publisher; fails early if the process exits."""
+        __tracebackhide__ = True
 
         def published(master: MasterProxy) -> bool:
             pubs, _, _ = master.system_state()
@@ -214,6 +221,7 @@ class RosProcess:
         self.stop()
 
 
+@readable
 def start_process(
     argv: Sequence[str],
     *,
@@ -224,6 +232,7 @@ def start_process(
     timeout: float = 10.0,
 ) -> RosProcess:
     """Start ``argv`` under ``ROS_MASTER_URI``, and wait for its node or topic if asked."""
+    __tracebackhide__ = True
     proc = RosProcess(argv, env, cwd)
     try:
         if wait_for_node is not None:

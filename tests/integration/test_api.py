@@ -18,6 +18,7 @@ from rostools import (
     Master,
     Node,
     NotFoundError,
+    RostoolsError,
     ServiceError,
     TimeoutExpired,
     UsageError,
@@ -142,6 +143,30 @@ def test_record_and_read_back(env_master: Master, tmp_path: Path, name: str) -> 
     assert [(m.topic, m.message.data) for m in read] == [("/count", i) for i in range(5)]  # type: ignore[attr-defined]
     assert read[0].message == message("std_msgs/Int32", data=0)
     assert read[0].time.to_sec() > 0
+
+
+def test_a_snapshot_makes_its_folder(
+    env_master: Master, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    # the README's example, where logs/ did not exist: the write failed
+    monkeypatch.chdir(tmp_path)
+    with Node("talker", env_master.uri) as talker:
+        pub = talker.advertise("/status", "std_msgs/String")
+        with rostools.snapshot(folder="logs/today", duration=60) as snap:
+            pub.wait_for_subscribers(1, timeout=5)
+            pub.publish(data="ok")
+            deadline = time.monotonic() + 10
+            while True:  # until the message is buffered
+                try:
+                    written = snap.write("crash.bag")
+                    break
+                except RostoolsError as err:
+                    assert "no messages buffered" in str(err) and time.monotonic() < deadline
+                    time.sleep(0.01)
+    assert written == Path("logs/today/crash.bag")
+    assert [m.message.data for m in rostools.read_bag(written)] == ["ok"]  # type: ignore[attr-defined]
+    with pytest.raises(UsageError, match=r"^cannot write /proc/logs: No such file or directory$"):
+        rostools.snapshot(folder="/proc/logs").start()
 
 
 def test_the_async_form_on_the_callers_loop() -> None:

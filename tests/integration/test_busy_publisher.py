@@ -9,7 +9,9 @@ are in flight to one node, and each gets the whole limit.
 
 from __future__ import annotations
 
+import asyncio
 import socket
+import struct
 import threading
 import time
 import xmlrpc.client
@@ -18,8 +20,11 @@ from pathlib import Path
 
 import pytest
 
+from rostools.master.server import MasterThread
+from rostools.node import subscriber
+from rostools.node.node import LiveNode
 from rostools.node.subscriber import PEER_CALLS
-from tests.support.fakepeer import FakeNode
+from tests.support.fakepeer import FakeNode, FakePublisher, frame, valid_header
 from tests.support.procs import start_cli, wait_for
 
 TOPICS = 20
@@ -75,3 +80,32 @@ def test_a_slow_publisher_of_many_topics_is_asked_once_per_topic(
     # each topic was asked for once: no call timed out behind the others
     assert asked == TOPICS, f"{asked} requestTopic calls for {TOPICS} topics"
     assert PEER_CALLS * ANSWER < 5.0 < TOPICS * ANSWER  # the shape that made calls time out
+
+
+def test_a_publisher_slow_to_shake_hands_is_given_longer_each_time(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    # A busy publisher that sent its header after HANDSHAKE_TIMEOUT was dropped, asked again
+    # from scratch (more work for it) and dropped again, for as long as it stayed busy.
+    monkeypatch.setattr(subscriber, "HANDSHAKE_TIMEOUT", 0.4)
+
+    def busy(sock: socket.socket) -> None:
+        time.sleep(1.0)  # longer than the usual limit, shorter than four times it
+        sock.sendall(valid_header("/late") + frame(struct.pack("<I", 2) + b"hi"))
+
+    async def main(master_uri: str) -> list[bytes]:
+        node = await LiveNode("/patient", master_uri).start()
+        got: list[bytes] = []
+        try:
+            await node.subscribe("/late", lambda frames, conn, t: got.extend(map(bytes, frames)))
+            for _ in range(400):
+                if got:
+                    break
+                await asyncio.sleep(0.05)
+        finally:
+            await node.close()
+        return got
+
+    with MasterThread() as master, FakePublisher(master.uri, "/late", busy) as fake:
+        assert asyncio.run(main(master.uri)) == [struct.pack("<I", 2) + b"hi"]
+        assert len(fake.connections) >= 2  # it was dropped once, at least, then waited for

@@ -191,3 +191,42 @@ def test_a_failure_writes_the_last_seconds_to_a_bag_named_in_the_report(
     with open_bag(bag) as reader:
         assert [c.topic for c in reader.connections] == ["/speed"]
         assert reader.info().message_count == 3
+
+
+def test_a_failing_helper_shows_the_tests_line_and_the_message(pytester: pytest.Pytester) -> None:
+    # the defect: each failure printed some 30 lines of the helper's source before its message
+    pytester.makepyfile(
+        test_readable="""
+        import sys
+        from rostools.testing import assert_message
+
+        def test_no_match(ros_node):
+            ros_node.publish("/status", {"data": "ok"}, "std_msgs/String")
+            assert_message("/status", {"data": "ready"}, timeout=0.5)
+
+        def test_refused_by_the_master(ros_master):
+            assert_message("/bad name", timeout=0.5)
+
+        def test_a_process_that_ends(ros_process):
+            ros_process([sys.executable, "-c", "print('bye')"], wait_for_node="/talker")
+        """
+    )
+    result = pytester.runpytest_inprocess("-p", "no:cacheprovider")
+    result.assert_outcomes(failed=3)
+    result.stdout.fnmatch_lines(
+        [
+            '>       assert_message("/status", {"data": "ready"}, timeout=0.5)',
+            "E       AssertionError: no message on /status matching the predicate within 0.5 s:*",
+            "test_readable.py:6: AssertionError",
+            '>       assert_message("/bad name", timeout=0.5)',
+            "E       *MasterError: ERROR: parameter [[]topic[]] contains illegal chars",
+            "test_readable.py:9: MasterError",
+            '>       ros_process(*wait_for_node="/talker")',
+            "E       AssertionError: * exited with 0 before node /talker; its output:",
+            "E       bye",
+            "test_readable.py:12: AssertionError",
+        ]
+    )
+    internals = ("rostools/testing/", "rostools/_api/", "rostools/rosgraph/", "rostools/node/")
+    shown = [line for line in result.outlines if any(part in line for part in internals)]
+    assert not shown, shown

@@ -73,14 +73,17 @@ def test_the_recorder_is_ready_once_every_service_is_registered(tmp_path: Path) 
         with MasterThread() as master:
             node = await LiveNode("snap", master.uri).start()
             registered: list[str] = []
-            register = node.master.register_service
+            call = node.master.call
 
-            async def slow(name: str, *args: str) -> None:
+            async def slow(method: str, *args: str, timeout: float | None = None) -> object:
+                if method != "registerService":
+                    return await call(method, *args, timeout=timeout)
                 await asyncio.sleep(0.2)  # a loaded master; readiness must not depend on it
-                await register(name, *args)
-                registered.append(name)
+                answer = await call(method, *args, timeout=timeout)
+                registered.append(args[0])
+                return answer
 
-            node.master.register_service = slow  # type: ignore[method-assign,assignment]
+            node.master.call = slow  # type: ignore[method-assign]
             opts = SnapshotOptions(topics=["/t"], base=tmp_path / "s.bag", min_space=0)
             snap = Snapshotter(node, opts)
             stop = asyncio.Event()

@@ -15,6 +15,7 @@ import re
 import signal
 import socket
 import subprocess
+import sys
 import threading
 import time
 import xmlrpc.client
@@ -241,6 +242,25 @@ class Proc:
             while lines is not None and not lines.empty():
                 seen.append(lines.get_nowait())
         return "".join(self.seen), "".join(self.seen_err)
+
+
+@contextlib.contextmanager
+def cpu_hogs(count: int = 2) -> Iterator[list[Proc]]:
+    """``count`` processes spinning at normal priority while in the ``with``: a busy machine.
+
+    Each has said it spins before the body runs; each is stopped by its PID at the end.
+    """
+    code = "print('spinning', flush=True)\nwhile True: pass"
+    hogs: list[Proc] = []
+    try:
+        for _ in range(count):
+            hogs.append(Proc([sys.executable, "-c", code]))
+        for hog in hogs:
+            hog.expect("spinning")
+        yield hogs
+    finally:
+        for hog in hogs:
+            hog.stop()
 
 
 def ros_env(master_uri: str, home: Path) -> dict[str, str]:

@@ -19,7 +19,11 @@ from contextlib import contextmanager
 from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
 from urllib.parse import urlsplit
 
-_METHOD = re.compile(rb"<methodName>\s*([^<\s]+)\s*</methodName>")
+#: A call's method, or each method of a ``system.multicall``.
+_METHOD = re.compile(
+    rb"<methodName>\s*([^<\s]+)\s*</methodName>"
+    rb"|<name>methodName</name>\s*<value>\s*(?:<string>)?\s*([^<\s]+)"
+)
 
 
 class SlowMaster:
@@ -41,17 +45,19 @@ class SlowMaster:
             self.delays[method] = (seconds, None if only is None else only.encode())
 
     def wait_before(self, body: bytes) -> float:
-        """How long to hold this request back (and count it, if at all)."""
-        found = _METHOD.search(body)
-        if found is None:
-            return 0.0
-        method = found.group(1).decode()
+        """How long to hold this request back (and count each delayed call in it).
+
+        A ``system.multicall`` is as slow as the slowest call it holds, as on a busy master.
+        """
+        wait = 0.0
         with self.lock:
-            seconds, only = self.delays.get(method, (0.0, None))
-            if seconds <= 0 or (only is not None and only not in body):
-                return 0.0
-            self.delayed[method] += 1
-        return seconds
+            for found in _METHOD.finditer(body):
+                method = (found.group(1) or found.group(2)).decode()
+                seconds, only = self.delays.get(method, (0.0, None))
+                if seconds > 0 and (only is None or only in body):
+                    self.delayed[method] += 1
+                    wait = max(wait, seconds)
+        return wait
 
     def forward(self, body: bytes) -> tuple[int, bytes]:
         """The real master's answer to one request."""

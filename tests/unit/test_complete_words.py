@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import time
-
 import pytest
 
 from rostools.cli.completer import Completer, _join_breaks
@@ -26,7 +24,7 @@ def test_bash_word_breaks_are_joined(
 
 
 def values(shell: str, words: list[str]) -> list[str]:
-    completer = Completer(words, len(words) - 1, time.monotonic() + 5, shell)
+    completer = Completer(words, len(words) - 1, 5, shell)
     return [v for v, _ in completer.complete()]
 
 

@@ -11,32 +11,56 @@ import pytest
 from rostools.errors import TimeoutExpired, UnreachableError
 from rostools.node import registration
 from rostools.node.notice import Notice
+from rostools.node.registration import Registrar, Registration
 from rostools.rosgraph.masterapi import MasterError
 
-
-class _Owner:
-    """What a registrar asks of its node: where the master is, and where notices go."""
-
-    master_uri = "http://master:11311/"
-
-    def __init__(self) -> None:
-        self.notices: list[Notice] = []
-
-    def notify(self, notice: Notice) -> None:
-        self.notices.append(notice)
+LATE = TimeoutExpired("the master at http://master:11311/ did not answer registerX within 3 s")
 
 
-def _slow(answers: list[Any], limits: list[float]) -> Callable[[float], Any]:
-    """An attempt that gives (or raises) ``answers`` in turn and notes each try's limit."""
+class _Master:
+    """Answers each call with the next of ``answers`` (raised if an exception); notes the calls.
 
-    async def attempt(limit: float) -> Any:
-        limits.append(limit)
-        answer = answers.pop(0)
+    ``answers`` may be a function of the call's first argument, for a multicall's entries.
+    """
+
+    def __init__(self, answers: list[Any] | Callable[[Any], Any]) -> None:
+        self.answers = answers
+        self.limits: list[float | None] = []
+        self.multicalls: list[int] = []
+
+    def _next(self, name: Any) -> Any:
+        if callable(self.answers):
+            return self.answers(name)
+        return self.answers.pop(0)
+
+    async def call(self, method: str, *params: Any, timeout: float | None = None) -> Any:
+        self.limits.append(timeout)
+        answer = self._next(params[0])
         if isinstance(answer, Exception):
             raise answer
         return answer
 
-    return attempt
+    async def multicall(
+        self, calls: list[tuple[str, tuple[Any, ...]]], timeout: float | None = None
+    ) -> list[Any]:
+        self.limits.append(timeout)
+        self.multicalls.append(len(calls))
+        if not callable(self.answers) and isinstance(self.answers[0], NotImplementedError):
+            raise self.answers.pop(0).args[0]  # the whole multicall fails
+        return [self._next(params[0]) for _, params in calls]
+
+
+class _Owner:
+    """What a registrar asks of its node: the master, and where notices go."""
+
+    master_uri = "http://master:11311/"
+
+    def __init__(self, master: _Master) -> None:
+        self.master = master
+        self.notices: list[Notice] = []
+
+    def notify(self, notice: Notice) -> None:
+        self.notices.append(notice)
 
 
 @pytest.fixture(autouse=True)
@@ -46,19 +70,24 @@ def _quick(monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setenv("ROSTOOLS_MASTER_TIMEOUT", "3")
 
 
-async def _settle(registrar: registration.Registrar) -> None:
+def _reg(name: str, taken: list[Any], current: Callable[[], bool] = lambda: True) -> Registration:
+    return Registration(
+        name, "registerSubscriber", (name, "*", "http://me/"), taken.append, current
+    )
+
+
+async def _settle(registrar: Registrar) -> None:
     while registrar.pending:
         await asyncio.gather(*registrar.pending.values(), return_exceptions=True)
 
 
 def test_a_registration_that_times_out_is_tried_again_until_taken() -> None:
-    owner, taken, limits = _Owner(), [], []
-    late = TimeoutExpired("the master at http://master:11311/ did not answer registerX within 3 s")
+    master, taken = _Master([LATE, LATE, UnreachableError("gone"), ["uri"]]), []
+    owner = _Owner(master)
 
-    async def main() -> registration.Registrar:
-        registrar = registration.Registrar(owner)  # type: ignore[arg-type]
-        attempt = _slow([late, late, UnreachableError("gone"), ["uri"]], limits)
-        await registrar.register("subscription /t", attempt, taken.append, lambda: True)
+    async def main() -> Registrar:
+        registrar = Registrar(owner)  # type: ignore[arg-type]
+        await registrar.register(_reg("/t", taken))
         assert registrar.pending  # the command goes on; the registration waits
         await _settle(registrar)
         return registrar
@@ -67,80 +96,133 @@ def test_a_registration_that_times_out_is_tried_again_until_taken() -> None:
     assert taken == [["uri"]]
     assert registrar.confirmed
     # each try may take twice as long as the one before, up to LIMIT_MAX
-    assert limits == [3.0, 6.0, 12.0, 24.0]
+    assert master.limits == [3.0, 6.0, 12.0, 24.0]
     assert [n.event for n in owner.notices] == ["register_retry", "registered"]
     assert owner.notices[0].message == (
-        "the master at http://master:11311/ did not answer registerX within 3 s; "
-        "registering subscription /t again until it answers"
+        "the master at http://master:11311/ did not answer registerSubscriber within 3 s; "
+        "registering /t again until it answers"
     )
     assert owner.notices[1].message.startswith(
         "the master at http://master:11311/ has taken 1 registration(s) it was slow to answer"
     )
 
 
-def test_one_line_for_an_episode_however_many_registrations_wait() -> None:
-    owner, taken = _Owner(), []
-    late = TimeoutExpired("late")
+def test_registrations_of_one_turn_go_in_one_multicall() -> None:
+    # A recorder that follows a thousand new topics made a thousand calls to a busy master.
+    master, taken = _Master(lambda name: [f"uri of {name}"]), []
 
     async def main() -> None:
-        registrar = registration.Registrar(owner)  # type: ignore[arg-type]
-        for i in range(50):
-            attempt = _slow([late, i], [])
-            await registrar.register(f"subscription /t{i}", attempt, taken.append, lambda: True)
+        registrar = Registrar(_Owner(master))  # type: ignore[arg-type]
+        await asyncio.gather(*(registrar.register(_reg(f"/t{i}", taken)) for i in range(50)))
+        await registrar.register(_reg("/alone", taken))
+
+    asyncio.run(main())
+    assert master.multicalls == [50]
+    assert len(master.limits) == 2  # the multicall, then one plain call
+    assert sorted(taken) == sorted([[f"uri of /t{i}"] for i in range(50)] + [["uri of /alone"]])
+
+
+def test_a_multicall_that_times_out_leaves_each_registration_to_try_again() -> None:
+    master, taken = _Master([NotImplementedError(LATE), ["a"], ["b"]]), []
+    owner = _Owner(master)
+
+    async def main() -> None:
+        registrar = Registrar(owner)  # type: ignore[arg-type]
+        await asyncio.gather(*(registrar.register(_reg(n, taken)) for n in ("/a", "/b")))
         await _settle(registrar)
 
     asyncio.run(main())
-    assert sorted(taken) == list(range(50))
+    assert sorted(taken) == [["a"], ["b"]]
+    assert [n.event for n in owner.notices] == ["register_retry", "registered"]
+    assert "has taken 2 registration(s)" in owner.notices[1].message
+
+
+def test_one_line_for_an_episode_however_many_registrations_wait() -> None:
+    tries: dict[str, int] = {}
+
+    def late_once(name: str) -> Any:
+        tries[name] = tries.get(name, 0) + 1
+        return LATE if tries[name] == 1 else name
+
+    master, taken = _Master(late_once), []
+    owner = _Owner(master)
+
+    async def main() -> None:
+        registrar = Registrar(owner)  # type: ignore[arg-type]
+        for i in range(50):  # one at a time: no batch
+            await registrar.register(_reg(f"/t{i}", taken))
+        await _settle(registrar)
+
+    asyncio.run(main())
+    assert sorted(taken) == sorted(f"/t{i}" for i in range(50))
     assert [n.event for n in owner.notices] == ["register_retry", "registered"]
     assert "has taken 50 registration(s)" in owner.notices[1].message
 
 
 def test_a_closed_endpoint_is_not_registered_again() -> None:
-    owner, taken, limits = _Owner(), [], []
+    master, taken = _Master([LATE, ["uri"]]), []
+    owner = _Owner(master)
     current = [True]
 
     async def main() -> None:
-        registrar = registration.Registrar(owner)  # type: ignore[arg-type]
-        attempt = _slow([TimeoutExpired("late"), ["uri"]], limits)
-        await registrar.register("subscription /t", attempt, taken.append, lambda: current[0])
+        registrar = Registrar(owner)  # type: ignore[arg-type]
+        await registrar.register(_reg("/t", taken, lambda: current[0]))
         current[0] = False  # unsubscribed before the next try
         await _settle(registrar)
 
     asyncio.run(main())
     assert taken == []
-    assert len(limits) == 1
+    assert len(master.limits) == 1
     assert [n.event for n in owner.notices] == ["register_retry"]  # nothing was taken
 
 
 def test_a_refusal_is_raised_at_once_and_said_when_it_comes_later() -> None:
-    owner = _Owner()
+    refused = MasterError("registerSubscriber", -1, "no")
+    master = _Master([MasterError("registerSubscriber", -1, "bad type"), LATE, refused])
+    owner = _Owner(master)
 
     async def main() -> None:
-        registrar = registration.Registrar(owner)  # type: ignore[arg-type]
+        registrar = Registrar(owner)  # type: ignore[arg-type]
         with pytest.raises(MasterError):
-            refused = _slow([MasterError("registerSubscriber", -1, "bad type")], [])
-            await registrar.register("subscription /a", refused, print, lambda: True)
-        attempt = _slow([TimeoutExpired("late"), MasterError("registerSubscriber", -1, "no")], [])
-        await registrar.register("subscription /b", attempt, print, lambda: True)
+            await registrar.register(_reg("/a", []))
+        await registrar.register(_reg("/b", []))
         await _settle(registrar)
 
     asyncio.run(main())
     assert [n.event for n in owner.notices] == ["register_retry", "register_refused"]
-    assert owner.notices[1].message == "the master refused subscription /b: no"
+    assert owner.notices[1].message == "the master refused /b: no"
 
 
 def test_close_stops_every_try() -> None:
-    owner, limits = _Owner(), []
+    master = _Master([LATE] * 1000)
 
     async def main() -> None:
-        registrar = registration.Registrar(owner)  # type: ignore[arg-type]
-        attempt = _slow([TimeoutExpired("late")] * 1000, limits)
-        await registrar.register("subscription /t", attempt, print, lambda: True)
-        task = registrar.pending["subscription /t"]
+        registrar = Registrar(_Owner(master))  # type: ignore[arg-type]
+        await registrar.register(_reg("/t", []))
+        task = registrar.pending["/t"]
         registrar.close()
         await asyncio.gather(task, return_exceptions=True)
         assert task.cancelled()
         assert not registrar.pending
 
     asyncio.run(main())
-    assert len(limits) == 1
+    assert len(master.limits) == 1
+
+
+def test_a_multicall_answer_short_of_entries_fails_every_registration() -> None:
+    # Each registration awaited an answer of its own: one left without would wait forever.
+    class _Short(_Master):
+        async def multicall(
+            self, calls: list[tuple[str, tuple[Any, ...]]], timeout: float | None = None
+        ) -> list[Any]:
+            return [["uri"]]
+
+    async def main() -> list[Any]:
+        registrar = Registrar(_Owner(_Short([])))  # type: ignore[arg-type]
+        regs = (registrar.register(_reg(n, [])) for n in ("/a", "/b"))
+        return await asyncio.wait_for(asyncio.gather(*regs, return_exceptions=True), 5)
+
+    outcomes = asyncio.run(main())
+    assert [str(o) for o in outcomes] == [
+        "bad answer from the master at http://master:11311/ to system.multicall"
+    ] * 2

@@ -156,7 +156,9 @@ class Shell:
         self.cwd = cwd
         self.out = cwd / f".stdout-{command.line}"
         self.err = cwd / f".stderr-{command.line}"
-        script = f"{{ {command.text}\n}} >{shlex.quote(str(self.out))} 2>{shlex.quote(str(self.err))}"
+        script = (
+            f"{{ {command.text}\n}} >{shlex.quote(str(self.out))} 2>{shlex.quote(str(self.err))}"
+        )
         self.proc = Proc(["bash", "-o", "pipefail", "-c", script], env=env, cwd=cwd)
 
     def printed(self) -> str:
@@ -279,10 +281,12 @@ if XFAIL:  # an example known to fail, until what its marker names is fixed
 
     @pytest.mark.parametrize(
         "block",
-        [pytest.param(b, id=b.where, marks=pytest.mark.xfail(reason=b.markers["xfail"], strict=True))
-         for b in XFAIL],
+        [pytest.param(b, id=b.where, marks=pytest.mark.xfail(reason=b.markers["xfail"],
+                                                             strict=True)) for b in XFAIL],
     )  # fmt: skip
-    def test_an_example_marked_xfail_still_fails(block: Block, graph: Graph, tmp_path: Path) -> None:
+    def test_an_example_marked_xfail_still_fails(
+        block: Block, graph: Graph, tmp_path: Path
+    ) -> None:
         assert run_block(block, graph, tmp_path) == []
 
 

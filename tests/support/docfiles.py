@@ -33,12 +33,16 @@ def _drive(i: int) -> Iterator[tuple[str, str, dict[str, Any]]]:
     x = 0.05 * min(i, STEPS // 2)
     stamp = {"secs": (START_NS + i * STEP_NS) // 10**9, "nsecs": (START_NS + i * STEP_NS) % 10**9}
     yield "/cmd_vel", "geometry_msgs/Twist", {"linear": {"x": speed}}
-    yield "/odom", "nav_msgs/Odometry", {
-        "header": {"seq": i, "stamp": stamp, "frame_id": "odom"},
-        "child_frame_id": "base_link",
-        "pose": {"pose": {"position": {"x": x, "y": 0.0}, "orientation": {"w": 1.0}}},
-        "twist": {"twist": {"linear": {"x": speed}}},
-    }
+    yield (
+        "/odom",
+        "nav_msgs/Odometry",
+        {
+            "header": {"seq": i, "stamp": stamp, "frame_id": "odom"},
+            "child_frame_id": "base_link",
+            "pose": {"pose": {"position": {"x": x, "y": 0.0}, "orientation": {"w": 1.0}}},
+            "twist": {"twist": {"linear": {"x": speed}}},
+        },
+    )
 
 
 def write_drive(writer: BagWriter, topics: tuple[str, ...] = ("/cmd_vel", "/odom")) -> None:

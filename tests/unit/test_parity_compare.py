@@ -289,7 +289,9 @@ def test_every_documented_difference_cites_text_that_the_docs_have(tmp_path: Pat
     shutil.copytree(ROOT / "docs", tmp_path / "docs")
     readme = (tmp_path / "README.md").read_text()
     assert "where rostopic keeps the master's order" in readme
-    (tmp_path / "README.md").write_text(readme.replace("where rostopic keeps the master's order", ""))
+    (tmp_path / "README.md").write_text(
+        readme.replace("where rostopic keeps the master's order", "")
+    )
     assert d.check_docs(tmp_path) == ["list-v-sorted"]
     # a phrase on a page of docs/ counts as much as one in README.md
     service = (tmp_path / "docs" / "service.md").read_text()

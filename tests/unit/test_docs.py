@@ -75,7 +75,7 @@ def _slug(heading: str) -> str:
 
 
 def test_blocks_are_read_as_the_examples_test_reads_them(tmp_path: Path) -> None:
-    page = tmp_path / "page.md"
+    page = tmp_path / "page.markdown"
     page.write_text(
         "<!-- exit: 6 -->\n```console\n$ rostools bag info a.bag \\\n    -y   # a comment\n"
         "path: a.bag\n...\n$ rostools msg md5 X\n```\n\n```\nrostools topic list\n```\n"

@@ -19,8 +19,8 @@ of it, against what was published, is what each lost live (goal 0).
 --before 0.3 --after 3`` start 0.5 s apart, so four files are written at once. Reported: the
 messages of the four windows lost (goal 0; the recorder's exact count, cross-checked against
 the images rosbag record got, by their stamps), beside what ``rosbag record`` lost of the same
-flood; and the snapshot's peak RSS against the README's bound: idle + --size x (2 + files) +
-4 MB a file.
+flood; and the snapshot's peak RSS against the bound of docs/bag.md: idle + --size x
+(2 + files) + 4 MB a file.
 
 Every process is stopped through its PID; files go to benchmarks/build/snapshot/ (gitignored)
 and are deleted once counted.
@@ -258,7 +258,7 @@ BATCH_MB = 4  # snapshot_live.BATCH_BYTES: what a file's thread holds beyond the
 
 
 def snapshot_bound_mb(idle_mb: float, size_mb: float, files: int) -> float:
-    """The README's bound on a snapshot recorder's memory while ``files`` are written.
+    """The bound (docs/bag.md) on a snapshot recorder's memory while ``files`` are written.
 
     The process idle, the buffer (--size), the live queue all files share (--size), the part
     of the buffer each file has yet to write (--size at most), and each file's batch in hand.
@@ -365,7 +365,7 @@ def bench_snapshot_four_writes() -> list[Result]:
         ),
         Result(
             f"snapshot peak RSS, four writes at 70 MB/s, --size {FOUR_SIZE_MB}", "MB", peak,
-            peaks["rosbag"] / 1024, f"<= {bound:.0f} MB (README bound)", peak <= bound,
+            peaks["rosbag"] / 1024, f"<= {bound:.0f} MB (the docs' bound)", peak <= bound,
             f"{setup}; bound = idle {idle_mb:.0f} MB + {FOUR_SIZE_MB} MB x (2 + "
             f"{FOUR_FILES}) + {BATCH_MB} MB x {FOUR_FILES}; 'ROS 1' is rosbag record's peak",
         ),

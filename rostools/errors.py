@@ -1,7 +1,7 @@
 """The one exception hierarchy of rostools.
 
 Library code raises these; ``rostools.cli`` turns them into a one-line message and the exit
-code below. The README's table of exit codes is generated from ``EXIT_CODES``.
+code below. The table of exit codes in docs/scripting.md lists ``EXIT_CODES`` (a test checks).
 """
 
 from __future__ import annotations
@@ -115,7 +115,7 @@ def cannot_write(path: object, why: str) -> UsageError:
     return UsageError(f"cannot write {path}: {why}")
 
 
-#: Exit code, name and meaning, in the order the README lists them.
+#: Exit code, name and meaning, in the order docs/scripting.md lists them.
 EXIT_CODES: tuple[tuple[int, str, str], ...] = (
     (
         0,

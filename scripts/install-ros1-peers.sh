@@ -25,6 +25,8 @@ packages=(
   python3-actionlib
   # Graphviz's dot renders `node graph -o graph.svg|png`
   graphviz
+  # the docs' examples pipe JSON into jq (tests/integration/test_doc_examples.py)
+  jq
   g++ make
   # the shells the completion tests drive, and rosbash (rostopic's own completion) to compare
   zsh fish rosbash

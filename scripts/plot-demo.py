@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Write the demo bag of the README's plot section and draw ``docs/bag-plot.png`` from it.
+"""Write the demo bag of docs/plot.md and draw ``docs/bag-plot.png`` from it.
 
 A robot drives for 30 s: ``/cmd_vel`` (10 Hz) steps its speed and turn rate, ``/odom``
 (50 Hz) integrates them, with a little noise. The picture is what ``bag plot -o`` draws.

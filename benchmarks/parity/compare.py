@@ -60,7 +60,7 @@ class Output:
 class Expect:
     """What a case knows about the right answer, for the rules that need it.
 
-    ``error``: the exit code the README gives rostools for this error case (None: not an
+    ``error``: the exit code the docs give rostools for this error case (None: not an
     error case). ``value``: the parameter value a ``get -p`` prints. ``kind``: "msg" or
     "srv" for listings of types.
     """
@@ -77,11 +77,11 @@ Transform = Callable[[Output, Output, Expect], tuple[Output, Output]]
 
 @dataclass(frozen=True)
 class Difference:
-    """A known difference between a ROS 1 tool and rostools, and where README.md says so."""
+    """A known difference between a ROS 1 tool and rostools, and where the docs say so."""
 
     key: str
     reason: str
-    #: A phrase of README.md (whitespace collapsed) that documents the difference.
+    #: A phrase of README.md or docs/ (whitespace collapsed) that documents the difference.
     readme: str
     apply: Transform
 

@@ -1,9 +1,9 @@
-"""The known differences between the ROS 1 tools and rostools, each where README.md says so.
+"""The known differences between the ROS 1 tools and rostools, each where the docs say so.
 
 A case names the differences that may apply to it; ``compare.judge`` takes each out in
 turn, and a pair that then agrees is "documented". Every ``readme`` phrase must be in
-README.md (whitespace collapsed): ``check_readme`` says which are not, and the harness
-refuses to run while one is missing. A difference found that no entry here covers is a
+README.md or a page of docs/ (whitespace collapsed): ``check_docs`` says which are not, and
+the harness refuses to run while one is missing. A difference found that no entry here covers is a
 defect, not a documented one.
 """
 
@@ -243,7 +243,7 @@ ONE_LINE_ERROR = D(
     "Errors print one line on stderr (`rostools: <what went wrong> (hint: ...)`)",
     _one_line_error,
 )
-#: The README's row for each exit code an error case may give.
+#: The docs' row for each exit code an error case may give.
 EXIT_ROWS = {
     1: "| 1 | error | the operation failed, or the input data is malformed (`bag info`: the bag "
     "is unindexed) |",
@@ -259,8 +259,8 @@ EXIT_CODES = {
 TYPES_FROM_PEER = D(
     "types-from-peer",
     "rostools learns a service's type from the server; rosservice needs it installed",
-    "`type`, `args` and `call` learn a service's type from the server itself (a `probe` "
-    "header), so custom services installed nowhere on this machine still work",
+    "`type` and `info` learn a service's type from the server itself (a `probe` header), so "
+    "they work for custom services installed nowhere on this machine",
     _types_from_peer,
 )
 PRETTY_MAPPING = D(
@@ -615,7 +615,8 @@ def error(code: int) -> tuple[Difference, ...]:
     return (ONE_LINE_ERROR, EXIT_CODES[code])
 
 
-def check_readme(readme: Path) -> list[str]:
-    """The keys of the differences whose phrase README.md does not contain."""
-    text = _rel(readme.read_text())
+def check_docs(root: Path) -> list[str]:
+    """The keys of the differences whose phrase neither README.md nor a page of docs/ contains."""
+    pages = [root / "README.md", *sorted((root / "docs").glob("*.md"))]
+    text = _rel(" ".join(page.read_text() for page in pages))
     return [d.key for d in ALL if _rel(d.readme) not in text]

@@ -46,7 +46,7 @@ SOURCES = [
     "mcap/rosbag2/rosbag2_cpp/only_topics.mcap",
     "mcap/rosbag2/rosbag2_transport/test_bag_for_seek/test_bag_for_seek_0.mcap",
 ]
-#: Exit codes a bad file may give (README): error, usage, not found, data loss.
+#: Exit codes a bad file may give (docs/scripting.md): error, usage, not found, data loss.
 DOCUMENTED = {0, 1, 2, 3, 6}
 CASE_SECONDS = 20
 

@@ -148,7 +148,7 @@ def test_record_and_read_back(env_master: Master, tmp_path: Path, name: str) -> 
 def test_a_snapshot_makes_its_folder(
     env_master: Master, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    # the README's example, where logs/ did not exist: the write failed
+    # the example of docs/api.md, where logs/ did not exist: the write failed
     monkeypatch.chdir(tmp_path)
     with Node("talker", env_master.uri) as talker:
         pub = talker.advertise("/status", "std_msgs/String")

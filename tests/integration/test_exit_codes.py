@@ -1,4 +1,4 @@
-"""The README's exit codes, case by case, from real runs: one line on stderr, no traceback."""
+"""The exit codes of docs/scripting.md, case by case, from real runs: one line, no traceback."""
 
 from __future__ import annotations
 

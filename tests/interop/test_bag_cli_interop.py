@@ -463,7 +463,7 @@ def test_the_snapshot_summary_gives_the_type_buffered_not_the_masters(
 #: rate: spaced evenly, the messages would be up to 350 ms off their times.
 PACE_TIMES = [100 * 10**9 + b * 490_000_000 + i * 10_000_000 for b in range(8) for i in range(15)]
 #: Per-message error allowed at the 90th percentile, and on the whole span. Here, idle, a
-#: message is delivered within about 1 ms of its time (README: p99 0.36 ms); under the
+#: message is delivered within about 1 ms of its time (docs/benchmarks.md: p99 0.36 ms); under the
 #: suite's load (another engineer's tests, load 15 on 2 cores) a delivery is now and then
 #: tens of ms late. Each message is scheduled on one clock from the start, so lateness does
 #: not add up; the 10% latest are left out of the percentile. A player that ignored -r, or

@@ -18,7 +18,7 @@ from tests.support.env import CORPUS, needs_corpus, needs_ros1, run_cli, run_sys
 
 pytestmark = [pytest.mark.interop, needs_ros1]
 
-#: Keys that rostools adds to rosbag's (a superset, documented in the README)
+#: Keys that rostools adds to rosbag's (a superset, documented in docs/bag.md)
 OURS_ONLY = ("format", "profile", "library", "chunks", "attachments", "metadata")
 
 
@@ -123,7 +123,7 @@ def test_info_key_prints_rosbags_scalars(info_bags: list[Path]) -> None:
 @needs_corpus
 def test_info_text_of_the_unsorted_bag_differs_only_as_documented() -> None:
     """example-unsorted-chunks.bag: rosbag takes start from its first chunk and end from its
-    last, and prints a negative duration; ours gives the true ones (README). Every other line
+    last, and prints a negative duration; ours gives the true ones (docs/bag.md). Every other line
     is rosbag's."""
     bag = CORPUS / "ros1" / "rosbag.js" / "example-unsorted-chunks.bag"
     theirs, ours = rosbag("info", str(bag)), run_cli("bag", "info", str(bag))

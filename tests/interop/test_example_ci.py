@@ -1,4 +1,4 @@
-"""``examples/ci``: the README's robot package, its pytest suite run as a user's CI runs it.
+"""``examples/ci``: docs/testing.md's robot package, its pytest suite run as a user's CI runs it.
 
 Real rospy nodes under the plugin's per-test masters; the suite's own pytest, in a child.
 """

@@ -1,7 +1,7 @@
 """A master killed outright and started again under running nodes, on both masters.
 
 rospy and roscpp never register again what they registered before, so after a respawn that
-is invisible to everyone who starts later (what the README says of them is checked here on
+is invisible to everyone who starts later (what docs/networking.md says of them is checked here on
 roscore). Ours (pub, echo, record, play) notice the new master and register again, and
 carry on.
 """
@@ -147,8 +147,8 @@ def test_a_roscore_stopped_the_hard_way_leaves_no_master_behind(tmp_path: Path) 
     wait_for(gone, 10, "the master gone")
 
 
-#: The README's claim (its lines joined) that the next test checks.
-README_CLAIM = (
+#: The claim of docs/networking.md (its lines joined) that the next test checks.
+DOCS_CLAIM = (
     "rospy and roscpp nodes never register again what they registered before; only what they"
     " register afterwards reaches the new master. So a subscriber that starts later cannot find"
     " an earlier publisher, and an earlier subscriber hears no later publisher: `rosbag record"
@@ -159,7 +159,7 @@ README_CLAIM = (
 
 
 def test_ros1_nodes_register_nothing_again_after_a_restart(tmp_path: Path) -> None:
-    """What the README says of rospy and roscpp under a restarted roscore (ros_comm 1.15).
+    """What docs/networking.md says of rospy and roscpp under a restarted roscore (ros_comm 1.15).
 
     Neither registers again anything it registered before. What a node registers afterwards
     goes to the new master as usual: ``rosbag record -a`` (roscpp) asks the master every
@@ -167,8 +167,8 @@ def test_ros1_nodes_register_nothing_again_after_a_restart(tmp_path: Path) -> No
     the later publishers of a topic it was recording already. ``rosbag record TOPIC`` and a
     rospy subscriber hear no later publisher at all.
     """
-    readme = " ".join((ROOT / "README.md").read_text().split())
-    assert README_CLAIM in readme, "the README no longer says what this test checks"
+    page = " ".join((ROOT / "docs" / "networking.md").read_text().split())
+    assert DOCS_CLAIM in page, "docs/networking.md no longer says what this test checks"
     port = free_port()
     uri = f"http://127.0.0.1:{port}"
     env = ros_env(uri, tmp_path / "ros_home")

@@ -34,7 +34,7 @@ def test_elsewhere_it_skips_with_the_reason(tmp_path: Path) -> None:
 
 
 def test_ci_runs_strict() -> None:
-    """``.ci/run`` sets ``CI=true`` before the README's test command."""
+    """``.ci/run`` sets ``CI=true`` before the test command of docs/development.md."""
     lines = (ROOT / ".ci" / "run").read_text().splitlines()
     strict = lines.index("export CI=true")
     assert any(line.endswith("&& pytest") for line in lines[strict + 1 :]), lines

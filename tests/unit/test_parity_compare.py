@@ -8,6 +8,7 @@ ROS 1 tool that hangs or crashes is a ROS 1 failure, anything else is a defect.
 from __future__ import annotations
 
 import os
+import shutil
 import signal
 import sys
 from pathlib import Path
@@ -281,11 +282,23 @@ def test_a_case_is_as_bad_as_its_worst_run() -> None:
     assert worst([]) is Verdict.IDENTICAL
 
 
-def test_every_documented_difference_cites_text_that_readme_has(tmp_path: Path) -> None:
-    assert d.check_readme(ROOT / "README.md") == []
-    cut = (ROOT / "README.md").read_text().replace("where rostopic keeps the master's order", "")
-    (tmp_path / "README.md").write_text(cut)
-    assert d.check_readme(tmp_path / "README.md") == ["list-v-sorted"]
+def test_every_documented_difference_cites_text_that_the_docs_have(tmp_path: Path) -> None:
+    assert d.check_docs(ROOT) == []
+    # a copy of the docs without one phrase: the difference that cites it is named
+    shutil.copy(ROOT / "README.md", tmp_path / "README.md")
+    shutil.copytree(ROOT / "docs", tmp_path / "docs")
+    readme = (tmp_path / "README.md").read_text()
+    assert "where rostopic keeps the master's order" in readme
+    (tmp_path / "README.md").write_text(
+        readme.replace("where rostopic keeps the master's order", "")
+    )
+    assert d.check_docs(tmp_path) == ["list-v-sorted"]
+    # a phrase on a page of docs/ counts as much as one in README.md
+    service = (tmp_path / "docs" / "service.md").read_text()
+    cut = service.replace("learn a service's type from the server itself", "")
+    assert cut != service
+    (tmp_path / "docs" / "service.md").write_text(cut)
+    assert d.check_docs(tmp_path) == ["list-v-sorted", "types-from-peer"]
 
 
 def test_normalise_text_masks_anonymous_names_of_every_tool() -> None:

@@ -57,7 +57,10 @@ def test_readme_links_work_on_a_package_index() -> None:
     readme = (ROOT / "README.md").read_text()
     home = re.search(r'^Source = "(https://github\.com/[^"]+)"', _table("project.urls"), re.M)
     assert home
-    targets = re.findall(r"\]\(([^)\s]+)\)", readme)
+    # inline links, and the targets of reference links ("[name]: URL" lines)
+    targets = re.findall(r"\]\(([^)\s]+)\)", readme) + re.findall(
+        r"^\[[^\]]+\]:\s*(\S+)", readme, re.M
+    )
     assert targets
     for target in targets:
         assert target.startswith(("https://", "#")), target

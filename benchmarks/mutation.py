@@ -1,7 +1,7 @@
 """Mutation testing of the modules where a silent bug costs most; prints a score per module.
 
 Usage: python -m benchmarks.mutation [GROUP ...] [--jobs N] [--survivors] [--fresh]
-       (groups: wire, master, bag, store; all by default)
+       (groups: wire, master, bag, store, rates, snapshot, player; all by default)
 
 mutmut plants one small bug at a time (a flipped comparison, a changed constant, a dropped
 call) and runs the tests that reach the mutated function; a mutant that no test notices
@@ -105,6 +105,7 @@ GROUPS: dict[str, Group] = {
             "tests/unit/test_action_types.py",
         ),
     ),
+    "rates": Group(modules=("rostools/rates.py",), tests=("tests/unit/test_rates.py",)),
 }
 
 #: mutmut's exit codes for a mutant (mutmut.stats.status_by_exit_code), as this report counts

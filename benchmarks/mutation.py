@@ -106,6 +106,24 @@ GROUPS: dict[str, Group] = {
         ),
     ),
     "rates": Group(modules=("rostools/rates.py",), tests=("tests/unit/test_rates.py",)),
+    # bag snapshot's logic; its services and `bag trigger` are wire glue, tested end to end
+    "snapshot": Group(
+        modules=(
+            "rostools/bag/ringbuffer.py",
+            "rostools/bag/snapshot_live.py",
+            "rostools/bag/snapshot_job.py",
+            "rostools/bag/snapshot_srv.py",
+            "rostools/bag/snapshot.py",
+        ),
+        tests=(
+            "tests/unit/bag/test_ringbuffer.py",
+            "tests/unit/bag/test_snapshot_live.py",
+            "tests/unit/bag/test_snapshot_srv.py",
+            "tests/unit/bag/test_snapshot_job.py",
+            "tests/unit/bag/test_snapshotter.py",
+            "tests/unit/test_snapshot_table.py",
+        ),
+    ),
 }
 
 #: mutmut's exit codes for a mutant (mutmut.stats.status_by_exit_code), as this report counts

@@ -210,20 +210,18 @@ def test_a_topic_holds_exactly_its_limit() -> None:
 
 def test_a_cleared_topic_starts_again_from_nothing() -> None:
     """--clear-on-write after the topic limit evicted: the fill, the limits and the order hold."""
-    ring = RingBuffer(
-        duration_ns=100 * NS, size=6 * (8 + ENTRY_OVERHEAD), topic_size=4 * (8 + ENTRY_OVERHEAD)
-    )
-    for i in range(6):  # /a keeps 4 of 6: two slots of the order wait to be let go
-        ring.add(ring.topic("/a"), A, i * NS, [frame(f"m{i:03}")])
-    ring.clear({"/a"})
-    tb = ring.topics["/a"]
-    assert (tb.bytes, len(tb.entries)) == (0, 0)
-    for i in range(6, 14):
+    ring = RingBuffer(duration_ns=100 * NS, size=1 << 30, topic_size=4 * (8 + ENTRY_OVERHEAD))
+    ring.add(ring.topic("/b"), B, 0, [frame("b000")])
+    tb = ring.topic("/a")
+    for i in range(1, 7):  # /a keeps 4 of 6; the slots of the two let go wait behind /b's
         ring.add(tb, A, i * NS, [frame(f"m{i:03}")])
-        ring.add(ring.topic("/b"), B, i * NS, [frame(f"b{i:03}")])
-    got = texts(ring.copy().messages(0, 100 * NS))
-    assert got == ["m011", "b011", "m012", "b012", "m013", "b013"]
-    assert tb.bytes == 3 * (8 + ENTRY_OVERHEAD) and len(ring.order) == 6
+    ring.clear({"/a"})
+    assert (tb.bytes, len(tb.entries)) == (0, 0)
+    ring.size = 4 * (8 + ENTRY_OVERHEAD)
+    for i in range(7, 12):
+        ring.add(tb, A, i * NS, [frame(f"m{i:03}")])
+    assert texts(ring.copy().messages(0, 100 * NS)) == ["m008", "m009", "m010", "m011"]
+    assert tb.bytes == ring.bytes == 4 * (8 + ENTRY_OVERHEAD) and len(ring.order) == 4
 
 
 def test_the_span_of_a_topic() -> None:

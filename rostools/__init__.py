@@ -8,8 +8,6 @@ and its start-up time counts.
 
 from __future__ import annotations
 
-__version__ = "0.1.0"
-
 TYPE_CHECKING = False
 if TYPE_CHECKING:  # the stable API: type checkers read these imports, rostools.lazy too
     from rostools._api.asyncnode import (
@@ -63,6 +61,9 @@ if TYPE_CHECKING:  # the stable API: type checkers read these imports, rostools.
         Duration as Duration,
         Message as Message,
         Time as Time,
+    )
+    from rostools.version import (
+        __version__ as __version__,
     )
 
 

@@ -1,15 +1,45 @@
 #!/usr/bin/env bash
 # The release check CI runs after the suite: build the sdist and the wheel, check both with
 # twine, install the wheel into a fresh venv and run it, and run the unit tests from the
-# unpacked sdist on every other interpreter from 3.10 to 3.13 that this machine has (the
-# whole suite ran on the default one).
+# unpacked sdist on this interpreter (python3) and on every other from 3.10 to 3.13 that this
+# machine has. Sourced, it defines its functions and does nothing (tests/unit/test_release.py).
+
+# pip -q still warns of each index folder this machine's pip config names and lacks
+quiet_pip() { "$@" 2> >(grep -v "is ignored: it is neither a file nor a directory" >&2); }
+
+# An interpreter that runs, by name on PATH, else pyenv's, else Debian's; pyenv's shims of a
+# version that is not selected print an error instead of running, hence the -c check.
+find_python() {
+    local v=$1 candidate
+    for candidate in "$(command -v "python$v" || true)" \
+        "$(ls -d "${PYENV_ROOT:-$HOME/.pyenv}"/versions/"$v".*/bin/"python$v" 2>/dev/null | sort -V | tail -1)" \
+        "/usr/bin/python$v"; do
+        if [ -n "$candidate" ] && "$candidate" -c 'import ensurepip, venv' 2>/dev/null; then
+            echo "$candidate"
+            return
+        fi
+    done
+}
+
+# The interpreters the sdist's unit tests run on, a line each: "VERSION PATH", or "VERSION"
+# alone for one not found. This one (python3) comes first, always: the whole suite ran on it
+# from the clone, not from the sdist, and where no other was found a broken sdist passed.
+sdist_pythons() {
+    local default v
+    default=$(python3 -c 'import sys; print("%d.%d" % sys.version_info[:2])')
+    echo "$default $(command -v python3)"
+    for v in 3.10 3.11 3.12 3.13; do
+        [ "$v" = "$default" ] && continue
+        echo "$v $(find_python "$v")"
+    done
+}
+
+[ "${BASH_SOURCE[0]}" = "$0" ] || return 0
+
 set -euo pipefail
 cd "$(dirname "$0")/.."
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
-
-# pip -q still warns of each index folder this machine's pip config names and lacks
-quiet_pip() { "$@" 2> >(grep -v "is ignored: it is neither a file nor a directory" >&2); }
 
 python3 -m venv "$work/tools"
 quiet_pip "$work/tools/bin/pip" install -q build twine
@@ -30,25 +60,8 @@ tar -xzf "$work"/dist/*.tar.gz -C "$work/src"
 src=$(echo "$work"/src/*)
 corpus=${ROSTOOLS_CORPUS:-$(cd .. && pwd)/shared/corpus}
 
-# An interpreter that runs, by name on PATH, else pyenv's, else Debian's; pyenv's shims of a
-# version that is not selected print an error instead of running, hence the -c check.
-find_python() {
-    local v=$1 candidate
-    for candidate in "$(command -v "python$v" || true)" \
-        "$(ls -d "${PYENV_ROOT:-$HOME/.pyenv}"/versions/"$v".*/bin/"python$v" 2>/dev/null | sort -V | tail -1)" \
-        "/usr/bin/python$v"; do
-        if [ -n "$candidate" ] && "$candidate" -c 'import ensurepip, venv' 2>/dev/null; then
-            echo "$candidate"
-            return
-        fi
-    done
-}
-
-default=$(python3 -c 'import sys; print("%d.%d" % sys.version_info[:2])')
-ran=("$default (the whole suite)") missing=()
-for v in 3.10 3.11 3.12 3.13; do
-    [ "$v" = "$default" ] && continue  # the whole suite ran on it, from the clone
-    py=$(find_python "$v")
+ran=() missing=()
+while read -r v py <&3; do  # fd 3: what the loop runs may read stdin
     if [ -z "$py" ]; then
         echo "Python $v: not found on this machine, its unit tests skipped"
         missing+=("$v")
@@ -67,5 +80,5 @@ for v in 3.10 3.11 3.12 3.13; do
     fi
     tail -1 "$work/unit.log"
     ran+=("$v")
-done
-echo "tests ran on Python ${ran[*]}; not found: ${missing[*]:-none}"
+done 3< <(sdist_pythons)
+echo "unit tests from the sdist ran on Python ${ran[*]}; not found: ${missing[*]:-none}"

@@ -20,7 +20,15 @@ from typing import Any
 
 from rostools._api import messages
 from rostools._api.messages import Values
-from rostools.errors import NotFoundError, RostoolsError, TimeoutExpired, UsageError, one_line
+from rostools.errors import (
+    NotFoundError,
+    RostoolsError,
+    ServiceError,
+    TimeoutExpired,
+    UsageError,
+    one_line,
+)
+from rostools.msgs.codec import DecodeError
 from rostools.msgs.message import Message
 from rostools.node.connection import Frame, InboundConnection
 from rostools.node.node import LiveNode
@@ -499,7 +507,11 @@ class AsyncNode:
         decode = messages.decoder(req, "", "")
 
         async def serve(data: bytes) -> bytes:
-            result = handler(decode(data))
+            try:
+                request = decode(data)
+            except DecodeError as err:  # the client's bytes: one line, in words, to the client
+                raise ServiceError(str(err)) from err
+            result = handler(request)
             if inspect.isawaitable(result):
                 result = await result
             return messages.message(resp, result).serialize()

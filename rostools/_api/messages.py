@@ -14,7 +14,7 @@ from typing import Any
 
 from rostools.errors import NotFoundError, UsageError
 from rostools.msgs import learnt
-from rostools.msgs.codec import Codec
+from rostools.msgs.codec import DECODE_ERRORS, Codec, DecodeError, why_not
 from rostools.msgs.message import Message
 from rostools.msgs.store import TypeStore
 from rostools.msgs.topictype import TopicType
@@ -119,7 +119,10 @@ def decoder(type_name: str, md5sum: str, definition: str) -> Callable[[Any], Mes
         decode = codec.decoder(type_name)
 
         def whole(data: Any) -> Message:
-            msg: Message = decode(data, 0)[0]
+            try:
+                msg: Message = decode(data, 0)[0]
+            except (DecodeError, *DECODE_ERRORS) as err:
+                raise DecodeError(f"cannot decode {type_name}: {why_not(err)}") from err
             return msg
 
         if len(_decoders) >= learnt.MAX_LEARNT:

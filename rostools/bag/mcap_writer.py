@@ -24,11 +24,11 @@ from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import Final
 
-from rostools import __version__
 from rostools.bag import mcap_format as fmt
 from rostools.bag.base import BagWriter
 from rostools.bag.model import BagUsageError, Connection, UnsupportedBagError
 from rostools.bag.sink import BIG_PAYLOAD, frozen, little_endian
+from rostools.version import __version__
 
 #: Chunk threshold (uncompressed bytes): rosbag's 768 KiB, close to the mcap library's 1 MiB.
 DEFAULT_CHUNK_SIZE: Final = 768 * 1024

@@ -120,21 +120,29 @@ class Player:
         self.shown_from, self.shown_until = self.from_ns, self.until_ns
         self.status.total = max(self.until_ns - self.from_ns, 0) / NS_PER_SEC
 
-    def measure_topics(self) -> None:
-        """Under ``--topics``, the status line's times span the messages played, as rosbag's.
+    def measure(self) -> None:
+        """The status line's times span the messages played, as rosbag's.
 
-        It reads the index entries of those topics (about 2 us each), so only a caller that
-        shows the status asks for it.
+        From the first message at or after ``-s`` to the last within ``-u``, of ``--topics``
+        if given (it showed the window asked for: ``-u 0.55`` was 0.55 s, rosbag's 0.5). It
+        reads index entries (about 2 us each) up to the end of what is played, so only a
+        caller that shows the status asks for it. Without ``-s``, ``-u`` and ``--topics``, the
+        span is the bags' own.
         """
         topics = self._topics()
-        if topics is None:
-            return
-        first = last = None
+        to_the_end = topics is None and self.until_ns >= self.bag_end
+        first: int | None = None
+        last: int | None = self.bag_end if to_the_end else None
         for reader in self.readers:
-            for _, t, _ in reader.times(topics):
-                if self.from_ns <= t <= self.until_ns:
-                    first = t if first is None else min(first, t)
-                    last = t if last is None else max(last, t)
+            for _, t, _ in reader.times(topics):  # in time order
+                if t < self.from_ns:
+                    continue
+                if t > self.until_ns:
+                    break
+                first = t if first is None else min(first, t)
+                if to_the_end:
+                    break
+                last = t if last is None else max(last, t)
         if first is not None and last is not None:
             self.shown_from, self.shown_until = first, last
             self.status.total = (last - first) / NS_PER_SEC

@@ -68,6 +68,9 @@ class RecordOptions(LiveOptions):
     limit: int | None = None
     buffer_bytes: int = 256 * 1024 * 1024  # 0: unlimited
     publish: bool = False  # announce each file on begin_write
+    #: The name for a file opened at a wall-clock time, when the name holds the date (``-o``,
+    #: or no name): each split after the first is named by its own start, as rosbag names it.
+    dated: Callable[[float], Path] | None = None
 
     def check(self) -> None:
         """Raise ``UsageError`` for combinations rosbag record refuses."""
@@ -105,7 +108,8 @@ class _Writer(threading.Thread):
 
     def _open_file(self, t_ns: int) -> BagFile:
         opts = self.rec.opts
-        path = file_name(opts.base, opts.split, self.index)
+        base = opts.base if opts.dated is None or not self.index else opts.dated(time.time())
+        path = file_name(base, opts.split, self.index)
         self.file = BagFile(path, opts.format, opts.compression, opts.chunk_size)
         self.file_start = t_ns
         self.rec.current_file = self.file.active
@@ -241,8 +245,8 @@ class Recorder(Follower):
             t_ns = self.clock.now()
             header = conn.header or {}
             key = (conn.id, topic)
-            if not stats.type:
-                stats.type = header.get("type", "")
+            if not stats.messages:  # what is recorded, over the master's word (it may be stale)
+                stats.type = header.get("type") or stats.type
             if self.closing:
                 return
             limit = self.opts.limit

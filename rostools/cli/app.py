@@ -8,10 +8,10 @@ from typing import Annotated, Any
 import typer
 from typer.core import TyperGroup
 
-from rostools import __version__
 from rostools.cli import output
 from rostools.cli.output import Format
 from rostools.cli.settings import Settings
+from rostools.version import __version__
 
 #: ``name:=value`` arguments that ``rostools.cli.main`` took off the command line.
 REMAPPINGS: dict[str, str] = {}

@@ -8,12 +8,12 @@ from typing import Annotated
 
 import typer
 
-from rostools import __version__
 from rostools.cli import output
 from rostools.cli.common import FINITE, FormatOpt, output_format
 from rostools.cli.declare import command, options_record
 from rostools.cli.register import add
 from rostools.errors import RostoolsError
+from rostools.version import __version__
 
 app = typer.Typer(
     name="core", help="Run the bundled master and parameter server (roscore).", add_completion=False

@@ -10,6 +10,7 @@ from __future__ import annotations
 from typing import Any
 
 from rostools.names import GLOBAL_NS, SEP, canonicalize, is_global, is_private
+from rostools.wire.rosapi import Failure
 
 #: How deep the tree may nest, key segments and value levels together. Encoding and walking
 #: it recurse; rosmaster stores a parameter 100,000 levels deep and then fails every
@@ -111,9 +112,9 @@ class ParamTree:
     def search(self, ns: str, key: str) -> str | None:
         """Rosmaster's upward search from ``ns`` for the first element of ``key``."""
         if not key or is_private(key):
-            raise ValueError("invalid key")
+            raise Failure("invalid key")
         if not is_global(ns):
-            raise ValueError("namespace must be global")
+            raise Failure("namespace must be global")
         if is_global(key):
             return key if self.has(key) else None
         parts = _parts(key)

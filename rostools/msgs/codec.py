@@ -9,7 +9,7 @@ is what makes ``echo`` of small high-rate topics fast (genpy does the same; rosb
 from __future__ import annotations
 
 import struct
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from typing import Any
 
 from rostools.errors import InvalidDataError
@@ -26,6 +26,11 @@ STRUCT_CODES = {
 BYTE_TYPES = frozenset(("uint8", "char"))  # arrays of these are ``bytes`` in Python, as in genpy
 # A peer's count of zero-size elements (std_msgs/Empty[]) is not bounded by the buffer.
 _MAX_EMPTY_ELEMENTS = 1 << 20
+#: The most fields one generated function reads or writes, nested messages' fields counted.
+#: Compiling a function costs a few KB per statement until it is done: a type of 100,000
+#: fields in one function took 700 MB to compile. A bigger type is done in parts of this
+#: many fields, each a function of its own, and a bigger nested type by its own function.
+PART_FIELDS = 1000
 
 _U32 = struct.Struct("<I")
 
@@ -43,8 +48,24 @@ class EncodeError(InvalidDataError):
 DECODE_ERRORS = (struct.error, IndexError, ValueError, OverflowError, MemoryError)
 
 
+#: What the bytes were, for the errors a generated decoder can raise: Python's own texts
+#: ("unpack_from requires a buffer of at least 1 bytes") reached peers and users.
+SHORT = "message is shorter than its type says"
+
+
 def _short() -> None:
-    raise DecodeError("message is shorter than its type says")
+    raise DecodeError(SHORT)
+
+
+def why_not(err: BaseException) -> str:
+    """What is wrong with bytes a generated decoder raised ``err`` on, in one line of words."""
+    if isinstance(err, DecodeError):
+        return str(err)
+    if isinstance(err, struct.error | IndexError):
+        return SHORT
+    if isinstance(err, OverflowError | MemoryError):
+        return "a length in it is too large"
+    return "its bytes do not fit its type"
 
 
 class _Gen(GeneratedCode):
@@ -118,9 +139,23 @@ class _DecodeGen(_Gen):
         self.line(f"{var} = _new({self.ref(self.codec.message_class(spec.name), 'C')})")
         if target:
             self.line(f"{target} = {var}")
-        for f in spec.fields:
-            self.field(f, f"{var}.{attr_name(f.name)}")
+        if self.codec.inline(spec.name):
+            self.fields(spec.fields, var)
+            return var
+        for number, part in enumerate(self.codec.parts(spec)):
+            self.flush()
+            gen = _DecodeGen(self.codec)
+            gen.fields(part, "o")
+            gen.flush()
+            gen.line("return pos")
+            what = f"{spec.name} part {number}"
+            read = gen.compile("part(buf, pos, o)", "codec", what, bind=True)
+            self.line(f"pos = {self.ref(read, 'd')}(buf, pos, {var})")
         return var
+
+    def fields(self, fields: Sequence[Field], var: str) -> None:
+        for f in fields:
+            self.field(f, f"{var}.{attr_name(f.name)}")
 
     def field(self, f: Field, target: str) -> None:
         if not f.is_array:
@@ -131,6 +166,9 @@ class _DecodeGen(_Gen):
                 self.time(f.base, target)
             elif f.base in STRUCT_CODES:
                 self.pending.append((STRUCT_CODES[f.base], target))
+            elif not self.codec.inline(f.base):
+                self.flush()
+                self.line(f"{target}, pos = {self.ref(self.codec.decoder(f.base), 'd')}(buf, pos)")
             else:
                 self.message(self.codec.store.msg(f.base), target)
             return
@@ -203,7 +241,19 @@ class _EncodeGen(_Gen):
     def message(self, spec: MsgSpec, expr: str) -> None:
         var = self.fresh("m")
         self.line(f"{var} = {expr}")
-        for f in spec.fields:
+        if self.codec.inline(spec.name):
+            self.fields(spec.fields, var)
+            return
+        for number, part in enumerate(self.codec.parts(spec)):
+            self.flush()
+            gen = _EncodeGen(self.codec)
+            gen.fields(part, "m")
+            gen.flush()
+            write = gen.compile("part(m, w)", "codec", f"{spec.name} part {number}", bind=True)
+            self.line(f"{self.ref(write, 'e')}({var}, w)")
+
+    def fields(self, fields: Sequence[Field], var: str) -> None:
+        for f in fields:
             self.field(f, f"{var}.{attr_name(f.name)}")
 
     def field(self, f: Field, expr: str) -> None:
@@ -222,6 +272,9 @@ class _EncodeGen(_Gen):
                 self.pending += [(code, f"{var}.secs"), (code, f"{var}.nsecs")]
             elif f.base in STRUCT_CODES:
                 self.pending.append((STRUCT_CODES[f.base], expr))
+            elif not self.codec.inline(f.base):
+                self.flush()
+                self.line(f"{self.ref(self.codec.encoder(f.base), 'e')}({expr}, w)")
             else:
                 self.message(self.codec.store.msg(f.base), expr)
             return
@@ -273,6 +326,9 @@ class Codec:
         self._decoders: dict[str, Callable[[Any, int], tuple[Any, int]]] = {}
         self._encoders: dict[str, Callable[[Any, Callable[[Any], Any]], None]] = {}
         self._sizes: dict[str, int] = {}
+        self._weights: dict[str, int] = {}
+        #: ``PART_FIELDS`` for this codec's functions (a test makes it small).
+        self.part_fields = PART_FIELDS
 
     @classmethod
     def of(cls, store: TypeStore) -> Codec:
@@ -301,6 +357,40 @@ class Codec:
                     size += self.min_size(f.base) * (f.length or 1)
             self._sizes[name] = size
         return size
+
+    def inline(self, name: str) -> bool:
+        """Whether one generated function does all of type ``name`` (else it is in parts)."""
+        return self.weight(name) <= self.part_fields
+
+    def weight(self, name: str) -> int:
+        """How many fields a function that inlines type ``name`` reads or writes.
+
+        A scalar, string, time or array field is one; a nested message is its own weight,
+        or one where that is over ``part_fields`` (then its own function does it).
+        """
+        weight = self._weights.get(name)
+        if weight is None:
+            weight = self._weights[name] = sum(map(self._cost, self.store.msg(name).fields))
+        return weight
+
+    def _cost(self, f: Field) -> int:
+        if f.is_array or f.is_builtin:
+            return 1
+        inner = self.weight(f.base)
+        return inner if inner <= self.part_fields else 1
+
+    def parts(self, spec: MsgSpec) -> list[list[Field]]:
+        """The fields of ``spec`` in runs that weigh at most ``part_fields`` each."""
+        parts: list[list[Field]] = [[]]
+        load = 0
+        for f in spec.fields:
+            cost = self._cost(f)
+            if load + cost > self.part_fields and parts[-1]:
+                parts.append([])
+                load = 0
+            parts[-1].append(f)
+            load += cost
+        return parts
 
     def decoder(self, name: str) -> Callable[[Any, int], tuple[Any, int]]:
         """``decode(buf, pos) -> (message, new_pos)`` for type ``name``."""
@@ -370,14 +460,18 @@ class Codec:
         cls: type[Message] = type(spec.name.replace("/", "__"), (Message,), namespace)
         cls.__qualname__ = name = spec.name
         # The generated names start with "_", which no ROS field name can (spec.py).
-        init = GeneratedCode({
+        env = {
             "_U": _UNSET, "_Time": Time, "_Duration": Duration, "_cls": self.message_class,
             "_bytes": bytes, "_range": range,
-        })  # fmt: skip
-        for a, f in zip(slots, spec.fields, strict=True):
-            init.line(f"_self.{a} = {self._default(f)} if {a} is _U else {a}")
-        params = "".join(f", {a}=_U" for a in slots)
-        setattr(cls, "__init__", init.compile(f"__init__(_self{params})", "init", name))  # noqa: B010
+        }  # fmt: skip
+        if len(slots) > self.part_fields:  # a signature alone of 100,000 names took 150 MB
+            setattr(cls, "__init__", self._init_of_many(spec, slots, env))  # noqa: B010
+        else:
+            init = GeneratedCode(env)
+            for a, f in zip(slots, spec.fields, strict=True):
+                init.line(f"_self.{a} = {self._default(f)} if {a} is _U else {a}")
+            params = "".join(f", {a}=_U" for a in slots)
+            setattr(cls, "__init__", init.compile(f"__init__(_self{params})", "init", name))  # noqa: B010
         codec = self
 
         def deserialize(klass: type[Message], data: Any) -> Any:
@@ -390,12 +484,50 @@ class Codec:
         setattr(cls, "serialize", serialize)  # noqa: B010
         return cls
 
+    def _init_of_many(
+        self, spec: MsgSpec, slots: tuple[str, ...], env: dict[str, Any]
+    ) -> Callable[..., None]:
+        """The ``__init__`` of a type of over ``part_fields`` fields, one loop over them.
+
+        It takes what the generated one takes, and refuses what it refuses, with Python's
+        words; each distinct default is one small generated function.
+        """
+        makers: dict[str, Callable[[], Any]] = {}
+        defaults: list[tuple[str, Callable[[], Any]]] = []
+        for a, f in zip(slots, spec.fields, strict=True):
+            expr = self._default(f)
+            make = makers.get(expr)
+            if make is None:
+                gen = GeneratedCode(env)
+                gen.line(f"return {expr}")
+                make = makers[expr] = gen.compile("default()", "init", spec.name)
+            defaults.append((a, make))
+        known = frozenset(slots)
+
+        def __init__(_self: Message, *args: Any, **kwargs: Any) -> None:  # noqa: N807
+            if len(args) > len(slots):
+                raise TypeError(
+                    f"__init__() takes from 1 to {len(slots) + 1} positional arguments "
+                    f"but {len(args) + 1} were given"
+                )
+            given = dict(zip(slots, args, strict=False))
+            for key in kwargs:
+                if key not in known:
+                    raise TypeError(f"__init__() got an unexpected keyword argument {key!r}")
+                if key in given:
+                    raise TypeError(f"__init__() got multiple values for argument {key!r}")
+            given |= kwargs
+            for a, make in defaults:
+                setattr(_self, a, given[a] if a in given else make())
+
+        return __init__
+
     def decode(self, name: str, data: Any) -> Any:
         """Decode ``data`` (bytes or memoryview) as type ``name``."""
         try:
             return self.decoder(name)(data, 0)[0]
         except (DecodeError, *DECODE_ERRORS) as err:
-            raise DecodeError(f"cannot decode {name}: {err}") from err
+            raise DecodeError(f"cannot decode {name}: {why_not(err)}") from err
 
     def serialize(self, msg: Message) -> bytes:
         """Encode a message of a class from this codec."""

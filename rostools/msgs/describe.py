@@ -11,15 +11,30 @@ from rostools.msgs.store import TypeStore
 _SCALAR_DEFAULTS = {"string": "''", "bool": "false", "float32": "0.0", "float64": "0.0"}
 
 
-def show_text(store: TypeStore, spec: MsgSpec, indent: str = "") -> str:
+def _check(store: TypeStore, spec: MsgSpec) -> None:
+    """Refuse a type that contains itself, or nests too deep, before expanding it.
+
+    Each description below recurses once per level. A cycle through ``spec`` passes through
+    one of its dependencies, so checking each of them finds it without recursing.
+    """
+    for dep in spec.dependencies:
+        store.check(dep)
+
+
+def show_text(store: TypeStore, spec: MsgSpec) -> str:
     """Rosmsg's expanded form: constants, then fields with nested types indented."""
+    _check(store, spec)
+    return _show_text(store, spec, "")
+
+
+def _show_text(store: TypeStore, spec: MsgSpec, indent: str) -> str:
     lines: list[str] = []
     for c in spec.constants:
         lines.append(f"{indent}{c.type} {c.name}={c.text}\n")
     for f in spec.fields:
         lines.append(f"{indent}{f.type} {f.name}\n")
         if not f.is_builtin:
-            lines.append(show_text(store, store.msg(f.base), indent + "  "))
+            lines.append(_show_text(store, store.msg(f.base), indent + "  "))
     return "".join(lines)
 
 
@@ -35,6 +50,7 @@ def show_action_text(store: TypeStore, spec: ActionSpec) -> str:
 
 def structure(store: TypeStore, spec: MsgSpec) -> dict[str, Any]:
     """Constants and fields of a type, nested types expanded, as plain data."""
+    _check(store, spec)
 
     def fields(s: MsgSpec) -> list[dict[str, Any]]:
         out: list[dict[str, Any]] = []
@@ -133,6 +149,7 @@ def proto(
     None (the default) writes times and arrays of scalars in brackets, the rest as blocks.
     Fields named in ``exclude`` are left out at every depth.
     """
+    _check(store, spec)
     tree = _Proto(store, empty_arrays, exclude).message(spec)
     if flow or not tree[1]:
         return _inline(tree)

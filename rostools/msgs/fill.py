@@ -38,6 +38,17 @@ def _describe(value: Any) -> str:
     return f"{text} ({type(value).__name__})"
 
 
+#: Field names a hint lists at most (a type may have 100,000 fields; the hint is one line).
+HINT_NAMES = 20
+
+
+def _names(spec: MsgSpec, sep: str) -> str:
+    names = [f.name for f in spec.fields[:HINT_NAMES]]
+    more = len(spec.fields) - len(names)
+    rest = f"{sep}... ({more} more: rostools msg show {spec.name})" if more else ""
+    return sep.join(names) + rest
+
+
 def _fail(path: str, expected: str, value: Any, hint: str | None = None) -> FieldValueError:
     where = f"field {path}" if path else "value"
     return FieldValueError(f"{where}: expected {expected}, got {_describe(value)}", hint=hint)
@@ -67,7 +78,7 @@ class Filler:
             for key, item in value.items():
                 f = by_name.get(str(key))
                 if f is None:
-                    names = ", ".join(by_name) or "none"
+                    names = _names(spec, ", ") or "none"
                     where = f"{path}." if path else ""
                     raise FieldValueError(
                         f"no field named {where}{key} in {spec.name}", hint=f"its fields: {names}"
@@ -76,7 +87,7 @@ class Filler:
             return msg
         if isinstance(value, list | tuple):
             if len(value) != len(spec.fields):
-                names = " ".join(f.name for f in spec.fields) or "(none)"
+                names = _names(spec, " ") or "(none)"
                 raise FieldValueError(
                     f"{spec.name}{' at ' + path if path else ''} takes {len(spec.fields)} "
                     f"values in field order, got {len(value)}",

@@ -11,22 +11,53 @@ from __future__ import annotations
 
 import json
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any
 
 from rostools.msgs.codec import BYTE_TYPES, STRUCT_CODES, Codec
 from rostools.msgs.codegen import GeneratedCode, attr_name, element
 from rostools.msgs.message import Time
-from rostools.msgs.spec import Field
+from rostools.msgs.spec import Field, MsgSpec
 
 Plain = Callable[[Any], Any]
 
 
 class _PlainGen(GeneratedCode):
+    kind = "plain"
+
     def __init__(self, codec: Codec) -> None:
         super().__init__({"_list": list})
         self.codec = codec
+
+    def message(self, spec: MsgSpec, expr: str) -> str:
+        """A message's expression; a big type's in parts, each a function (as the codec)."""
+        if self.codec.inline(spec.name):
+            return self.whole(self.members(spec.fields, expr))
+        calls = []
+        for i, part in enumerate(self.codec.parts(spec)):
+            gen = type(self)(self.codec)
+            gen.line("return " + gen.part(gen.members(part, "m")))
+            fn = gen.compile("part(m)", self.kind, f"{spec.name} part {i}")
+            calls.append(self.call(self.ref(fn), expr))
+        return self.whole(self.joined(calls))
+
+    def members(self, fields: Sequence[Field], expr: str) -> str:
+        return ", ".join(
+            f"{f.name!r}: {self.value(f, f'{expr}.{attr_name(f.name)}')}" for f in fields
+        )
+
+    def whole(self, members: str) -> str:
+        return "{" + members + "}"
+
+    def part(self, members: str) -> str:
+        return "{" + members + "}"
+
+    def call(self, fn: str, expr: str) -> str:
+        return f"**{fn}({expr})"
+
+    def joined(self, calls: list[str]) -> str:
+        return ", ".join(calls)
 
     def value(self, f: Field, expr: str) -> str:
         if f.is_array:
@@ -38,11 +69,7 @@ class _PlainGen(GeneratedCode):
             return f"{{'secs': {expr}.secs, 'nsecs': {expr}.nsecs}}"
         if f.base in STRUCT_CODES or f.base == "string":
             return expr
-        spec = self.codec.store.msg(f.base)
-        items = ", ".join(
-            f"{f2.name!r}: {self.value(f2, f'{expr}.{attr_name(f2.name)}')}" for f2 in spec.fields
-        )
-        return "{" + items + "}"
+        return self.message(self.codec.store.msg(f.base), expr)
 
 
 def to_plain(codec: Codec, value_type: Field) -> Plain:
@@ -91,6 +118,8 @@ def _json_each(item: Callable[[Any], str], values: Any) -> str:
 class _JsonGen(_PlainGen):
     """Writes the JSON text ``dumps(plain(value))`` would, without the dicts in between."""
 
+    kind = "json"
+
     def __init__(self, codec: Codec) -> None:
         super().__init__(codec)
         from json.encoder import encode_basestring  # the C escaper json uses, not ASCII-only
@@ -123,11 +152,24 @@ class _JsonGen(_PlainGen):
             return f"{{{expr}}}"
         if f.base == "string":
             return f"{{_s({expr})}}"
-        spec = self.codec.store.msg(f.base)
-        items = ",".join(
-            f'"{f2.name}":{self.value(f2, f"{expr}.{attr_name(f2.name)}")}' for f2 in spec.fields
+        return self.message(self.codec.store.msg(f.base), expr)
+
+    def members(self, fields: Sequence[Field], expr: str) -> str:
+        return ",".join(
+            f'"{f.name}":{self.value(f, f"{expr}.{attr_name(f.name)}")}' for f in fields
         )
-        return "{{" + items + "}}"
+
+    def whole(self, members: str) -> str:
+        return "{{" + members + "}}"
+
+    def part(self, members: str) -> str:
+        return "f'" + members + "'"
+
+    def call(self, fn: str, expr: str) -> str:
+        return f"{{{fn}({expr})}}"
+
+    def joined(self, calls: list[str]) -> str:
+        return ",".join(calls)
 
 
 def to_json(codec: Codec, value_type: Field) -> Callable[[Any], str]:
@@ -227,9 +269,20 @@ class _CsvGen(GeneratedCode):
         elif f.base == "duration":
             self.line(f"a(_str({expr}.secs * 1000000000 + {expr}.nsecs))")
         else:
-            for f2 in self.codec.store.msg(f.base).fields:
-                if self.options.keep(f2):
-                    self.emit(f2, f"{expr}.{attr_name(f2.name)}")
+            spec = self.codec.store.msg(f.base)
+            if self.codec.inline(spec.name):
+                self.fields(spec.fields, expr)
+                return
+            for i, part in enumerate(self.codec.parts(spec)):  # as the codec does
+                gen = _CsvGen(self.codec, self.options)
+                gen.fields(part, "m")
+                fn = gen.compile("part(m, a, x, off)", "csv", f"{spec.name} part {i}")
+                self.line(f"{self.ref(fn)}({expr}, a, x, off)")
+
+    def fields(self, fields: Sequence[Field], expr: str) -> None:
+        for f in fields:
+            if self.options.keep(f):
+                self.emit(f, f"{expr}.{attr_name(f.name)}")
 
 
 def csv_row(codec: Codec, value_type: Field, options: CsvOptions) -> Callable[[Any, int], str]:

@@ -16,7 +16,7 @@ from typing import Any, Final
 
 from rostools.errors import UsageError
 from rostools.msgs import extract, fieldpath
-from rostools.msgs.codec import DECODE_ERRORS, Codec, DecodeError
+from rostools.msgs.codec import DECODE_ERRORS, Codec, DecodeError, why_not
 from rostools.msgs.expr import Expression
 from rostools.msgs.fieldpath import Step
 from rostools.msgs.message import Time
@@ -193,7 +193,7 @@ class Sampler:
                         values.append(None)
             except (DecodeError, *DECODE_ERRORS) as err:
                 failure = DecodeError(
-                    f"a message on {self.topic} does not decode as {self.type_name}: {err}"
+                    f"a message on {self.topic} does not decode as {self.type_name}: {why_not(err)}"
                 )
                 if skip is None:
                     raise failure from err

@@ -52,6 +52,10 @@ BODY_BUDGET = 2 * MAX_BODY
 CALL_TIMEOUT = 5.0
 #: The server's receive buffer, shared by its connections (asyncio reads this much at once).
 RECEIVE_CHUNK = 256 * 1024
+#: A refused request (an HTTP error) is answered, our side shut, and what the client still
+#: sends read and dropped for up to this long: closed with it unread, the socket was reset,
+#: and a client still sending (a 1 MiB header line) lost the answer with it (rosmaster: 431).
+REFUSE_LINGER = 2.0
 
 Dispatch = Callable[[str, tuple[Any, ...]], Any]
 
@@ -132,6 +136,8 @@ class _Connection(asyncio.BufferedProtocol):
         self.busy = False
         #: Bytes of the body budget this connection holds.
         self.reserved = 0
+        #: Refused: what arrives from now on is dropped (``_refuse``).
+        self.refused = False
 
     def connection_made(self, transport: asyncio.BaseTransport) -> None:
         assert isinstance(transport, asyncio.Transport)
@@ -148,6 +154,8 @@ class _Connection(asyncio.BufferedProtocol):
         return self.server.scratch
 
     def buffer_updated(self, nbytes: int) -> None:
+        if self.refused:
+            return
         self.parser.feed(self.server.scratch[:nbytes])
         if not self.busy:
             try:
@@ -210,10 +218,20 @@ class _Connection(asyncio.BufferedProtocol):
             self.transport.close()
 
     def _refuse(self, err: HttpError) -> None:
-        assert self.transport is not None
+        """Answer ``err``, shut our side, and drop what still comes until the client closes."""
+        transport = self.transport
+        assert transport is not None
         page = f"{err.status} {err.reason}".encode()
-        self.transport.write(format_response(page, False, f"{err.status} {err.reason}"))
-        self.transport.close()
+        transport.write(format_response(page, False, f"{err.status} {err.reason}"))
+        self.refused = True
+        self.parser = HttpParser()  # what it buffered is no longer needed
+        self._release()
+        if not transport.can_write_eof():
+            transport.close()
+            return
+        transport.write_eof()  # the answer, then our FIN; the client's EOF ends the connection
+        self._stop_clock()
+        self.deadline = asyncio.get_running_loop().call_later(REFUSE_LINGER, transport.close)
 
     def _reserve(self, length: int) -> None:
         """Hold ``length`` of the body budget while a large body arrives (503 past it)."""

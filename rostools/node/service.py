@@ -132,7 +132,8 @@ class _ServiceLink:
                         False, f"service cannot process request: {err}".encode()
                     )
                 except Exception as err:  # noqa: BLE001 - the handler's failure goes to the client
-                    reply = service_response(False, f"error processing request: {err}".encode())
+                    why = str(err) or type(err).__name__  # the handler's words, as rospy sends
+                    reply = service_response(False, f"error processing request: {why}".encode())
                 self.conn.write(reply)
                 if not self.persistent:
                     self.conn.close()

@@ -307,10 +307,21 @@ async def node_at(node: Owner, uri: str) -> str | None:
         key = (asyncio.get_running_loop(), node.master_uri)
         lookup = _lookups.get(key)
         if lookup is None:
-            lookup = _lookups[key] = asyncio.ensure_future(publisher_names(node))
+            lookup = _lookups[key] = asyncio.ensure_future(_keep_names(node))
             lookup.add_done_callback(lambda _: _lookups.pop(key, None))
-        known = _names[node.master_uri] = (time.monotonic(), await asyncio.shield(lookup))
+        return (await asyncio.shield(lookup)).get(uri)
     return known[1].get(uri)
+
+
+async def _keep_names(node: Owner) -> dict[str, str]:
+    """``publisher_names``, kept before the lookup ends.
+
+    Kept by those who waited for it, the names were missing between the lookup's end and
+    their turn, and a report that came in between looked them all up again.
+    """
+    names = await publisher_names(node)
+    _names[node.master_uri] = (time.monotonic(), names)
+    return names
 
 
 async def publisher_names(node: Owner) -> dict[str, str]:

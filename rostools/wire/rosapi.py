@@ -3,15 +3,20 @@
 Each method has an error value and one check per argument after ``caller_id``; a call that
 fails a check is answered ``[-1, message, error value]`` with rosmaster's and rospy's exact
 messages (``rosmaster.validators``, ``rospy.impl.masterslave.apivalidate``), and a handler
-that raises is answered ``[0, "Internal failure: ..."]``, never with a traceback.
+that raises is answered ``[0, "Internal failure: ..."]``, never with a traceback: with the
+words of a ``Failure``, and for any other error, which is ours, the method and the error's
+kind (Python's own text, such as "unpack_from requires a buffer of at least 1 bytes", is
+no help to a peer, and is logged instead).
 """
 
 from __future__ import annotations
 
+import logging
 from collections.abc import Callable, Mapping
 from typing import Any
 from urllib.parse import urlsplit
 
+from rostools.errors import one_line
 from rostools.names import ANYTYPE, GLOBAL_NS, resolve
 from rostools.wire.codes import ERROR, FAILURE
 from rostools.wire.xmlvalues import Fault
@@ -22,8 +27,15 @@ Check = Callable[[Any, str], Any]
 Methods = Mapping[str, tuple[Callable[..., Triple], Any, tuple[Check, ...]]]
 
 
+log = logging.getLogger(__name__)
+
+
 class ArgumentError(Exception):
     """An argument that fails its check; answered as ``[-1, message, error value]``."""
+
+
+class Failure(ValueError):  # noqa: N818 - the answer's own word: "Internal failure"
+    """A handler's failure, in words for the caller: ``[0, "Internal failure: WORDS"]``."""
 
 
 def string(name: str, value: Any) -> str:
@@ -188,8 +200,14 @@ def dispatch(methods: Methods, method: str, params: tuple[Any, ...]) -> list[Any
     handler, error_value, _ = methods[method]
     try:
         code, message, value = handler(*args)
-    except Exception as err:  # noqa: BLE001 - rosmaster and rospy answer any failure this way
+    except Failure as err:
         return [FAILURE, f"Internal failure: {err}", error_value]
+    except Exception as err:  # noqa: BLE001 - rosmaster and rospy answer any failure this way
+        kind = type(err).__qualname__
+        if type(err).__module__ != "builtins":
+            kind = f"{type(err).__module__}.{kind}"
+        log.warning("%s failed: %s", method, one_line(f"{kind}: {err}"))
+        return [FAILURE, f"Internal failure: {method} failed ({kind})", error_value]
     return [code, message, value]
 
 

@@ -33,7 +33,9 @@ PARSE_SLICE = 256 * 1024
 class BadCall(ValueError):  # noqa: N818 - reads as what it is
     """A request body that is not an XML-RPC call; servers answer with a fault, as rosmaster.
 
-    The message is rosmaster's fault string: ``<class 'ExceptionType'>:what went wrong``.
+    The message has the form of rosmaster's fault string, ``<class 'ExceptionType'>:what went
+    wrong``: expat's words where XML does not parse (rosmaster's too), ours where a value does
+    not read as its tag says (Python's, such as "Incorrect padding", name no place).
     """
 
 
@@ -82,10 +84,13 @@ class HttpParser:
     def next_message(self) -> HttpMessage | None:
         """The next complete message, or None until more bytes arrive."""
         end = self.buffer.find(b"\r\n\r\n")
-        if end < 0:
-            if len(self.buffer) > MAX_HEADERS:
-                raise HttpError(431, "Request Header Fields Too Large")
+        if end < 0 and len(self.buffer) <= MAX_HEADERS:
             return None
+        if end < 0 or end > MAX_HEADERS:  # however many reads it came in
+            eol = self.buffer.find(b"\r\n", 0, MAX_HEADERS + 2)
+            if eol < 0 or eol > MAX_HEADERS:  # rosmaster's words for each
+                raise HttpError(414, "Request-URI Too Long")
+            raise HttpError(431, "Request Header Fields Too Large")
         head = self.buffer[:end].decode("latin-1")
         lines = head.split("\r\n")
         headers: dict[str, str] = {}
@@ -231,17 +236,30 @@ def decode_call(body: bytes | bytearray) -> tuple[str, tuple[Any, ...]]:
     target = xmlrpc.client.Unmarshaller(use_builtin_types=False)
     target.xml(None, None)  # type: ignore[arg-type]  # as ExpatParser: expat gives str
     parser = xmlvalues.expat_parser()
+
+    def end(tag: str) -> None:
+        try:
+            target.end(tag)
+        except Exception as err:  # named in words: Python's are no help to a peer
+            where = f"line {parser.CurrentLineNumber}, column {parser.CurrentColumnNumber}"
+            raise BadCall(f"{type(err)}:not a valid <{tag}>: {where}") from err
+
     parser.StartElementHandler = target.start
-    parser.EndElementHandler = target.end
+    parser.EndElementHandler = end
     parser.CharacterDataHandler = target.data
     view = memoryview(body)
     try:
         for start in range(0, len(view), PARSE_SLICE):
             parser.Parse(view[start : start + PARSE_SLICE], False)
         parser.Parse(b"", True)
-        params = target.close()
-    except Exception as err:
+    except BadCall:
+        raise
+    except Exception as err:  # expat's own texts (rosmaster's too) say what is wrong, and where
         raise BadCall(f"{type(err)}:{err}") from err
+    try:
+        params = target.close()
+    except xmlrpc.client.ResponseError as err:  # its text is empty: "ResponseError()"
+        raise BadCall(f"{type(err)}:the body is no complete XML-RPC call") from err
     method = target.getmethodname()
     if method is None:
         raise BadCall("<class 'Exception'>:method \"None\" is not supported")

@@ -151,8 +151,8 @@ def test_header_and_bag_names_are_escaped(
     bag = tmp_path / "hdr.bag"
     with FakePublisher(rostools_master, "/hdr", hostile_header):
         _, err = cli(cli_env, "bag", "record", "/hdr", "-l", "1", "-O", str(bag))
-    # the table gives the master's type; the bag keeps the header's, escaped when shown
-    assert "  /hdr [std_msgs/String]: 1 msg" in err, err
+    # the summary gives the type recorded, the header's (not the master's: issue 32), escaped
+    assert f"  /hdr [std_msgs/Str{RAW_SHOWN}ing]: 1 msg" in err, err
     assert "\x1b" not in err and "\r" not in err, err
     out, _ = cli(cli_env, "bag", "info", str(bag))
     assert f"types:       std_msgs/Str{RAW_SHOWN}ing [{STRING_MD5}]" in out

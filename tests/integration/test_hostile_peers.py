@@ -236,3 +236,49 @@ def test_a_stalled_subscriber_costs_the_others_nothing(
         healthy.close()
     finally:
         pub.stop()
+
+
+def _service_answer(node_uri: str, service: str, request: bytes) -> tuple[int, bytes]:
+    """A service call made by hand with ``request`` as its bytes: the ok byte and the payload."""
+    import xmlrpc.client
+
+    from rostools.wire.tcpros import service_request_header
+
+    master_uri = xmlrpc.client.ServerProxy(node_uri).getMasterUri("/raw")[2]
+    host, port = (
+        xmlrpc.client.ServerProxy(master_uri)
+        .lookupService("/raw", service)[2][len("rosrpc://") :]
+        .split(":")
+    )
+    with socket.create_connection((host, int(port)), timeout=10) as sock:
+        sock.sendall(service_request_header("/raw", service, "*") + frame(request))
+        (length,) = struct.unpack("<I", sock.recv(4, socket.MSG_WAITALL))
+        sock.recv(length, socket.MSG_WAITALL)  # the server's header
+        ok = sock.recv(1, socket.MSG_WAITALL)[0]
+        (length,) = struct.unpack("<I", sock.recv(4, socket.MSG_WAITALL))
+        return ok, sock.recv(length, socket.MSG_WAITALL)
+
+
+@pytest.mark.parametrize(
+    ("service", "request_bytes"),
+    [("std_srvs/SetBool", b""), ("rospy_tutorials/AddTwoInts", b"\x01\x00\x00")],
+    ids=["empty", "cut-short"],
+)
+def test_a_request_that_does_not_decode_is_answered_in_words(
+    master: MasterThread, service: str, request_bytes: bytes
+) -> None:
+    # the defect: the client got Python's text, "unpack_from requires a buffer of at least 1
+    # bytes for unpacking 1 bytes at offset 0 (actual buffer size is 0)"
+    from rostools import Node
+
+    with Node("served", master_uri=master.uri) as node:
+        node.advertise_service("/svc", service, lambda request: {})
+        ok, text = _service_answer(node.uri, "/svc", request_bytes)
+        assert (ok, text.decode()) == (
+            0,
+            f"service cannot process request: cannot decode {service}Request: "
+            "message is shorter than its type says",
+        )
+        # and the server serves the next call
+        good = b"\x01" if service == "std_srvs/SetBool" else bytes(16)
+        assert _service_answer(node.uri, "/svc", good)[0] == 1

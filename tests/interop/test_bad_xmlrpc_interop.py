@@ -5,7 +5,7 @@ from __future__ import annotations
 import pytest
 
 from tests.conftest import MasterInfo
-from tests.integration.test_hostile_xmlrpc import LAUGHS, fault_of, post
+from tests.integration.test_hostile_xmlrpc import LAUGHS, fault_of, post, send_long_line
 
 pytestmark = pytest.mark.interop
 
@@ -45,3 +45,14 @@ def test_a_dtd_is_a_fault_on_both(any_master: MasterInfo) -> None:
     assert ("needs no DTD" if any_master.kind == "rostools" else "EntitiesForbidden") in (
         fault.faultString
     )
+
+
+@pytest.mark.parametrize(("where", "status"), [("header", b" 431 "), ("request", b" 414 ")])
+def test_a_line_of_a_megabyte_is_answered_by_both(
+    any_master: MasterInfo, where: str, status: bytes
+) -> None:
+    # rosmaster (BaseHTTPRequestHandler) answers "431 Line too long" to a header line over
+    # 64 KiB and "414 Request-URI Too Long" to such a request line; ours reset the connection
+    port = int(any_master.uri.rsplit(":", 1)[1])
+    answer = send_long_line(port, where)
+    assert answer.split(b"\r\n", 1)[0].startswith(b"HTTP/1.") and status in answer[:20], answer

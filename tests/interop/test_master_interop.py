@@ -10,7 +10,7 @@ from pathlib import Path
 import pytest
 
 from tests.conftest import MasterInfo
-from tests.support.env import needs_ros1, run_cli
+from tests.support.env import CLI, needs_ros1, run_cli
 from tests.support.procs import (
     Proc,
     free_port,
@@ -206,3 +206,38 @@ def test_rostools_param_matches_rosparam_on_a_real_roscore(
         assert (tmp_path / "o.yaml").read_text() == (tmp_path / "t.yaml").read_text()
     finally:
         master.stop()
+
+
+def test_text_that_is_not_utf8_is_refused_as_rosparam_refuses_it(
+    any_master: MasterInfo, tmp_path: Path
+) -> None:
+    """``param load`` stored U+FFFD for the bad bytes and exited 0; rosparam fails, sets nothing.
+
+    rosparam's ``load FILE`` and ``set -t FILE`` end in a UnicodeDecodeError (exit 1); ours say
+    which byte in one line (exit 2, as ``topic pub -f``). From stdin too: ours reads bytes.
+    """
+    bad = tmp_path / "bad.yaml"
+    bad.write_bytes(b"good: 1\nname: r\xff2\n")
+    env = any_master.cli_env
+    theirs = [
+        ros_tool(any_master, "rosparam", "load", str(bad), "/theirs"),
+        ros_tool(any_master, "rosparam", "set", "-t", str(bad), "/theirs_text"),
+    ]
+    assert all(t.startswith("[exit 1]") and "UnicodeDecodeError" in t for t in theirs), theirs
+    ours = [
+        run_cli("param", "load", str(bad), "/ours", env=env),
+        run_cli("param", "set", "-t", str(bad), "/ours_text", env=env),
+        subprocess.run(
+            [*CLI, "param", "load", "-", "/ours_stdin"],
+            input=bad.read_bytes(),
+            capture_output=True,
+            env=env,
+            timeout=60,
+            check=False,
+        ),
+    ]
+    for run, source in zip(ours, [str(bad), str(bad), "stdin"], strict=True):
+        err = run.stderr if isinstance(run.stderr, str) else run.stderr.decode()
+        assert (run.returncode, err) == (2, f"rostools: {source} is not UTF-8 text (byte 15)\n")
+    listed = run_cli("param", "list", env=env).stdout.split()
+    assert not [name for name in listed if name.startswith(("/ours", "/theirs"))]

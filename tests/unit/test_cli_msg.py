@@ -98,6 +98,35 @@ def test_custom_package_and_malformed_msg(cli_env: dict[str, str], tmp_path: Pat
     assert "Traceback" not in bad.stderr
 
 
+@pytest.mark.parametrize(
+    "args",
+    [
+        ["msg", "show", "loops/Self"],
+        ["msg", "show", "loops/Self", "--format", "json"],
+        ["msg", "info", "loops/Pair"],
+        ["msg", "proto", "loops/Self"],
+        ["msg", "show", "loops/Holder"],
+        ["msg", "md5", "loops/Self"],
+    ],
+)
+def test_a_type_that_contains_itself_is_one_line(
+    cli_env: dict[str, str], tmp_path: Path, args: list[str]
+) -> None:
+    """show, info and proto refuse it as md5 does (they recursed to a RecursionError)."""
+    (tmp_path / "loops" / "msg").mkdir(parents=True)
+    (tmp_path / "loops" / "srv").mkdir()
+    (tmp_path / "loops" / "msg" / "Self.msg").write_text("loops/Self next\nint32 x\n")
+    (tmp_path / "loops" / "msg" / "Pair.msg").write_text("loops/Other other\n")
+    (tmp_path / "loops" / "msg" / "Other.msg").write_text("loops/Pair pair\n")
+    (tmp_path / "loops" / "srv" / "Holder.srv").write_text("loops/Self a\n---\nint32 b\n")
+    cli_env["ROSTOOLS_MSG_PATH"] = str(tmp_path)
+    out = run_cli(*args, env=cli_env)
+    assert out.returncode == 1
+    assert out.stdout == ""
+    assert "contains itself" in out.stderr
+    assert len(out.stderr.strip().splitlines()) == 1, out.stderr
+
+
 def test_type_from_stdin(cli_env: dict[str, str]) -> None:
     out = run_cli("msg", "md5", env=cli_env, input="\nstd_msgs/Header\n")
     assert out.stdout == "2176decaecbce78abc3b96ef049fabed\n"

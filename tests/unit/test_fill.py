@@ -82,3 +82,20 @@ def test_yaml_arguments() -> None:
     ]
     with pytest.raises(UsageError, match=r"bad YAML in argument '\{a: 1': .* \(line 2, column 1\)"):
         parse_yaml_args(["{a: 1"])
+
+
+@pytest.mark.parametrize(
+    ("args", "tail"),
+    [
+        ([1, 2], "f18 f19 ... (980 more: rostools msg show big/Wide)"),
+        ([{"nope": 1}], "f18, f19, ... (980 more: rostools msg show big/Wide)"),
+    ],
+)
+def test_a_hint_names_at_most_twenty_fields(args: list[object], tail: str) -> None:
+    """The hint of a type of 100,000 fields was a line of 700 KB: twenty, then how many more."""
+    fields = "".join(f"int32 f{i}\n" for i in range(1000))
+    store = TypeStore([BuiltinSource()]).with_definition("big/Wide", fields)
+    with pytest.raises(FieldValueError) as err:
+        Filler(Codec.of(store), NOW).message("big/Wide", args)
+    assert (err.value.hint or "").endswith(tail)
+    assert len(err.value.hint or "") < 300

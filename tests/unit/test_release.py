@@ -8,6 +8,7 @@ import sys
 from pathlib import Path
 
 import rostools
+import rostools.version
 
 ROOT = Path(__file__).resolve().parents[2]
 PYPROJECT = (ROOT / "pyproject.toml").read_text()
@@ -25,7 +26,9 @@ def _table(name: str) -> str:
 def test_the_version_has_one_source() -> None:
     project = _table("project")
     assert 'dynamic = ["version"]' in project and not re.search(r"^version\s*=", project, re.M)
-    assert 'version = { attr = "rostools.__version__" }' in _table("tool.setuptools.dynamic")
+    dynamic = _table("tool.setuptools.dynamic")
+    assert 'version = { attr = "rostools.version.__version__" }' in dynamic
+    assert rostools.__version__ is rostools.version.__version__
 
 
 def test_the_changelog_starts_with_this_version() -> None:
@@ -84,3 +87,25 @@ def test_version_flag() -> None:
             [sys.executable, "-m", "rostools", flag], capture_output=True, text=True, check=False
         )
         assert (done.returncode, done.stdout) == (0, f"rostools {rostools.__version__}\n")
+
+
+def test_the_sdists_tests_run_on_this_interpreter_when_no_other_is_found(tmp_path: Path) -> None:
+    """scripts/check-release.sh ran the sdist's unit tests on the other interpreters it found
+    only: on a machine with none, a broken sdist passed. This one (``python3``) comes first,
+    always; the others it cannot find are listed without a path."""
+    script = ROOT / "scripts" / "check-release.sh"
+    assert "sdist_pythons()" in script.read_text()  # sourced without it, the whole check runs
+    bin_dir = tmp_path / "bin"
+    bin_dir.mkdir()
+    (bin_dir / "python3").symlink_to(sys.executable)
+    env = {"PATH": f"{bin_dir}:/usr/bin:/bin", "PYENV_ROOT": str(tmp_path / "none"),
+           "HOME": str(tmp_path)}  # fmt: skip
+    listed = subprocess.run(
+        ["bash", "-c", f'source "{script}" && sdist_pythons'],
+        env=env, capture_output=True, text=True, timeout=60, check=True,
+    ).stdout.splitlines()  # fmt: skip
+    this = f"{sys.version_info[0]}.{sys.version_info[1]}"
+    assert listed[0] == f"{this} {bin_dir / 'python3'}"
+    assert sorted(line.split()[0] for line in listed) == sorted(
+        {"3.10", "3.11", "3.12", "3.13", this}
+    )

@@ -142,3 +142,26 @@ def test_a_cached_answer_is_kept_under_the_resolved_call() -> None:
     assert rosapi.cache_key(methods, "lookupService", ("/a",)) is None  # bad arity
     assert rosapi.cache_key(methods, "setParam", ("/a", "/p", [1])) is None  # unhashable
     assert rosapi.cache_key(methods, "getParam", ("/a", "/p")) == ("getParam", "/p")
+
+
+def test_a_handler_that_fails_is_answered_in_words_not_pythons(
+    caplog: pytest.LogCaptureFixture,
+) -> None:
+    """A handler's own failure keeps its words (rosmaster's "Internal failure: invalid key");
+    any other error is ours, and the caller learns the method and its kind, not Python's text
+    ("unpack_from requires a buffer of at least 1 bytes"), which goes to the log, one line."""
+    import struct
+
+    def unpack(caller: str) -> rosapi.Triple:
+        struct.unpack_from("<I", b"")
+        raise AssertionError("unreachable")
+
+    def refuse(caller: str) -> rosapi.Triple:
+        raise rosapi.Failure("invalid key")
+
+    methods = {"unpack": (unpack, 0, ()), "refuse": (refuse, "", ())}
+    assert rosapi.dispatch(methods, "refuse", ("/c",)) == [0, "Internal failure: invalid key", ""]
+    answer = rosapi.dispatch(methods, "unpack", ("/c",))
+    assert answer == [0, "Internal failure: unpack failed (struct.error)", 0]
+    [record] = caplog.records
+    assert record.getMessage().startswith("unpack failed: struct.error: unpack_from requires")

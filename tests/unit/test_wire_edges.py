@@ -369,14 +369,18 @@ def parse(data: bytes) -> wx.HttpMessage | None:
         (b"POST / HTTP/1.1\r\nContent-Length: x\r\n\r\n", 400,
          ": Content-Length is not a number"),
         (b"POST / HTTP/1.1\r\nContent-Length: %d\r\n\r\n" % (wx.MAX_BODY + 1), 413, ""),
-        (b"x" * (wx.MAX_HEADERS + 1), 431, ""),
+        (b"x" * (wx.MAX_HEADERS + 1), 414, ""),  # the request line alone: rosmaster's 414
+        (b"POST / HTTP/1.1\r\nX: " + b"x" * wx.MAX_HEADERS, 431, ""),
+        (b"POST / HTTP/1.1\r\nX: " + b"x" * wx.MAX_HEADERS + b"\r\n\r\n", 431, ""),  # one read
     ],
 )  # fmt: skip
 def test_http_errors_carry_the_standard_reason(data: bytes, status: int, detail: str) -> None:
     with pytest.raises(wx.HttpError) as caught:
         parse(data)
-    # RFC 7231's reason phrases; Python's own name for 413 changed with each RFC
-    phrase = "Payload Too Large" if status == 413 else HTTPStatus(status).phrase
+    # RFC 7231's reason phrases; Python's own names for 413 and 414 changed with each RFC
+    phrase = {413: "Payload Too Large", 414: "Request-URI Too Long"}.get(
+        status, HTTPStatus(status).phrase
+    )
     assert caught.value.status == status
     assert caught.value.reason == phrase + detail
     assert str(caught.value) == f"{status} {phrase}{detail}"

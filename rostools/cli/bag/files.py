@@ -180,7 +180,9 @@ def _in_place(
         def step(progress: Any) -> CopyReport:
             return dataclasses.replace(run(path, dst, progress), output=keep or dst)
 
-        report = copy_command(output_format(ctx, fmt), quiet, label, step, check=False)
+        report = copy_command(
+            output_format(ctx, fmt), quiet, label, step, check=False, say=not quiet
+        )
         swap(path, dst, keep)
         return list(report.lost)
 

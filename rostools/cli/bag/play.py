@@ -114,22 +114,24 @@ async def _play(
 
     player = Player(node, readers, opts)
     if shown is not None:
-        player.measure_topics()
+        player.measure()
         for path in shown:
             sys.stderr.write(f"Opening {one_line(path)}\n")
     keys = {" ": player.toggle_pause, "s": player.step, "t": player.toggle_pause_topics}
     with keyboard(keys, asyncio.get_running_loop()) as keys_read:
-        if shown is not None and keys_read:
-            sys.stderr.write("Hit space to toggle paused, or 's' to step.\n")
-            if opts.pause_topics:
-                sys.stderr.write("Hit 't' to toggle pausing on --pause-topics.\n")
         if shown is None:
             return await player.run(stop)
-        return await player.run(stop, StatusLines(sys.stderr.isatty()), _say)
+        hints = ["Hit space to toggle paused, or 's' to step.\n"] if keys_read else []
+        if keys_read and opts.pause_topics:
+            hints.append("Hit 't' to toggle pausing on --pause-topics.\n")
+        return await player.run(stop, StatusLines(sys.stderr.isatty()), partial(_say, hints))
 
 
-def _say(text: str) -> None:
+def _say(hints: list[str], text: str) -> None:
+    """rosbag play's lines; the key hints after the wait's, as rosbag prints them."""
     sys.stderr.write(text)
+    if text.startswith("Waiting ") and text.endswith(" done.\n"):
+        sys.stderr.write("".join(hints))
     sys.stderr.flush()
 
 

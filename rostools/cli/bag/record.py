@@ -181,6 +181,7 @@ def _record_options(
         size=size * 1024 * 1024 if size else None,
         duration=parse_duration(duration, "--duration") if duration else None,
         max_splits=splitting.max_splits, repeat_latched=splitting.repeat_latched, limit=limit,
+        dated=None if out.output_name is not None else (lambda now: out.path(now)[0]),
     )  # fmt: skip
     opts.check()
     return opts

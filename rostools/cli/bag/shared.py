@@ -137,17 +137,20 @@ def copy_command(
     label: str,
     run: Callable[[Any], CopyReport],
     check: bool = True,
+    say: bool = True,
 ) -> CopyReport:
     """Run a copying command with a progress bar, then report what it wrote.
 
-    With ``check``, exit 6 if the input had damage that was left out.
+    With ``check``, exit 6 if the input had damage that was left out; without ``say``, the
+    text report's lines are left out (``compress -q`` prints nothing, as rosbag's).
     """
     progress = Progress(label, fmt, quiet)
     try:
         report = run(progress)
     finally:
         progress.done()
-    _report(fmt, report)
+    if say or fmt is not Format.text:
+        _report(fmt, report)
     if check:
         report.raise_if_lost()
     return report

@@ -74,7 +74,7 @@ def set(
     if sum(given) != 1:
         raise UsageError("give exactly one of a value, --textfile or --binfile")
     if textfile is not None:
-        parsed: Any = _read(textfile).decode("utf-8", "replace")
+        parsed: Any = _text(_read(textfile), str(textfile))
     elif binfile is not None:
         parsed = xmlrpc.client.Binary(_read(binfile))
     else:
@@ -82,6 +82,14 @@ def set(
         parsed = "" if value == "" else paramyaml.load(value)
     paramyaml.check_value(parsed, key)
     _set_tree(s.master(TOOL), key, parsed, verbose)
+
+
+def _text(data: bytes, source: str) -> str:
+    """``data`` as UTF-8; else a usage error (rosparam refuses it: XML-RPC strings are text)."""
+    try:
+        return data.decode()
+    except UnicodeDecodeError as err:
+        raise UsageError(f"{source} is not UTF-8 text (byte {err.start})") from None
 
 
 def _read(path: Path) -> bytes:
@@ -114,12 +122,13 @@ def load(
     verbose: VerboseOpt = False,
 ) -> None:
     """Load parameters from a YAML file (every document; a '_ns' key picks a namespace)."""
-    text = sys.stdin.read() if file == "-" else _read(Path(file)).decode("utf-8", "replace")
+    source = "stdin" if file == "-" else file
+    text = _text(sys.stdin.buffer.read() if file == "-" else _read(Path(file)), source)
     say(verbose, "reading parameters from " + ("stdin" if file == "-" else f"[{file}]"))
     base = script_resolve(namespace, TOOL)
     proxy = s.master(TOOL)
     loaded: list[tuple[Any, str]] = []
-    for doc in paramyaml.load_all(text, "stdin" if file == "-" else file):
+    for doc in paramyaml.load_all(text, source):
         if doc is None:
             continue
         ns = base

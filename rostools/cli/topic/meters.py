@@ -122,8 +122,10 @@ class Meter:
             if ref.field:
                 raise UsageError(f"{topic}: field paths do not apply here; give the topic itself")
 
+            # the sink's key is the topic as given: hz keeps a meter per argument, and
+            # ``hz foo foo:=/chatter`` subscribes to /chatter (a KeyError before)
             def on_frames(
-                frames: list[Frame], conn: InboundConnection, now: float, t: str = ref.topic
+                frames: list[Frame], conn: InboundConnection, now: float, t: str = topic
             ) -> None:
                 if self.clock.sim:
                     if not self.clock.valid:
@@ -231,7 +233,7 @@ def _filter(
     if not expr:
         return None
     from rostools.msgs import learnt
-    from rostools.msgs.codec import DECODE_ERRORS, DecodeError
+    from rostools.msgs.codec import DECODE_ERRORS, DecodeError, why_not
     from rostools.msgs.expr import compile_expression
     from rostools.msgs.store import TypeStore
 
@@ -247,7 +249,7 @@ def _filter(
             try:
                 msg = decode(data, 0)[0]
             except (DecodeError, *DECODE_ERRORS) as err:
-                why = f"a message on {topic} does not decode as {kind}: {err}"
+                why = f"a message on {topic} does not decode as {kind}: {why_not(err)}"
                 skip(DecodeError(why), conn, data)
                 continue
             if wanted(topic, msg):

@@ -121,7 +121,7 @@ class Echo:
         Bytes that do not decode as their type says are a ``DecodeError`` naming both; with
         ``skip``, it is handed the error and the message, and printing goes on.
         """
-        from rostools.msgs.codec import DECODE_ERRORS, DecodeError
+        from rostools.msgs.codec import DECODE_ERRORS, DecodeError, why_not
 
         limit = self.opts.count
         if printer.fast is not None and limit is None:
@@ -144,7 +144,7 @@ class Echo:
                 except (DecodeError, *DECODE_ERRORS) as err:
                     failure = DecodeError(
                         f"a message on {printer.topic} does not decode as {printer.type_name}: "
-                        f"{err}"
+                        f"{why_not(err)}"
                     )
                     if skip is None:
                         raise failure from err

@@ -124,6 +124,10 @@ GROUPS: dict[str, Group] = {
             "tests/unit/test_snapshot_table.py",
         ),
     ),
+    "player": Group(
+        modules=("rostools/bag/player.py", "rostools/bag/play_control.py"),
+        tests=("tests/unit/bag/test_play_control.py", "tests/unit/bag/test_player.py"),
+    ),
 }
 
 #: mutmut's exit codes for a mutant (mutmut.stats.status_by_exit_code), as this report counts

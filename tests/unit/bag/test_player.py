@@ -7,6 +7,7 @@ a send late), with an upper bound far from any load (``LATE``).
 from __future__ import annotations
 
 import asyncio
+import itertools
 import struct
 import time
 from collections.abc import Awaitable, Callable, Hashable
@@ -219,8 +220,8 @@ def test_a_latched_connection_makes_its_topic_latched(tmp_path: Path) -> None:
             "/chatter", "std_msgs/String", STRING_MD5, "string data\n", callerid="/l", latching=True
         )
         writer.write(conn, T0 + 1, string("b"))
-    played = play([bag, tmp_path / "b.bag"], immediate=True)
-    assert played.node.publishers["/chatter"].latch
+    for order in ([bag, tmp_path / "b.bag"], [tmp_path / "b.bag", bag]):
+        assert play(order, immediate=True).node.publishers["/chatter"].latch
 
 
 def test_messages_go_out_at_their_recorded_pace(tmp_path: Path) -> None:
@@ -229,6 +230,17 @@ def test_messages_go_out_at_their_recorded_pace(tmp_path: Path) -> None:
     assert played.node.texts() == [f"m{i}" for i in range(10)]
     assert_paced(played.node.sent, [i * 0.01 for i in range(10)], 0.5, played.began)
     assert played.ended - played.began < 0.18 + LATE
+
+
+def test_play_starts_with_the_first_message_in_the_window(tmp_path: Path) -> None:
+    """-s into a gap: the first message played goes at once, the next at their pace."""
+    bag = write_bag(
+        tmp_path / "a.bag", [("/chatter", 0, "a"), ("/chatter", 3.0, "b"), ("/chatter", 3.2, "c")]
+    )
+    played = play([bag], start=0.1)
+    b, c = played.node.sent
+    assert b.at - played.began < 2.0  # not the 2.9 s of bag time before it
+    assert c.at >= b.at + 0.2 - 0.01  # c is timed from b (b was due when it was read)
 
 
 def test_a_rate_plays_faster(tmp_path: Path) -> None:
@@ -254,6 +266,7 @@ def test_start_and_duration_choose_the_messages_and_send_the_latched_before(
     topics = play([bag], immediate=True, topics=["/chatter"], start=0.035)
     assert topics.node.texts() == ["m4", "m5", "m6", "m7", "m8", "m9"]
     assert set(topics.node.publishers) == {"/chatter"}
+    assert play([bag], immediate=True, topics=["/latched"]).node.texts() == ["old", "last"]
 
 
 def test_the_status_spans_the_messages_played(tmp_path: Path) -> None:
@@ -274,6 +287,51 @@ def test_the_status_spans_the_messages_played(tmp_path: Path) -> None:
         none = Player(FakeNode(), readers, PlayOptions(topics=["/chatter"], start=0.3))  # type: ignore[arg-type]
         none.measure()
         assert (none.shown_from, none.shown_until) == (none.from_ns, none.until_ns)
+        exact = Player(FakeNode(), readers, PlayOptions(duration=0.08))  # type: ignore[arg-type]
+        exact.measure()  # -u ending on a message keeps it
+        assert exact.shown_until == T0 + 8 * NS // 100
+        late = Player(FakeNode(), readers, PlayOptions(start=0.015))  # type: ignore[arg-type]
+        late.measure()  # -s alone: from the first message at or after it, to the bags' end
+        assert (late.shown_from, late.shown_until) == (T0 + 2 * NS // 100, T0 + NS // 2)
+        past = Player(FakeNode(), readers, PlayOptions(start=10.0))  # type: ignore[arg-type]
+        past.measure()  # -s past the end: nothing plays
+        assert past.status.total == 0.0
+    finally:
+        readers[0].close()
+
+
+def test_the_status_spans_several_bags(tmp_path: Path) -> None:
+    long = write_bag(tmp_path / "long.bag", [("/chatter", 0, "a"), ("/chatter", 0.5, "b")])
+    short = write_bag(tmp_path / "short.bag", [("/chatter", 0.1, "c")])
+    readers = [open_bag(long), open_bag(short)]
+    try:
+        player = Player(FakeNode(), readers, PlayOptions(topics=["/chatter"]))  # type: ignore[arg-type]
+        player.measure()
+        assert (player.shown_from, player.shown_until) == (T0, T0 + NS // 2)
+    finally:
+        for reader in readers:
+            reader.close()
+
+
+def test_an_empty_bag_plays_nothing(tmp_path: Path) -> None:
+    with open_writer(tmp_path / "empty.bag"):
+        pass
+    played = play([tmp_path / "empty.bag"])
+    assert played.count == 0 and not played.node.sent
+    assert (played.player.status.total, played.player.status.bag_time) == (0.0, 0)
+    past = play([write_bag(tmp_path / "a.bag", TEN)], start=5.0)
+    assert past.count == 0 and past.player.status.total == 0.0
+
+
+def test_the_bag_time_playing_is_paced_by_the_rate(tmp_path: Path) -> None:
+    """The status line's and /clock's bag time: from -s, at the rate, never past the next."""
+    bag = write_bag(tmp_path / "a.bag", TEN)
+    readers = [open_bag(bag)]
+    try:
+        player = Player(FakeNode(), readers, PlayOptions(rate=2.0, start=0.01))  # type: ignore[arg-type]
+        player._origin = 50.0
+        assert player._bag_time(50.25, T0 + 10 * NS) == T0 + NS // 100 + NS // 2
+        assert player._bag_time(50.25, T0 + NS // 10) == T0 + NS // 10
     finally:
         readers[0].close()
 
@@ -316,6 +374,35 @@ def test_stopping_ends_the_play_at_once(tmp_path: Path) -> None:
     assert played.ended - played.began < LATE
 
 
+def test_a_stopped_play_shows_the_last_message_sent(tmp_path: Path) -> None:
+    many = [("/chatter", i * 0.001, f"m{i}") for i in range(3000)]
+    bag = write_bag(tmp_path / "a.bag", many)
+
+    async def stop_soon(player: Player, node: FakeNode, stop: asyncio.Event) -> None:
+        await until(lambda: len(node.sent) > 0)
+        stop.set()
+
+    played = play([bag], stop_soon, immediate=True)
+    assert 0 < played.count < 3000
+    last = played.shown[-1]
+    assert last.state is State.DONE
+    assert last.bag_time == T0 + round((played.count - 1) * 0.001 * NS)
+
+
+def test_play_without_a_status_line(tmp_path: Path) -> None:
+    """-q: no status shown, the messages as paced."""
+    bag = write_bag(tmp_path / "a.bag", TEN[:3])
+    node = FakeNode()
+    with open_bag(bag) as reader:
+        player = Player(node, [reader], PlayOptions(delay=0.0, clock=True))  # type: ignore[arg-type]
+
+        async def main() -> int:
+            return await asyncio.wait_for(player.run(asyncio.Event()), LATE)
+
+        assert asyncio.run(main()) == 3
+    assert node.texts("/chatter") == ["m0", "m1", "m2"]
+
+
 def test_keep_alive_waits_for_the_stop(tmp_path: Path) -> None:
     bag = write_bag(tmp_path / "a.bag", TEN[:1])
     stopped_at: list[float] = []
@@ -353,6 +440,25 @@ def test_a_paused_start_waits_and_a_step_sends_one(tmp_path: Path) -> None:
     assert_paced(played.node.sent, [0.0, 0.01, 0.02, 0.03], 1.0, stepped[0])
 
 
+def test_steps_send_at_once_and_the_rest_follows_from_the_last(tmp_path: Path) -> None:
+    bag = write_bag(
+        tmp_path / "a.bag", [("/chatter", 0, "a"), ("/chatter", 2.0, "b"), ("/chatter", 2.1, "c")]
+    )
+    stepped: list[float] = []
+
+    async def steer(player: Player, node: FakeNode, stop: asyncio.Event) -> None:
+        player.step()
+        player.step()  # two presses of ``s``: two messages
+        await until(lambda: len(node.sent) == 2)
+        stepped.append(time.monotonic())
+        player.toggle_pause()
+
+    played = play([bag], steer, pause=True)
+    a, b, c = played.node.sent
+    assert b.at - a.at < 2.0  # a step does not wait for the message's time
+    assert c.at >= b.at + 0.1 - 0.01 and c.at - stepped[0] < 2.0
+
+
 def test_paused_time_does_not_count(tmp_path: Path) -> None:
     bag = write_bag(tmp_path / "a.bag", [("/chatter", 0, "a"), ("/chatter", 0.4, "b")])
     paused: list[float] = []
@@ -370,6 +476,33 @@ def test_paused_time_does_not_count(tmp_path: Path) -> None:
     a, b = played.node.sent
     # b follows a by its 0.4 s and the pause (less what the loop took to see the pause)
     assert b.at - a.at >= 0.4 + (paused[1] - paused[0]) - 0.1
+
+
+def test_the_status_shows_a_pause_and_a_stop_while_paused_sends_nothing(tmp_path: Path) -> None:
+    bag = write_bag(tmp_path / "a.bag", [("/chatter", 0, "a"), ("/chatter", 0.5, "b")])
+    shown: list[Status] = []
+    node = FakeNode()
+
+    async def pause_then_stop(player: Player, stop: asyncio.Event) -> None:
+        await until(lambda: len(node.sent) == 1)
+        before = len(shown)
+        player.set_paused(True)
+        await until(lambda: any(s.state is State.PAUSED for s in shown[before:]))
+        stop.set()
+
+    with open_bag(bag) as reader:
+        player = Player(node, [reader], PlayOptions(delay=0.0))  # type: ignore[arg-type]
+
+        async def main() -> None:
+            stop = asyncio.Event()
+            task = asyncio.get_running_loop().create_task(pause_then_stop(player, stop))
+            await asyncio.wait_for(
+                player.run(stop, lambda s: shown.append(Status(**vars(s)))), LATE
+            )
+            await task
+
+        asyncio.run(main())
+    assert node.texts() == ["a"]
 
 
 def test_pause_topics_pause_before_their_messages(tmp_path: Path) -> None:
@@ -391,6 +524,19 @@ def test_pause_topics_pause_before_their_messages(tmp_path: Path) -> None:
         player.toggle_pause_topics()  # ``t``: they pause no more
 
     assert play([bag], toggle_first, pause_topics=["/tf"]).node.texts() == ["a", "t", "b"]
+
+
+def test_the_keys_toggle(tmp_path: Path) -> None:
+    bag = write_bag(tmp_path / "a.bag", TEN[:1])
+    with open_bag(bag) as reader:
+        player = Player(FakeNode(), [reader], PlayOptions(pause_topics=["/tf"]))  # type: ignore[arg-type]
+        player.toggle_pause()
+        assert player.status.state is State.PAUSED
+        player.toggle_pause()
+        assert player.status.state is State.RUNNING
+        player.toggle_pause_topics()
+        player.toggle_pause_topics()
+        assert player.pausing_on_topics
 
 
 def test_the_pause_service_pauses_and_resumes(tmp_path: Path) -> None:
@@ -463,14 +609,39 @@ def test_play_waits_for_the_subscribers_the_master_listed(tmp_path: Path) -> Non
     assert played.node.sent[0].at < played.node.advertised_at + CONNECT_GRACE + LATE
 
 
+def test_a_listed_subscriber_that_never_connects_holds_play_a_while_only(tmp_path: Path) -> None:
+    bag = write_bag(tmp_path / "a.bag", TEN[:1])
+    node = FakeNode()
+    node.listed["/chatter"] = ["/dead"]
+    played = play([bag], node=node)
+    assert played.node.sent[0].at >= played.node.advertised_at + CONNECT_GRACE - EARLY
+
+
 def test_a_long_gap_is_skipped_when_asked(tmp_path: Path) -> None:
+    """--skip-empty is bag time: at -r 2, a gap of 8 s of bag is jumped, 1 s is not."""
     bag = write_bag(
-        tmp_path / "a.bag", [("/chatter", 0, "a"), ("/chatter", 0.05, "b"), ("/chatter", 30, "c")]
+        tmp_path / "a.bag",
+        [
+            ("/chatter", 0, "a"),
+            ("/chatter", 1.0, "b"),
+            ("/chatter", 9.0, "c"),
+            ("/chatter", 9.4, "d"),
+        ],
     )
-    played = play([bag], skip_empty=1.0)
-    first, second, third = played.node.sent
-    assert second.at - first.at >= 0.05 - EARLY  # a short gap is played
-    assert third.at - second.at < LATE  # 30 s are not
+    played = play([bag], skip_empty=2.0, rate=2.0)
+    _, b, c, d = played.node.sent
+    assert b.at >= played.began + 0.5 - EARLY  # a short gap is played
+    assert c.at - b.at < 2.0  # 4 s at -r 2 are not
+    assert d.at >= c.at + 0.2 - 0.01  # after the jump, the pace goes on
+
+
+def test_the_clock_ticks_at_hz_through_a_gap(tmp_path: Path) -> None:
+    bag = write_bag(tmp_path / "a.bag", [("/chatter", 0, "a"), ("/chatter", 0.5, "b")])
+    played = play([bag], clock=True, hz=50)
+    ticks = [s.at for s in played.node.sent if s.topic == "/clock"]
+    assert len(ticks) >= 12  # some 25 in the 0.5 s gap, each timed by itself
+    gaps = sorted(b - a for a, b in itertools.pairwise(ticks))
+    assert gaps[len(gaps) // 2] < 0.03  # a median of 20 ms: --hz 50
 
 
 def test_the_clock_follows_bag_time(tmp_path: Path) -> None:
@@ -506,6 +677,38 @@ def test_the_rate_control_topic_holds_play_until_its_stamps_catch_up(tmp_path: P
     assert played.player.status.state is State.DONE
 
 
+def test_time_held_by_the_rate_control_topic_does_not_count(tmp_path: Path) -> None:
+    bag = write_bag(
+        tmp_path / "a.bag", [("/chatter", 0, "a"), ("/chatter", 0.3, "b"), ("/chatter", 0.6, "c")]
+    )
+    conn = type("Conn", (), {"header": {"message_definition": STAMPED_DEF}})()
+
+    async def stamps(player: Player, node: FakeNode, stop: asyncio.Event) -> None:
+        await until(lambda: player.status.state is State.DELAYED)
+        await asyncio.sleep(0.3)
+        stamp = T0 + 10 * NS  # far ahead: nothing is held again
+        node.subscribed["/ctl"]([struct.pack("<III", 0, stamp // NS, stamp % NS)], conn, 0.0)
+
+    played = play([bag], stamps, rate_control_topic="/ctl", rate_control_max_delay=0.1)
+    _, b, c = played.node.sent
+    assert c.at >= b.at + 0.3 - 0.01  # the hold moved c on with b
+    after = [
+        s for s in played.shown if s.state is not State.DONE and s.bag_time > T0 + 3 * NS // 10
+    ]
+    assert after and all(s.state is State.RUNNING for s in after)
+
+
+def test_a_stop_while_held_sends_nothing_more(tmp_path: Path) -> None:
+    bag = write_bag(tmp_path / "a.bag", [("/chatter", 0, "a"), ("/chatter", 0.3, "b")])
+
+    async def stop_when_held(player: Player, node: FakeNode, stop: asyncio.Event) -> None:
+        await until(lambda: player.status.state is State.DELAYED)
+        stop.set()
+
+    played = play([bag], stop_when_held, rate_control_topic="/ctl", rate_control_max_delay=0.1)
+    assert played.node.texts() == ["a"]
+
+
 @pytest.mark.parametrize(
     ("options", "why"),
     [
@@ -522,3 +725,4 @@ def test_options_that_cannot_play_are_usage_errors(
     assert str(refused.value) == why
     with open_bag(bag) as reader:  # --hz alone is not checked without --clock
         Player(FakeNode(), [reader], PlayOptions(hz=0.0))  # type: ignore[arg-type]
+        Player(FakeNode(), [reader], PlayOptions(clock=True, hz=0.5))  # type: ignore[arg-type]

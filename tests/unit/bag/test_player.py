@@ -140,14 +140,16 @@ def play(
     paths: list[Path],
     during: Callable[[Player, FakeNode, asyncio.Event], Awaitable[None]] | None = None,
     node: FakeNode | None = None,
+    shown: list[Status] | None = None,
     **options: Any,
 ) -> Played:
-    """Play ``paths`` with ``options`` (no -d unless given); ``during`` runs beside it."""
+    """Play ``paths`` with ``options`` (no -d unless given); ``during`` runs beside it, and
+    ``shown`` gets each status shown as it is."""
     options.setdefault("delay", 0.0)
     node = node or FakeNode()
     readers: list[BagReader] = [open_bag(p) for p in paths]
     player = Player(node, readers, PlayOptions(**options))  # type: ignore[arg-type]
-    shown: list[Status] = []
+    shown = [] if shown is None else shown
     said: list[str] = []
 
     def show(status: Status) -> None:
@@ -241,6 +243,14 @@ def test_play_starts_with_the_first_message_in_the_window(tmp_path: Path) -> Non
     b, c = played.node.sent
     assert b.at - played.began < 2.0  # not the 2.9 s of bag time before it
     assert c.at >= b.at + 0.2 - 0.01  # c is timed from b (b was due when it was read)
+
+
+def test_the_pace_is_the_recordings_not_slower(tmp_path: Path) -> None:
+    """A second of bag is a second of play: the last message is due one second after the first
+    (a late send does not delay the next: each is timed from the start)."""
+    bag = write_bag(tmp_path / "a.bag", [("/chatter", 0, "a"), ("/chatter", 1.0, "b")])
+    a, b = play([bag]).node.sent
+    assert 1.0 - EARLY <= b.at - a.at < 1.6
 
 
 def test_a_rate_plays_faster(tmp_path: Path) -> None:
@@ -348,6 +358,14 @@ def test_the_end_shows_done_at_the_last_time(tmp_path: Path) -> None:
     for s in during:
         assert T0 <= s.bag_time <= T0 + 9 * NS // 100
         assert s.elapsed == pytest.approx((s.bag_time - T0) / NS)
+
+
+def test_the_status_is_refreshed_ten_times_a_second(tmp_path: Path) -> None:
+    bag = write_bag(tmp_path / "a.bag", [("/chatter", 0, "a"), ("/chatter", 0.5, "b")])
+    played = play([bag])
+    running = [s for s in played.shown if s.state is State.RUNNING]
+    assert len(running) >= 3  # some 5 in the 0.5 s gap
+    assert len(running) <= (played.ended - played.began) / 0.1 + 3
 
 
 def test_a_loop_plays_again_until_stopped(tmp_path: Path) -> None:
@@ -665,13 +683,15 @@ def test_the_rate_control_topic_holds_play_until_its_stamps_catch_up(tmp_path: P
     async def stamps(player: Player, node: FakeNode, stop: asyncio.Event) -> None:
         await until(lambda: player.status.state is State.DELAYED)
         delays.append(player.status.delay)
+        await until(lambda: any(s.state is State.DELAYED for s in shown))  # the status says so
         assert node.texts() == ["a"]
         conn = type("Conn", (), {"header": {"message_definition": STAMPED_DEF}})()
         stamp = T0 + 3 * NS // 10
         frame = struct.pack("<III", 0, stamp // NS, stamp % NS)
         node.subscribed["/ctl"]([frame], conn, 0.0)
 
-    played = play([bag], stamps, rate_control_topic="/ctl", rate_control_max_delay=0.1)
+    shown: list[Status] = []
+    played = play([bag], stamps, rate_control_topic="/ctl", rate_control_max_delay=0.1, shown=shown)
     assert played.node.texts() == ["a", "b"]
     assert delays and 0.1 < delays[0] <= 0.3
     assert played.player.status.state is State.DONE

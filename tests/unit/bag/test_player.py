@@ -409,8 +409,8 @@ def test_the_clock_ticks_at_hz_with_the_bag_time(vt: VirtualTime, tmp_path: Path
 
 def test_paused_time_does_not_count(vt: VirtualTime, tmp_path: Path) -> None:
     bag = write_bag(tmp_path / "a.bag", [("/chatter", 0, "a"), ("/chatter", 0.4, "b")])
-    played = play(vt, [bag], [(0.1, pause), (0.65, resume)])
-    assert played.node.times() == approx([0.0, 0.95])  # b's 0.4 s, and the 0.55 s paused
+    played = play(vt, [bag], [(0.05, pause), (0.65, resume)])
+    assert played.node.times() == approx([0.0, 1.0])  # b's 0.4 s, and the 0.6 s paused
     paused = [at for at, s in played.shown if s.state is State.PAUSED]
     assert len(paused) >= 5 and max(paused) < 0.65  # the status says so, ten times a second
 
@@ -572,6 +572,19 @@ def test_play_waits_for_the_subscribers_the_master_listed(vt: VirtualTime, tmp_p
     dead.listed["/chatter"] = ["/dead"]  # never connects: play waits CONNECT_GRACE only
     late = play(vt, [bag], node=dead)
     assert CONNECT_GRACE <= late.node.sent[0].at <= CONNECT_GRACE + 0.005 + 1e-9
+
+
+def test_a_stop_before_play_sends_nothing(vt: VirtualTime, tmp_path: Path) -> None:
+    """Ctrl-C during -d, or while play waits for subscribers, ends it at once."""
+    bag = write_bag(tmp_path / "a.bag", [("/latched", 0, "map"), *TEN[1:]])
+    delayed = play(vt, [bag], [(0.5123, halt)], delay=5.0, start=0.05)
+    assert not delayed.node.sent and delayed.ended == pytest.approx(0.5123)
+    waiting = play(vt, [bag], [(0.1234, halt)], wait_for_subscribers=True)
+    assert not waiting.node.sent and waiting.ended == pytest.approx(0.1234)
+    node = FakeNode(vt.monotonic)
+    node.listed["/chatter"] = ["/dead"]
+    listed = play(vt, [bag], [(0.1023, halt)], node=node)
+    assert not listed.node.sent and listed.ended == pytest.approx(0.1023)
 
 
 def test_a_loop_plays_again_until_stopped(vt: VirtualTime, tmp_path: Path) -> None:

@@ -389,6 +389,8 @@ def test_a_long_gap_is_skipped_when_asked(vt: VirtualTime, tmp_path: Path) -> No
         ],
     )
     assert play(vt, [bag], skip_empty=2.0, rate=2.0).node.times() == approx([0, 0.5, 0.5, 0.7])
+    # "more than": a gap of exactly --skip-empty is played
+    assert play(vt, [bag], skip_empty=1.0).node.times()[:2] == approx([0, 1.0])
 
 
 def test_the_clock_ticks_at_hz_with_the_bag_time(vt: VirtualTime, tmp_path: Path) -> None:

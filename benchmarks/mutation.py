@@ -1,7 +1,7 @@
 """Mutation testing of the modules where a silent bug costs most; prints a score per module.
 
 Usage: python -m benchmarks.mutation [GROUP ...] [--jobs N] [--survivors] [--fresh]
-       (groups: wire, master, bag, store; all by default)
+       (groups: wire, master, bag, store, rates, snapshot, player; all by default)
 
 mutmut plants one small bug at a time (a flipped comparison, a changed constant, a dropped
 call) and runs the tests that reach the mutated function; a mutant that no test notices
@@ -104,6 +104,29 @@ GROUPS: dict[str, Group] = {
             # the seven messages of an .action are built by the store
             "tests/unit/test_action_types.py",
         ),
+    ),
+    "rates": Group(modules=("rostools/rates.py",), tests=("tests/unit/test_rates.py",)),
+    # bag snapshot's logic; its services and `bag trigger` are wire glue, tested end to end
+    "snapshot": Group(
+        modules=(
+            "rostools/bag/ringbuffer.py",
+            "rostools/bag/snapshot_live.py",
+            "rostools/bag/snapshot_job.py",
+            "rostools/bag/snapshot_srv.py",
+            "rostools/bag/snapshot.py",
+        ),
+        tests=(
+            "tests/unit/bag/test_ringbuffer.py",
+            "tests/unit/bag/test_snapshot_live.py",
+            "tests/unit/bag/test_snapshot_srv.py",
+            "tests/unit/bag/test_snapshot_job.py",
+            "tests/unit/bag/test_snapshotter.py",
+            "tests/unit/test_snapshot_table.py",
+        ),
+    ),
+    "player": Group(
+        modules=("rostools/bag/player.py", "rostools/bag/play_control.py"),
+        tests=("tests/unit/bag/test_play_control.py", "tests/unit/bag/test_player.py"),
     ),
 }
 

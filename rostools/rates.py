@@ -102,7 +102,10 @@ class RateMeter:
     def _trim(self, keep_after: float) -> None:
         excess = self.held - self.size
         steps = self.steps
-        while excess > 0 and steps[0][2] < keep_after:
+        # A batch that ended min_span ago or earlier is outside the span; without a span
+        # (an explicit -w) that is every batch, so the window is a count of messages even
+        # when one read brings more than it holds.
+        while excess > 0 and steps[0][2] <= keep_after:
             k = int(steps[0][0])
             if k <= excess:
                 steps.popleft()

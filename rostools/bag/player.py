@@ -239,7 +239,8 @@ class Player:
             await first(stop.wait(), timeout=rest)
         if say is not None:
             say(f"Waiting {self.opts.delay:g} seconds after advertising topics... done.\n")
-        if self.from_ns > self.bag_start:  # -s: what a late subscriber would still get
+        # -s: what a late subscriber would still get (unless stopped while waiting)
+        if self.from_ns > self.bag_start and not stop.is_set():
             for conn, _, data in latched_before(self.readers, self._topics(), self.from_ns):
                 self._publish(conn, data)
         if self.rate_control is not None:

@@ -108,10 +108,11 @@ class Held:
         return min((q[0][0] for q, _ in self.topics.values() if q), default=None)
 
     def any_between(self, start: int, stop: int) -> bool:
-        """Whether some message held may lie in [start, stop] (or a latched one is kept)."""
+        """Whether some message held lies in [start, stop] (or a latched one is kept)."""
         if self.latched:
             return True
-        return any(q and q[0][0] <= stop and q[-1][0] >= start for q, _ in self.topics.values())
+        # newest first: a window usually ends near the trigger, so this stops at once
+        return any(start <= e[0] <= stop for q, _ in self.topics.values() for e in reversed(q))
 
     def messages(self, start: int, stop: int) -> Iterator[Entry]:
         """The messages in [start, stop], in the order they arrived, let go as they are read."""
@@ -237,16 +238,6 @@ class RingBuffer:
             if not tb.skip and tb.entries[0][0] >= cutoff:
                 return
             self._pop_oldest()
-
-    def lost_since(self, start_ns: int, topics: set[str] | None = None) -> Lost:
-        """Messages of ``topics`` (None: all) received at ``start_ns`` or later and evicted."""
-        count, exact = 0, True
-        for name, tb in self.topics.items():
-            if topics is None or name in topics:
-                lost = tb.lost_since(start_ns)
-                count += lost.count
-                exact = exact and lost.exact
-        return Lost(count, exact)
 
     def copy(self, topics: set[str] | None = None) -> Held:
         """References to what is held now, of ``topics`` (None: all)."""

@@ -107,10 +107,11 @@ class LiveQueue:
             if reader.taken >= last and reader.end_at is None:
                 self.cond.wait(timeout)
                 last = self.tail if reader.end_at is None else reader.end_at
-            first = reader.taken - self.base
+            # the queue may have dropped past an ended file's end (another file kept it moving)
+            first, last = reader.taken - self.base, max(last, reader.taken) - self.base
             batch: list[Entry] = []
             size = 0
-            for entry in itertools.islice(self.entries, first, last - self.base):
+            for entry in itertools.islice(self.entries, first, last):
                 if batch and (size >= BATCH_BYTES or len(batch) >= BATCH_MESSAGES):
                     break
                 batch.append(entry)

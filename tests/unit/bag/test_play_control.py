@@ -23,6 +23,7 @@ def test_set_bool_type_is_std_srvs() -> None:
     ("definition", "expected"),
     [
         ("# comment\n\nHeader header\nfloat64 x\n", True),
+        ("# a comment # with two marks\nHeader header\n", True),
         ("std_msgs/Header header  # spelt out\n", True),
         ("uint32 seq\ntime stamp\nstring frame_id\n", False),  # a Header itself: no header
         ("float64 x\nHeader header\n", False),
@@ -45,6 +46,7 @@ def reply(data: bytes) -> tuple[bool, str]:
         (b"\x01", True, (False, "Bag is already paused."), []),
         (b"\x00", True, (True, "Playback is now resumed"), [False]),
         (b"\x00", False, (False, "Bag is already running."), []),
+        (b"", True, (True, "Playback is now resumed"), [False]),  # too short: false
     ],
 )
 def test_pause_playback_answers_as_rosbag(
@@ -75,3 +77,31 @@ def test_delayed_status_line_shows_the_delay() -> None:
     assert line.endswith("   Delay: 0.42 \r")
     running = status_line(Status(bag_time=100 * 10**9, total=1.0))
     assert running.startswith(" [RUNNING]") and "Delay" not in running
+
+
+class _Conn:
+    def __init__(self, header: dict[str, str] | None) -> None:
+        self.header = header
+
+
+def _stamped(secs: int, nsecs: int) -> bytes:
+    return struct.pack("<III", 7, secs, nsecs)
+
+
+def test_rate_control_follows_the_newest_stamp(caplog: pytest.LogCaptureFixture) -> None:
+    woken: list[int] = []
+    control = RateControl("/ctl", 0.5, lambda: woken.append(1))
+    control.start(100 * 10**9)
+    stamped = _Conn({"message_definition": "Header header\nfloat64 x\n"})
+    control._frames([_stamped(101, 0), _stamped(102, 250_000_000)], stamped, 0.0)  # type: ignore[arg-type]
+    assert control.last_ns == 102_250_000_000 and woken == [1]
+    assert not control.holds(102_750_000_000) and control.holds(102_750_000_001)
+    control._frames([b"short"], stamped, 0.0)  # type: ignore[arg-type]
+    assert control.last_ns == 102_250_000_000  # too short for a stamp: ignored
+    with caplog.at_level("WARNING", logger="rostools.bag.play_control"):
+        for conn in (_Conn({"message_definition": "float64 x\n"}), _Conn({}), _Conn(None)):
+            control._frames([_stamped(200, 0)], conn, 0.0)  # type: ignore[arg-type]
+    assert control.last_ns == 102_250_000_000  # no Header first: not a stamp
+    assert [r.getMessage() for r in caplog.records] == [
+        "the rate control topic's type has no Header first; ignored"
+    ]  # once

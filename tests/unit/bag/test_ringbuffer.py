@@ -121,9 +121,9 @@ def test_what_the_limits_evict_is_counted_by_time_exactly() -> None:
     for i in range(10):  # two messages a read: runs of two at the same time
         ring.add(tb, A, i * NS, [frame(f"m{i:03}"), frame(f"n{i:03}")])
     assert tb.evicted == 17
-    assert ring.lost_since(0) == Lost(17, True)
-    assert ring.lost_since(7 * NS) == Lost(3, True)  # m007, n007, m008 (n008 on stays)
-    assert ring.lost_since(4 * NS, {"/b"}) == Lost(0, True)
+    assert tb.lost_since(0) == Lost(17, True)
+    assert tb.lost_since(7 * NS) == Lost(3, True)  # m007, n007, m008 (n008 on stays)
+    assert ring.topic("/b").lost_since(4 * NS) == Lost(0, True)
 
 
 def test_past_what_it_remembers_the_count_is_a_least() -> None:
@@ -131,5 +131,106 @@ def test_past_what_it_remembers_the_count_is_a_least() -> None:
     tb = ring.topic("/a")
     for i in range(GONE_KEPT + 10):
         ring.add(tb, A, (i + 1) * NS, [frame(f"m{i:03}")])
-    assert ring.lost_since(1 * NS) == Lost(GONE_KEPT, False)
-    assert ring.lost_since(20 * NS) == Lost(GONE_KEPT + 9 - 19, True)
+    assert tb.lost_since(1 * NS) == Lost(GONE_KEPT, False)
+    assert tb.lost_since(20 * NS) == Lost(GONE_KEPT + 9 - 19, True)
+
+
+def test_messages_evicted_together_are_remembered_as_one_run() -> None:
+    """Reads of two messages: 400 evicted in 200 runs are counted exactly, past GONE_KEPT."""
+    ring = RingBuffer(duration_ns=1000 * NS, size=2 * (8 + ENTRY_OVERHEAD))
+    tb = ring.topic("/a")
+    for i in range(201):
+        ring.add(tb, A, (i + 1) * NS, [frame(f"m{i:03}"), frame(f"n{i:03}")])
+    assert tb.evicted == 400 and GONE_KEPT < 400
+    assert tb.lost_since(1 * NS) == Lost(400, True)
+
+
+def test_a_latched_message_still_buffered_is_written_once() -> None:
+    """The buffer gives it in its window; the latched copy is only for what the buffer lost."""
+    ring = RingBuffer(duration_ns=100 * NS, size=1 << 30)
+    ring.add(ring.topic("/tf_static"), STATIC, 5 * NS, [frame("tf")])
+    ring.add(ring.topic("/a"), A, 6 * NS, [frame("m006")])
+    held = ring.copy()
+    for start in (1 * NS, 5 * NS):  # before it, and exactly at it
+        assert held.latched_before(start) == []
+        assert held.resent_since(start) == []
+    assert [(t, bytes(d[4:])) for t, _, d in held.latched_before(6 * NS)] == [(6 * NS, b"tf")]
+    assert texts(held.messages(5 * NS, 6 * NS)) == ["tf", "m006"]
+
+
+def test_a_latched_topic_counts_its_older_messages_lost() -> None:
+    """Only the latched copy comes back: an older message of the same publisher is lost."""
+    ring = RingBuffer(duration_ns=100 * NS, size=1 << 30, topic_size=8 + ENTRY_OVERHEAD)
+    tb = ring.topic("/tf_static")
+    ring.add(tb, STATIC, 1 * NS, [frame("old")])
+    ring.add(tb, STATIC, 2 * NS, [frame("new")])  # the topic keeps one: "old" goes
+    held = ring.copy()
+    assert held.resent_since(1 * NS) == []  # "new" is still buffered
+    assert tb.lost_since(1 * NS) == Lost(1, True)
+
+
+def test_a_window_ending_at_a_message_holds_it() -> None:
+    ring = RingBuffer(duration_ns=100 * NS, size=1 << 30)
+    ring.add(ring.topic("/a"), A, 5 * NS, [frame("m005")])
+    held = ring.copy()
+    assert held.any_between(1 * NS, 5 * NS) and held.any_between(5 * NS, 9 * NS)
+    assert not held.any_between(1 * NS, 5 * NS - 1) and not held.any_between(5 * NS + 1, 9 * NS)
+
+
+def test_a_copy_of_some_topics_keeps_their_order_and_their_latched_only() -> None:
+    ring = RingBuffer(duration_ns=100 * NS, size=1 << 30)
+    c = ConnInfo("/c", {"callerid": "/pc"})
+    for i in range(9):
+        conn = (A, B, c)[i % 3]
+        ring.add(ring.topic(conn.topic), conn, i * NS, [frame(f"m{i:03}")])
+    ring.add(ring.topic("/tf_static"), STATIC, 9 * NS, [frame("tf")])
+    held = ring.copy({"/a", "/c"})
+    assert texts(held.messages(0, 100 * NS)) == ["m000", "m002", "m003", "m005", "m006", "m008"]
+    assert held.latched == []
+    assert [e[1].topic for e in ring.copy({"/tf_static"}).latched] == ["/tf_static"]
+
+
+def test_a_latched_publisher_holds_one_copy_in_the_size() -> None:
+    ring = RingBuffer(duration_ns=100 * NS, size=1 << 30)
+    tb = ring.topic("/tf_static")
+    for size in (10, 400, 30, 7):
+        ring.add(tb, STATIC, size * NS, [bytes(size)])
+    assert ring.latched_bytes == 7 + ENTRY_OVERHEAD
+    other = ConnInfo("/tf_static", {"latching": "1"})  # no callerid: a publisher of its own
+    ring.add(tb, other, 500 * NS, [bytes(5)])
+    assert ring.latched_bytes == 7 + 5 + 2 * ENTRY_OVERHEAD
+
+
+def test_a_topic_holds_exactly_its_limit() -> None:
+    ring = RingBuffer(duration_ns=100 * NS, size=1 << 30, topic_size=3 * (8 + ENTRY_OVERHEAD))
+    for i in range(3):
+        ring.add(ring.topic("/a"), A, i * NS, [frame(f"m{i:03}")])
+    assert ring.topics["/a"].evicted == 0 and ring.topics["/a"].bytes == ring.topic_size
+
+
+def test_a_cleared_topic_starts_again_from_nothing() -> None:
+    """--clear-on-write after the topic limit evicted: the fill, the limits and the order hold."""
+    ring = RingBuffer(duration_ns=100 * NS, size=1 << 30, topic_size=4 * (8 + ENTRY_OVERHEAD))
+    ring.add(ring.topic("/b"), B, 0, [frame("b000")])
+    tb = ring.topic("/a")
+    for i in range(1, 7):  # /a keeps 4 of 6; the slots of the two let go wait behind /b's
+        ring.add(tb, A, i * NS, [frame(f"m{i:03}")])
+    ring.clear({"/a"})
+    assert (tb.bytes, len(tb.entries)) == (0, 0)
+    ring.size = 4 * (8 + ENTRY_OVERHEAD)
+    for i in range(7, 12):
+        ring.add(tb, A, i * NS, [frame(f"m{i:03}")])
+    assert texts(ring.copy().messages(0, 100 * NS)) == ["m008", "m009", "m010", "m011"]
+    assert tb.bytes == ring.bytes == 4 * (8 + ENTRY_OVERHEAD) and len(ring.order) == 4
+
+
+def test_the_span_of_a_topic() -> None:
+    """The live table's span column: seconds from its oldest message to its newest."""
+    ring = RingBuffer(duration_ns=100 * NS, size=1 << 30)
+    tb = ring.topic("/a")
+    assert tb.span() == 0.0
+    ring.add(tb, A, 1 * NS, [frame("m001")])
+    ring.add(tb, A, 3 * NS + NS // 2, [frame("m003")])
+    assert tb.span() == 2.5
+    ring.clear()
+    assert tb.span() == 0.0

@@ -3,7 +3,9 @@ what they do (a line printed, a node subscribed, a connection up), so no test sl
 
 Every process is started in its own session and stopped by its process group id, which is
 its own PID: nothing is ever killed by name, and children of a launcher (roscore starts
-rosmaster and rosout) go with it.
+rosmaster and rosout) go with it. Each group is also told to the plugin's reaper
+(``rostools.testing.reaper``), which stops it if pytest dies first: Ctrl-C in a teardown that
+had not stopped them all yet, SIGTERM or SIGKILL to pytest or to an xdist worker.
 """
 
 from __future__ import annotations
@@ -23,6 +25,7 @@ from pathlib import Path
 from typing import IO, Any
 
 from tests.support.env import CLI
+from tests.support.reap import forget, forget_ended, group_left, reap_with_pytest
 
 
 def free_port() -> int:
@@ -141,6 +144,7 @@ class Proc:
             start_new_session=True,
         )
         self.pid = self.popen.pid
+        reap_with_pytest(self.pid, self._may_run)
         #: Stream name -> the lines read from it and not yet looked at.
         self._lines: dict[str, queue.Queue[str]] = {}
         self._readers: list[threading.Thread] = []
@@ -148,6 +152,10 @@ class Proc:
         self.seen: list[str] = []
         #: The stderr lines ``expect(..., stderr=True)`` has looked at, in order.
         self.seen_err: list[str] = []
+
+    def _may_run(self) -> bool:
+        """Whether it, or anything left in its group, may still run."""
+        return self.popen.poll() is None or group_left(self.pid)
 
     def expect(self, pattern: str, timeout: float = 15.0, *, stderr: bool = False) -> str:
         """The next stdout (or stderr) line matching the regex ``pattern``.
@@ -212,6 +220,7 @@ class Proc:
                 break
         self.signal(signal.SIGKILL)  # anything the launcher left behind in its group
         code = self.popen.wait()
+        forget(self.pid)
         for reader in self._readers:  # at the pipes' end by now; closed under it, it would raise
             reader.join(1)
         for stream in (self.popen.stdout, self.popen.stderr):
@@ -306,7 +315,15 @@ class Roscore(Proc):
         for pid in children:
             with contextlib.suppress(ProcessLookupError):
                 os.kill(pid, signal.SIGKILL)
+        forget_ended()
         return code
+
+    def reap_children(self) -> None:
+        """Tell the reaper the groups of the children it runs now (rosmaster, rosout)."""
+        for pid in child_pids(self.pid):
+            with contextlib.suppress(ProcessLookupError):
+                if (group := os.getpgid(pid)) != self.pid:
+                    reap_with_pytest(group)
 
 
 def group_members(group: int) -> list[int]:
@@ -339,6 +356,8 @@ def start_roscore(port: int, env: dict[str, str]) -> Proc:
     wait_for(lambda: master_answers(uri) or proc.popen.poll() is not None, 30, "roscore")
     if proc.popen.poll() is not None:
         raise AssertionError(f"roscore exited: {proc.output()}")
+    # a roscore killed with pytest would stop them in its own time, past the reaper's grace
+    proc.reap_children()
     return proc
 
 

@@ -56,7 +56,7 @@ def test_a_slow_service_is_waited_for(
         bounded = run_cli("service", "call", "/slow", "--timeout", "1", env=cli_env)
         assert bounded.returncode == 5
         assert bounded.stderr == "rostools: service /slow did not respond within 1 s\n"
-        assert time.monotonic() - started < SLOW - 2
+        assert time.monotonic() - started < SLOW  # gave up before the answer could come
     finally:
         server.stop()
 

@@ -10,6 +10,7 @@ from pathlib import Path
 
 import pytest
 
+from tests.support.load import scaled
 from tests.support.reap import run
 
 ROOT = Path(__file__).resolve().parent.parent.parent
@@ -48,8 +49,9 @@ def run_cli(
     timeout: float = 60,
     cwd: Path | None = None,
 ) -> subprocess.CompletedProcess[str]:
-    """Run ``python -m rostools ARGS`` (in ``cwd``) and capture its output."""
-    return run([*CLI, *args], env=env, cwd=cwd, input=input, timeout=timeout)
+    """Run ``python -m rostools ARGS`` (in ``cwd``) and capture its output; ``timeout`` is
+    scaled by the run's load factor."""
+    return run([*CLI, *args], env=env, cwd=cwd, input=input, timeout=scaled(timeout))
 
 
 def run_system_python(code: str, *args: str, input: str | None = None, timeout: float = 300) -> str:

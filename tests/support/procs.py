@@ -25,6 +25,7 @@ from pathlib import Path
 from typing import IO, Any
 
 from tests.support.env import CLI
+from tests.support.load import scaled
 from tests.support.reap import forget, forget_ended, group_left, reap_with_pytest
 
 
@@ -52,13 +53,15 @@ def wait_for(
     what: str = "condition",
     interval: float = 0.05,
 ) -> None:
-    """Poll ``predicate`` every ``interval`` s until true; AssertionError after ``timeout`` s."""
+    """Poll ``predicate`` every ``interval`` s until true; AssertionError after ``timeout`` s
+    (on a quiet machine: the run's load factor scales it, ``tests/support/load.py``)."""
+    timeout = scaled(timeout)
     deadline = time.monotonic() + timeout
     while time.monotonic() < deadline:
         if predicate():
             return
         time.sleep(interval)
-    raise AssertionError(f"timed out after {timeout} s waiting for {what}")
+    raise AssertionError(f"timed out after {timeout:.3g} s waiting for {what}")
 
 
 def wait_for_name(names: Callable[[], list[str]], suffix: str, timeout: float = 15.0) -> str:
@@ -160,8 +163,9 @@ class Proc:
     def expect(self, pattern: str, timeout: float = 15.0, *, stderr: bool = False) -> str:
         """The next stdout (or stderr) line matching the regex ``pattern``.
 
-        AssertionError after ``timeout`` seconds without one.
+        AssertionError after ``timeout`` seconds without one (scaled by the run's load factor).
         """
+        timeout = scaled(timeout)
         self._start_readers()
         name, seen = ("stderr", self.seen_err) if stderr else ("stdout", self.seen)
         lines = self._lines[name]
@@ -210,7 +214,7 @@ class Proc:
         ``record`` it started has closed its file, and killing that one then left the file
         ``.active`` (one run in six). So each signal waits for the whole group.
         """
-        timeout = self.stop_timeout if timeout is None else timeout
+        timeout = scaled(self.stop_timeout if timeout is None else timeout)
         for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGKILL):
             if self.popen.poll() is not None:  # exited before: its group ends on its own
                 self._wait_group(timeout)

@@ -23,6 +23,33 @@ os.environ.pop("PYTHONDONTWRITEBYTECODE", None)
 STRICT = os.environ.get("CI", "").lower() == "true"
 
 
+#: xdist workers per CPU for ``-n auto`` (pyproject's addopts): most tests wait on peers and
+#: sockets, not on the CPU. ``-n N`` or ``PYTEST_XDIST_AUTO_NUM_WORKERS`` choose otherwise.
+WORKERS_PER_CPU = 3
+
+
+def pytest_xdist_auto_num_workers(config: pytest.Config) -> int:
+    """How many workers ``-n auto`` starts: none for tests named one by one (``FILE::TEST``),
+    which would wait longer for the workers than for themselves."""
+    if workers := os.environ.get("PYTEST_XDIST_AUTO_NUM_WORKERS"):
+        return int(workers)
+    if config.args and all("::" in arg for arg in config.args):
+        return 0
+    return WORKERS_PER_CPU * len(os.sched_getaffinity(0))
+
+
+@pytest.hookimpl(tryfirst=True)
+def pytest_configure(config: pytest.Config) -> None:
+    """Measure the machine's load once per run, before any worker starts (they inherit it),
+    and scale pytest-timeout's guard against a hung test by it (before pytest-timeout reads
+    it; xdist's workers are handed the scaled value)."""
+    from tests.support import load
+
+    factor = load.factor()
+    if not hasattr(config, "workerinput") and getattr(config.option, "timeout", None):
+        config.option.timeout *= factor
+
+
 @pytest.hookimpl(hookwrapper=True)
 def pytest_runtest_makereport(
     item: pytest.Item, call: pytest.CallInfo[None]

@@ -37,6 +37,8 @@ def peak_rss_mb(proc: Proc, timeout: float) -> float:
             status = Path(f"/proc/{proc.pid}/status").read_text()
         except OSError:
             break
+        if "VmHWM:" not in status:  # exiting: its memory is gone already (seen under load)
+            break
         peak = max(peak, int(status.split("VmHWM:")[1].split()[0]))
         time.sleep(0.05)
     return peak / 1024

@@ -20,6 +20,7 @@ from typing import Any
 import pytest
 
 from tests.support.env import needs_ros1, run_cli
+from tests.support.load import scaled
 from tests.support.procs import (
     Proc,
     core_and_env,
@@ -116,7 +117,7 @@ def test_a_server_that_dies_mid_goal(graph: Graph) -> None:
         graph.listed("/doomed")
         started = time.monotonic()
         code, got, err = send_goal(graph, "/doomed", "666", "--feedback")
-        assert time.monotonic() - started < 10
+        assert time.monotonic() - started < scaled(10)
         assert code == 4, err
         assert [e["event"] for e in got][-2:] == ["feedback", "lost"]
         assert err.count("\n") == 1 and "the action server of /doomed went away" in err, err

@@ -6,6 +6,7 @@
 
 from __future__ import annotations
 
+import json
 import re
 import shutil
 import subprocess
@@ -15,6 +16,7 @@ import pytest
 
 from tests.support.bagdata import write_sample
 from tests.support.env import CORPUS, needs_corpus, needs_ros1, run_cli, run_system_python
+from tests.support.reap import run as run_reaped
 
 pytestmark = [pytest.mark.interop, needs_ros1]
 
@@ -24,9 +26,30 @@ OURS_ONLY = ("format", "profile", "library", "chunks", "attachments", "metadata"
 
 def rosbag(*argv: str, cwd: Path | None = None) -> subprocess.CompletedProcess[str]:
     """The real ``rosbag``, run to its end."""
-    return subprocess.run(
-        ["rosbag", *argv], cwd=cwd, capture_output=True, text=True, timeout=120, check=False
-    )
+    return run_reaped(["rosbag", *argv], cwd=cwd, timeout=120)
+
+
+#: ``rosbag info ARGV`` for each ARGV (a JSON list) in one process, as the ``rosbag`` command
+#: runs it; each one's output, in a JSON list. One start instead of one per key: each start
+#: of ``rosbag`` costs more than a second of CPU.
+ROSBAG_INFO = """
+import contextlib, io, json, sys
+from rosbag.rosbag_main import info_cmd
+said = []
+for argv in json.loads(sys.stdin.read()):
+    out = io.StringIO()
+    with contextlib.redirect_stdout(out):
+        info_cmd(argv)
+    said.append(out.getvalue())
+print(json.dumps(said))
+"""
+
+
+def rosbag_info(argvs: list[list[str]]) -> list[str]:
+    """What ``rosbag info ARGV`` prints for each of ``argvs``, from one ``rosbag`` process
+    (one that exits 0: an error exits it)."""
+    said: list[str] = json.loads(run_system_python(ROSBAG_INFO, input=json.dumps(argvs)))
+    return said
 
 
 def without_keys(text: str, keys: set[str]) -> str:
@@ -71,16 +94,16 @@ def rosbags_part(ours: str, theirs: str, empty: bool = False) -> str:
 def test_info_yaml_is_rosbags_plus_our_keys(info_bags: list[Path]) -> None:
     """``info -y``: rosbag's text byte for byte (``version: 2.0``, ``indexed: True``, 4-space
     lists, the blank line at the end), with our own keys beside; one bag and several."""
-    for path in info_bags:
-        theirs = rosbag("info", "-y", str(path))
-        ours = run_cli("bag", "info", "-y", str(path))
-        assert theirs.returncode == 0 == ours.returncode, ours.stderr
-        empty = path.name == "empty.bag"
-        assert rosbags_part(ours.stdout, theirs.stdout, empty) == theirs.stdout
     many = [str(p) for p in info_bags]
-    theirs, ours = rosbag("info", "-y", *many), run_cli("bag", "info", "-y", *many)
-    pairs = zip(ours.stdout.split("---\n"), theirs.stdout.split("---\n"), strict=True)
-    assert "---\n".join(rosbags_part(a, b, True) for a, b in pairs) == theirs.stdout
+    *each, together = rosbag_info([["-y", path] for path in many] + [["-y", *many]])
+    for path, theirs in zip(info_bags, each, strict=True):
+        ours = run_cli("bag", "info", "-y", str(path))
+        assert ours.returncode == 0, ours.stderr
+        empty = path.name == "empty.bag"
+        assert rosbags_part(ours.stdout, theirs, empty) == theirs
+    ours = run_cli("bag", "info", "-y", *many)
+    pairs = zip(ours.stdout.split("---\n"), together.split("---\n"), strict=True)
+    assert "---\n".join(rosbags_part(a, b, True) for a, b in pairs) == together
 
 
 def test_info_yaml_with_frequencies(info_bags: list[Path]) -> None:
@@ -101,10 +124,10 @@ def test_info_key_prints_rosbags_scalars(info_bags: list[Path]) -> None:
     """``-y -k KEY`` for every key rosbag has: ``2.0`` (not ``'2.0'``), ``True`` (not
     ``true``), ``False`` for an empty bag, ``1e-06``, a list with rosbag's blank line after."""
     compared = 0
-    for key in ROSBAG_KEYS:
-        theirs = rosbag("info", "-y", "-k", key, *map(str, info_bags))
-        docs = theirs.stdout.split("---\n")  # nothing for a bag without the key
-        assert len(docs) == len(info_bags), theirs.stdout
+    argvs = [["-y", "-k", key, *map(str, info_bags)] for key in ROSBAG_KEYS]
+    for key, text in zip(ROSBAG_KEYS, rosbag_info(argvs), strict=True):
+        docs = text.split("---\n")  # nothing for a bag without the key
+        assert len(docs) == len(info_bags), text
         having = [str(p) for p, doc in zip(info_bags, docs, strict=True) if doc]
         ours = run_cli("bag", "info", "-y", "-k", key, *having)
         assert ours.stdout == "---\n".join(d for d in docs if d), (key, ours.stderr)

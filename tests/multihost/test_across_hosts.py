@@ -21,7 +21,9 @@ from tests.support.env import SYSTEM_PYTHON, needs_ros1
 from tests.support.netlab import Host, Lab
 from tests.support.procs import NODES, Proc
 
-pytestmark = [pytest.mark.multihost, needs_ros1]
+# one worker runs them all: one lab of namespaces and its masters (session fixtures), not one
+# per worker
+pytestmark = [pytest.mark.multihost, needs_ros1, pytest.mark.xdist_group("netns")]
 
 PLAYED = 48
 

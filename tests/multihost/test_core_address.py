@@ -13,7 +13,9 @@ from tests.support.env import SYSTEM_PYTHON, needs_ros1
 from tests.support.netlab import Lab
 from tests.support.procs import NODES, free_port
 
-pytestmark = [pytest.mark.multihost, needs_ros1]
+# one worker runs them all: one lab of namespaces and its masters (session fixtures), not one
+# per worker
+pytestmark = [pytest.mark.multihost, needs_ros1, pytest.mark.xdist_group("netns")]
 
 #: Asks the master at argv[1] for its URI and /rosout's, as one JSON line.
 LOOKUP = (

@@ -10,6 +10,9 @@ from pathlib import Path
 
 import pytest
 
+from tests.support.load import scaled
+from tests.support.reap import run
+
 ROOT = Path(__file__).resolve().parent.parent.parent
 # Third-party bags live beside the project (../shared/corpus); ROSTOOLS_CORPUS overrides.
 CORPUS = Path(os.environ.get("ROSTOOLS_CORPUS", ROOT.parent / "shared" / "corpus"))
@@ -46,29 +49,14 @@ def run_cli(
     timeout: float = 60,
     cwd: Path | None = None,
 ) -> subprocess.CompletedProcess[str]:
-    """Run ``python -m rostools ARGS`` (in ``cwd``) and capture its output."""
-    return subprocess.run(
-        [*CLI, *args],
-        capture_output=True,
-        text=True,
-        env=env,
-        cwd=cwd,
-        input=input,
-        timeout=timeout,
-        check=False,
-    )
+    """Run ``python -m rostools ARGS`` (in ``cwd``) and capture its output; ``timeout`` is
+    scaled by the run's load factor."""
+    return run([*CLI, *args], env=env, cwd=cwd, input=input, timeout=scaled(timeout))
 
 
 def run_system_python(code: str, *args: str, input: str | None = None, timeout: float = 300) -> str:
     """Run Python code on the system interpreter (the one the real ROS 1 lives on)."""
-    proc = subprocess.run(
-        [SYSTEM_PYTHON, "-c", code, *args],
-        capture_output=True,
-        text=True,
-        input=input,
-        timeout=timeout,
-        check=False,
-    )
+    proc = run([SYSTEM_PYTHON, "-c", code, *args], input=input, timeout=timeout)
     if proc.returncode != 0:
         raise AssertionError(f"system python failed:\n{proc.stderr[-3000:]}")
     return proc.stdout
@@ -84,14 +72,11 @@ def ask_ros1(requests: list[dict[str, object]]) -> list[object]:
 
     oracle = Path(__file__).with_name("ros1_oracle.py")
     env = {k: v for k, v in os.environ.items() if not k.startswith("ROS")}
-    proc = subprocess.run(
+    proc = run(
         [SYSTEM_PYTHON, str(oracle)],
         input="".join(json.dumps(r) + "\n" for r in requests),
-        capture_output=True,
-        text=True,
         env=env,
         timeout=600,
-        check=False,
     )
     if proc.returncode != 0:
         raise AssertionError(f"ros1_oracle failed:\n{proc.stderr[-3000:]}")

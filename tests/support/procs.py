@@ -3,7 +3,9 @@ what they do (a line printed, a node subscribed, a connection up), so no test sl
 
 Every process is started in its own session and stopped by its process group id, which is
 its own PID: nothing is ever killed by name, and children of a launcher (roscore starts
-rosmaster and rosout) go with it.
+rosmaster and rosout) go with it. Each group is also told to the plugin's reaper
+(``rostools.testing.reaper``), which stops it if pytest dies first: Ctrl-C in a teardown that
+had not stopped them all yet, SIGTERM or SIGKILL to pytest or to an xdist worker.
 """
 
 from __future__ import annotations
@@ -24,6 +26,8 @@ from pathlib import Path
 from typing import IO, Any
 
 from tests.support.env import CLI
+from tests.support.load import scaled
+from tests.support.reap import forget, forget_ended, group_left, reap_with_pytest
 
 
 def free_port() -> int:
@@ -50,13 +54,15 @@ def wait_for(
     what: str = "condition",
     interval: float = 0.05,
 ) -> None:
-    """Poll ``predicate`` every ``interval`` s until true; AssertionError after ``timeout`` s."""
+    """Poll ``predicate`` every ``interval`` s until true; AssertionError after ``timeout`` s
+    (on a quiet machine: the run's load factor scales it, ``tests/support/load.py``)."""
+    timeout = scaled(timeout)
     deadline = time.monotonic() + timeout
     while time.monotonic() < deadline:
         if predicate():
             return
         time.sleep(interval)
-    raise AssertionError(f"timed out after {timeout} s waiting for {what}")
+    raise AssertionError(f"timed out after {timeout:.3g} s waiting for {what}")
 
 
 def wait_for_name(names: Callable[[], list[str]], suffix: str, timeout: float = 15.0) -> str:
@@ -142,6 +148,7 @@ class Proc:
             start_new_session=True,
         )
         self.pid = self.popen.pid
+        reap_with_pytest(self.pid, self._may_run)
         #: Stream name -> the lines read from it and not yet looked at.
         self._lines: dict[str, queue.Queue[str]] = {}
         self._readers: list[threading.Thread] = []
@@ -150,11 +157,16 @@ class Proc:
         #: The stderr lines ``expect(..., stderr=True)`` has looked at, in order.
         self.seen_err: list[str] = []
 
+    def _may_run(self) -> bool:
+        """Whether it, or anything left in its group, may still run."""
+        return self.popen.poll() is None or group_left(self.pid)
+
     def expect(self, pattern: str, timeout: float = 15.0, *, stderr: bool = False) -> str:
         """The next stdout (or stderr) line matching the regex ``pattern``.
 
-        AssertionError after ``timeout`` seconds without one.
+        AssertionError after ``timeout`` seconds without one (scaled by the run's load factor).
         """
+        timeout = scaled(timeout)
         self._start_readers()
         name, seen = ("stderr", self.seen_err) if stderr else ("stdout", self.seen)
         lines = self._lines[name]
@@ -203,7 +215,7 @@ class Proc:
         ``record`` it started has closed its file, and killing that one then left the file
         ``.active`` (one run in six). So each signal waits for the whole group.
         """
-        timeout = self.stop_timeout if timeout is None else timeout
+        timeout = scaled(self.stop_timeout if timeout is None else timeout)
         for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGKILL):
             if self.popen.poll() is not None:  # exited before: its group ends on its own
                 self._wait_group(timeout)
@@ -213,6 +225,7 @@ class Proc:
                 break
         self.signal(signal.SIGKILL)  # anything the launcher left behind in its group
         code = self.popen.wait()
+        forget(self.pid)
         for reader in self._readers:  # at the pipes' end by now; closed under it, it would raise
             reader.join(1)
         for stream in (self.popen.stdout, self.popen.stderr):
@@ -326,7 +339,15 @@ class Roscore(Proc):
         for pid in children:
             with contextlib.suppress(ProcessLookupError):
                 os.kill(pid, signal.SIGKILL)
+        forget_ended()
         return code
+
+    def reap_children(self) -> None:
+        """Tell the reaper the groups of the children it runs now (rosmaster, rosout)."""
+        for pid in child_pids(self.pid):
+            with contextlib.suppress(ProcessLookupError):
+                if (group := os.getpgid(pid)) != self.pid:
+                    reap_with_pytest(group)
 
 
 def group_members(group: int) -> list[int]:
@@ -359,6 +380,8 @@ def start_roscore(port: int, env: dict[str, str]) -> Proc:
     wait_for(lambda: master_answers(uri) or proc.popen.poll() is not None, 30, "roscore")
     if proc.popen.poll() is not None:
         raise AssertionError(f"roscore exited: {proc.output()}")
+    # a roscore killed with pytest would stop them in its own time, past the reaper's grace
+    proc.reap_children()
     return proc
 
 

@@ -13,8 +13,8 @@ ROOT = Path(__file__).resolve().parent.parent.parent
 def _doctor_tests(tmp_path: Path, ci: str) -> subprocess.CompletedProcess[str]:
     env = dict(os.environ, CI=ci, ROSTOOLS_CORPUS=str(tmp_path / "moved-away"))
     return subprocess.run(
-        [sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", "-k", "cli_lines",
-         "tests/corpus/test_bag_doctor.py"],
+        [sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", "-n", "0",
+         "-k", "cli_lines", "tests/corpus/test_bag_doctor.py"],
         cwd=ROOT, env=env, capture_output=True, text=True, timeout=120, check=False,
     )  # fmt: skip
 

@@ -28,6 +28,7 @@ from tests.support.bagdata import (
     write_sample,
 )
 from tests.support.env import ROOT
+from tests.support.reap import reap_with_pytest
 
 CASES = [
     ("x.bag", "none"),
@@ -237,7 +238,9 @@ def test_killed_writer_is_recovered(tmp_path: Path, name: str, compression: str)
         [sys.executable, "-c", code, str(path), compression],
         stdout=subprocess.PIPE,
         text=True,
+        start_new_session=True,
     )
+    reap_with_pytest(child.pid)
     try:
         assert child.stdout is not None
         lines = [child.stdout.readline().strip() for _ in range(4)]

@@ -95,6 +95,26 @@ def test_rate_meters(rostools_master: str, cli_env: dict[str, str]) -> None:
         pub.stop()
 
 
+def test_a_topic_not_published_holds_no_other_back(
+    rostools_master: str, cli_env: dict[str, str]
+) -> None:
+    """hz measures the topics that are published while one it was given is not (it waited
+    for each in turn, and printed nothing until the timeout)."""
+    pub = start_cli("topic", "pub", "-r", "20", "/pt", "geometry_msgs/PointStamped",
+                    "{header: auto}", "-s", env=cli_env)  # fmt: skip
+    try:
+        wait_listed("/pt", cli_env)
+        done = run_cli("topic", "hz", "/nobody", "/pt", "--timeout", "3", "-F", "json",
+                       env=cli_env, timeout=30)  # fmt: skip
+        assert done.returncode == 0, done.stderr
+        rows = [json.loads(line) for line in done.stdout.splitlines()]
+        assert rows and all(row["topic"] == "/pt" for row in rows), done.stdout
+        assert "topic [/nobody] does not appear to be published yet" in done.stderr
+        assert "subscribed to [/pt]" in done.stderr
+    finally:
+        pub.stop()
+
+
 def test_filter_sees_m_and_topic(rostools_master: str, cli_env: dict[str, str]) -> None:
     pub = start_cli("topic", "pub", "-r", "20", "/nums", "std_msgs/Int32", "7", env=cli_env)
     try:

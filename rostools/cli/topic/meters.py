@@ -71,6 +71,8 @@ class Meter:
         self.coalesce = coalesce
         self.clock = RosClock()
         self.received = 0
+        #: Topics subscribed so far: reports start with the first, as rostopic's.
+        self.subscribed = 0
         self.error: BaseException | None = None
         self.strict = strict
         self.undecodable: Undecodable | None = None
@@ -111,41 +113,80 @@ class Meter:
         store: TypeStore,
         deadline: float | None,
     ) -> str:
-        from rostools.node.session import first
+        import asyncio
 
         if not self.wall_time:
             await self.clock.start(node)
-        for topic in self.topics:
-            ref = await wait_for_topic(node, topic, store, deadline, stop)
-            if ref is None:
-                return "stopped" if stop.is_set() else "timeout"
-            if ref.field:
-                raise UsageError(f"{topic}: field paths do not apply here; give the topic itself")
+        # each topic is subscribed once it appears: one not published yet holds none of the
+        # others back (rostopic waits for each in turn, and reports nothing meanwhile)
+        waits = [
+            asyncio.ensure_future(self._attach(node, topic, stop, sink, store, deadline))
+            for topic in self.topics
+        ]
 
-            # the sink's key is the topic as given: hz keeps a meter per argument, and
-            # ``hz foo foo:=/chatter`` subscribes to /chatter (a KeyError before)
-            def on_frames(
-                frames: list[Frame], conn: InboundConnection, now: float, t: str = topic
-            ) -> None:
-                if self.clock.sim:
-                    if not self.clock.valid:
-                        return  # sim time is zero until the first /clock: rostopic skips these
-                    now = self.clock.now() / 1e9
-                self.received += len(frames)
-                try:
-                    sink(t, frames, conn, now)
-                except Exception as err:  # noqa: BLE001 - re-raised by run(), not in asyncio's IO
-                    self.error = err
-                    stop.set()
+        def failed(task: asyncio.Future[None]) -> None:
+            if not task.cancelled() and task.exception() is not None:
+                stop.set()  # a failed wait (a field path, the master) ends the command now
 
-            if ref.topic == "/clock" and self.clock.sim:
-                self.clock.forward = on_frames  # the clock's subscription is this node's one
-            else:
-                await node.subscribe(
-                    ref.topic, on_frames, tcp_nodelay=self.tcp_nodelay, coalesce=self.coalesce,
-                    reuse_frames=True,  # the sinks only look at a frame during the call
-                )  # fmt: skip
-            sys.stderr.write(f"subscribed to [{one_line(ref.topic)}]\n")
+        for task in waits:
+            task.add_done_callback(failed)
+        try:
+            return await self._report(stop, report, deadline, waits)
+        finally:
+            for task in waits:
+                task.cancel()
+            await asyncio.gather(*waits, return_exceptions=True)
+
+    async def _attach(
+        self,
+        node: LiveNode,
+        topic: str,
+        stop: asyncio.Event,
+        sink: Callable[[str, list[Frame], InboundConnection, float], None],
+        store: TypeStore,
+        deadline: float | None,
+    ) -> None:
+        """Subscribe to ``topic`` once it is advertised (nothing if stopped or late first)."""
+        ref = await wait_for_topic(node, topic, store, deadline, stop)
+        if ref is None:
+            return
+        if ref.field:
+            raise UsageError(f"{topic}: field paths do not apply here; give the topic itself")
+
+        # the sink's key is the topic as given: hz keeps a meter per argument, and
+        # ``hz foo foo:=/chatter`` subscribes to /chatter (a KeyError before)
+        def on_frames(frames: list[Frame], conn: InboundConnection, now: float) -> None:
+            if self.clock.sim:
+                if not self.clock.valid:
+                    return  # sim time is zero until the first /clock: rostopic skips these
+                now = self.clock.now() / 1e9
+            self.received += len(frames)
+            try:
+                sink(topic, frames, conn, now)
+            except Exception as err:  # noqa: BLE001 - re-raised by run(), not in asyncio's IO
+                self.error = err
+                stop.set()
+
+        if ref.topic == "/clock" and self.clock.sim:
+            self.clock.forward = on_frames  # the clock's subscription is this node's one
+        else:
+            await node.subscribe(
+                ref.topic, on_frames, tcp_nodelay=self.tcp_nodelay, coalesce=self.coalesce,
+                reuse_frames=True,  # the sinks only look at a frame during the call
+            )  # fmt: skip
+        self.subscribed += 1
+        sys.stderr.write(f"subscribed to [{one_line(ref.topic)}]\n")
+
+    async def _report(
+        self,
+        stop: asyncio.Event,
+        report: Callable[[bool], None],
+        deadline: float | None,
+        waits: list[asyncio.Task[None]],
+    ) -> str:
+        """Report every second until stopped or timed out; a topic's failed wait ends it."""
+        from rostools.node.session import first
+
         next_report = time.monotonic() + REPORT_PERIOD
         while True:
             now = time.monotonic()
@@ -153,12 +194,16 @@ class Meter:
             if deadline is not None:
                 wait = min(wait, deadline - now)
             if await first(stop.wait(), timeout=max(wait, 0)) == 0:
+                for task in waits:
+                    if task.done() and not task.cancelled() and (err := task.exception()):
+                        raise err
                 if self.error is not None:
                     raise self.error
-                report(True)  # Ctrl-C: rostopic prints the window once more
-                output.flush()
+                if self.subscribed:
+                    report(True)  # Ctrl-C: rostopic prints the window once more
+                    output.flush()
                 return "stopped"
-            if time.monotonic() >= next_report:
+            if time.monotonic() >= next_report and self.subscribed:
                 report(False)
                 output.flush()
                 next_report += REPORT_PERIOD

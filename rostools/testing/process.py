@@ -105,6 +105,9 @@ class RosProcess:
         log: str | Path | None = None,
     ) -> None:
         self.argv = [str(a) for a in argv]
+        #: Its output once stopped, when the log was a temporary file of ours, now removed.
+        self._kept: str | None = None
+        self._own_log = log is None
         if log is None:
             handle, name = tempfile.mkstemp(prefix="rostools-proc-", suffix=".log")
             os.close(handle)
@@ -138,6 +141,8 @@ class RosProcess:
 
     def output(self) -> str:
         """Everything it has written so far (stdout and stderr together)."""
+        if self._kept is not None:
+            return self._kept
         try:
             return self.log.read_bytes().decode(errors="replace")
         except OSError:
@@ -162,6 +167,9 @@ class RosProcess:
         self._signal(signal.SIGKILL)  # whatever it left behind in its group
         code = self.popen.wait()
         _REAPER.tell(f"-{self.pid}")
+        if self._own_log and self._kept is None:  # a temporary log is not left behind
+            self._kept = self.output()
+            self.log.unlink(missing_ok=True)
         return code
 
     def _check_alive(self, waiting_for: str) -> None:

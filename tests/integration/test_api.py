@@ -205,6 +205,20 @@ def test_a_process_that_exits_fails_the_wait_at_once(env_master: Master) -> None
     assert time.monotonic() - began < 10
 
 
+def test_a_process_leaves_no_temporary_log(env_master: Master) -> None:
+    """Without a log of the caller's, the output goes to a temporary file, removed at the stop
+    (one was left in the temporary folder by every such process); the output is kept."""
+    from rostools.testing import RosProcess
+
+    proc = RosProcess([sys.executable, "-c", "print('said')"])
+    log = proc.log
+    proc.popen.wait(30)
+    assert log.exists()
+    proc.stop()
+    assert not log.exists()
+    assert proc.output() == "said\n" and proc.tail() == "said"
+
+
 def test_a_callback_gets_a_message_that_arrives_as_it_subscribes(
     master: Master, monkeypatch: pytest.MonkeyPatch
 ) -> None:

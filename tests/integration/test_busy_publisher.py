@@ -9,7 +9,6 @@ are in flight to one node, and each gets the whole limit.
 
 from __future__ import annotations
 
-import asyncio
 import socket
 import struct
 import threading
@@ -22,9 +21,8 @@ import pytest
 
 from rostools.master.server import MasterThread
 from rostools.node import subscriber
-from rostools.node.node import LiveNode
 from rostools.node.subscriber import PEER_CALLS
-from tests.support.fakepeer import FakeNode, FakePublisher, frame, valid_header
+from tests.support.fakepeer import FakeNode, FakePublisher, first_frames, frame, valid_header
 from tests.support.procs import start_cli, wait_for
 
 TOPICS = 20
@@ -93,19 +91,7 @@ def test_a_publisher_slow_to_shake_hands_is_given_longer_each_time(
         time.sleep(1.0)  # longer than the usual limit, shorter than four times it
         sock.sendall(valid_header("/late") + frame(struct.pack("<I", 2) + b"hi"))
 
-    async def main(master_uri: str) -> list[bytes]:
-        node = await LiveNode("/patient", master_uri).start()
-        got: list[bytes] = []
-        try:
-            await node.subscribe("/late", lambda frames, conn, t: got.extend(map(bytes, frames)))
-            for _ in range(400):
-                if got:
-                    break
-                await asyncio.sleep(0.05)
-        finally:
-            await node.close()
-        return got
-
     with MasterThread() as master, FakePublisher(master.uri, "/late", busy) as fake:
-        assert asyncio.run(main(master.uri)) == [struct.pack("<I", 2) + b"hi"]
+        got = first_frames(master.uri, "/late", "/patient", within=20)
+        assert got == [struct.pack("<I", 2) + b"hi"]
         assert len(fake.connections) >= 2  # it was dropped once, at least, then waited for

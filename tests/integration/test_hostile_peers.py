@@ -17,7 +17,7 @@ from rostools.msgs.store import BuiltinSource, TypeStore
 from rostools.msgs.topictype import TopicType
 from rostools.node import connection
 from rostools.node.node import LiveNode
-from tests.support.fakepeer import FakePublisher, frame, valid_header
+from tests.support.fakepeer import FakePublisher, first_frames, frame, valid_header
 from tests.support.procs import Proc, start_cli
 
 STRING = TopicType.of(TypeStore([BuiltinSource()]), "std_msgs/String")
@@ -91,21 +91,8 @@ def test_a_big_message_in_the_same_read_as_the_header(master: MasterThread) -> N
     def send(sock: socket.socket) -> None:
         sock.sendall(valid_header("/big") + frame(message))
 
-    async def main() -> list[int]:
-        node = await LiveNode("big_sub", master.uri).start()
-        got: list[int] = []
-        try:
-            await node.subscribe("/big", lambda frames, conn, t: got.extend(map(len, frames)))
-            for _ in range(200):
-                if got:
-                    break
-                await asyncio.sleep(0.05)
-        finally:
-            await node.close()
-        return got
-
     with FakePublisher(master.uri, "/big", send):
-        assert asyncio.run(main()) == [size]
+        assert [len(f) for f in first_frames(master.uri, "/big", "big_sub")] == [size]
 
 
 def test_a_peer_that_never_sends_its_header_is_closed(

@@ -7,6 +7,7 @@ the test says.
 
 from __future__ import annotations
 
+import asyncio
 import socket
 import struct
 import threading
@@ -16,6 +17,7 @@ from types import TracebackType
 from typing import Any
 from xmlrpc.server import SimpleXMLRPCRequestHandler, SimpleXMLRPCServer
 
+from rostools.node.node import LiveNode
 from rostools.wire.tcpros import publisher_header
 
 STRING_MD5 = "992ce8a1687cec8c8bd883ec73ca41d1"
@@ -38,6 +40,26 @@ def header_type_header(topic: str, name: str = "/fake") -> bytes:
     """A std_msgs/Header publisher's reply header, length prefix included."""
     definition = "uint32 seq\ntime stamp\nstring frame_id\n"
     return publisher_header(name, topic, HEADER_MD5, "std_msgs/Header", definition, False)
+
+
+def first_frames(master_uri: str, topic: str, name: str, within: float = 10.0) -> list[bytes]:
+    """The frames of the first read a new node ``name`` gets on ``topic`` within ``within``
+    seconds (none: an empty list); the node is closed after."""
+
+    async def main() -> list[bytes]:
+        node = await LiveNode(name, master_uri).start()
+        got: list[bytes] = []
+        try:
+            await node.subscribe(topic, lambda frames, conn, t: got.extend(map(bytes, frames)))
+            for _ in range(int(within / 0.05)):
+                if got:
+                    break
+                await asyncio.sleep(0.05)
+        finally:
+            await node.close()
+        return got
+
+    return asyncio.run(main())
 
 
 class _QuietHandler(SimpleXMLRPCRequestHandler):

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+import signal
 from collections.abc import Generator
 from pathlib import Path
 from typing import Any
@@ -42,9 +43,15 @@ def pytest_xdist_auto_num_workers(config: pytest.Config) -> int:
 def pytest_configure(config: pytest.Config) -> None:
     """Measure the machine's load once per run, before any worker starts (they inherit it),
     and scale pytest-timeout's guard against a hung test by it (before pytest-timeout reads
-    it; xdist's workers are handed the scaled value)."""
+    it; xdist's workers are handed the scaled value). Ctrl-C reaches the processes the tests
+    start, however pytest was started."""
     from tests.support import load
 
+    if signal.getsignal(signal.SIGINT) is signal.SIG_IGN:
+        # started in the background of a script (``cmd &`` ignores Ctrl-C), every child would
+        # ignore it too, and the tests of what Ctrl-C does would fail: a handler here is reset
+        # to the default in each child at its start
+        signal.signal(signal.SIGINT, signal.default_int_handler)
     factor = load.factor()
     if not hasattr(config, "workerinput") and getattr(config.option, "timeout", None):
         config.option.timeout *= factor

@@ -169,3 +169,15 @@ def test_pytest_killed_mid_test(
     worker = run.info["pytest"]
     assert isinstance(worker, int)
     wait_for(lambda: not alive(worker), 30, "pytest to exit")
+
+
+def test_ctrl_c_reaches_the_tests_processes_when_pytest_was_started_ignoring_it() -> None:
+    """A script's ``pytest &`` starts it with SIGINT ignored, which every child inherited: the
+    tests of what Ctrl-C does failed (six in a run started so)."""
+    test = "tests/integration/test_exit_codes.py::test_interrupted_wait_is_130"
+    done = subprocess.run(
+        [sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", "-n", "0", test],
+        cwd=ROOT, capture_output=True, text=True, timeout=300, check=False,
+        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_IGN),
+    )  # fmt: skip
+    assert done.returncode == 0, done.stdout[-2000:]

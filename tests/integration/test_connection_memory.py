@@ -12,6 +12,7 @@ import collections
 import signal
 import struct
 import sys
+import threading
 import time
 import xmlrpc.client
 from collections.abc import Iterator
@@ -26,6 +27,7 @@ from rostools.node import connection, mastercalls, subscriber
 from rostools.node.node import LiveNode
 from rostools.node.notice import Notice
 from rostools.wire.tcpros import subscriber_header
+from tests.support.load import scaled
 from tests.support.procs import Proc, free_port, linked, publishers, start_cli, wait_for
 
 STRING = TopicType.of(TypeStore([BuiltinSource()]), "std_msgs/String")
@@ -222,15 +224,16 @@ def test_a_burst_of_subscribers_past_the_limit_all_get_through(master: MasterThr
             # from another thread and loop, as from another process: the node accepts while
             # the subscribers write
             loop = asyncio.get_running_loop()
+            counted = threading.Event()  # the subscribers stay until they have been counted
             hold_open = loop.run_in_executor(
-                None, hold, node.tcpros_port, count, header, lambda: time.sleep(5), count
+                None, hold, node.tcpros_port, count, header, lambda: counted.wait(600), count
             )
-            for _ in range(200):
-                if pub.subscriber_count == count:
-                    break
+            deadline = time.monotonic() + scaled(10)
+            while pub.subscriber_count < count and time.monotonic() < deadline:
                 await asyncio.sleep(0.05)
             await asyncio.sleep(connection.PENDING_GRACE + 0.5)  # past any drop
             connected = pub.subscriber_count
+            counted.set()
             await hold_open
             return connected
         finally:

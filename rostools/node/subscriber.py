@@ -35,6 +35,11 @@ FramesCallback = Callable[[list[Frame], InboundConnection, float], None]
 RETRY_FIRST, RETRY_MAX = 0.2, 5.0
 #: A failure that may be a publisher on its way out is reported once it lasts this long (s).
 REPORT_AFTER = 1.0
+#: After a publisher closed a working connection, failures to connect again are reported
+#: once they last this long (s): a node on its way out unregisters, closes, and refuses its
+#: topics until the master's ``publisherUpdate`` tells us, which for a node of a thousand
+#: topics on a busy machine takes seconds (a line for each topic was printed meanwhile).
+REPORT_AFTER_DROP = 5.0
 #: How long a TCP connect to a publisher may take: the OS's own wait is minutes.
 CONNECT_TIMEOUT = 5.0
 #: A publisher that timed out may take twice as long the next time, up to this many times the
@@ -131,6 +136,7 @@ class Subscriber:
         delay = RETRY_FIRST
         failing_since: float | None = None
         reported = False
+        closed_by_peer = False  # it closed a working connection: it may be on its way out
         while not self.closed and uri in self.publishers:
             result = await self._connect(uri)
             if isinstance(result, InboundConnection):
@@ -144,6 +150,8 @@ class Subscriber:
                 failure = result.failure
                 if result.timed_out:
                     self._slow(uri)
+                if result.header is not None:  # it worked: was it closed by the peer?
+                    closed_by_peer = failure is None
                 if failure is None:
                     failing_since, reported = None, False
             else:
@@ -153,7 +161,10 @@ class Subscriber:
             if failure is not None:
                 now = time.monotonic()
                 failing_since = failing_since or now
-                due = failure.lasting or now - failing_since >= REPORT_AFTER
+                if closed_by_peer:
+                    due = now - failing_since >= REPORT_AFTER_DROP
+                else:
+                    due = failure.lasting or now - failing_since >= REPORT_AFTER
                 if due and not reported and not self.node.master_lost:  # lists go stale then
                     reported = True
                     await self._report(uri, failure)

@@ -288,8 +288,11 @@ def _subscribe_all(
             ]
             loop = asyncio.get_running_loop()
             await loop.run_in_executor(None, while_subscribed, subs)  # type: ignore[arg-type]
-            for _ in range(200):
-                if len({n.fields["topic"] for n in notices}) == TOPICS:
+            # a publisher that closed its connections is reported once it has been unreachable
+            # for subscriber.REPORT_AFTER_DROP
+            deadline = time.monotonic() + scaled(subscriber.REPORT_AFTER_DROP + 10)
+            while len({n.fields["topic"] for n in notices}) < TOPICS:
+                if time.monotonic() > deadline:
                     break
                 await asyncio.sleep(0.05)
         finally:

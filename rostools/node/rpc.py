@@ -50,6 +50,10 @@ LARGE_BODY = 1024 * 1024
 BODY_BUDGET = 2 * MAX_BODY
 #: Outgoing calls (publisherUpdate, paramUpdate, shutdown) give up after this long.
 CALL_TIMEOUT = 5.0
+#: A notification a node did not answer in time is sent again, this many times, each with
+#: twice the time: a node busy on a loaded machine missed its publisherUpdate for good, and
+#: never connected to the publisher (rosmaster waits without a limit, a thread a call).
+NOTIFY_RETRIES = 3
 #: The server's receive buffer, shared by its connections (asyncio reads this much at once).
 RECEIVE_CHUNK = 256 * 1024
 #: A refused request (an HTTP error) is answered, our side shut, and what the client still
@@ -370,13 +374,30 @@ class Notifier:
             async with self.slots:
                 while self.queues.get(uri):
                     method, params = self.queues[uri].pop(0)
-                    try:
-                        await call(uri, method, params)
-                    except Exception as err:  # noqa: BLE001 - best effort, as rosmaster's
-                        log.debug("%s to %s failed: %s", method, uri, err)
+                    await self._deliver(uri, method, params)
         finally:
             self.queues.pop(uri, None)
             self.busy.discard(uri)
+
+    async def _deliver(self, uri: str, method: str, params: tuple[Any, ...]) -> None:
+        """One call, sent again with twice the time while the node is too slow to answer.
+
+        Not when a newer call of the same method and subject waits behind it: it says more.
+        """
+        timeout = CALL_TIMEOUT
+        for attempt in range(NOTIFY_RETRIES + 1):
+            try:
+                await call(uri, method, params, timeout)
+                return
+            except TimeoutError as err:
+                log.debug("%s to %s: %s (attempt %d)", method, uri, err, attempt + 1)
+                newer = any(m == method and p[:2] == params[:2] for m, p in self.queues[uri])
+                if newer:
+                    return
+                timeout *= 2
+            except Exception as err:  # noqa: BLE001 - best effort, as rosmaster's
+                log.debug("%s to %s failed: %s", method, uri, err)
+                return
 
     async def close(self) -> None:
         """Cancel what is still queued."""

@@ -273,3 +273,25 @@ def test_small_requests_allocate_no_big_read_buffers(master: MasterThread) -> No
             tracemalloc.stop()
     # asyncio's plain recv allocated 256 KiB per read (mmap, mremap and munmap per request).
     assert peak < 128 * 1024
+
+
+def test_a_node_too_slow_for_its_publisher_update_gets_it_again(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """A subscriber too busy to answer publisherUpdate in time got it once, and never
+    connected to the publisher (a rospy listener beside two CPU hogs heard nothing)."""
+    monkeypatch.setattr(graph_xmlrpc, "CALL_TIMEOUT", 0.3)
+    busy = [True]
+
+    def update(caller: str, topic: str, uris: list[str]) -> list[Any]:
+        if busy[0]:
+            busy[0] = False
+            time.sleep(0.6)  # past the first limit, not the second
+        return [1, "", 0]
+
+    with MasterThread() as master, FakeNode({"publisherUpdate": update}) as node:
+        with xmlrpc.client.ServerProxy(master.uri) as proxy:
+            proxy.registerSubscriber("/slow_sub", "/t", "std_msgs/String", node.uri)
+            proxy.registerPublisher("/pub", "/t", "std_msgs/String", "http://127.0.0.1:1/")
+        wait_for(lambda: len(node.calls) >= 2, 30, "publisherUpdate sent again")
+    assert [c[1][1:] for c in node.calls] == [("/t", ["http://127.0.0.1:1/"])] * 2

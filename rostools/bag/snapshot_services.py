@@ -20,7 +20,7 @@ import struct
 from collections.abc import Callable
 from typing import Protocol
 
-from rostools.bag.follow import Selection
+from rostools.selection import Selection
 from rostools.bag.play_control import SET_BOOL
 from rostools.bag.recorder import STRING
 from rostools.bag.snapshot_job import SnapshotJob

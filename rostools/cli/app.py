@@ -26,6 +26,7 @@ GROUPS: dict[str, str] = {
     "node": "ROS nodes: list, info, ping, kill, machine, cleanup, and graph.",
     "bag": "Bags (.bag and MCAP): record, play, info, filter, convert, cat, plot, and more.",
     "core": "Run the bundled master and parameter server (roscore).",
+    "bridge": "Serve the live graph over WebSocket to Foxglove Studio, Lichtblick and browsers.",
     "doctor": "Check this host's view of the ROS graph: master, names, nodes, sim time, clocks.",
     "demo": "Try rostools in ten seconds: a master, a talker, a service, a recording.",
     "completion": "Shell completion for bash, zsh and fish: show or install the script.",

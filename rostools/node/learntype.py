@@ -28,6 +28,4 @@ async def learn_topic_type(node: LiveNode, topic: str, timeout: float) -> TopicT
     except asyncio.TimeoutError:
         raise TimeoutExpired(f"no publisher of {topic} answered within {timeout:g} s") from None
     finally:
-        await sub.close()
-        node.subscribers.pop(sub.topic, None)
-        await node.master.unregister_subscriber(sub.topic, node.uri)
+        await node.unsubscribe(sub.topic)

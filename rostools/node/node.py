@@ -84,6 +84,8 @@ class LiveNode:
         self.shutdown_reason = ""
         #: Where the node's notices go (a peer it cannot reach, a master restart).
         self.notify: Callable[[Notice], None] = to_stderr
+        #: Called with each ``paramUpdate`` (key, value) once the node follows parameters.
+        self.on_param_update: Callable[[str, Any], None] | None = None
         self._xmlrpc: XmlRpcServer | None = None
         self._tcpros: Listener | None = None
         self._watch: MasterWatch | None = None
@@ -223,6 +225,22 @@ class LiveNode:
         )
         return sub
 
+    async def unsubscribe(self, topic: str) -> None:
+        """Close the subscription to ``topic`` and withdraw it from the master."""
+        topic = self.resolve(topic)
+        sub = self.subscribers.pop(topic, None)
+        if sub is not None:
+            await sub.close()
+            await self.master.unregister_subscriber(topic, self.uri)
+
+    async def unadvertise(self, topic: str) -> None:
+        """Stop publishing on ``topic`` and withdraw it from the master."""
+        topic = self.resolve(topic)
+        pub = self.publishers.pop(topic, None)
+        if pub is not None:
+            pub.close()
+            await self.master.call("unregisterPublisher", topic, self.uri)
+
     async def advertise_service(
         self, name: str, srv_type: ServiceType, handler: ServiceHandler
     ) -> ServiceServer:
@@ -282,8 +300,7 @@ class LiveNode:
             "getSubscriptions": (self._subscriptions, [], ()),
             "getPublications": (self._publications, [], ()),
             "paramUpdate": (
-                lambda caller, key, value: (-1, "not subscribed", 0), -1,
-                (check.global_name("parameter_key"), check.anything),
+                self._param_update, -1, (check.global_name("parameter_key"), check.anything),
             ),
             "publisherUpdate": (
                 self._publisher_update, -1, (topic, check.uri_list("publishers")),
@@ -308,6 +325,12 @@ class LiveNode:
 
     def _publications(self, caller: str) -> Triple:
         return SUCCESS, "publications", [[t, p.type.type] for t, p in self.publishers.items()]
+
+    def _param_update(self, caller: str, key: str, value: Any) -> Triple:
+        if self.on_param_update is None:
+            return ERROR, "not subscribed", 0
+        self.on_param_update(key, value)
+        return SUCCESS, "", 0
 
     def _publisher_update(self, caller: str, topic: str, uris: list[str]) -> Triple:
         sub = self.subscribers.get(self.resolve(topic))

@@ -16,12 +16,12 @@ ROOT = Path(__file__).resolve().parents[2] / "rostools"
 #: package root (``__init__``) stands above everything: its names are the API's, lazily.
 LAYERS: list[set[str]] = [
     {"errors", "lazy", "version"},
-    {"names", "yamlio"},
+    {"names", "yamlio", "selection"},
     {"wire"},
     {"msgs", "rates", "series"},
     {"rosgraph"},
     {"node"},
-    {"master", "bag", "action"},
+    {"master", "bag", "action", "bridge"},
     {"cli", "_api"},
     {"testing"},
     {"__main__", "__init__"},

@@ -104,7 +104,7 @@ class TopicOptions:
             raise UsageError("-a takes every topic; do not also name topics")
 
     def choice(self, topics: list[str]) -> dict[str, Any]:
-        """The library's ``TopicChoice`` fields (``bag.follow``), for ``topics``."""
+        """The library's ``TopicChoice`` fields (``selection``), for ``topics``."""
         return {
             "topics": topics, "all": self.all_, "regex": self.regex,
             "exclude": self.exclude or [], "node": self.node, "types": self.types or [],

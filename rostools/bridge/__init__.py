@@ -1,0 +1,1 @@
+"""``rostools bridge``: the live ROS 1 graph over WebSocket, in the Foxglove protocol."""

@@ -1,0 +1,179 @@
+"""One WebSocket client of the bridge: its subscriptions, their queues, and the one writer.
+
+The ROS side never waits on a client. A message for a client goes into that subscription's
+own bounded queue, and returns; the client's writer task sends, one message of each waiting
+subscription in turn, so a topic of big messages cannot starve a small one. A full queue
+drops its oldest message ("latest wins"), and the drop is counted.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import collections
+import logging
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any, Protocol
+
+from rostools.node.connection import Frame
+from rostools.wire import foxglove
+
+log = logging.getLogger(__name__)
+
+#: Messages a subscription queues for a client that reads slower than they come.
+QUEUE_MESSAGES = 100
+#: Bytes a subscription queues; its newest message is always kept, whatever its size, so a
+#: stalled client holds at most this, or one message, per subscription.
+QUEUE_BYTES = 8 * 1024 * 1024
+#: Subscriptions one client may hold at once (a subscription flood is refused past it).
+MAX_SUBSCRIPTIONS = 1024
+
+
+class Socket(Protocol):
+    """What the writer needs of a WebSocket connection (``websockets``' has it)."""
+
+    async def send(self, message: str | bytes) -> None:
+        """Send one message, waiting while the socket's buffer is full."""
+        ...
+
+
+@dataclass
+class Subscription:
+    """A client's subscription to one channel."""
+
+    id: int
+    channel: int
+    topic: str
+    #: Seconds between two messages sent (0: every one): the bridge's ``--max-rate`` for the
+    #: topic, or the client's own ``maxRate``, whichever is slower.
+    interval: float = 0.0
+    queue: collections.deque[tuple[int, Frame]] = field(default_factory=collections.deque)
+    queued_bytes: int = 0
+    last_taken: float = 0.0
+    sent: int = 0
+    sent_bytes: int = 0
+    dropped: int = 0
+    throttled: int = 0
+
+
+@dataclass
+class ClientStats:
+    """What one client was sent and what it missed, for the live table."""
+
+    messages: int = 0
+    bytes: int = 0
+    dropped: int = 0
+    throttled: int = 0
+
+
+class Client:
+    """A connected WebSocket client."""
+
+    def __init__(self, socket: Socket, name: str, on_gone: Callable[[Client], None]) -> None:
+        self.socket = socket
+        self.name = name
+        self.on_gone = on_gone
+        self.subscriptions: dict[int, Subscription] = {}
+        #: Channels the client advertised (its id -> the ROS topic it publishes).
+        self.channels: dict[int, str] = {}
+        #: Parameter names it follows, and whether it follows the connection graph.
+        self.parameters: set[str] = set()
+        self.graph = False
+        self.closed = False
+        self._waiting: collections.OrderedDict[int, None] = collections.OrderedDict()
+        self._control: collections.deque[str | bytes] = collections.deque()
+        self._wake = asyncio.Event()
+        self.writer = asyncio.get_running_loop().create_task(self._write())
+
+    # what the bridge hands over ------------------------------------------------------------
+
+    def offer(self, sub: Subscription, stamp: int, frame: Frame, now: float) -> None:
+        """Queue one message for ``sub``; never waits."""
+        if sub.interval and now - sub.last_taken < sub.interval:
+            sub.throttled += 1
+            return
+        sub.last_taken = now
+        sub.queue.append((stamp, frame))
+        sub.queued_bytes += len(frame)
+        while len(sub.queue) > 1 and (
+            len(sub.queue) > QUEUE_MESSAGES or sub.queued_bytes > QUEUE_BYTES
+        ):
+            _, old = sub.queue.popleft()
+            sub.queued_bytes -= len(old)
+            sub.dropped += 1
+        self._waiting[sub.id] = None
+        self._wake.set()
+
+    def send(self, message: dict[str, Any] | bytes) -> None:
+        """Queue a control message (JSON, or a binary one), sent before any data."""
+        if self.closed:
+            return
+        self._control.append(foxglove.dumps(message) if isinstance(message, dict) else message)
+        self._wake.set()
+
+    def status(self, level: int, text: str) -> None:
+        """Tell the client something in a ``status`` message."""
+        self.send({"op": "status", "level": level, "message": text})
+
+    def unsubscribe(self, sub_id: int) -> Subscription | None:
+        """Forget a subscription and what it had queued."""
+        sub = self.subscriptions.pop(sub_id, None)
+        self._waiting.pop(sub_id, None)
+        return sub
+
+    @property
+    def stats(self) -> ClientStats:
+        """Totals over the client's subscriptions."""
+        out = ClientStats()
+        for sub in self.subscriptions.values():
+            out.messages += sub.sent
+            out.bytes += sub.sent_bytes
+            out.dropped += sub.dropped
+            out.throttled += sub.throttled
+        return out
+
+    def close(self) -> None:
+        """Stop writing; the server closes the socket."""
+        self.closed = True
+        self.writer.cancel()
+
+    # the writer --------------------------------------------------------------------------
+
+    async def _write(self) -> None:
+        try:
+            while not self.closed:
+                await self._wake.wait()
+                self._wake.clear()
+                await self._drain()
+        except asyncio.CancelledError:
+            raise
+        except Exception as err:  # noqa: BLE001 - a socket gone mid-send ends this client only
+            log.debug("client %s: %s", self.name, err)
+        self.closed = True
+        self.on_gone(self)
+
+    async def _drain(self) -> None:
+        """Send everything waiting: control messages first, then a message per topic in turn."""
+        while self._control or self._waiting:
+            while self._control:
+                await self.socket.send(self._control.popleft())
+            if not self._waiting:
+                return
+            sub_id, _ = self._waiting.popitem(last=False)
+            sub = self.subscriptions.get(sub_id)
+            if sub is None or not sub.queue:
+                continue
+            stamp, frame = sub.queue.popleft()
+            sub.queued_bytes -= len(frame)
+            if sub.queue:
+                self._waiting[sub_id] = None  # its turn comes again after the others'
+            data = b"".join((foxglove.message_data(sub.id, stamp), frame))
+            await self.socket.send(data)
+            sub.sent += 1
+            sub.sent_bytes += len(frame)
+
+
+def now() -> float:
+    """The clock the throttles read."""
+    return time.monotonic()

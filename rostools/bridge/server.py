@@ -1,0 +1,345 @@
+"""The bridge: a ROS node with a WebSocket face that speaks the Foxglove protocol.
+
+It runs on the node's own event loop. The graph comes from ``GraphWatch``; each topic the
+options choose is a channel; a client's subscription subscribes the node to the topic (the
+first one) and lets go of it (the last one); frames go to the clients undecoded, each
+through its own queue (``client.Client``). What a client asks for is ``operations.py``'s.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import hmac
+import itertools
+import logging
+import time
+from collections.abc import Callable
+from http import HTTPStatus
+from typing import Any
+from urllib.parse import parse_qs, urlsplit
+
+from rostools.bridge.channels import Channel, Links
+from rostools.bridge.client import Client, Subscription
+from rostools.bridge.graph import Graph, GraphChange, GraphWatch
+from rostools.bridge.options import BridgeOptions
+from rostools.bridge.services import Service, Services
+from rostools.errors import RostoolsError
+from rostools.msgs.store import TypeStore
+from rostools.msgs.topictype import TopicType
+from rostools.node.clock import RosClock
+from rostools.node.connection import Frame, InboundConnection
+from rostools.node.node import LiveNode
+from rostools.selection import Selection
+from rostools.wire import foxglove
+
+log = logging.getLogger(__name__)
+
+#: The largest message a client may send (a frame past it closes that client, code 1009).
+MAX_CLIENT_MESSAGE = 16 * 1024 * 1024
+#: Bytes the socket library may buffer per client before a send waits.
+WRITE_LIMIT = 1024 * 1024
+#: The least time between two ``time`` messages (a 1 kHz ``/clock`` is sent at 100 Hz).
+TIME_PERIOD = 0.01
+
+Event = dict[str, Any]
+
+
+class Bridge:
+    """Serves the graph of ``node`` to WebSocket clients until ``run``'s ``stop``."""
+
+    def __init__(
+        self,
+        node: LiveNode,
+        opts: BridgeOptions,
+        store: TypeStore,
+        on_event: Callable[[Event], None] | None = None,
+    ) -> None:
+        from rostools.bridge.operations import Operations
+
+        self.node = node
+        self.opts = opts
+        self.store = store
+        self.on_event = on_event or (lambda _: None)
+        self.selection = Selection(opts)
+        self.ids = itertools.count(1)
+        self.channels: dict[int, Channel] = {}
+        self.by_topic: dict[str, Channel] = {}
+        self.services: dict[int, Service] = {}
+        self.service_ids: dict[str, int] = {}
+        self.clients: set[Client] = set()
+        self.clock = RosClock()
+        self.links = Links(node, self.clock.now, time.monotonic, self._learnt)
+        self.graph = GraphWatch(node.master, self._graph_changed)
+        self.describer = Services(node, store)
+        self.ops = Operations(self)
+        self.port = 0
+        self.started = time.monotonic()
+        self._last_time = 0.0
+        self._tasks: set[asyncio.Task[Any]] = set()
+
+    # the run -------------------------------------------------------------------------------
+
+    async def run(self, stop: asyncio.Event, ready: Callable[[Bridge], None] | None = None) -> None:
+        """Serve until ``stop``; ``ready`` is called once the port is open and the graph read."""
+        from websockets.asyncio.server import serve
+
+        tls = self.opts.tls()
+        await self.clock.start(self.node)
+        if self.clock.sim:
+            self.links.borrowed.add("/clock")
+            self.clock.forward = self._clock_frames
+        try:
+            server = await serve(
+                self._serve,
+                self.opts.address,
+                self.opts.port,
+                subprotocols=[foxglove.SUBPROTOCOLS[0], foxglove.SUBPROTOCOLS[1]],  # type: ignore[list-item]
+                process_request=self._check_token,
+                ssl=tls,
+                max_size=MAX_CLIENT_MESSAGE,
+                compression=None,
+                write_limit=WRITE_LIMIT,
+                server_header=None,
+            )
+        except OSError as err:
+            raise RostoolsError(
+                f"cannot listen on {self.opts.address}:{self.opts.port}: {err.strerror or err}",
+                hint="another bridge may be running there: choose another --port",
+            ) from err
+        watch = asyncio.get_running_loop().create_task(self.graph.run())
+        try:
+            self.port = server.sockets[0].getsockname()[1] if server.sockets else self.opts.port
+            await self._first_look(stop)
+            self.event("listening", address=self.opts.address, port=self.port, url=self.url)
+            if ready is not None:
+                ready(self)
+            await stop.wait()
+        finally:
+            watch.cancel()
+            server.close()
+            for client in list(self.clients):
+                client.close()
+            await server.wait_closed()
+            for task in list(self._tasks):
+                task.cancel()
+
+    async def _first_look(self, stop: asyncio.Event) -> None:
+        """Wait for the first look at the graph (a master that is not there: keep trying)."""
+        ready = asyncio.ensure_future(self.graph.ready.wait())
+        stopped = asyncio.ensure_future(stop.wait())
+        try:
+            await asyncio.wait([ready, stopped], return_when=asyncio.FIRST_COMPLETED)
+        finally:
+            ready.cancel()
+            stopped.cancel()
+
+    @property
+    def url(self) -> str:
+        """The URL a client connects to (the token left out)."""
+        scheme = "wss" if self.opts.certfile else "ws"
+        host = self.opts.address
+        host = "127.0.0.1" if host in ("0.0.0.0", "") else host  # noqa: S104 - shown, not bound
+        return f"{scheme}://{f'[{host}]' if ':' in host else host}:{self.port}"
+
+    def event(self, kind: str, **fields: Any) -> None:
+        """Tell the terminal (the live table, or a JSON line)."""
+        self.on_event({"event": kind, **fields})
+
+    def spawn(self, coro: Any) -> None:
+        """Run ``coro`` beside the loop, kept until done; an error is logged, not raised."""
+        task = asyncio.get_running_loop().create_task(coro)
+        self._tasks.add(task)
+        task.add_done_callback(self._task_done)
+
+    def _task_done(self, task: asyncio.Task[Any]) -> None:
+        self._tasks.discard(task)
+        if not task.cancelled() and task.exception() is not None:
+            log.warning("bridge: %s", task.exception())
+
+    # clients -----------------------------------------------------------------------------
+
+    def _check_token(self, connection: Any, request: Any) -> Any:
+        """Refuse a client without the token, before the upgrade (HTTP 401)."""
+        if not self.opts.token:
+            return None
+        given = parse_qs(urlsplit(request.path).query).get("token", [""])[0]
+        if hmac.compare_digest(given.encode(), self.opts.token.encode()):
+            return None
+        peer = connection.remote_address
+        self.event("refused", client=_peer_name(peer), reason="wrong or missing token")
+        return connection.respond(HTTPStatus.UNAUTHORIZED, "a token is needed: ?token=...\n")
+
+    async def _serve(self, ws: Any) -> None:
+        from websockets.exceptions import ConnectionClosed
+
+        name = _peer_name(ws.remote_address)
+        client = Client(ws, name, lambda c: None)
+        self.clients.add(client)
+        self.event("connected", client=name, protocol=ws.subprotocol)
+        client.send(self._server_info())
+        if self.channels:
+            client.send(
+                {"op": "advertise", "channels": [c.advertisement() for c in self.channels.values()]}
+            )
+        if self.services:
+            client.send(self._services_message(list(self.services.values())))
+        try:
+            async for message in ws:
+                if client.closed:
+                    break
+                await self.ops.handle(client, message)
+        except ConnectionClosed:
+            pass
+        finally:
+            await self._drop(client)
+
+    def _server_info(self) -> dict[str, Any]:
+        caps = [foxglove.PARAMETERS, foxglove.PARAMETERS_SUBSCRIBE, foxglove.CONNECTION_GRAPH]
+        caps.append(foxglove.SERVICES)
+        if not self.opts.read_only:
+            caps.append(foxglove.CLIENT_PUBLISH)
+        if self.clock.sim:
+            caps.append(foxglove.CAPABILITY_TIME)
+        return {
+            "op": "serverInfo",
+            "name": f"rostools bridge ({self.node.name})",
+            "capabilities": caps,
+            "supportedEncodings": ["ros1"],
+            "metadata": {"ROS_DISTRO": "noetic", "ROS_MASTER_URI": self.node.master_uri},
+            "sessionId": str(int(self.started * 1000)),
+        }
+
+    async def _drop(self, client: Client) -> None:
+        """A client went away: its subscriptions, channels and parameter watches with it."""
+        client.close()
+        self.clients.discard(client)
+        stats = client.stats
+        for sub_id in list(client.subscriptions):
+            await self.ops.unsubscribe(client, sub_id)
+        await self.ops.forget_client(client)
+        self.event(
+            "disconnected",
+            client=client.name,
+            messages=stats.messages,
+            bytes=stats.bytes,
+            dropped=stats.dropped,
+        )
+
+    def broadcast(self, message: dict[str, Any] | bytes) -> None:
+        """Send one message to every client."""
+        for client in self.clients:
+            client.send(message)
+
+    # channels ----------------------------------------------------------------------------
+
+    async def _graph_changed(self, change: GraphChange) -> None:
+        for topic in change.removed_topics:
+            await self._unadvertise(topic)
+        for topic, type_name in change.added_topics.items():
+            if not self.selection.wants(topic, type_name or None):
+                continue
+            if type_name and self.store.has_msg(type_name):
+                try:
+                    self._advertise(topic, TopicType.of(self.store, type_name))
+                    continue
+                except RostoolsError as err:  # a definition the store cannot complete
+                    log.debug("%s: %s", type_name, err)
+            self.spawn(self.links.open(topic, learning=True))
+        for name in change.removed_services:
+            service_id = self.service_ids.pop(name, None)
+            if service_id is not None and self.services.pop(service_id, None) is not None:
+                self.broadcast({"op": "unadvertiseServices", "serviceIds": [service_id]})
+        for name in change.added_services:
+            self.spawn(self._describe(name))
+        if change.links_changed:
+            self.ops.graph_changed(change.new)
+
+    def _advertise(self, topic: str, topic_type: TopicType) -> None:
+        channel = Channel(next(self.ids), topic, topic_type)
+        self.channels[channel.id] = channel
+        self.by_topic[topic] = channel
+        self.broadcast({"op": "advertise", "channels": [channel.advertisement()]})
+        self.event("advertised", topic=topic, type=topic_type.type)
+
+    async def _unadvertise(self, topic: str) -> None:
+        channel = self.by_topic.pop(topic, None)
+        if channel is not None:
+            del self.channels[channel.id]
+            self.broadcast({"op": "unadvertise", "channelIds": [channel.id]})
+            self.event("unadvertised", topic=topic)
+        link = self.links.links.get(topic)
+        if link is not None:
+            for client, sub in list(link.readers.values()):
+                client.unsubscribe(sub.id)
+            link.readers.clear()
+            link.learning = False
+            await self.links.release(topic)
+
+    def _learnt(self, topic: str, topic_type: TopicType) -> None:
+        """A publisher's header gave the type (and definition) of ``topic``."""
+        link = self.links.links.get(topic)
+        channel = self.by_topic.get(topic)
+        if channel is None and topic in self.graph.graph.topics:
+            self._advertise(topic, topic_type)
+        elif channel is not None and channel.type.md5sum != topic_type.md5sum:
+            # the store's definition is not the publisher's: the publisher's is the truth
+            self.spawn(self._replace(topic, topic_type))
+        if link is not None and link.learning:
+            link.learning = False
+            self.spawn(self.links.release(topic))
+
+    async def _replace(self, topic: str, topic_type: TopicType) -> None:
+        for client, _ in list(self.links.links[topic].readers.values()):
+            client.status(
+                foxglove.WARNING, f"{topic} is of another {topic_type.type}: subscribe again"
+            )
+        await self._unadvertise(topic)
+        self._advertise(topic, topic_type)
+
+    def _clock_frames(self, frames: list[Frame], conn: InboundConnection, now: float) -> None:
+        self.links.feed("/clock", frames, conn)
+        if now - self._last_time >= TIME_PERIOD and self.clock.last_ns:
+            self._last_time = now
+            self.broadcast(foxglove.time_message(self.clock.last_ns))
+
+    # services ----------------------------------------------------------------------------
+
+    async def _describe(self, name: str) -> None:
+        found = await self.describer.describe(next(self.ids), name)
+        if isinstance(found, str):
+            self.event("service_skipped", service=name, reason=found)
+            return
+        if name not in self.graph.graph.services or name in self.service_ids:
+            return  # gone meanwhile, or described twice
+        self.services[found.id] = found
+        self.service_ids[name] = found.id
+        self.broadcast(self._services_message([found]))
+
+    def _services_message(self, services: list[Service]) -> dict[str, Any]:
+        return {
+            "op": "advertiseServices",
+            "services": [s.advertisement(self.store) for s in services],
+        }
+
+    # the live table ----------------------------------------------------------------------
+
+    def topic_rows(self) -> list[tuple[str, int, int, int]]:
+        """(topic, messages in, bytes in, readers) of every topic subscribed."""
+        return [
+            (t, link.stats.messages, link.stats.bytes, len(link.readers))
+            for t, link in sorted(self.links.links.items())
+        ]
+
+    def current_graph(self) -> Graph:
+        """The graph at the last look."""
+        return self.graph.graph
+
+    def subscription_of(self, client: Client, sub_id: int) -> Subscription | None:
+        """A client's subscription by its id."""
+        return client.subscriptions.get(sub_id)
+
+
+def _peer_name(address: Any) -> str:
+    if isinstance(address, tuple) and len(address) >= 2:
+        return f"{address[0]}:{address[1]}"
+    return str(address)

@@ -19,8 +19,8 @@ from rostools.errors import one_line
 if TYPE_CHECKING:
     import asyncio
 
-    from rostools.bridge.options import BridgeOptions
-    from rostools.bridge.server import Bridge
+    from rostools.web.options import BridgeOptions
+    from rostools.web.server import Bridge
     from rostools.node.node import LiveNode
 
 app = typer.Typer(
@@ -82,7 +82,7 @@ def bridge(
     Open Foxglove Studio or Lichtblick, choose "Foxglove WebSocket", and give the URL this
     prints. Every topic's type comes from its publisher: no .msg files are needed.
     """
-    from rostools.bridge.options import BridgeOptions, parse_rate
+    from rostools.web.options import BridgeOptions, parse_rate
 
     fmt = output_format(ctx, fmt)
     opts = BridgeOptions(
@@ -108,7 +108,7 @@ async def _run(
 ) -> None:
     import asyncio
 
-    from rostools.bridge.server import Bridge
+    from rostools.web.server import Bridge
     from rostools.msgs.store import TypeStore
 
     def on_event(event: dict[str, Any]) -> None:

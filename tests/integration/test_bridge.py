@@ -179,7 +179,7 @@ def test_what_a_hostile_client_sends_gets_a_status_and_costs_nobody_else(
 def test_a_subscription_flood_is_refused_past_the_limit(
     rostools_master: str, cli_env: dict[str, str]
 ) -> None:
-    from rostools.bridge.client import MAX_SUBSCRIPTIONS
+    from rostools.web.client import MAX_SUBSCRIPTIONS
 
     pub = start_cli(
         "topic", "pub", "-r", "5", "/chatter", "std_msgs/String", "data: hi", env=cli_env

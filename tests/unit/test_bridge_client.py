@@ -7,9 +7,9 @@ import struct
 
 import pytest
 
-from rostools.bridge import client as client_mod
-from rostools.bridge.client import Client, Subscription
-from rostools.bridge.params import from_client, leaves, to_client
+from rostools.web import client as client_mod
+from rostools.web.client import Client, Subscription
+from rostools.web.params import from_client, leaves, to_client
 from rostools.wire import foxglove
 from rostools.wire.foxglove import ProtocolError
 

@@ -15,10 +15,10 @@ from typing import TYPE_CHECKING
 from rostools.msgs.topictype import ANY, TopicType
 
 if TYPE_CHECKING:
-    from rostools.bridge.client import Client, Subscription
     from rostools.node.connection import Frame, InboundConnection
     from rostools.node.node import LiveNode
     from rostools.node.subscriber import Subscriber
+    from rostools.web.client import Client, Subscription
 
 #: The message encoding and schema encoding of every channel: ROS 1 bytes, ``.msg`` text.
 ENCODING, SCHEMA_ENCODING = "ros1", "ros1msg"

@@ -11,10 +11,10 @@ from collections.abc import Mapping, Sequence
 
 from rostools._api import exiting, loop, messages
 from rostools._api.asyncnode import default_master_uri
-from rostools.web.options import BridgeOptions
-from rostools.web.server import Bridge
 from rostools.errors import RostoolsError, TimeoutExpired, UsageError
 from rostools.node.node import LiveNode
+from rostools.web.options import BridgeOptions
+from rostools.web.server import Bridge
 
 #: How long the bridge may take to listen and read the graph before it gives up.
 START_TIMEOUT = 10.0

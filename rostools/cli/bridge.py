@@ -19,9 +19,9 @@ from rostools.errors import one_line
 if TYPE_CHECKING:
     import asyncio
 
+    from rostools.node.node import LiveNode
     from rostools.web.options import BridgeOptions
     from rostools.web.server import Bridge
-    from rostools.node.node import LiveNode
 
 app = typer.Typer(
     name="bridge",
@@ -108,8 +108,8 @@ async def _run(
 ) -> None:
     import asyncio
 
-    from rostools.web.server import Bridge
     from rostools.msgs.store import TypeStore
+    from rostools.web.server import Bridge
 
     def on_event(event: dict[str, Any]) -> None:
         if fmt is not Format.text:

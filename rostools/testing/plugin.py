@@ -198,8 +198,10 @@ def ros_record(
 
 @pytest.fixture
 def ros_bridge(ros_master: Master) -> Iterator[WebBridge]:
-    """``rostools bridge`` of every topic on the test's master, on a free loopback port
-    (``ros_bridge.url``), stopped after the test."""
+    """``rostools bridge`` of the test's master, on a free loopback port (``ros_bridge.url``).
+
+    It serves every topic, and stops after the test.
+    """
     from rostools._api.bridges import bridge
 
     with bridge(master_uri=ros_master.uri) as running:

@@ -268,7 +268,9 @@ def test_parameters_get_set_and_follow(rostools_master: str, cli_env: dict[str, 
                 }
             )
             client.wait(lambda m: m.get("id") == "set")
-            assert run_cli("param", "get", "/robot/gains", env=cli_env).stdout == "- 1\n- 2\n- 3\n\n"
+            assert (
+                run_cli("param", "get", "/robot/gains", env=cli_env).stdout == "- 1\n- 2\n- 3\n\n"
+            )
             client.send({"op": "subscribeParameterUpdates", "parameterNames": ["/robot/speed"]})
 
             update: list[dict[str, object]] = []

@@ -54,7 +54,7 @@ def test_a_stalled_client_holds_a_bounded_queue_and_counts_its_drops() -> None:
         await asyncio.sleep(0.01)
         return stalled, big, quick
 
-    stalled, big, quick = asyncio.run(scenario())
+    _, big, quick = asyncio.run(scenario())
     assert big.queued_bytes <= client_mod.QUEUE_BYTES
     in_the_socket = 1  # taken by the writer, whose send never returns
     assert big.dropped > 150 and big.dropped + len(big.queue) + in_the_socket == 200

@@ -196,8 +196,9 @@ class BridgeTable:
         from rich.table import Table
 
         now = time.monotonic()
+        where = bridge.url if bridge.port else "starting"
         title = (
-            f"bridge {bridge.url}: {len(bridge.clients)} clients, "
+            f"bridge {where}: {len(bridge.clients)} clients, "
             f"{len(bridge.channels)} topics, {now - bridge.started:.0f} s"
         )
         table = Table(title=title, title_justify="left")

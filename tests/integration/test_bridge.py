@@ -348,3 +348,58 @@ def test_bad_options_are_one_line(
         done = run_cli("bridge", "--port", "0", *args, env=cli_env)
         assert done.returncode == 2, done.stderr
         assert done.stderr.count("\n") == 1 and words in done.stderr
+
+
+def test_wss_with_a_certificate_and_a_warning_off_loopback(
+    rostools_master: str, cli_env: dict[str, str], tmp_path: Path
+) -> None:
+    import ssl
+    import subprocess
+
+    cert, key = tmp_path / "cert.pem", tmp_path / "key.pem"
+    subprocess.run(
+        ["openssl", "req", "-x509", "-newkey", "rsa:2048", "-nodes", "-days", "1",
+         "-subj", "/CN=127.0.0.1", "-addext", "subjectAltName=IP:127.0.0.1",
+         "-keyout", str(key), "-out", str(cert)],
+        check=True, capture_output=True, timeout=60,
+    )  # fmt: skip
+    bridge, url = start_bridge(
+        cli_env, "--address", "0.0.0.0", "--certfile", str(cert), "--keyfile", str(key)
+    )
+    try:
+        assert url.startswith("wss://127.0.0.1:")
+        bridge.expect("listening on 0.0.0.0: anyone who reaches it can read", stderr=True)
+        trusting = ssl.create_default_context(cafile=str(cert))
+        with Client(url, ssl=trusting) as client:
+            assert client.server_info["op"] == "serverInfo"
+        with pytest.raises(ssl.SSLError):
+            Client(url)  # a client that does not trust the certificate is not let in
+    finally:
+        bridge.stop()
+
+
+def test_the_live_table_on_a_terminal(rostools_master: str, cli_env: dict[str, str]) -> None:
+    import re
+    import sys
+
+    import pexpect
+
+    pub = start_cli(
+        "topic", "pub", "-r", "20", "/chatter", "std_msgs/String", "data: hi", env=cli_env
+    )
+    argv = ["-m", "rostools", "bridge", "--port", "0"]
+    child = pexpect.spawn(sys.executable, argv, env=cli_env, timeout=30, encoding="utf-8")
+    try:
+        child.expect(r"rostools bridge: ws://127\.0\.0\.1:(\d+)")
+        url = f"ws://127.0.0.1:{child.match.group(1)}"
+        with Client(url) as client:
+            sub = client.subscribe("/chatter")
+            client.receive(sub, 3)
+            child.expect(r"1 clients, \d+ topics")
+            child.expect(re.escape("/chatter"))
+        child.sendintr()
+        child.expect(pexpect.EOF)
+    finally:
+        child.close(force=True)
+        pub.stop()
+    assert child.exitstatus == 0

@@ -132,7 +132,7 @@ class Bridge(BridgeState):
         from websockets.exceptions import ConnectionClosed
 
         name = _peer_name(ws.remote_address)
-        client = Client(ws, name, lambda c: None)
+        client = Client(ws, name, lambda c: self.spawn(ws.close(1008, "let go")))
         self.clients.add(client)
         self.event("connected", client=name, protocol=ws.subprotocol)
         client.send(self._server_info())

@@ -168,3 +168,17 @@ def test_parameters_cross_in_both_directions() -> None:
         with pytest.raises(ProtocolError, match=words):
             from_client(bad)
     assert leaves("/", {"a": {"b": 1, "c": 2}, "d": 3}) == [("/a/b", 1), ("/a/c", 2), ("/d", 3)]
+
+
+def test_a_client_that_reads_nothing_is_let_go_past_the_control_limit() -> None:
+    async def scenario() -> tuple[Client, list[Client]]:
+        gone: list[Client] = []
+        client = Client(Stalled(), "flooder", gone.append)
+        for n in range(client_mod.MAX_CONTROL + 2):
+            client.status(foxglove.ERROR, f"refused {n}")
+            if n == 0:
+                await asyncio.sleep(0)  # the writer takes the first, and stalls on it
+        return client, gone
+
+    client, gone = asyncio.run(scenario())
+    assert client.closed and gone == [client]

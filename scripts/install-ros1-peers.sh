@@ -63,7 +63,7 @@ fi
 # The web peers' npm packages, exactly as the lock file pins them (npm ci, never npm install),
 # when node_modules is missing or older than the lock file. npm ci writes
 # node_modules/.package-lock.json last, so its presence also says the last install finished.
-web=tests/peers/web
+web="$(cd "$(dirname "$0")/.." && pwd)/tests/peers/web"
 if [ ! "$web/node_modules/.package-lock.json" -nt "$web/package-lock.json" ]; then
   echo "install-ros1-peers: npm ci in $web" >&2
   (cd "$web" && npm ci --no-audit --no-fund --loglevel=error >/dev/null)

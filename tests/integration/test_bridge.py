@@ -403,3 +403,23 @@ def test_the_live_table_on_a_terminal(rostools_master: str, cli_env: dict[str, s
         child.close(force=True)
         pub.stop()
     assert child.exitstatus == 0
+
+
+def test_clients_subscribing_at_once_get_each_message_once(
+    rostools_master: str, cli_env: dict[str, str]
+) -> None:
+    pub = start_cli("topic", "pub", "-r", "50", "/counted", "geometry_msgs/PointStamped", "{header: auto}", env=cli_env)
+    bridge, url = start_bridge(cli_env)
+    try:
+        clients = [Client(url) for _ in range(4)]
+        try:
+            subs = [c.subscribe("/counted") for c in clients]  # four at once, none read yet
+            for client, sub in zip(clients, subs, strict=True):
+                seqs = [struct.unpack_from("<I", p)[0] for _, p in client.receive(sub, 20)]
+                assert len(set(seqs)) == len(seqs), f"a message came twice: {seqs}"
+        finally:
+            for client in clients:
+                client.close()
+    finally:
+        bridge.stop()
+        pub.stop()

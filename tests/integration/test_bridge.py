@@ -408,7 +408,16 @@ def test_the_live_table_on_a_terminal(rostools_master: str, cli_env: dict[str, s
 def test_clients_subscribing_at_once_get_each_message_once(
     rostools_master: str, cli_env: dict[str, str]
 ) -> None:
-    pub = start_cli("topic", "pub", "-r", "50", "/counted", "geometry_msgs/PointStamped", "{header: auto}", env=cli_env)
+    pub = start_cli(
+        "topic",
+        "pub",
+        "-r",
+        "50",
+        "/counted",
+        "geometry_msgs/PointStamped",
+        "{header: auto}",
+        env=cli_env,
+    )
     bridge, url = start_bridge(cli_env)
     try:
         clients = [Client(url) for _ in range(4)]

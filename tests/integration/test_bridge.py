@@ -432,3 +432,11 @@ def test_clients_subscribing_at_once_get_each_message_once(
     finally:
         bridge.stop()
         pub.stop()
+
+
+def test_no_master_is_one_line_and_exit_4(cli_env: dict[str, str]) -> None:
+    done = run_cli("bridge", "--port", "0", env=cli_env)  # cli_env's master: the discard port
+    assert done.returncode == 4
+    assert (
+        done.stderr.startswith("rostools: cannot reach the master") and done.stderr.count("\n") == 1
+    )

@@ -13,6 +13,7 @@ from __future__ import annotations
 import contextlib
 import os
 import queue
+import random
 import re
 import signal
 import socket
@@ -30,12 +31,35 @@ from tests.support.load import scaled
 from tests.support.reap import forget, forget_ended, group_left, reap_with_pytest
 
 
+def ephemeral_ports() -> tuple[int, int]:
+    """The range the kernel hands out to ``bind(0)`` and outgoing connections."""
+    try:
+        low, high = Path("/proc/sys/net/ipv4/ip_local_port_range").read_text().split()
+        return int(low), int(high)
+    except (OSError, ValueError):
+        return 32768, 60999
+
+
 def free_port() -> int:
-    """A TCP port on loopback that was free a moment ago."""
-    with socket.socket() as s:
+    """A TCP port on loopback that was free a moment ago, below the ephemeral range.
+
+    A port the kernel handed out (``bind(0)``) is handed out again: roscore's roslaunch
+    server, started before its master, took the very port chosen for the master (one run
+    in a few under load). Ports below the range are never handed out.
+    """
+    low, _ = ephemeral_ports()
+    for _ in range(200):
+        port = random.randrange(max(1024, low - 12000), low)
+        with socket.socket() as s:
+            try:
+                s.bind(("127.0.0.1", port))
+            except OSError:
+                continue
+            return port
+    with socket.socket() as s:  # all taken: any the kernel gives
         s.bind(("127.0.0.1", 0))
-        port: int = s.getsockname()[1]
-        return port
+        chosen: int = s.getsockname()[1]
+        return chosen
 
 
 @contextlib.contextmanager

@@ -10,10 +10,10 @@ import asyncio
 import time
 from collections.abc import Collection, Iterator, Sequence
 from pathlib import Path
-from typing import NamedTuple, TypeVar
+from typing import NamedTuple
 
-from rostools._api import exiting, loop, messages
-from rostools._api.asyncnode import default_master_uri
+from rostools._api import messages
+from rostools._api.nodetask import NodeTask
 from rostools.bag.access import format_for_name, open_bag, require_ros1
 from rostools.bag.follow import Follower
 from rostools.bag.model import lost_data
@@ -51,24 +51,13 @@ def read_bag(path: str | Path, topics: Collection[str] | None = None) -> Iterato
             raise lost_data(f"read {count} messages of {path}", reader.damage)
 
 
-R = TypeVar("R", bound="LiveRecorder")
-
-
-class LiveRecorder(loop.Lifecycle):
+class LiveRecorder(NodeTask):
     """A recorder of the live graph on a node of its own, on the API's loop or the caller's.
 
     A subclass makes the recorder (``_make``) and says when it is under way (``_ready``).
     """
 
-    #: The recorder node's name (made anonymous).
     node_name = "rostools_record"
-
-    def __init__(self, master_uri: str | None) -> None:
-        self.master_uri = master_uri
-        self._node: LiveNode | None = None
-        self._stop: asyncio.Event | None = None
-        self._task: asyncio.Task[None] | None = None
-        self._on_api_loop = False
 
     def _make(self, node: LiveNode) -> Follower:
         raise NotImplementedError
@@ -76,23 +65,15 @@ class LiveRecorder(loop.Lifecycle):
     def _ready(self, node: LiveNode) -> bool:
         raise NotImplementedError
 
-    @property
-    def running(self) -> bool:
-        """Whether it records."""
-        return self._task is not None and not self._task.done()
-
     async def _start(self, what: str) -> None:
-        node = LiveNode(self.node_name, self.master_uri or default_master_uri(),
-                        anonymous_name=True)  # fmt: skip
-        await node.start()
+        node = await self._open_node()
         try:
             follower = self._make(node)
         except BaseException:
             await node.close()
             raise
-        self._node, self._stop = node, asyncio.Event()
-        exiting.track(node, self._finish)  # the file is completed at exit too
-        self._task = asyncio.get_running_loop().create_task(follower.run(self._stop))
+        self._launch(node, follower.run)  # the file is completed at exit too
+        assert self._task is not None
         deadline = time.monotonic() + START_TIMEOUT
         while not self._ready(node):
             if self._task.done():
@@ -102,29 +83,6 @@ class LiveRecorder(loop.Lifecycle):
                 await self._finish()
                 raise TimeoutExpired(f"{what} did not start")
             await asyncio.sleep(0.005)
-
-    async def _finish(self) -> None:
-        if self._stop is not None:
-            self._stop.set()
-        try:
-            if self._task is not None:
-                await self._task
-        finally:
-            if self._node is not None:
-                node, self._node = self._node, None
-                try:
-                    await node.close()
-                finally:
-                    exiting.forget(node)
-
-    def _start_on_api_loop(self: R) -> R:
-        self._on_api_loop = True
-        exiting.take_sigterm()  # here, on the caller's thread: the start runs on the loop's
-        return loop.run(self.start_async())
-
-    def _stop_on_api_loop(self) -> None:
-        if self._on_api_loop and self._node is not None:
-            loop.run(self._finish())
 
 
 class Recording(LiveRecorder):

@@ -9,10 +9,9 @@ from __future__ import annotations
 import asyncio
 from collections.abc import Mapping, Sequence
 
-from rostools._api import exiting, loop, messages
-from rostools._api.asyncnode import default_master_uri
-from rostools.errors import RostoolsError, TimeoutExpired, UsageError
-from rostools.node.node import LiveNode
+from rostools._api import messages
+from rostools._api.nodetask import NodeTask
+from rostools.errors import TimeoutExpired, UsageError
 from rostools.web.options import BridgeOptions
 from rostools.web.server import Bridge
 
@@ -20,17 +19,15 @@ from rostools.web.server import Bridge
 START_TIMEOUT = 10.0
 
 
-class WebBridge(loop.Lifecycle):
+class WebBridge(NodeTask):
     """A running ``rostools bridge``, on a node of its own."""
 
+    node_name = "rostools_bridge"
+
     def __init__(self, opts: BridgeOptions, master_uri: str | None = None) -> None:
+        super().__init__(master_uri)
         self.opts = opts
-        self.master_uri = master_uri
         self.server: Bridge | None = None
-        self._node: LiveNode | None = None
-        self._stop: asyncio.Event | None = None
-        self._task: asyncio.Task[None] | None = None
-        self._on_api_loop = False
 
     @property
     def url(self) -> str:
@@ -51,11 +48,7 @@ class WebBridge(loop.Lifecycle):
 
     async def start_async(self) -> WebBridge:
         """Start serving on the running event loop; returns once clients can connect."""
-        node = LiveNode("rostools_bridge", self.master_uri or default_master_uri(),
-                        anonymous_name=True)  # fmt: skip
-        await node.start()
-        self._node, self._stop = node, asyncio.Event()
-        exiting.track(node, self._finish)
+        node = await self._open_node()
         server = self.server = Bridge(node, self.opts, messages.store())
         ready: asyncio.Future[None] = asyncio.get_running_loop().create_future()
 
@@ -63,31 +56,15 @@ class WebBridge(loop.Lifecycle):
             if not ready.done():
                 ready.set_result(None)
 
-        self._task = asyncio.get_running_loop().create_task(server.run(self._stop, listening))
+        self._launch(node, lambda stop: server.run(stop, listening))
+        assert self._task is not None
         done, _ = await asyncio.wait([ready, self._task], timeout=START_TIMEOUT,
                                      return_when=asyncio.FIRST_COMPLETED)  # fmt: skip
         if ready not in done:
-            error = self._task.exception() if self._task in done else None
-            await self._finish()
-            if isinstance(error, RostoolsError):
-                raise error
+            await self._finish()  # raises the bridge's own error, if it stopped with one
             raise TimeoutExpired(f"the bridge did not start within {START_TIMEOUT:g} s",
                                  hint="is the master running?")  # fmt: skip
         return self
-
-    async def _finish(self) -> None:
-        if self._stop is not None:
-            self._stop.set()
-        try:
-            if self._task is not None:
-                await asyncio.gather(self._task, return_exceptions=True)
-        finally:
-            if self._node is not None:
-                node, self._node = self._node, None
-                try:
-                    await node.close()
-                finally:
-                    exiting.forget(node)
 
     async def stop_async(self) -> None:
         """Stop serving, and close every client's connection."""
@@ -95,14 +72,11 @@ class WebBridge(loop.Lifecycle):
 
     def start(self) -> WebBridge:
         """Start on the API's background loop."""
-        self._on_api_loop = True
-        exiting.take_sigterm()
-        return loop.run(self.start_async())
+        return self._start_on_api_loop()
 
     def stop(self) -> None:
         """Stop serving."""
-        if self._on_api_loop and self._node is not None:
-            loop.run(self._finish())
+        self._stop_on_api_loop()
 
 
 def bridge(

@@ -5,13 +5,14 @@ from __future__ import annotations
 import sys
 import time
 from functools import partial
-from typing import TYPE_CHECKING, Annotated, Any
+from typing import TYPE_CHECKING, Annotated, Any, NamedTuple
 
 import typer
 
 from rostools.cli import output
 from rostools.cli.common import FormatOpt, node_session, output_format
 from rostools.cli.declare import command
+from rostools.cli.liveview import LiveView
 from rostools.cli.output import Format
 from rostools.cli.register import add
 from rostools.errors import one_line
@@ -165,22 +166,15 @@ _SAID = {
 }
 
 
-class BridgeTable:
+class _Sent(NamedTuple):
+    """What a subscription was sent, as the live view counts it."""
+
+    messages: int
+    bytes: int
+
+
+class BridgeTable(LiveView):
     """The live table on stderr: each client's subscriptions, rates, bytes and drops."""
-
-    def __init__(self) -> None:
-        from rich.console import Console
-        from rich.live import Live
-
-        self.live = Live(console=Console(stderr=True), auto_refresh=False, transient=False)
-        self._last: dict[tuple[str, str], tuple[float, int, int]] = {}
-
-    def __enter__(self) -> BridgeTable:
-        self.live.__enter__()
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        self.live.__exit__(None, None, None)
 
     async def follow(self, bridge: Bridge, stop: asyncio.Event) -> None:
         """Redraw twice a second until ``stop``."""
@@ -204,24 +198,26 @@ class BridgeTable:
         table = Table(title=title, title_justify="left")
         for col in ("client", "topic", "sent", "rate", "bandwidth", "throttled", "drops"):
             table.add_column(col, justify="left" if col in ("client", "topic") else "right")
-        for client in sorted(bridge.clients, key=lambda c: c.name):
-            for sub in client.subscriptions.values():
-                key = (client.name, f"{sub.id}")
-                t0, m0, b0 = self._last.get(key, (now, sub.sent, sub.sent_bytes))
-                span = max(now - t0, 1e-9)
-                hz, bw = (sub.sent - m0) / span, (sub.sent_bytes - b0) / span
-                if now - t0 >= 1.0 or key not in self._last:
-                    self._last[key] = (now, sub.sent, sub.sent_bytes)
-                drops = f"[bold red]{sub.dropped}[/]" if sub.dropped else "0"
-                table.add_row(
-                    escape(client.name),
-                    escape(one_line(sub.topic)),
-                    str(sub.sent),
-                    f"{hz:.1f} Hz",
-                    f"{bw / 1e6:.2f} MB/s",
-                    str(sub.throttled),
-                    drops,
-                )
+        rows = [
+            (f"{client.name} {sub.id}", client, sub)
+            for client in sorted(bridge.clients, key=lambda c: c.name)
+            for sub in client.subscriptions.values()
+        ]
+        self.measure(
+            {k: _Sent(sub.sent, sub.sent_bytes) for k, _, sub in rows}, bridge.started, now
+        )
+        for key, client, sub in rows:
+            hz, bw = self.rates.get(key, (0.0, 0.0))
+            drops = f"[bold red]{sub.dropped}[/]" if sub.dropped else "0"
+            table.add_row(
+                escape(client.name),
+                escape(one_line(sub.topic)),
+                str(sub.sent),
+                f"{hz:.1f} Hz",
+                f"{bw / 1e6:.2f} MB/s",
+                str(sub.throttled),
+                drops,
+            )
         self.live.update(table, refresh=True)
 
 

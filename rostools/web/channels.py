@@ -92,7 +92,7 @@ class Links:
         """Frames of a borrowed topic."""
         link = self.links.get(topic)
         if link is not None:
-            self._frames(link)(frames, conn, 0.0)
+            self.deliver(link, frames, conn)
 
     async def open(self, topic: str, learning: bool = False) -> TopicLink:
         """The link of ``topic``, subscribed if it was not."""
@@ -104,7 +104,12 @@ class Links:
         if link.opening is None and topic not in self.borrowed:
             # one subscription, however many clients ask at once: the later ones wait for it
             link.opening = asyncio.ensure_future(
-                self.node.subscribe(topic, self._frames(link), ANY, on_header=self._header(link))
+                self.node.subscribe(
+                    topic,
+                    lambda frames, conn, _: self.deliver(link, frames, conn),
+                    ANY,
+                    on_header=self._header(link),
+                )
             )
         if link.opening is not None:
             link.sub = await asyncio.shield(link.opening)
@@ -129,17 +134,15 @@ class Links:
 
         return on_header
 
-    def _frames(self, link: TopicLink) -> Callable[[list[Frame], InboundConnection, float], None]:
-        def on_frames(frames: list[Frame], conn: InboundConnection, _: float) -> None:
-            link.stats.messages += len(frames)
-            link.stats.bytes += sum(len(f) for f in frames)
-            if frames and (conn.header or {}).get("latching") == "1":
-                link.latched[conn.publisher_uri] = frames[-1]
-            if not link.readers:
-                return
-            stamp, now = self.stamp(), self.clock()
-            for client, sub in list(link.readers.values()):
-                for frame in frames:
-                    client.offer(sub, stamp, frame, now)
-
-        return on_frames
+    def deliver(self, link: TopicLink, frames: list[Frame], conn: InboundConnection) -> None:
+        """Frames of ``link``'s topic: counted, the latched one kept, offered to each reader."""
+        link.stats.messages += len(frames)
+        link.stats.bytes += sum(len(f) for f in frames)
+        if frames and (conn.header or {}).get("latching") == "1":
+            link.latched[conn.publisher_uri] = frames[-1]
+        if not link.readers:
+            return
+        stamp, now = self.stamp(), self.clock()
+        for client, sub in list(link.readers.values()):
+            for frame in frames:
+                client.offer(sub, stamp, frame, now)

@@ -11,7 +11,6 @@ from __future__ import annotations
 import asyncio
 import collections
 import logging
-import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any, Protocol
@@ -181,8 +180,3 @@ class Client:
             await self.socket.send(data)
             sub.sent += 1
             sub.sent_bytes += len(frame)
-
-
-def now() -> float:
-    """The clock the throttles read."""
-    return time.monotonic()

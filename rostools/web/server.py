@@ -153,8 +153,10 @@ class Bridge(BridgeState):
             await self._drop(client)
 
     def _server_info(self) -> dict[str, Any]:
-        caps = [foxglove.PARAMETERS, foxglove.PARAMETERS_SUBSCRIBE, foxglove.CONNECTION_GRAPH]
-        caps.append(foxglove.SERVICES)
+        caps = [
+            foxglove.PARAMETERS, foxglove.PARAMETERS_SUBSCRIBE, foxglove.CONNECTION_GRAPH,
+            foxglove.SERVICES,
+        ]  # fmt: skip
         if not self.opts.read_only:
             caps.append(foxglove.CLIENT_PUBLISH)
         if self.clock.sim:
@@ -274,15 +276,6 @@ class Bridge(BridgeState):
             "op": "advertiseServices",
             "services": [s.advertisement(self.store) for s in services],
         }
-
-    # the live table ----------------------------------------------------------------------
-
-    def topic_rows(self) -> list[tuple[str, int, int, int]]:
-        """(topic, messages in, bytes in, readers) of every topic subscribed."""
-        return [
-            (t, link.stats.messages, link.stats.bytes, len(link.readers))
-            for t, link in sorted(self.links.links.items())
-        ]
 
 
 def _peer_name(address: Any) -> str:

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import struct
+from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
@@ -16,13 +17,22 @@ from tests.support.procs import start_cli, subscribers, wait_for
 STRING_DEF = "string data\n"
 
 
-@pytest.mark.parametrize("subprotocol", [V1, SDK])
-def test_a_topic_is_advertised_with_its_definition_and_forwarded_as_bytes(
-    rostools_master: str, cli_env: dict[str, str], subprotocol: str
-) -> None:
+@pytest.fixture
+def chatter(cli_env: dict[str, str], rostools_master: str) -> Iterator[None]:
+    """``/chatter``: std_msgs/String "hi" at 20 Hz, on the test's master."""
     pub = start_cli(
         "topic", "pub", "-r", "20", "/chatter", "std_msgs/String", "data: hi", env=cli_env
     )
+    try:
+        yield
+    finally:
+        pub.stop()
+
+
+@pytest.mark.parametrize("subprotocol", [V1, SDK])
+def test_a_topic_is_advertised_with_its_definition_and_forwarded_as_bytes(
+    rostools_master: str, cli_env: dict[str, str], chatter: None, subprotocol: str
+) -> None:
     bridge, url = start_bridge(cli_env)
     try:
         with Client(url, subprotocol) as client:
@@ -40,15 +50,11 @@ def test_a_topic_is_advertised_with_its_definition_and_forwarded_as_bytes(
             assert stamp > 1_600_000_000 * 10**9  # a receive time in ns
     finally:
         bridge.stop()
-        pub.stop()
 
 
 def test_the_bridge_subscribes_on_demand_and_lets_go(
-    rostools_master: str, cli_env: dict[str, str]
+    rostools_master: str, cli_env: dict[str, str], chatter: None
 ) -> None:
-    pub = start_cli(
-        "topic", "pub", "-r", "20", "/chatter", "std_msgs/String", "data: hi", env=cli_env
-    )
     bridge, url = start_bridge(cli_env)
 
     def bridge_subscribes() -> bool:
@@ -70,7 +76,6 @@ def test_the_bridge_subscribes_on_demand_and_lets_go(
             wait_for(lambda: not bridge_subscribes(), 15, "the bridge to unsubscribe")
     finally:
         bridge.stop()
-        pub.stop()
 
 
 def test_a_type_nobody_here_knows_is_learnt_from_the_publisher(
@@ -137,11 +142,8 @@ def test_a_token_and_a_subprotocol_are_required_before_the_upgrade(
 
 
 def test_what_a_hostile_client_sends_gets_a_status_and_costs_nobody_else(
-    rostools_master: str, cli_env: dict[str, str]
+    rostools_master: str, cli_env: dict[str, str], chatter: None
 ) -> None:
-    pub = start_cli(
-        "topic", "pub", "-r", "20", "/chatter", "std_msgs/String", "data: hi", env=cli_env
-    )
     bridge, url = start_bridge(cli_env)
     try:
         with Client(url) as good, Client(url) as bad:
@@ -173,17 +175,13 @@ def test_what_a_hostile_client_sends_gets_a_status_and_costs_nobody_else(
         bridge.expect(r'"event": ?"refused"', 15)
     finally:
         bridge.stop()
-        pub.stop()
 
 
 def test_a_subscription_flood_is_refused_past_the_limit(
-    rostools_master: str, cli_env: dict[str, str]
+    rostools_master: str, cli_env: dict[str, str], chatter: None
 ) -> None:
     from rostools.web.client import MAX_SUBSCRIPTIONS
 
-    pub = start_cli(
-        "topic", "pub", "-r", "5", "/chatter", "std_msgs/String", "data: hi", env=cli_env
-    )
     bridge, url = start_bridge(cli_env)
     try:
         with Client(url) as client:
@@ -193,7 +191,6 @@ def test_a_subscription_flood_is_refused_past_the_limit(
             client.status(f"more than {MAX_SUBSCRIPTIONS} subscriptions", 60)
     finally:
         bridge.stop()
-        pub.stop()
 
 
 def test_a_client_publishes_on_the_graph_with_its_own_schema(
@@ -378,15 +375,14 @@ def test_wss_with_a_certificate_and_a_warning_off_loopback(
         bridge.stop()
 
 
-def test_the_live_table_on_a_terminal(rostools_master: str, cli_env: dict[str, str]) -> None:
+def test_the_live_table_on_a_terminal(
+    rostools_master: str, cli_env: dict[str, str], chatter: None
+) -> None:
     import re
     import sys
 
     import pexpect
 
-    pub = start_cli(
-        "topic", "pub", "-r", "20", "/chatter", "std_msgs/String", "data: hi", env=cli_env
-    )
     argv = ["-m", "rostools", "bridge", "--port", "0"]
     child = pexpect.spawn(sys.executable, argv, env=cli_env, timeout=30, encoding="utf-8")
     try:
@@ -401,7 +397,6 @@ def test_the_live_table_on_a_terminal(rostools_master: str, cli_env: dict[str, s
         child.expect(pexpect.EOF)
     finally:
         child.close(force=True)
-        pub.stop()
     assert child.exitstatus == 0
 
 

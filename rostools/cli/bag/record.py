@@ -13,9 +13,10 @@ import typer
 from rostools.bag.model import counted
 from rostools.cli import output
 from rostools.cli.bag.options import OutputFile, Receiving, Splitting, TopicOptions
-from rostools.cli.bag.shared import LiveView, human_size
+from rostools.cli.bag.shared import human_size
 from rostools.cli.common import FormatOpt, node_session, output_format
 from rostools.cli.declare import command
+from rostools.cli.liveview import LiveView
 from rostools.cli.output import Format, check_writable, render
 from rostools.cli.units import parse_duration
 from rostools.errors import DataLossError, UsageError, one_line

@@ -6,10 +6,9 @@ Time windows, renames, notes, progress, and the report of a copy. Typer-free.
 from __future__ import annotations
 
 import sys
-import time
-from collections.abc import Callable, Iterable, Mapping, Sequence
+from collections.abc import Callable, Iterable, Sequence
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, TypeVar
+from typing import TYPE_CHECKING, Any
 
 from rostools.bag.model import counted
 from rostools.cli import output
@@ -17,7 +16,6 @@ from rostools.cli.output import Format, emit
 
 if TYPE_CHECKING:
     from rostools.bag.base import BagReader
-    from rostools.bag.follow import TopicStats
     from rostools.bag.ops import CopyReport
     from rostools.bag.rename import Renames
 
@@ -183,46 +181,3 @@ def human_size(size: float) -> str:
         if size < 1024.0:
             return f"{size:.1f} {suffix}"
     return "-"
-
-
-View = TypeVar("View", bound="LiveView")
-
-
-class LiveView:
-    """A table redrawn in place on stderr, at most twice a second, with each topic's rates.
-
-    The live views of ``bag record`` and ``bag snapshot``: a subclass says what it draws.
-    """
-
-    def __init__(self) -> None:
-        from rich.console import Console
-        from rich.live import Live
-
-        self.live = Live(console=Console(stderr=True), auto_refresh=False, transient=False)
-        #: Messages and bytes a second, per topic, over the last second or more.
-        self.rates: dict[str, tuple[float, float]] = {}
-        self._last: dict[str, tuple[float, int, int]] = {}
-        self._next_draw = 0.0
-
-    def __enter__(self: View) -> View:
-        self.live.__enter__()
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        self.live.__exit__(None, None, None)
-
-    def due(self, force: bool = False) -> bool:
-        """Whether to redraw now: half a second after the last time, or when ``force``."""
-        now = time.monotonic()
-        if now < self._next_draw and not force:
-            return False
-        self._next_draw = now + 0.5
-        return True
-
-    def measure(self, stats: Mapping[str, TopicStats], started: float, now: float) -> None:
-        """Update each topic's rates from what it received (``stats``) since the last second."""
-        for topic, s in stats.items():
-            t0, m0, b0 = self._last.get(topic, (started, 0, 0))
-            if now - t0 >= 1.0:
-                self.rates[topic] = ((s.messages - m0) / (now - t0), (s.bytes - b0) / (now - t0))
-                self._last[topic] = (now, s.messages, s.bytes)

@@ -10,7 +10,8 @@ from __future__ import annotations
 import time
 from typing import TYPE_CHECKING, Any
 
-from rostools.cli.bag.shared import LiveView, human_size as size_text
+from rostools.cli.bag.shared import human_size as size_text
+from rostools.cli.liveview import LiveView
 from rostools.errors import one_line
 
 if TYPE_CHECKING:

@@ -435,3 +435,17 @@ def test_no_master_is_one_line_and_exit_4(cli_env: dict[str, str]) -> None:
     assert (
         done.stderr.startswith("rostools: cannot reach the master") and done.stderr.count("\n") == 1
     )
+
+
+def test_a_client_that_leaves_is_reported_with_what_it_was_sent(
+    rostools_master: str, cli_env: dict[str, str], chatter: None
+) -> None:
+    bridge, url = start_bridge(cli_env)
+    try:
+        with Client(url) as client:
+            sub = client.subscribe("/chatter")
+            received = len(client.receive(sub, 3))
+        left = json.loads(bridge.expect(r'"event": ?"disconnected"', 15))
+        assert left["messages"] >= received and left["bytes"] >= received * 6
+    finally:
+        bridge.stop()

@@ -165,6 +165,7 @@ def test_a_huge_multicall_does_not_stall_other_clients(master: MasterThread) -> 
         target=lambda: answer.append(xmlrpc.client.ServerProxy(master.uri).system.multicall(calls))
     )
     proxy = xmlrpc.client.ServerProxy(master.uri)
+    started = time.monotonic()
     big.start()
     waits = []
     while big.is_alive():
@@ -172,10 +173,14 @@ def test_a_huge_multicall_does_not_stall_other_clients(master: MasterThread) -> 
         assert proxy.getSystemState("/small")[0] == 1
         waits.append(time.monotonic() - began)
     big.join()
+    took = time.monotonic() - started
     assert len(answer[0]) == 100_000 and answer[0][-1][0][0] == 1
-    # 1.5 s: master, both clients and pytest share one GIL, and a loaded CI stalls it (0.5 s
-    # failed there once); the defect's 4.5 s is still far above
-    assert len(waits) > 5 and max(waits) < 1.5, f"{len(waits)} calls, worst {max(waits):.2f} s"
+    # relative to the big call, not in seconds: master, both clients and pytest share one
+    # GIL, and a loaded machine stretches everything (1.5 s failed there once); with the
+    # defect the small call waits for nearly the whole big one
+    assert len(waits) > 5 and max(waits) < took / 3, (
+        f"{len(waits)} calls, worst {max(waits):.2f} s of {took:.2f} s"
+    )
 
 
 def test_a_bad_multicall_entry_is_a_fault(master: MasterThread, capsys: Any) -> None:

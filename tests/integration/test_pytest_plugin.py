@@ -99,11 +99,14 @@ def test_the_module_marker_shares_one_master_and_helpers_measure(
             stop = threading.Event()
 
             def tick():
-                i = 0
+                # on a schedule, not sleep-after-publish: a loaded machine slows each
+                # turn, and the rate must still hold on average
+                i, due = 0, time.monotonic()
                 while not stop.is_set():
                     pub.publish(data=i)
                     i += 1
-                    time.sleep(0.02)
+                    due += 0.02
+                    time.sleep(max(0.0, due - time.monotonic()))
 
             thread = threading.Thread(target=tick)
             thread.start()

@@ -33,6 +33,7 @@ MODULES = [
     "benchmarks.bench_snapshot",
     "benchmarks.bench_fixture",
     "benchmarks.bench_demo",
+    "benchmarks.bench_bridge",
 ]
 
 

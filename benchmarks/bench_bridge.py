@@ -355,8 +355,8 @@ def _compare(topic: Topic, n: int, got: dict[str, Figures]) -> list[Result]:
 
 def _slow_results(run: Run, one_client: float) -> list[Result]:
     """4 image clients, one reading at 1 MB/s: the others' rate and the bridge's memory."""
-    from rostools.bridge.client import QUEUE_BYTES
-    from rostools.bridge.server import WRITE_LIMIT
+    from rostools.web.client import QUEUE_BYTES
+    from rostools.web.server import WRITE_LIMIT
 
     with _publisher(IMAGE, run.env):
         if one_client <= 0:

@@ -26,6 +26,10 @@ if TYPE_CHECKING:  # the stable API: type checkers read these imports, rostools.
         Publisher as Publisher,
         Subscription as Subscription,
     )
+    from rostools._api.bridges import (
+        WebBridge as WebBridge,
+        bridge as bridge,
+    )
     from rostools._api.functions import (
         call_service as call_service,
         delete_param as delete_param,

@@ -1,7 +1,10 @@
 #!/usr/bin/env bash
 # Install the real ROS 1 (ros_comm 1.15, Noetic era) from Debian, as interop peers for the
-# tests and benchmarks. rostools itself never needs these. Idempotent and quiet when done.
+# tests and benchmarks, and the web peers of the bridge tests (Node, chromium, and the npm
+# packages pinned in tests/peers/web). rostools itself never needs these. Idempotent and quiet
+# when done.
 set -euo pipefail
+cd "$(dirname "$0")/.."
 
 packages=(
   ros-core
@@ -30,7 +33,12 @@ packages=(
   g++ make
   # the shells the completion tests drive, and rosbash (rostopic's own completion) to compare
   zsh fish rosbash
+  # the bridge tests drive Foxglove Studio in a headless browser (tests/peers/web)
+  chromium
 )
+# Node and npm, unless some are on PATH already: NodeSource's nodejs bundles npm and conflicts
+# with Debian's npm package, which would replace it with Debian's older Node.
+command -v node >/dev/null 2>&1 && command -v npm >/dev/null 2>&1 || packages+=(nodejs npm)
 
 missing=()
 for p in "${packages[@]}"; do
@@ -38,16 +46,25 @@ for p in "${packages[@]}"; do
     missing+=("$p")
   fi
 done
-[ ${#missing[@]} -eq 0 ] && exit 0
-
-if [ "$(id -u)" -ne 0 ]; then
-  if command -v sudo >/dev/null 2>&1; then SUDO=sudo; else
-    echo "install-ros1-peers: need root to install: ${missing[*]}" >&2; exit 1
+if [ ${#missing[@]} -gt 0 ]; then
+  if [ "$(id -u)" -ne 0 ]; then
+    if command -v sudo >/dev/null 2>&1; then SUDO=sudo; else
+      echo "install-ros1-peers: need root to install: ${missing[*]}" >&2; exit 1
+    fi
+  else
+    SUDO=
   fi
-else
-  SUDO=
+  echo "install-ros1-peers: installing ${#missing[@]} Debian packages" >&2
+  export DEBIAN_FRONTEND=noninteractive
+  $SUDO apt-get update -qq >/dev/null
+  $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
 fi
-echo "install-ros1-peers: installing ${#missing[@]} Debian packages" >&2
-export DEBIAN_FRONTEND=noninteractive
-$SUDO apt-get update -qq >/dev/null
-$SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+
+# The web peers' npm packages, exactly as the lock file pins them (npm ci, never npm install),
+# when node_modules is missing or older than the lock file. npm ci writes
+# node_modules/.package-lock.json last, so its presence also says the last install finished.
+web="$(cd "$(dirname "$0")/.." && pwd)/tests/peers/web"
+if [ ! "$web/node_modules/.package-lock.json" -nt "$web/package-lock.json" ]; then
+  echo "install-ros1-peers: npm ci in $web" >&2
+  (cd "$web" && npm ci --no-audit --no-fund --loglevel=error >/dev/null)
+fi

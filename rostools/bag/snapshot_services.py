@@ -20,13 +20,13 @@ import struct
 from collections.abc import Callable
 from typing import Protocol
 
-from rostools.selection import Selection
 from rostools.bag.play_control import SET_BOOL
 from rostools.bag.recorder import STRING
 from rostools.bag.snapshot_job import SnapshotJob
 from rostools.bag.snapshot_srv import TRIGGER, TRIGGER_SNAPSHOT, SnapshotRequest, encode_answer
 from rostools.errors import RostoolsError
 from rostools.node.node import LiveNode
+from rostools.selection import Selection
 
 #: The topic each complete file is announced on, private to the node.
 WRITTEN = "~written"

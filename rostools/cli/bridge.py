@@ -19,9 +19,9 @@ from rostools.errors import one_line
 if TYPE_CHECKING:
     import asyncio
 
-    from rostools.bridge.options import BridgeOptions
-    from rostools.bridge.server import Bridge
     from rostools.node.node import LiveNode
+    from rostools.web.options import BridgeOptions
+    from rostools.web.server import Bridge
 
 app = typer.Typer(
     name="bridge",
@@ -82,7 +82,7 @@ def bridge(
     Open Foxglove Studio or Lichtblick, choose "Foxglove WebSocket", and give the URL this
     prints. Every topic's type comes from its publisher: no .msg files are needed.
     """
-    from rostools.bridge.options import BridgeOptions, parse_rate
+    from rostools.web.options import BridgeOptions, parse_rate
 
     fmt = output_format(ctx, fmt)
     opts = BridgeOptions(
@@ -108,8 +108,8 @@ async def _run(
 ) -> None:
     import asyncio
 
-    from rostools.bridge.server import Bridge
     from rostools.msgs.store import TypeStore
+    from rostools.web.server import Bridge
 
     def on_event(event: dict[str, Any]) -> None:
         if fmt is not Format.text:
@@ -196,8 +196,9 @@ class BridgeTable:
         from rich.table import Table
 
         now = time.monotonic()
+        where = bridge.url if bridge.port else "starting"
         title = (
-            f"bridge {bridge.url}: {len(bridge.clients)} clients, "
+            f"bridge {where}: {len(bridge.clients)} clients, "
             f"{len(bridge.channels)} topics, {now - bridge.started:.0f} s"
         )
         table = Table(title=title, title_justify="left")

@@ -9,6 +9,7 @@ nanoseconds; unlike rostopic it keeps ``uint8[]``/``char[]`` columns instead of 
 
 from __future__ import annotations
 
+import base64
 import json
 import math
 from collections.abc import Callable, Sequence
@@ -175,6 +176,56 @@ class _JsonGen(_PlainGen):
 def to_json(codec: Codec, value_type: Field) -> Callable[[Any], str]:
     """``text(value)``: the same text as ``dumps(to_plain(...)(value))``, generated per type."""
     fn: Callable[[Any], str] = _generated(codec, value_type, _JsonGen(codec), "json", "f'{}'")
+    return fn
+
+
+def _rosbridge_float(v: float) -> str:
+    """A float as rosbridge's ``json.dumps`` writes it: NaN and infinities as JS tokens."""
+    if math.isfinite(v):
+        return repr(v)
+    return "NaN" if math.isnan(v) else ("Infinity" if v > 0 else "-Infinity")
+
+
+def _base64(values: Any) -> str:
+    return '"' + base64.b64encode(bytes(values)).decode() + '"'
+
+
+class _RosbridgeGen(_JsonGen):
+    """rosbridge_server's JSON of a message, as ``json.dumps`` of its ``extract_values``.
+
+    ``uint8[]``/``char[]`` as base64, strings escaped to ASCII, NaN and infinities as the
+    tokens ``NaN`` and ``Infinity``.
+    """
+
+    kind = "rosbridge"
+
+    def __init__(self, codec: Codec) -> None:
+        super().__init__(codec)
+        from json.encoder import encode_basestring_ascii
+
+        self.env.update(
+            _s=encode_basestring_ascii, _f=_rosbridge_float, _b64=_base64,
+            _fs=lambda vs: "[" + ",".join(map(_rosbridge_float, vs)) + "]",
+        )  # fmt: skip
+
+    def value(self, f: Field, expr: str) -> str:
+        """As JSON's, but bytes as base64 and nested types in rosbridge's JSON."""
+        if f.is_array and f.base in BYTE_TYPES:
+            return f"{{_b64({expr})}}"
+        if f.is_array and f.base not in STRUCT_CODES and f.base not in _WRITTEN:
+            item = to_rosbridge_json(self.codec, element(f.base))
+            return f"{{_each({self.ref(item)}, {expr})}}"
+        return super().value(f, expr)
+
+
+#: Array element types the JSON writer writes itself (the rest are messages).
+_WRITTEN = ("bool", "float32", "float64", "string", "time", "duration")
+
+
+def to_rosbridge_json(codec: Codec, value_type: Field) -> Callable[[Any], str]:
+    """``text(value)``: a message as rosbridge_server writes it in JSON, generated per type."""
+    gen = _RosbridgeGen(codec)
+    fn: Callable[[Any], str] = _generated(codec, value_type, gen, "rosbridge", "f'{}'")
     return fn
 
 

@@ -35,6 +35,7 @@ import pytest
 if TYPE_CHECKING:
     from rostools._api.bags import Recording
     from rostools._api.blocking import Node
+    from rostools._api.bridges import WebBridge
     from rostools._api.master import Master
     from rostools._api.snapshots import SnapshotRecorder
     from rostools.testing.process import RosProcess
@@ -193,6 +194,18 @@ def ros_record(
     finally:
         for recording in started:
             recording.stop()
+
+
+@pytest.fixture
+def ros_bridge(ros_master: Master) -> Iterator[WebBridge]:
+    """``rostools bridge`` of the test's master, on a free loopback port (``ros_bridge.url``).
+
+    It serves every topic, and stops after the test.
+    """
+    from rostools._api.bridges import bridge
+
+    with bridge(master_uri=ros_master.uri) as running:
+        yield running
 
 
 @pytest.fixture

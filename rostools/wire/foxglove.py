@@ -4,7 +4,7 @@ What the bridge sends and what it accepts from a client, checked before anything
 every client message either reads as one of the protocol's operations, with fields of the
 right types, or raises ``ProtocolError`` naming what is wrong, which the bridge answers with a
 ``status`` message. The layout of the binary messages is the protocol's (little-endian,
-opcode first): github.com/foxglove/ws-protocol, ``docs/spec.md``.
+opcode first), as github.com/foxglove/ws-protocol specifies it.
 """
 
 from __future__ import annotations

@@ -21,7 +21,7 @@ LAYERS: list[set[str]] = [
     {"msgs", "rates", "series"},
     {"rosgraph"},
     {"node"},
-    {"master", "bag", "action", "bridge"},
+    {"master", "bag", "action", "web"},
     {"cli", "_api"},
     {"testing"},
     {"__main__", "__init__"},

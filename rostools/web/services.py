@@ -12,11 +12,11 @@ import asyncio
 import logging
 from dataclasses import dataclass
 
-from rostools.bridge.channels import ENCODING, SCHEMA_ENCODING
 from rostools.errors import RostoolsError
 from rostools.msgs.store import TypeStore
 from rostools.node.node import LiveNode
 from rostools.node.service import ServiceClient, ServiceType
+from rostools.web.channels import ENCODING, SCHEMA_ENCODING
 
 log = logging.getLogger(__name__)
 

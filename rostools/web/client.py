@@ -28,6 +28,9 @@ QUEUE_MESSAGES = 100
 QUEUE_BYTES = 8 * 1024 * 1024
 #: Subscriptions one client may hold at once (a subscription flood is refused past it).
 MAX_SUBSCRIPTIONS = 1024
+#: Control messages (statuses, advertisements, time) waiting for a client that does not read:
+#: past this many it is let go, as a client that floods us with refusals and reads nothing.
+MAX_CONTROL = 10_000
 
 
 class Socket(Protocol):
@@ -109,6 +112,10 @@ class Client:
         """Queue a control message (JSON, or a binary one), sent before any data."""
         if self.closed:
             return
+        if len(self._control) >= MAX_CONTROL:
+            log.info("client %s reads nothing: let go", self.name)
+            self.close()
+            return
         self._control.append(foxglove.dumps(message) if isinstance(message, dict) else message)
         self._wake.set()
 
@@ -134,9 +141,12 @@ class Client:
         return out
 
     def close(self) -> None:
-        """Stop writing; the server closes the socket."""
+        """Stop writing, and tell the server (``on_gone``) to close the socket."""
+        if self.closed:
+            return
         self.closed = True
         self.writer.cancel()
+        self.on_gone(self)
 
     # the writer --------------------------------------------------------------------------
 
@@ -150,8 +160,7 @@ class Client:
             raise
         except Exception as err:  # noqa: BLE001 - a socket gone mid-send ends this client only
             log.debug("client %s: %s", self.name, err)
-        self.closed = True
-        self.on_gone(self)
+        self.close()
 
     async def _drain(self) -> None:
         """Send everything waiting: control messages first, then a message per topic in turn."""

@@ -10,18 +10,18 @@ from __future__ import annotations
 from collections import Counter
 from typing import TYPE_CHECKING, Any
 
-from rostools.bridge import params
-from rostools.bridge.client import MAX_SUBSCRIPTIONS, Client, Subscription
 from rostools.errors import NotFoundError, RostoolsError
 from rostools.msgs.store import md5_of
 from rostools.msgs.topictype import TopicType
 from rostools.names import is_legal
+from rostools.web import params
+from rostools.web.client import MAX_SUBSCRIPTIONS, Client, Subscription
 from rostools.wire import foxglove
 from rostools.wire.foxglove import ERROR, WARNING, CallRequest, ClientData, ProtocolError, field
 
 if TYPE_CHECKING:
-    from rostools.bridge.graph import Graph
-    from rostools.bridge.server import Bridge
+    from rostools.web.graph import Graph
+    from rostools.web.state import BridgeState
 
 #: Service calls one client may have in flight.
 MAX_CALLS = 64
@@ -30,7 +30,7 @@ MAX_CALLS = 64
 class Operations:
     """The handlers of every client operation, for one bridge."""
 
-    def __init__(self, bridge: Bridge) -> None:
+    def __init__(self, bridge: BridgeState) -> None:
         self.bridge = bridge
         self.node = bridge.node
         #: topic -> clients' channels publishing on it

@@ -8,6 +8,7 @@ bridge subscribes, reads the header, and lets go again unless a client wants the
 
 from __future__ import annotations
 
+import asyncio
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
@@ -15,10 +16,10 @@ from typing import TYPE_CHECKING
 from rostools.msgs.topictype import ANY, TopicType
 
 if TYPE_CHECKING:
-    from rostools.bridge.client import Client, Subscription
     from rostools.node.connection import Frame, InboundConnection
     from rostools.node.node import LiveNode
     from rostools.node.subscriber import Subscriber
+    from rostools.web.client import Client, Subscription
 
 #: The message encoding and schema encoding of every channel: ROS 1 bytes, ``.msg`` text.
 ENCODING, SCHEMA_ENCODING = "ros1", "ros1msg"
@@ -58,6 +59,8 @@ class TopicLink:
 
     topic: str
     sub: Subscriber | None = None
+    #: The node's subscription under way or made (``Links.open``): one, however many ask.
+    opening: asyncio.Future[Subscriber] | None = None
     readers: dict[tuple[int, int], tuple[Client, Subscription]] = field(default_factory=dict)
     #: The last message of each latching publisher (by its URI): what a new reader gets first.
     latched: dict[str, Frame] = field(default_factory=dict)
@@ -96,10 +99,15 @@ class Links:
         link = self.links.get(topic)
         if link is None:
             link = self.links[topic] = TopicLink(topic, learning=learning)
-        if link.sub is None and topic not in self.borrowed:
-            link.sub = await self.node.subscribe(
-                topic, self._frames(link), ANY, on_header=self._header(link)
+        if link.opening is not None and link.opening.done() and link.opening.exception():
+            link.opening = None  # it failed: this call tries again
+        if link.opening is None and topic not in self.borrowed:
+            # one subscription, however many clients ask at once: the later ones wait for it
+            link.opening = asyncio.ensure_future(
+                self.node.subscribe(topic, self._frames(link), ANY, on_header=self._header(link))
             )
+        if link.opening is not None:
+            link.sub = await asyncio.shield(link.opening)
         return link
 
     async def release(self, topic: str) -> None:
@@ -108,8 +116,9 @@ class Links:
         if link is None or link.readers or link.learning:
             return
         del self.links[topic]
-        if link.sub is not None:
-            link.sub = None
+        if link.opening is not None:
+            await asyncio.wait([link.opening])  # subscribed first, so that it is undone
+            link.sub = link.opening = None
             await self.node.unsubscribe(topic)
 
     def _header(self, link: TopicLink) -> Callable[[InboundConnection], None]:

@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import asyncio
 import hmac
-import itertools
 import logging
 import time
 from collections.abc import Callable
@@ -18,18 +17,19 @@ from http import HTTPStatus
 from typing import Any
 from urllib.parse import parse_qs, urlsplit
 
-from rostools.bridge.channels import Channel, Links
-from rostools.bridge.client import Client, Subscription
-from rostools.bridge.graph import Graph, GraphChange, GraphWatch
-from rostools.bridge.options import BridgeOptions
-from rostools.bridge.services import Service, Services
 from rostools.errors import RostoolsError
 from rostools.msgs.store import TypeStore
 from rostools.msgs.topictype import TopicType
-from rostools.node.clock import RosClock
 from rostools.node.connection import Frame, InboundConnection
 from rostools.node.node import LiveNode
 from rostools.selection import Selection
+from rostools.web.channels import Channel, Links
+from rostools.web.client import Client
+from rostools.web.graph import GraphChange, GraphWatch
+from rostools.web.operations import Operations
+from rostools.web.options import BridgeOptions
+from rostools.web.services import Service
+from rostools.web.state import BridgeState, Event
 from rostools.wire import foxglove
 
 log = logging.getLogger(__name__)
@@ -41,10 +41,8 @@ WRITE_LIMIT = 1024 * 1024
 #: The least time between two ``time`` messages (a 1 kHz ``/clock`` is sent at 100 Hz).
 TIME_PERIOD = 0.01
 
-Event = dict[str, Any]
 
-
-class Bridge:
+class Bridge(BridgeState):
     """Serves the graph of ``node`` to WebSocket clients until ``run``'s ``stop``."""
 
     def __init__(
@@ -54,28 +52,12 @@ class Bridge:
         store: TypeStore,
         on_event: Callable[[Event], None] | None = None,
     ) -> None:
-        from rostools.bridge.operations import Operations
-
-        self.node = node
-        self.opts = opts
-        self.store = store
-        self.on_event = on_event or (lambda _: None)
+        super().__init__(node, opts, store, on_event)
         self.selection = Selection(opts)
-        self.ids = itertools.count(1)
-        self.channels: dict[int, Channel] = {}
-        self.by_topic: dict[str, Channel] = {}
-        self.services: dict[int, Service] = {}
-        self.service_ids: dict[str, int] = {}
-        self.clients: set[Client] = set()
-        self.clock = RosClock()
         self.links = Links(node, self.clock.now, time.monotonic, self._learnt)
         self.graph = GraphWatch(node.master, self._graph_changed)
-        self.describer = Services(node, store)
         self.ops = Operations(self)
-        self.port = 0
-        self.started = time.monotonic()
         self._last_time = 0.0
-        self._tasks: set[asyncio.Task[Any]] = set()
 
     # the run -------------------------------------------------------------------------------
 
@@ -133,29 +115,6 @@ class Bridge:
             ready.cancel()
             stopped.cancel()
 
-    @property
-    def url(self) -> str:
-        """The URL a client connects to (the token left out)."""
-        scheme = "wss" if self.opts.certfile else "ws"
-        host = self.opts.address
-        host = "127.0.0.1" if host in ("0.0.0.0", "") else host  # noqa: S104 - shown, not bound
-        return f"{scheme}://{f'[{host}]' if ':' in host else host}:{self.port}"
-
-    def event(self, kind: str, **fields: Any) -> None:
-        """Tell the terminal (the live table, or a JSON line)."""
-        self.on_event({"event": kind, **fields})
-
-    def spawn(self, coro: Any) -> None:
-        """Run ``coro`` beside the loop, kept until done; an error is logged, not raised."""
-        task = asyncio.get_running_loop().create_task(coro)
-        self._tasks.add(task)
-        task.add_done_callback(self._task_done)
-
-    def _task_done(self, task: asyncio.Task[Any]) -> None:
-        self._tasks.discard(task)
-        if not task.cancelled() and task.exception() is not None:
-            log.warning("bridge: %s", task.exception())
-
     # clients -----------------------------------------------------------------------------
 
     def _check_token(self, connection: Any, request: Any) -> Any:
@@ -173,7 +132,7 @@ class Bridge:
         from websockets.exceptions import ConnectionClosed
 
         name = _peer_name(ws.remote_address)
-        client = Client(ws, name, lambda c: None)
+        client = Client(ws, name, lambda c: self.spawn(ws.close(1008, "let go")))
         self.clients.add(client)
         self.event("connected", client=name, protocol=ws.subprotocol)
         client.send(self._server_info())
@@ -224,11 +183,6 @@ class Bridge:
             bytes=stats.bytes,
             dropped=stats.dropped,
         )
-
-    def broadcast(self, message: dict[str, Any] | bytes) -> None:
-        """Send one message to every client."""
-        for client in self.clients:
-            client.send(message)
 
     # channels ----------------------------------------------------------------------------
 
@@ -329,14 +283,6 @@ class Bridge:
             (t, link.stats.messages, link.stats.bytes, len(link.readers))
             for t, link in sorted(self.links.links.items())
         ]
-
-    def current_graph(self) -> Graph:
-        """The graph at the last look."""
-        return self.graph.graph
-
-    def subscription_of(self, client: Client, sub_id: int) -> Subscription | None:
-        """A client's subscription by its id."""
-        return client.subscriptions.get(sub_id)
 
 
 def _peer_name(address: Any) -> str:

@@ -1,0 +1,148 @@
+"""``rostools bridge`` with real rospy and roscpp nodes, on rostools core and on a real roscore."""
+
+from __future__ import annotations
+
+import struct
+import subprocess
+from collections.abc import Iterator
+from pathlib import Path
+
+import pytest
+
+from tests.conftest import MasterInfo
+from tests.support import cppbuild
+from tests.support.env import needs_ros1
+from tests.support.foxglove import Client, ros_string, start_bridge
+from tests.support.procs import Proc, start_ros1_node, wait_for
+
+pytestmark = [pytest.mark.interop, needs_ros1]
+
+_CPP_REASON = cppbuild.cpp_missing()
+ADD = struct.Struct("<qq")
+
+
+def failure(client: Client, call_id: int) -> dict[str, object]:
+    """The serviceCallFailure of call ``call_id``."""
+    return client.wait(lambda m: m.get("op") == "serviceCallFailure" and m["callId"] == call_id)
+
+
+def publish_until(client: Client, channel: int, text: str, node: Proc, seen: str) -> None:
+    """Publish ``text`` from the client until ``node`` prints ``seen`` (it may connect late)."""
+
+    def printed() -> bool:
+        client.send(b"\x01" + struct.pack("<I", channel) + ros_string(text))
+        try:
+            node.expect(seen, 0.5)
+        except AssertionError:
+            return False
+        return True
+
+    wait_for(printed, 30, f"a subscriber to print {seen!r}")
+
+
+def test_rospy_nodes_through_the_bridge(any_master: MasterInfo) -> None:
+    env = any_master.ros_env
+    talker = start_ros1_node("talker.py", ["/chatter", "20"], env)
+    server = start_ros1_node("add_two_ints_server.py", [], env)
+    listener = start_ros1_node("listener.py", ["/to_rospy"], env)
+    bridge, url = start_bridge(any_master.cli_env)
+    try:
+        server.expect("ready", 30)
+        listener.expect("ready", 30)
+        with Client(url) as client:
+            channel = client.channel("/chatter", 30)
+            assert (channel["schemaName"], channel["schema"]) == (
+                "std_msgs/String",
+                "string data\n",
+            )
+            sub = client.subscribe("/chatter")
+            (_, payload), *_ = client.receive(sub, 2, 30)
+            assert payload[4:].startswith(b"hello ")
+
+            client.poll(lambda: "/add_two_ints" in client.services, 30, "the service")
+            service = client.services["/add_two_ints"]
+            assert service["type"] == "rospy_tutorials/AddTwoInts"
+            assert service["request"]["schema"] == "int64 a\nint64 b\n"
+            client.call("/add_two_ints", ADD.pack(2, 3), call_id=1)
+            client.poll(lambda: bool(client.responses()), 30, "a service response")
+            assert client.responses() == [(service["id"], 1, struct.pack("<q", 5))]
+            client.call("/add_two_ints", ADD.pack(-5, 1), call_id=2)
+            assert "negative sum -4" in str(failure(client, 2)["message"])
+
+            client.send(
+                {
+                    "op": "advertise",
+                    "channels": [
+                        {
+                            "id": 1,
+                            "topic": "/to_rospy",
+                            "encoding": "ros1",
+                            "schemaName": "std_msgs/String",
+                            "schema": "string data\n",
+                        }
+                    ],
+                }
+            )
+            publish_until(client, 1, "from the web", listener, "got from the web")
+
+            client.send({"op": "subscribeParameterUpdates", "parameterNames": ["/gain"]})
+
+            def updated() -> bool:
+                subprocess.run(["rosparam", "set", "/gain", "3"], env=env, check=True, timeout=30)
+                try:
+                    client.wait(lambda m: m.get("op") == "parameterValues", 2)
+                except AssertionError:
+                    return False
+                return True
+
+            wait_for(updated, 30, "a paramUpdate from the master")
+    finally:
+        bridge.stop()
+        for proc in (talker, server, listener):
+            proc.stop()
+
+
+@pytest.fixture(scope="module")
+def cpp_peers() -> Iterator[dict[str, Path]]:
+    """The roscpp peers, built once."""
+    if _CPP_REASON is not None:
+        pytest.skip(_CPP_REASON)
+    yield cppbuild.build_many(["talker", "listener", "add_two_ints_server"])
+
+
+def test_roscpp_nodes_through_the_bridge(
+    any_master: MasterInfo, cpp_peers: dict[str, Path]
+) -> None:
+    env = any_master.ros_env
+    talker = Proc([str(cpp_peers["talker"]), "/cpp_chatter", "--rate", "20"], env=env)
+    listener = Proc([str(cpp_peers["listener"]), "/to_roscpp"], env=env)
+    server = Proc([str(cpp_peers["add_two_ints_server"]), "--mode", "throw"], env=env)
+    bridge, url = start_bridge(any_master.cli_env)
+    try:
+        for proc in (talker, listener, server):
+            proc.expect("ready", 30)
+        with Client(url) as client:
+            sub = client.subscribe("/cpp_chatter")
+            (_, payload), *_ = client.receive(sub, 2, 30)
+            assert payload[4:].startswith(b"hello ")
+            client.poll(lambda: "/add_two_ints" in client.services, 30, "the service")
+            client.call("/add_two_ints", ADD.pack(1, 2), call_id=9)
+            assert str(failure(client, 9)["message"]).endswith("was told to throw")  # its exception
+            client.send(
+                {
+                    "op": "advertise",
+                    "channels": [
+                        {
+                            "id": 4,
+                            "topic": "/to_roscpp",
+                            "encoding": "ros1",
+                            "schemaName": "std_msgs/String",
+                        }
+                    ],
+                }
+            )  # no schema: the store's
+            publish_until(client, 4, "to roscpp", listener, "got to roscpp")
+    finally:
+        bridge.stop()
+        for proc in (talker, listener, server):
+            proc.stop()

@@ -11,8 +11,9 @@ Usage:
 
 A reader (reader, direct) prints "ready" after its first message, then waits for one line on
 stdin, "START_NS END_NS" (wall clock), counts what arrives in that window, and prints one JSON
-line once it is over: {"messages", "bytes", "delays_ns": [...]}. "bytes" counts ROS message
-bytes (the WebSocket message's 13-byte prefix left out). A delay is the arrival's wall-clock
+line once it is over: {"messages", "bytes", "duplicates", "delays_ns": [...]}. "bytes" counts
+ROS message bytes (the WebSocket message's 13-byte prefix left out); a message whose stamp is
+not newer than the last one's is a duplicate, counted apart. A delay is the arrival's wall-clock
 time less the message's header.stamp, which every message here has at bytes 4..12.
 The foxglove server prints {"port": N} once it listens and is subscribed, and runs until
 SIGINT.
@@ -45,6 +46,8 @@ class Window:
         self.messages = 0
         self.bytes = 0
         self.delays: list[int] = []
+        self.duplicates = 0
+        self._last = -1
         asyncio.get_running_loop().run_in_executor(None, self._read_stdin)
 
     def _read_stdin(self) -> None:
@@ -65,14 +68,24 @@ class Window:
         """Count a message that arrived at ``now``; whether the window is over."""
         if self.given.done() and self.start <= now < self.end:
             secs, nsecs = _STAMP.unpack_from(payload, 4)
+            stamp = secs * 1_000_000_000 + nsecs
+            if stamp <= self._last:  # the publisher's stamps only grow: sent twice
+                self.duplicates += 1
+                return False
+            self._last = stamp
             self.messages += 1
             self.bytes += size
-            self.delays.append(now - (secs * 1_000_000_000 + nsecs))
+            self.delays.append(now - stamp)
         return self.given.done() and now >= self.end
 
     def report(self) -> None:
         """The JSON line."""
-        out = {"messages": self.messages, "bytes": self.bytes, "delays_ns": self.delays}
+        out = {
+            "messages": self.messages,
+            "bytes": self.bytes,
+            "duplicates": self.duplicates,
+            "delays_ns": self.delays,
+        }
         print(json.dumps(out), flush=True)
 
 

@@ -1,9 +1,14 @@
-"""Big messages skip ``websockets``' copies (``DirectWrite``): what a real client gets is the same."""
+"""Big messages skip websockets' copies (``DirectWrite``): what a real client gets is the same."""
 
 from __future__ import annotations
 
 import asyncio
+import ssl
+import subprocess
+from pathlib import Path
 from typing import Any
+
+import pytest
 
 from rostools.web.client import DIRECT_WRITE, Client, Subscription, binary_frame_header
 from rostools.wire import foxglove
@@ -16,9 +21,28 @@ def _frame(i: int, size: int) -> bytes:
     return bytes((i * 37 + k) % 251 for k in range(min(size, 251))) * (size // 251 + 1)
 
 
-def test_messages_of_every_size_reach_a_websockets_client_whole_and_in_order() -> None:
+def _tls(folder: Path) -> tuple[ssl.SSLContext, ssl.SSLContext]:
+    """A server's context with a new self-signed certificate, and a client's that trusts it."""
+    cert, key = folder / "cert.pem", folder / "key.pem"
+    subprocess.run(
+        ["openssl", "req", "-x509", "-newkey", "rsa:2048", "-nodes", "-days", "1",
+         "-subj", "/CN=127.0.0.1", "-addext", "subjectAltName=IP:127.0.0.1",
+         "-keyout", str(key), "-out", str(cert)],
+        check=True, capture_output=True, timeout=60,
+    )  # fmt: skip
+    server = ssl.SSLContext(ssl.PROTOCOL_TLS_SERVER)
+    server.load_cert_chain(cert, key)
+    return server, ssl.create_default_context(cafile=str(cert))
+
+
+@pytest.mark.parametrize("scheme", ["ws", "wss"])
+def test_messages_of_every_size_reach_a_websockets_client_whole_and_in_order(
+    scheme: str, tmp_path: Path
+) -> None:
     from websockets.asyncio.client import connect
     from websockets.asyncio.server import serve
+
+    server_tls, client_tls = _tls(tmp_path) if scheme == "wss" else (None, None)
 
     frames = [_frame(i, size)[:size] for i, size in enumerate(SIZES)]
     direct: list[int] = []
@@ -45,10 +69,11 @@ def test_messages_of_every_size_reach_a_websockets_client_whole_and_in_order() -
             await done.wait()
             client.close()
 
-        async with serve(handler, "127.0.0.1", 0, compression=None) as server:
+        async with serve(handler, "127.0.0.1", 0, compression=None, ssl=server_tls) as server:
             port = server.sockets[0].getsockname()[1]
+            url = f"{scheme}://127.0.0.1:{port}"
             got: list[str | bytes] = []
-            async with connect(f"ws://127.0.0.1:{port}", max_size=None, compression=None) as ws:
+            async with connect(url, max_size=None, compression=None, ssl=client_tls) as ws:
                 pong = await ws.ping()  # answered between the data frames
                 while sum(isinstance(m, bytes) for m in got) < len(frames):
                     got.append(await asyncio.wait_for(ws.recv(), 30))

@@ -33,6 +33,7 @@ from __future__ import annotations
 
 import contextlib
 import json
+import os
 import queue
 import statistics
 import subprocess
@@ -156,6 +157,7 @@ class Figures:
     readers_cpu: list[float] = field(default_factory=list)  # % of one core, each reader's
     dropped: list[int] = field(default_factory=list)  # the bridge's drops, for each client
     duplicates: int = 0  # messages a reader got twice (none expected)
+    load: float = 0.0  # the machine's 1-minute load average as the window ended
 
     @property
     def delays_ms(self) -> list[float]:
@@ -249,6 +251,7 @@ class Run:
                     rss.append(((time.time_ns() - t0) / 1e9, status_kb(pid)))
                 time.sleep(min(0.1, left / 1e9))
             cpu = (cpu_seconds(pid) - cpu0) / window * 100 if server else None
+            load = os.getloadavg()[0]
             readers_cpu = [
                 (cpu_seconds(p.proc.pid) - c) / window * 100
                 for p, c in zip(peers, readers0, strict=True)
@@ -272,6 +275,7 @@ class Run:
             readers_cpu,
             [json.loads(line)["dropped"] for line in gone],
             sum(o["duplicates"] for o in outs),
+            load,
         )
 
 
@@ -319,7 +323,7 @@ def _compare(topic: Topic, n: int, got: dict[str, Figures]) -> list[Result]:
             ">= 0.9x direct",
             ours.rate >= 0.9 * direct.rate,
             f"offered {offered:.0f} MB/s; bridge {rates(ours)}{drops}; direct {rates(direct)}"
-            f"{fox_note}",
+            f"{fox_note}; load average {ours.load:.1f} on {os.cpu_count()} cores",
         )
     ]
     if fox is not None:

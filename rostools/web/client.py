@@ -11,7 +11,8 @@ from __future__ import annotations
 import asyncio
 import collections
 import logging
-from collections.abc import Callable
+import struct
+from collections.abc import Awaitable, Callable
 from dataclasses import dataclass, field
 from typing import Any, Protocol
 
@@ -30,6 +31,11 @@ MAX_SUBSCRIPTIONS = 1024
 #: Control messages (statuses, advertisements, time) waiting for a client that does not read:
 #: past this many it is let go, as a client that floods us with refusals and reads nothing.
 MAX_CONTROL = 10_000
+#: Messages at least this big go to the connection's transport behind a frame header of our
+#: own (``DirectWrite``): ``websockets`` would copy each three times first (our join of the
+#: prefix, its frame's ``BytesIO``, and the slice asyncio keeps of what the socket did not
+#: take at once), which was most of the bridge's CPU for big images and point clouds.
+DIRECT_WRITE = 64 * 1024
 
 
 class Socket(Protocol):
@@ -86,6 +92,7 @@ class Client:
         self._waiting: collections.OrderedDict[int, None] = collections.OrderedDict()
         self._control: collections.deque[str | bytes] = collections.deque()
         self._wake = asyncio.Event()
+        self._direct = DirectWrite.of(socket)
         self.writer = asyncio.get_running_loop().create_task(self._write())
 
     # what the bridge hands over ------------------------------------------------------------
@@ -176,7 +183,66 @@ class Client:
             sub.queued_bytes -= len(frame)
             if sub.queue:
                 self._waiting[sub_id] = None  # its turn comes again after the others'
-            data = b"".join((foxglove.message_data(sub.id, stamp), frame))
-            await self.socket.send(data)
+            head = foxglove.message_data(sub.id, stamp)
+            if self._direct is not None and len(frame) >= DIRECT_WRITE and self._direct.ready():
+                await self._direct.send(head, frame)
+            else:
+                await self.socket.send(b"".join((head, frame)))
             sub.sent += 1
             sub.sent_bytes += len(frame)
+
+
+class DirectWrite:
+    """Big binary messages written to a ``websockets`` connection's transport, uncopied.
+
+    The frame is the one ``websockets`` would send (FIN, binary, unmasked: a server's), its
+    header and the message's prefix in one write and the message itself in another, so the
+    message is copied once, into the transport's buffer, and only for what the socket does
+    not take at once. Flow control is the connection's own (``drain``: ``WRITE_LIMIT``).
+    Frames go out whole and in order on the one loop, so pings and control messages still
+    fall between messages. Only an open connection without extensions, and outside a
+    fragmented message, is written so; anything else goes through ``send``.
+    """
+
+    def __init__(self, socket: Any, open_state: object) -> None:
+        self.socket = socket
+        self.open_state = open_state
+        self.drain: Callable[[], Awaitable[None]] = socket.drain
+
+    @classmethod
+    def of(cls, socket: object) -> DirectWrite | None:
+        """The direct writer of a ``websockets`` asyncio connection; None for anything else."""
+        if not all(hasattr(socket, a) for a in ("transport", "protocol", "drain")):
+            return None
+        try:
+            from websockets.protocol import State
+        except ImportError:  # pragma: no cover - websockets is a dependency
+            return None
+        return cls(socket, State.OPEN)
+
+    def ready(self) -> bool:
+        """Whether a message may be written directly now."""
+        sock = self.socket
+        protocol = sock.protocol
+        return (
+            protocol.state is self.open_state
+            and not protocol.extensions
+            and getattr(sock, "send_in_progress", None) is None
+            and not sock.transport.is_closing()
+        )
+
+    async def send(self, head: bytes, frame: Frame) -> None:
+        """One binary message: ``head`` then ``frame``; waits while the transport is full."""
+        transport = self.socket.transport
+        transport.write(binary_frame_header(len(head) + len(frame)) + head)
+        transport.write(frame)
+        await self.drain()
+
+
+def binary_frame_header(length: int) -> bytes:
+    """A server's WebSocket frame header of a whole binary message (RFC 6455, 5.2)."""
+    if length < 126:
+        return struct.pack("!BB", 0x82, length)
+    if length < 65536:
+        return struct.pack("!BBH", 0x82, 126, length)
+    return struct.pack("!BBQ", 0x82, 127, length)

@@ -54,6 +54,8 @@ def server(request: pytest.FixtureRequest, tmp_path: Path) -> Iterator[Server]:
     master, uri = start_rosmaster(tmp_path)
     try:
         with rosbridge_graph(uri, tmp_path):
+            # the one place a second server starts: "rostools" -> rostools bridge on ``uri``
+            assert request.param == "rosbridge_server", f"no way to start {request.param}"
             bridge = start_rosbridge(uri, tmp_path)
             try:
                 yield Server(request.param, bridge.url, bridge.port)

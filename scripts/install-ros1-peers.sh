@@ -35,6 +35,9 @@ packages=(
   zsh fish rosbash
   # the bridge tests drive Foxglove Studio in a headless browser (tests/peers/web)
   chromium
+  # the real rosbridge_server 0.11.17 (tests/peers/rosbridge), a parity peer of the bridge;
+  # tornado too, since rosbridge_server's __init__ imports its tornado handler
+  python3-twisted python3-autobahn python3-tornado python3-bson python3-pil python3-distutils
 )
 # Node and npm, unless some are on PATH already: NodeSource's nodejs bundles npm and conflicts
 # with Debian's npm package, which would replace it with Debian's older Node.

@@ -1,0 +1,109 @@
+"""The rosbridge v2 protocol with clients nobody here wrote, against each server in
+``SERVERS``: roslib 2.1.0 in node, roslibpy 2.1.0, and the parity recorder's answers compared
+with those of the real rosbridge_server 0.11.17 (``tests/peers/rosbridge/golden.json``).
+
+Each test starts a loopback master, ``rosbridge_graph.py`` (a rospy node with a talker, a
+service, an echo and a parameter) and the server, on free ports, and stops them by PID.
+"""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from collections.abc import Iterator
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+from tests.support.load import factor, scaled
+from tests.support.rosbridge import (
+    PEER,
+    rosbridge_graph,
+    rosbridge_missing,
+    start_rosbridge,
+    start_rosmaster,
+)
+from tests.support.rosbridge_parity import GOLDEN, differences, record
+from tests.support.web import WEB, node_missing
+
+pytestmark = [pytest.mark.interop]
+
+#: The servers every test here runs against. rostools bridge joins once it speaks rosbridge:
+#: add "rostools" here and start it in ``server`` below, and the same checks and the same
+#: golden answers then hold for ours.
+SERVERS = ["rosbridge_server"]
+
+
+@dataclass
+class Server:
+    """A rosbridge v2 server on a graph of ``rosbridge_graph.py``."""
+
+    kind: str
+    url: str
+    port: int
+
+
+@pytest.fixture(params=SERVERS)
+def server(request: pytest.FixtureRequest, tmp_path: Path) -> Iterator[Server]:
+    """The server ``request.param`` on a fresh ``rosmaster --core`` with the test graph."""
+    if reason := rosbridge_missing():
+        pytest.skip(reason)
+    master, uri = start_rosmaster(tmp_path)
+    try:
+        with rosbridge_graph(uri, tmp_path):
+            # the one place a second server starts: "rostools" -> rostools bridge on ``uri``
+            assert request.param == "rosbridge_server", f"no way to start {request.param}"
+            bridge = start_rosbridge(uri, tmp_path)
+            try:
+                yield Server(request.param, bridge.url, bridge.port)
+            finally:
+                bridge.stop()
+    finally:
+        master.stop()
+
+
+def checks(argv: list[str], cwd: Path, timeout: float) -> list[dict[str, Any]]:
+    """Run a checks script (one JSON line per check, then a summary); its checks' lines."""
+    done = subprocess.run(
+        argv, cwd=cwd, capture_output=True, text=True, timeout=scaled(timeout), check=False
+    )
+    lines = [json.loads(line) for line in done.stdout.splitlines() if line.startswith("{")]
+    assert lines and lines[-1].get("summary"), f"{argv[1]} ended early: {done.stderr[-3000:]}"
+    failed = [line for line in lines[:-1] if not line["ok"]]
+    assert not failed, f"{argv[1]}: failed checks: {failed}\n{done.stderr[-2000:]}"
+    assert done.returncode == 0
+    return lines[:-1]
+
+
+def test_roslib_in_node(server: Server) -> None:
+    if reason := node_missing():
+        pytest.skip(reason)
+    if not (WEB / "node_modules" / "roslib").is_dir():
+        pytest.skip("roslib is not installed in tests/peers/web: run npm ci there")
+    argv = ["node", str(WEB / "roslib-client.mjs"), server.url, f"{factor():.2f}"]
+    done = checks(argv, WEB, 180)
+    assert [c["check"] for c in done] == [
+        "connect", "getTopics", "getServices", "getNodes", "getTopicType", "getServiceType",
+        "getMessageDetails", "Param get and set", "subscribe (JSON), 10 messages",
+        "subscribe (compression cbor)", "publish, rospy echoes it", "callService",
+        "callService, a missing service fails", "advertise a service, rospy calls it",
+    ]  # fmt: skip
+
+
+def test_roslibpy(server: Server) -> None:
+    pytest.importorskip("roslibpy", reason="roslibpy is in the test extra: pip install -e .[test]")
+    script = PEER / "roslibpy_checks.py"
+    argv = [sys.executable, str(script), "127.0.0.1", str(server.port), f"{factor():.2f}"]
+    done = checks(argv, PEER, 180)
+    assert len(done) == 11
+
+
+def test_parity_with_rosbridge_server(server: Server) -> None:
+    golden = json.loads(GOLDEN.read_text())
+    ours = record(server.url)
+    assert list(ours) == list(golden)  # the same steps, in the same order
+    found = differences(golden, ours)
+    assert not found, "answers differ from rosbridge_server's:\n" + "\n".join(found)

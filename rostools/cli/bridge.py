@@ -75,13 +75,22 @@ def bridge(
             "--read-only", help="Refuse client publish, parameter changes and service calls."
         ),
     ] = False,
+    protocol: Annotated[
+        str,
+        typer.Option(
+            "--protocol",
+            help="both: Foxglove to clients that offer its subprotocol, rosbridge v2 to the "
+            "rest; or foxglove, or rosbridge, alone.",
+        ),
+    ] = "both",
     quiet: Annotated[bool, typer.Option("--quiet", "-q", help="No live table.")] = False,
     fmt: FormatOpt = None,
 ) -> None:
-    """Serve the graph in the Foxglove WebSocket protocol until Ctrl-C.
+    """Serve the graph over WebSocket, in the Foxglove protocol and rosbridge v2, until Ctrl-C.
 
     Open Foxglove Studio or Lichtblick, choose "Foxglove WebSocket", and give the URL this
-    prints. Every topic's type comes from its publisher: no .msg files are needed.
+    prints; roslib, roslibpy and rosbridge dashboards take the same URL. Every topic's type
+    comes from its publisher: no .msg files are needed.
     """
     from rostools.web.options import BridgeOptions, parse_rate
 
@@ -98,6 +107,7 @@ def bridge(
         keyfile=keyfile,
         max_rates=dict(parse_rate(r) for r in max_rate or []),
         read_only=read_only,
+        protocol=protocol,
     )
     opts.tls()  # a certificate that does not load is a usage error before anything starts
     live = not quiet and fmt is Format.text and sys.stderr.isatty()
@@ -150,11 +160,14 @@ async def _run(
 def _banner(b: Bridge) -> str:
     url = b.url + ("/?token=…" if b.opts.token else "")
     where = "this machine only" if b.opts.loopback else f"{b.opts.address}, every machine"
-    return (
-        f"rostools bridge: {url} (Foxglove WebSocket; listening on {where})\n"
-        f"Foxglove or Lichtblick: open a connection, Foxglove WebSocket, {url}\n"
-        "press Ctrl-C to stop"
-    )
+    speaks = {"both": "Foxglove WebSocket and rosbridge v2", "foxglove": "Foxglove WebSocket",
+              "rosbridge": "rosbridge v2"}[b.opts.protocol]  # fmt: skip
+    lines = [f"rostools bridge: {url} ({speaks}; listening on {where})"]
+    if b.opts.protocol != "rosbridge":
+        lines.append(f"Foxglove or Lichtblick: open a connection, Foxglove WebSocket, {url}")
+    if b.opts.protocol != "foxglove":
+        lines.append(f"roslib, roslibpy: new ROSLIB.Ros({{url: '{url}'}})")
+    return "\n".join([*lines, "press Ctrl-C to stop"])
 
 
 _SAID = {

@@ -258,6 +258,14 @@ class LiveNode:
         )
         return server
 
+    async def unadvertise_service(self, name: str) -> None:
+        """Stop serving ``name`` and withdraw it from the master."""
+        name = self.resolve(name)
+        server = self.services.pop(name, None)
+        if server is not None:
+            server.close()
+            await self.master.call("unregisterService", name, server.uri)
+
     # TCPROS ---------------------------------------------------------------------------
 
     def _accept(self, fields: dict[str, str], conn: ServerConnection) -> ConnectionHandler | None:

@@ -66,6 +66,8 @@ class TopicLink:
     latched: dict[str, Frame] = field(default_factory=dict)
     #: Subscribed only to read a publisher's header (the type); let go once it is read.
     learning: bool = False
+    #: The type the last publisher's header gave (what a rosbridge client's JSON is made by).
+    type: TopicType | None = None
     stats: TopicStats = field(default_factory=TopicStats)
 
 
@@ -130,7 +132,8 @@ class Links:
         def on_header(conn: InboundConnection) -> None:
             header = conn.header or {}
             if "type" in header and "md5sum" in header:
-                self.on_type(link.topic, TopicType.from_header(header))
+                link.type = TopicType.from_header(header)
+                self.on_type(link.topic, link.type)
 
         return on_header
 

@@ -12,7 +12,7 @@ import asyncio
 import collections
 import logging
 import struct
-from collections.abc import Awaitable, Callable
+from collections.abc import Awaitable, Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Any, Protocol
 
@@ -57,6 +57,11 @@ class Subscription:
     #: topic, or the client's own ``maxRate``, whichever is slower.
     interval: float = 0.0
     queue: collections.deque[tuple[int, Frame]] = field(default_factory=collections.deque)
+    #: Messages it queues at most (its bytes are bounded by ``QUEUE_BYTES`` whatever this is).
+    limit: int = QUEUE_MESSAGES
+    #: What a message is sent as, made when it is sent (a rosbridge client's JSON, CBOR or
+    #: fragments); None: the Foxglove protocol's binary message, undecoded.
+    render: Callable[[int, Frame], Sequence[str | bytes]] | None = None
     queued_bytes: int = 0
     last_taken: float = 0.0
     sent: int = 0
@@ -77,6 +82,9 @@ class ClientStats:
 
 class Client:
     """A connected WebSocket client."""
+
+    #: Whether it speaks the Foxglove protocol (what ``BridgeState.broadcast`` sends).
+    foxglove = True
 
     def __init__(self, socket: Socket, name: str, on_gone: Callable[[Client], None]) -> None:
         self.socket = socket
@@ -105,17 +113,15 @@ class Client:
         sub.last_taken = now
         sub.queue.append((stamp, frame))
         sub.queued_bytes += len(frame)
-        while len(sub.queue) > 1 and (
-            len(sub.queue) > QUEUE_MESSAGES or sub.queued_bytes > QUEUE_BYTES
-        ):
+        while len(sub.queue) > 1 and (len(sub.queue) > sub.limit or sub.queued_bytes > QUEUE_BYTES):
             _, old = sub.queue.popleft()
             sub.queued_bytes -= len(old)
             sub.dropped += 1
         self._waiting[sub.id] = None
         self._wake.set()
 
-    def send(self, message: dict[str, Any] | bytes) -> None:
-        """Queue a control message (JSON, or a binary one), sent before any data."""
+    def send(self, message: dict[str, Any] | str | bytes) -> None:
+        """Queue a control message (JSON as a dict or text, or binary), sent before any data."""
         if self.closed:
             return
         if len(self._control) >= MAX_CONTROL:
@@ -183,13 +189,21 @@ class Client:
             sub.queued_bytes -= len(frame)
             if sub.queue:
                 self._waiting[sub_id] = None  # its turn comes again after the others'
-            head = foxglove.message_data(sub.id, stamp)
-            if self._direct is not None and len(frame) >= DIRECT_WRITE and self._direct.ready():
-                await self._direct.send(head, frame)
+            if sub.render is not None:
+                for part in sub.render(stamp, frame):
+                    await self.socket.send(part)
             else:
-                await self.socket.send(b"".join((head, frame)))
+                await self._send_data(sub, stamp, frame)
             sub.sent += 1
             sub.sent_bytes += len(frame)
+
+    async def _send_data(self, sub: Subscription, stamp: int, frame: Frame) -> None:
+        """One Foxglove ``messageData``: its prefix, then the frame as it came."""
+        head = foxglove.message_data(sub.id, stamp)
+        if self._direct is not None and len(frame) >= DIRECT_WRITE and self._direct.ready():
+            await self._direct.send(head, frame)
+        else:
+            await self.socket.send(b"".join((head, frame)))
 
 
 class DirectWrite:

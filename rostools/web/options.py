@@ -11,6 +11,8 @@ from rostools.selection import TopicChoice
 #: Foxglove's port, as foxglove_bridge and Studio's default connection use it.
 DEFAULT_PORT = 8765
 LOOPBACK = ("127.0.0.1", "::1", "localhost")
+#: What ``--protocol`` takes.
+PROTOCOLS = ("both", "foxglove", "rosbridge")
 
 
 @dataclass
@@ -27,11 +29,16 @@ class BridgeOptions(TopicChoice):
     max_rates: dict[str, float] = field(default_factory=dict)
     #: Refuse what writes to the graph: client publish, setParameters, service calls.
     read_only: bool = False
+    #: What clients may speak: "foxglove", "rosbridge" (v2), or "both" (by the subprotocol
+    #: a client offers).
+    protocol: str = "both"
 
     def __post_init__(self) -> None:
         """No topic chosen means every topic, as foxglove_bridge's default."""
         if not (self.topics or self.all or self.node or self.types):
             self.all = True
+        if self.protocol not in PROTOCOLS:
+            raise UsageError(f"--protocol {self.protocol}: choose one of {', '.join(PROTOCOLS)}")
 
     @property
     def loopback(self) -> bool:

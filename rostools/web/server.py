@@ -12,7 +12,7 @@ import asyncio
 import hmac
 import logging
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from http import HTTPStatus
 from typing import Any
 from urllib.parse import parse_qs, urlsplit
@@ -28,6 +28,8 @@ from rostools.web.client import Client
 from rostools.web.graph import GraphChange, GraphWatch
 from rostools.web.operations import Operations
 from rostools.web.options import BridgeOptions
+from rostools.web.rbservices import RbServices
+from rostools.web.rosbridge import RosbridgeClient, RosbridgeOps
 from rostools.web.services import Service
 from rostools.web.state import BridgeState, Event
 from rostools.wire import foxglove
@@ -57,6 +59,7 @@ class Bridge(BridgeState):
         self.links = Links(node, self.clock.now, time.monotonic, self._learnt)
         self.graph = GraphWatch(node.master, self._graph_changed)
         self.ops = Operations(self)
+        self.rosbridge = RosbridgeOps(self, RbServices(self))
         self._last_time = 0.0
 
     # the run -------------------------------------------------------------------------------
@@ -75,7 +78,7 @@ class Bridge(BridgeState):
                 self._serve,
                 self.opts.address,
                 self.opts.port,
-                subprotocols=[foxglove.SUBPROTOCOLS[0], foxglove.SUBPROTOCOLS[1]],  # type: ignore[list-item]
+                select_subprotocol=self._choose,  # type: ignore[arg-type]
                 process_request=self._check_token,
                 ssl=tls,
                 max_size=MAX_CLIENT_MESSAGE,
@@ -128,10 +131,27 @@ class Bridge(BridgeState):
         self.event("refused", client=_peer_name(peer), reason="wrong or missing token")
         return connection.respond(HTTPStatus.UNAUTHORIZED, "a token is needed: ?token=...\n")
 
+    def _choose(self, connection: Any, offered: Sequence[str]) -> str | None:
+        """A Foxglove subprotocol the client offers, else none: rosbridge v2 (``--protocol``)."""
+        from websockets.exceptions import NegotiationError
+
+        if self.opts.protocol != "rosbridge":
+            for name in foxglove.SUBPROTOCOLS:
+                if name in offered:
+                    return name
+        if self.opts.protocol == "foxglove":
+            raise NegotiationError(
+                f"this bridge speaks the Foxglove protocol only: offer {foxglove.SUBPROTOCOLS[0]}"
+            )
+        return None
+
     async def _serve(self, ws: Any) -> None:
         from websockets.exceptions import ConnectionClosed
 
         name = _peer_name(ws.remote_address)
+        if ws.subprotocol not in foxglove.SUBPROTOCOLS:
+            await self._serve_rosbridge(ws, name)
+            return
         client = Client(ws, name, lambda c: self.spawn(ws.close(1008, "let go")))
         self.clients.add(client)
         self.event("connected", client=name, protocol=ws.subprotocol)
@@ -151,6 +171,32 @@ class Bridge(BridgeState):
             pass
         finally:
             await self._drop(client)
+
+    async def _serve_rosbridge(self, ws: Any, name: str) -> None:
+        from websockets.exceptions import ConnectionClosed
+
+        client = RosbridgeClient(ws, name, lambda c: self.spawn(ws.close(1008, "let go")))
+        self.clients.add(client)
+        self.event("connected", client=name, protocol="rosbridge")
+        try:
+            async for message in ws:
+                if client.closed:
+                    break
+                await self.rosbridge.handle(client, message)
+        except ConnectionClosed:
+            pass
+        finally:
+            client.close()
+            self.clients.discard(client)
+            stats = client.stats
+            await self.rosbridge.forget_client(client)
+            self.event(
+                "disconnected",
+                client=client.name,
+                messages=stats.messages,
+                bytes=stats.bytes,
+                dropped=stats.dropped,
+            )
 
     def _server_info(self) -> dict[str, Any]:
         caps = [

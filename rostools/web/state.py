@@ -80,9 +80,10 @@ class BridgeState:
             log.warning("bridge: %s", task.exception())
 
     def broadcast(self, message: dict[str, Any] | bytes) -> None:
-        """Send one message to every client."""
+        """Send one message to every Foxglove client."""
         for client in self.clients:
-            client.send(message)
+            if client.foxglove:
+                client.send(message)
 
     def current_graph(self) -> Graph:
         """The graph at the last look."""

@@ -170,7 +170,7 @@ class RosbridgeOps:
                 raise ProtocolError(f"subscribe: {topic} is of type {known.type}, not {asked_type}")
             if known is None and not self.bridge.store.has_msg(asked_type):
                 raise ProtocolError(f"subscribe: {topic}: no message type {asked_type} is known")
-        elif known is None and topic not in self.bridge.current_graph().topics:
+        elif known is None and ask["compression"] != "cbor-raw" and not await self._on_graph(topic):
             raise ProtocolError(
                 f"subscribe: {topic} is not on the graph yet: give its type to subscribe before"
             )
@@ -198,6 +198,15 @@ class RosbridgeOps:
                 sub.last_taken = 0.0  # each latched message is sent, however throttled
                 client.offer(sub, stamp, frame, now)
             self.bridge.event("subscribed", client=client.name, topic=topic)
+
+    async def _on_graph(self, topic: str) -> bool:
+        """Whether ``topic`` is on the graph: at the last look, or the master's now."""
+        if topic in self.bridge.current_graph().topics:
+            return True
+        try:
+            return topic in await self.node.master.topic_types()
+        except RostoolsError:
+            return False
 
     def _apply(self, client: RosbridgeClient, subs: TopicSubs) -> None:
         """The queue's settings from every subscription to the topic."""

@@ -28,8 +28,9 @@ from rostools.web.client import Client
 from rostools.web.graph import GraphChange, GraphWatch
 from rostools.web.operations import Operations
 from rostools.web.options import BridgeOptions
+from rostools.web.rbclient import RosbridgeClient
 from rostools.web.rbservices import RbServices
-from rostools.web.rosbridge import RosbridgeClient, RosbridgeOps
+from rostools.web.rosbridge import RosbridgeOps
 from rostools.web.services import Service
 from rostools.web.state import BridgeState, Event
 from rostools.wire import foxglove

@@ -373,6 +373,11 @@ def test_wss_with_a_certificate_and_a_warning_off_loopback(
         trusting = ssl.create_default_context(cafile=str(cert))
         with Client(url, ssl=trusting) as client:
             assert client.server_info["op"] == "serverInfo"
+        with connect(url, ssl=trusting) as rosbridge:  # a rosbridge client: wss:// as well
+            rosbridge.send(json.dumps({"op": "call_service", "id": 1, "service": "/none"}))
+            assert (
+                json.loads(rosbridge.recv(timeout=30))["values"] == "Service /none does not exist"
+            )
         with pytest.raises(ssl.SSLError):
             Client(url)  # a client that does not trust the certificate is not let in
     finally:

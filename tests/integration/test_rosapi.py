@@ -275,3 +275,17 @@ def test_advertised_services_answer_ros_clients(rostools_master: str) -> None:
         assert not [name for name, _ in state[2] if name.startswith("/rosapi/")]
 
     on_graph(rostools_master, body)
+
+
+def test_a_type_learnt_from_a_publisher_has_details() -> None:
+    api = RosApi(None, STORE)  # type: ignore[arg-type]  # no graph is asked
+    definition = "int32 a\nrosapi_t_pkg/Sub s\n" + "=" * 80 + "\nMSG: rosapi_t_pkg/Sub\nstring t\n"
+    with pytest.raises(RosApiFailure, match="Unable to load the manifest for package"):
+        asyncio.run(api.call("rosapi/message_details", {"type": "rosapi_t_pkg/Thing"}))
+    api.learn("rosapi_t_pkg/Thing", definition)
+    typedefs = asyncio.run(api.call("rosapi/message_details", {"type": "rosapi_t_pkg/Thing"}))
+    assert [(t["type"], t["fieldtypes"]) for t in typedefs["typedefs"]] == [
+        ("rosapi_t_pkg/Thing", ["int32", "rosapi_t_pkg/Sub"]),
+        ("rosapi_t_pkg/Sub", ["string"]),
+    ]
+    assert api._full_text("rosapi_t_pkg/Thing") == definition

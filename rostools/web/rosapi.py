@@ -50,6 +50,8 @@ SPECIALS = ("time", "duration")
 _DEFAULTS = {"bool": "False", "float32": "0.0", "float64": "0.0", "string": ""}
 #: rosapi_node's name: rospy resolves ``~name`` parameters under it.
 NODE_NAME = "/rosapi"
+#: What rosservice says of a master out of reach (rosapi and rosbridge pass it on).
+MASTER_GONE = "Unable to communicate with master!"
 #: How long a service's header is waited for (rosservice's probe: 5 s).
 PROBE_TIMEOUT = 5.0
 
@@ -70,6 +72,13 @@ class RosApiFailure(RostoolsError):  # noqa: N818 - the name the bridge's caller
 
 class _HandlerError(Exception):
     """rosapi's handler raised: its words, wrapped by ``RosApi.call`` as rosbridge shows them."""
+
+
+class _MasterGoneError(_HandlerError):
+    """The master is out of reach: rosbridge fails the call before it reaches rosapi."""
+
+    def __init__(self) -> None:
+        super().__init__(MASTER_GONE)
 
 
 class RosApi:
@@ -111,6 +120,9 @@ class RosApi:
             raise RosApiFailure(str(err)) from None
         try:
             return await handler(self, request)
+        except _MasterGoneError:
+            # rosbridge asks the master for the service's type first, and fails there
+            raise RosApiFailure(MASTER_GONE) from None
         except _HandlerError as err:
             reason = str(err)
             raw = f"error processing request: {reason}".encode()
@@ -167,7 +179,7 @@ class RosApi:
         try:
             return await self.node.master.call(method, *args)
         except (UnreachableError, TimeoutExpired) as err:
-            raise _HandlerError("Unable to communicate with master!") from err
+            raise _MasterGoneError from err
 
     async def _state(self) -> tuple[list[Any], list[Any], list[Any]]:
         pubs, subs, srvs = await self._master("getSystemState")
@@ -182,7 +194,7 @@ class RosApi:
         try:
             pubs, subs, _ = await self._state()
             types = await self._master("getTopicTypes")
-        except (_HandlerError, RostoolsError):
+        except RostoolsError:  # a master that answers, with a failure
             return [], []
         live = {t for t, _ in pubs} | {t for t, _ in subs}
         pairs = [(str(t), str(ty)) for t, ty in types if t in live]
@@ -550,7 +562,7 @@ async def _search_param(api: RosApi, req: Any) -> dict[str, Any]:
     except (NotFoundError, MasterError):
         return {"global_name": ""}
     except (UnreachableError, TimeoutExpired) as err:
-        raise _HandlerError("Unable to communicate with master!") from err
+        raise _MasterGoneError from err
     return {"global_name": str(found) if found else ""}
 
 

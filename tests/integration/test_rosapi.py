@@ -18,6 +18,7 @@ from rostools.msgs.topictype import TopicType
 from rostools.node.node import LiveNode
 from rostools.node.service import ServiceClient, ServiceType
 from rostools.web.rosapi import SERVICES, RosApi, RosApiFailure, action_servers
+from tests.support.procs import free_port
 from tests.support.rosbridge_parity import GOLDEN
 
 STORE = TypeStore([BuiltinSource()])
@@ -289,3 +290,14 @@ def test_a_type_learnt_from_a_publisher_has_details() -> None:
         ("rosapi_t_pkg/Sub", ["string"]),
     ]
     assert api._full_text("rosapi_t_pkg/Thing") == definition
+
+
+def test_a_master_out_of_reach_fails_as_rosbridge_says() -> None:
+    """rosbridge asks the master for the service's type before calling rosapi: its words."""
+    node = LiveNode("rosapi_test", f"http://127.0.0.1:{free_port()}")  # nothing listens there
+    api = RosApi(node, STORE)
+    for service, args in [("topics", {}), ("services", {}), ("get_param", {"name": "/a"}),
+                           ("search_param", {"name": "a"})]:  # fmt: skip
+        with pytest.raises(RosApiFailure) as failed:
+            asyncio.run(api.call(f"rosapi/{service}", args))
+        assert str(failed.value) == "Unable to communicate with master!", service

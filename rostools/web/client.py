@@ -38,6 +38,11 @@ MAX_CONTROL = 10_000
 DIRECT_WRITE = 64 * 1024
 
 
+#: A message as a subscription renders it: text, bytes, or bytes then a frame as it came (sent
+#: as one binary message without joining them: see ``DirectWrite``).
+Rendered = str | bytes | tuple[bytes, Frame]
+
+
 class Socket(Protocol):
     """What the writer needs of a WebSocket connection (``websockets``' has it)."""
 
@@ -61,7 +66,7 @@ class Subscription:
     limit: int = QUEUE_MESSAGES
     #: What a message is sent as, made when it is sent (a rosbridge client's JSON, CBOR or
     #: fragments); None: the Foxglove protocol's binary message, undecoded.
-    render: Callable[[int, Frame], Sequence[str | bytes]] | None = None
+    render: Callable[[int, Frame], Sequence[Rendered]] | None = None
     queued_bytes: int = 0
     last_taken: float = 0.0
     sent: int = 0
@@ -191,7 +196,10 @@ class Client:
                 self._waiting[sub_id] = None  # its turn comes again after the others'
             if sub.render is not None:
                 for part in sub.render(stamp, frame):
-                    await self.socket.send(part)
+                    if isinstance(part, tuple):
+                        await self._send_binary(*part)
+                    else:
+                        await self.socket.send(part)
             else:
                 await self._send_data(sub, stamp, frame)
             sub.sent += 1
@@ -199,7 +207,10 @@ class Client:
 
     async def _send_data(self, sub: Subscription, stamp: int, frame: Frame) -> None:
         """One Foxglove ``messageData``: its prefix, then the frame as it came."""
-        head = foxglove.message_data(sub.id, stamp)
+        await self._send_binary(foxglove.message_data(sub.id, stamp), frame)
+
+    async def _send_binary(self, head: bytes, frame: Frame) -> None:
+        """One binary message of ``head`` then ``frame``, a big frame uncopied."""
         if self._direct is not None and len(frame) >= DIRECT_WRITE and self._direct.ready():
             await self._direct.send(head, frame)
         else:

@@ -269,3 +269,28 @@ def test_a_cbor_frame_carries_typed_arrays(
             assert struct.unpack("<2f", bytes.fromhex(got["value"]["bytes"])) == (1.5, -2.0)
     finally:
         pub.stop()
+
+
+def test_a_big_image_in_each_encoding(bridge: tuple[Proc, str], rostools_master: str) -> None:
+    import rostools
+
+    pixels = bytes(range(256)) * 1200  # 300 KiB: past the size written without a copy
+    image = {"height": 200, "width": 512, "encoding": "rgb8", "step": 1536, "data": pixels}
+    _, url = bridge
+    with rostools.Node("big_images", rostools_master) as node, rosbridge(url) as ws:
+        node.publish("/image", image, "sensor_msgs/Image", latch=True)
+        s = Session(ws)
+        for compression in ("cbor-raw", "cbor", "none"):
+            s.send({"op": "subscribe", "topic": "/image", "type": "sensor_msgs/Image",
+                    "compression": compression})  # fmt: skip
+            if compression == "none":
+                got = s.until(lambda m: m.get("op") == "publish")["msg"]
+                assert base64.b64decode(got["data"]) == pixels and got["width"] == 512
+            else:
+                msg = s.until(lambda m: "cbor" in m)["cbor"]["msg"]
+                if compression == "cbor-raw":
+                    assert bytes.fromhex(msg["bytes"]["bytes"]).endswith(pixels)
+                else:
+                    assert bytes.fromhex(msg["data"]["bytes"]) == pixels
+            s.send({"op": "unsubscribe", "topic": "/image"})
+            s.inbox.clear()

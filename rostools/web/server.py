@@ -18,7 +18,7 @@ from http import HTTPStatus
 from typing import Any
 from urllib.parse import parse_qs, urlsplit
 
-from rostools.errors import RostoolsError
+from rostools.errors import NotFoundError, RostoolsError
 from rostools.msgs.store import TypeStore
 from rostools.msgs.topictype import TopicType
 from rostools.node.connection import Frame, InboundConnection
@@ -31,6 +31,7 @@ from rostools.web.operations import Operations
 from rostools.web.options import BridgeOptions
 from rostools.web.rbclient import RosbridgeClient
 from rostools.web.rbservices import RbServices
+from rostools.web.rosapi import RosApi
 from rostools.web.rosbridge import RosbridgeOps
 from rostools.web.services import Service
 from rostools.web.state import BridgeState, Event
@@ -61,7 +62,8 @@ class Bridge(BridgeState):
         self.links = Links(node, self.clock.now, time.monotonic, self._learnt)
         self.graph = GraphWatch(node.master, self._graph_changed)
         self.ops = Operations(self)
-        self.rosbridge = RosbridgeOps(self, RbServices(self))
+        self.rosapi = RosApi(node, store)
+        self.rosbridge = RosbridgeOps(self, RbServices(self, self.rosapi))
         self._last_time = 0.0
 
     # the run -------------------------------------------------------------------------------
@@ -97,6 +99,8 @@ class Bridge(BridgeState):
         try:
             self.port = server.sockets[0].getsockname()[1] if server.sockets else self.opts.port
             await self._first_look(stop)
+            if self.opts.protocol != "foxglove":
+                await self._serve_rosapi()
             self.event("listening", address=self.opts.address, port=self.port, url=self.url)
             if ready is not None:
                 ready(self)
@@ -109,6 +113,18 @@ class Bridge(BridgeState):
             await server.wait_closed()
             for task in list(self._tasks):
                 task.cancel()
+
+    async def _serve_rosapi(self) -> None:
+        """rosapi's services to the graph too, unless a rosapi_node serves them already."""
+        try:
+            await self.node.master.lookup_service("/rosapi/topics")
+        except NotFoundError:
+            await self.rosapi.advertise()
+            return
+        except RostoolsError as err:  # the master went away: the graph watch says so
+            log.debug("rosapi: %s", err)
+            return
+        self.event("warning", message="a rosapi node serves /rosapi/* already: left to it")
 
     async def _first_look(self, stop: asyncio.Event) -> None:
         """Wait for the first look at the graph (a master that is not there: keep trying)."""
@@ -267,6 +283,7 @@ class Bridge(BridgeState):
 
     def _learnt(self, topic: str, topic_type: TopicType) -> None:
         """A publisher's header gave the type (and definition) of ``topic``."""
+        self.rosapi.learn(topic_type.type, topic_type.definition)
         link = self.links.links.get(topic)
         channel = self.by_topic.get(topic)
         if channel is None and topic in self.graph.graph.topics:

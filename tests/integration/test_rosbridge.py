@@ -112,7 +112,8 @@ def test_bad_input_is_answered_by_a_status_with_the_ops_id(bridge: tuple[Proc, s
         s.send({"op": "advertise", "id": "a1", "topic": "/x", "type": "std_msgs/String"})
         s.send({"op": "publish", "id": "p2", "topic": "/x", "msg": {"data": 1}})
         assert s.until(_is("status", id="p2"))["msg"] == (
-            "publish: /x: std_msgs/String message requires a string for field data, but got a int"
+            "publish: /x: std_msgs/String message requires a string for field data, "
+            "but got a <class 'int'>"
         )
         s.ws.send(b"\x00\x01")
         assert "binary messages are not understood" in s.until(_is("status"))["msg"]

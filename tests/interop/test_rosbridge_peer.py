@@ -18,7 +18,9 @@ from typing import Any
 
 import pytest
 
+from tests.support.foxglove import start_bridge
 from tests.support.load import factor, scaled
+from tests.support.procs import ros_env
 from tests.support.rosbridge import (
     PEER,
     rosbridge_graph,
@@ -26,15 +28,14 @@ from tests.support.rosbridge import (
     start_rosbridge,
     start_rosmaster,
 )
-from tests.support.rosbridge_parity import GOLDEN, differences, record
+from tests.support.rosbridge_parity import GOLDEN, differences, record, without_own
 from tests.support.web import WEB, node_missing
 
 pytestmark = [pytest.mark.interop]
 
-#: The servers every test here runs against. rostools bridge joins once it speaks rosbridge:
-#: add "rostools" here and start it in ``server`` below, and the same checks and the same
-#: golden answers then hold for ours.
-SERVERS = ["rosbridge_server"]
+#: The servers every test here runs against: the same checks and the same golden answers
+#: hold for both.
+SERVERS = ["rosbridge_server", "rostools"]
 
 
 @dataclass
@@ -54,8 +55,14 @@ def server(request: pytest.FixtureRequest, tmp_path: Path) -> Iterator[Server]:
     master, uri = start_rosmaster(tmp_path)
     try:
         with rosbridge_graph(uri, tmp_path):
-            # the one place a second server starts: "rostools" -> rostools bridge on ``uri``
-            assert request.param == "rosbridge_server", f"no way to start {request.param}"
+            if request.param == "rostools":
+                env = {**ros_env(uri, tmp_path), "HOME": str(tmp_path / "home")}
+                proc, url = start_bridge(env, "--protocol", "rosbridge")
+                try:
+                    yield Server(request.param, url, int(url.rsplit(":", 1)[1]))
+                finally:
+                    proc.stop()
+                return
             bridge = start_rosbridge(uri, tmp_path)
             try:
                 yield Server(request.param, bridge.url, bridge.port)
@@ -101,9 +108,32 @@ def test_roslibpy(server: Server) -> None:
     assert len(done) == 11
 
 
+#: The steps where rostools says what it refused in a ``status`` (rosbridge_server 0.11.17
+#: only logs it), and the id each status carries (that of the op refused).
+REFUSED = {
+    "malformed JSON": None, "unknown op": "unknown-op", "no op": "no-op",
+    "publish, no such field": "pub-bad-field", "publish, wrong field type": "pub-bad-type",
+    "subscribe, unknown type": "sub-bad-type", "call_service missing": "call-missing",
+    "call_service /set_flag, bad args": "call-bad-args",
+}  # fmt: skip
+
+
 def test_parity_with_rosbridge_server(server: Server) -> None:
-    golden = json.loads(GOLDEN.read_text())
-    ours = record(server.url)
-    assert list(ours) == list(golden)  # the same steps, in the same order
+    golden = without_own(json.loads(GOLDEN.read_text()), "rosbridge_server")
+    answers = record(server.url)
+    assert list(answers) == list(golden)  # the same steps, in the same order
+    # statuses aside: rosbridge_server sends none, rostools one for each op it refuses
+    statuses = {
+        step: [m for m in said if m.get("op") == "status"] for step, said in answers.items()
+    }
+    ours = without_own(
+        {s: [m for m in said if m.get("op") != "status"] for s, said in answers.items()},
+        server.kind,
+    )
     found = differences(golden, ours)
     assert not found, "answers differ from rosbridge_server's:\n" + "\n".join(found)
+    if server.kind == "rostools":
+        said = {
+            step: [(m["level"], m.get("id")) for m in got] for step, got in statuses.items() if got
+        }
+        assert said == {step: [("error", ident)] for step, ident in REFUSED.items()}

@@ -79,11 +79,11 @@ def test_values_in_fill_a_message_as_rosbridge_populates_one() -> None:
         ("geometry_msgs/PoseStamped", {"pose": {"position": {"q": 1}}},
          "Message type geometry_msgs/Point does not have a field pose.position.q"),
         ("std_msgs/String", {"data": 5},
-         "std_msgs/String message requires a string for field data, but got a int"),
+         "std_msgs/String message requires a string for field data, but got a <class 'int'>"),
         ("std_msgs/Header", {"stamp": "now"},
-         "std_msgs/Header message requires a time for field stamp, but got a str"),
+         "std_msgs/Header message requires a time for field stamp, but got a <class 'str'>"),
         ("sensor_msgs/Image", {"data": "not base64!"},
-         "sensor_msgs/Image message requires a uint8[] for field data, but got a str"),
+         "sensor_msgs/Image message requires a uint8[] for field data, but got a <class 'str'>"),
     ],
 )  # fmt: skip
 def test_values_that_do_not_fit_are_named_as_rosbridge_names_them(

@@ -1,6 +1,7 @@
 """The rosbridge v2 protocol with clients nobody here wrote, against each server in
-``SERVERS``: roslib 2.1.0 in node, roslibpy 2.1.0, and the parity recorder's answers compared
-with those of the real rosbridge_server 0.11.17 (``tests/peers/rosbridge/golden.json``).
+``SERVERS``: roslib 2.1.0 in node and roslibpy 2.1.0 (rostools bridge on both masters), and
+the parity recorder's answers compared with those of the real rosbridge_server 0.11.17
+(``tests/peers/rosbridge/golden.json``).
 
 Each test starts a loopback master, ``rosbridge_graph.py`` (a rospy node with a talker, a
 service, an echo and a parameter) and the server, on free ports, and stops them by PID.
@@ -8,6 +9,7 @@ service, an echo and a parameter) and the server, on free ports, and stops them 
 
 from __future__ import annotations
 
+import contextlib
 import json
 import subprocess
 import sys
@@ -20,7 +22,7 @@ import pytest
 
 from tests.support.foxglove import start_bridge
 from tests.support.load import factor, scaled
-from tests.support.procs import ros_env
+from tests.support.procs import free_port, ros_env, start_rostools_core
 from tests.support.rosbridge import (
     PEER,
     rosbridge_graph,
@@ -47,29 +49,55 @@ class Server:
     port: int
 
 
-@pytest.fixture(params=SERVERS)
-def server(request: pytest.FixtureRequest, tmp_path: Path) -> Iterator[Server]:
-    """The server ``request.param`` on a fresh ``rosmaster --core`` with the test graph."""
+#: The masters the real clients' checks run on, for rostools bridge: the real one, and ours.
+MASTERS = ["rosmaster", "rostools core"]
+
+
+@contextlib.contextmanager
+def serving(kind: str, master_kind: str, home: Path) -> Iterator[Server]:
+    """The server ``kind`` on a fresh master of ``master_kind`` with the test graph."""
     if reason := rosbridge_missing():
         pytest.skip(reason)
-    master, uri = start_rosmaster(tmp_path)
+    if master_kind == "rosmaster":
+        master, uri = start_rosmaster(home)
+    else:
+        port = free_port()
+        uri = f"http://127.0.0.1:{port}"
+        master = start_rostools_core(port, {**ros_env(uri, home), "HOME": str(home / "home")})
     try:
-        with rosbridge_graph(uri, tmp_path):
-            if request.param == "rostools":
-                env = {**ros_env(uri, tmp_path), "HOME": str(tmp_path / "home")}
+        with rosbridge_graph(uri, home):
+            if kind == "rostools":
+                env = {**ros_env(uri, home), "HOME": str(home / "home")}
                 proc, url = start_bridge(env, "--protocol", "rosbridge")
                 try:
-                    yield Server(request.param, url, int(url.rsplit(":", 1)[1]))
+                    yield Server(kind, url, int(url.rsplit(":", 1)[1]))
                 finally:
                     proc.stop()
                 return
-            bridge = start_rosbridge(uri, tmp_path)
+            bridge = start_rosbridge(uri, home)
             try:
-                yield Server(request.param, bridge.url, bridge.port)
+                yield Server(kind, bridge.url, bridge.port)
             finally:
                 bridge.stop()
     finally:
         master.stop()
+
+
+@pytest.fixture(params=SERVERS)
+def server(request: pytest.FixtureRequest, tmp_path: Path) -> Iterator[Server]:
+    """The server ``request.param`` on a fresh ``rosmaster --core`` (the golden answers')."""
+    with serving(request.param, "rosmaster", tmp_path) as found:
+        yield found
+
+
+@pytest.fixture(
+    params=[("rosbridge_server", "rosmaster")] + [("rostools", m) for m in MASTERS],
+    ids=lambda p: f"{p[0]} on {p[1]}",
+)
+def any_server(request: pytest.FixtureRequest, tmp_path: Path) -> Iterator[Server]:
+    """Each server, rostools bridge on each master."""
+    with serving(*request.param, tmp_path) as found:
+        yield found
 
 
 def checks(argv: list[str], cwd: Path, timeout: float) -> list[dict[str, Any]]:
@@ -85,12 +113,12 @@ def checks(argv: list[str], cwd: Path, timeout: float) -> list[dict[str, Any]]:
     return lines[:-1]
 
 
-def test_roslib_in_node(server: Server) -> None:
+def test_roslib_in_node(any_server: Server) -> None:
     if reason := node_missing():
         pytest.skip(reason)
     if not (WEB / "node_modules" / "roslib").is_dir():
         pytest.skip("roslib is not installed in tests/peers/web: run npm ci there")
-    argv = ["node", str(WEB / "roslib-client.mjs"), server.url, f"{factor():.2f}"]
+    argv = ["node", str(WEB / "roslib-client.mjs"), any_server.url, f"{factor():.2f}"]
     done = checks(argv, WEB, 180)
     assert [c["check"] for c in done] == [
         "connect", "getTopics", "getServices", "getNodes", "getTopicType", "getServiceType",
@@ -100,10 +128,10 @@ def test_roslib_in_node(server: Server) -> None:
     ]  # fmt: skip
 
 
-def test_roslibpy(server: Server) -> None:
+def test_roslibpy(any_server: Server) -> None:
     pytest.importorskip("roslibpy", reason="roslibpy is in the test extra: pip install -e .[test]")
     script = PEER / "roslibpy_checks.py"
-    argv = [sys.executable, str(script), "127.0.0.1", str(server.port), f"{factor():.2f}"]
+    argv = [sys.executable, str(script), "127.0.0.1", str(any_server.port), f"{factor():.2f}"]
     done = checks(argv, PEER, 180)
     assert len(done) == 11
 

@@ -1,4 +1,5 @@
-"""The README's roslib page, as written, in Debian's chromium against ``rostools bridge``.
+"""The README's roslib page, as written, in Debian's chromium against ``rostools bridge``,
+and against the real rosbridge_server 0.11.17 (what the page must do there, it must do here).
 
 The page is the README's ``html`` block whose marker names this file: if the page changes,
 this test runs the new one. Two things change on the way to the browser, and nothing else:
@@ -11,13 +12,18 @@ from __future__ import annotations
 
 import json
 import re
+from collections.abc import Iterator
+from dataclasses import dataclass
 from pathlib import Path
 
 import pytest
 
+import rostools
 from tests.support.docblocks import blocks
 from tests.support.foxglove import start_bridge
-from tests.support.procs import start_cli, subscribers, wait_for
+from tests.support.load import scaled
+from tests.support.procs import free_port, start_cli, start_rostools_core
+from tests.support.rosbridge import rosbridge_missing, start_rosbridge, start_rosmaster
 from tests.support.web import MODULES, BrowserPage, browser_missing, serve_web
 
 pytestmark = pytest.mark.interop
@@ -60,41 +66,98 @@ def served(page: str, base: str, bridge_url: str) -> str:
     return page
 
 
-def test_the_readme_roslib_page_hears_chatter_and_drives_cmd_vel(
-    rostools_master: str, cli_env: dict[str, str], tmp_path: Path
-) -> None:
+@dataclass
+class Server:
+    """A rosbridge v2 server on a master: the master's URI and the server's URL."""
+
+    kind: str
+    master_uri: str
+    url: str
+
+
+#: Until issue 35 wires rosapi into the bridge and keeps a new publisher's first messages for
+#: subscribers still connecting (rosbridge_server's PublisherConsistencyListener keeps 1 s of
+#: them): the page's one click, an advertise then a publish, reaches no subscriber.
+LOST_FIRST_PUBLISH = pytest.mark.xfail(
+    strict=True, reason="rostools bridge: no rosapi yet; the first publish after advertise is lost"
+)
+
+
+@pytest.fixture(params=[pytest.param("rostools", marks=LOST_FIRST_PUBLISH), "rosbridge_server"])
+def server(
+    request: pytest.FixtureRequest, cli_env: dict[str, str], tmp_path: Path
+) -> Iterator[Server]:
+    """``rostools bridge`` on ``rostools core``, or the real rosbridge_server on ``rosmaster``.
+
+    ``cli_env`` points at the master.
+    """
     if reason := browser_missing("roslib/importmap.js"):
         pytest.skip(reason)
+    if request.param == "rostools":
+        port = free_port()
+        cli_env["ROS_MASTER_URI"] = uri = f"http://127.0.0.1:{port}"
+        master = start_rostools_core(port, cli_env)
+        try:
+            bridge, url = start_bridge(cli_env)
+            try:
+                yield Server(request.param, uri, url)
+            finally:
+                bridge.stop()
+        finally:
+            master.stop()
+        return
+    if reason := rosbridge_missing():
+        pytest.skip(reason)
+    master, uri = start_rosmaster(tmp_path)
+    cli_env["ROS_MASTER_URI"] = uri
+    try:
+        real = start_rosbridge(uri, tmp_path)
+        try:
+            yield Server(request.param, uri, real.url)
+        finally:
+            real.stop()
+    finally:
+        master.stop()
+
+
+def test_the_readme_roslib_page_hears_chatter_and_drives_cmd_vel(
+    server: Server, cli_env: dict[str, str], tmp_path: Path
+) -> None:
     page = readme_page()  # before anything starts: a README without it fails here
     talker = start_cli("topic", "pub", "-r", "10", "/chatter", "std_msgs/String", "data: hi",
                        env=cli_env)  # fmt: skip
-    echo = start_cli("topic", "echo", "-n", "1", "/cmd_vel", "-F", "json", env=cli_env)
-    bridge, url = start_bridge(cli_env)
+    # a robot's base, say: on /cmd_vel before the page is, as the page's one message must find
+    base_node = rostools.Node("base", server.master_uri)
+    cmd_vel = base_node.subscribe("/cmd_vel", msg_type="geometry_msgs/Twist")
     ARTIFACTS.mkdir(parents=True, exist_ok=True)
-    shot = ARTIFACTS / "readme-roslib-page.png"
+    shot = ARTIFACTS / f"readme-roslib-page-{server.kind}.png"
     browser: BrowserPage | None = None
     try:
         pages: dict[str, str] = {}
-        with serve_web(pages) as base:
-            pages["/teleop.html"] = served(page, base, url)
-            browser = BrowserPage(f"{base}teleop.html", shot, tmp_path)
-            log = browser.text("#log", r"^connected$")
-            log = browser.text("#log", r"^topics: .*/chatter")
+        with serve_web(pages) as site:
+            pages["/teleop.html"] = served(page, site, server.url)
+            browser = BrowserPage(f"{site}teleop.html", shot, tmp_path)
+            browser.text("#log", r"^connected$")
+            browser.text("#log", r"^topics: .*/chatter")
             log = browser.text("#log", r"^heard: hi$")
-            # the click's one message goes to a subscriber already there
-            wait_for(lambda: subscribers(rostools_master, "/cmd_vel"), 30, "echo on /cmd_vel")
-            browser.click("#go")
-            heard = json.loads(echo.expect(r"^\{", 30))
-            log = browser.text("#log", r"heard: hi")  # the page still up, for its screenshot
-            browser.close()
+            browser.click("#go")  # one click, one message
+            try:
+                heard = cmd_vel.get(timeout=scaled(30))
+            except rostools.TimeoutExpired:
+                sent = [f for f in browser.frames() if '"/chatter"' not in f]
+                got = [f for f in browser.frames("received") if '"/chatter"' not in f]
+                raise AssertionError(
+                    f"/cmd_vel got nothing; the page sent {sent} and received {got}"
+                ) from None
+            browser.close()  # after the message: the page's screenshot, its bridge client gone
             said = browser.said()
     finally:
         if browser is not None:
-            browser.stop()
-        for proc in (echo, bridge, talker):
-            proc.stop()
-    assert heard["linear"] == {"x": 0.2, "y": 0.0, "z": 0.0}, heard
-    assert heard["angular"] == {"x": 0.0, "y": 0.0, "z": 0.0}, heard
+            browser.close()  # if not yet: the screenshot of a failure
+        base_node.close()
+        talker.stop()
+    assert (heard.linear.x, heard.linear.y, heard.linear.z) == (0.2, 0.0, 0.0), heard
+    assert (heard.angular.x, heard.angular.y, heard.angular.z) == (0.0, 0.0, 0.0), heard
     topics = next(line for line in log.splitlines() if line.startswith("topics: "))
     assert "/chatter" in topics.split()[1:], topics
     assert not [e for e in said if e["event"] in ("pageerror", "refused")], said

@@ -113,6 +113,10 @@ class BrowserPage(NodeClient):
         kinds = ("console", "pageerror", "refused", "http")
         return [e for e in self.events if e["event"] in kinds]
 
+    def frames(self, direction: str = "sent") -> list[str]:
+        """The page's WebSocket frames so far, ``sent`` or ``received`` (500 characters each)."""
+        return [e["data"] for e in self.events if e["event"] == "ws" and e["dir"] == direction]
+
     def _answer(self, kind: str, timeout: float) -> dict[str, Any]:
         event = self.expect(lambda e: e["event"] in (kind, "error"), timeout)
         if event["event"] == "error":
@@ -131,7 +135,10 @@ class BrowserPage(NodeClient):
         self._answer("clicked", 30)
 
     def close(self) -> None:
-        """Take the screenshot, close the browser, stop the driver."""
+        """Take the screenshot, close the browser, stop the driver (once: then nothing)."""
+        if self.proc.popen.poll() is not None:
+            self.stop()  # its pipes and its group, if not yet
+            return
         try:
             self.send(do="close")
             self._answer("closed", 60)

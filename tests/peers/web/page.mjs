@@ -9,6 +9,8 @@
 // and, as they happen: {"event": "console", "type", "text"}, {"event": "pageerror", "text"},
 // {"event": "refused", "url"} for a request off loopback (refused: tests stay on loopback),
 // {"event": "http", "status", "url"} for an answer of 400 or more,
+// {"event": "ws", "dir": "sent"|"received", "data"} for each WebSocket frame (its first 500
+// characters),
 // {"event": "error", "text"} for a command that failed (a wait says the text it saw; it ends at
 // the page's first uncaught error).
 import readline from "node:readline";
@@ -31,6 +33,12 @@ page.on("pageerror", (e) => {
   broken ??= String(e.message || e);
   say({ event: "pageerror", text: String(e.message || e) });
 });
+// the page's WebSocket frames, as chromium saw them (a failing test's evidence)
+const cdp = await page.createCDPSession();
+await cdp.send("Network.enable");
+const frame = (dir) => (e) => say({ event: "ws", dir, data: e.response.payloadData.slice(0, 500) });
+cdp.on("Network.webSocketFrameSent", frame("sent"));
+cdp.on("Network.webSocketFrameReceived", frame("received"));
 await page.setRequestInterception(true);
 page.on("request", (request) => {
   const host = new URL(request.url()).hostname;

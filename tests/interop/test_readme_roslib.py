@@ -75,15 +75,7 @@ class Server:
     url: str
 
 
-#: Until issue 35 wires rosapi into the bridge and keeps a new publisher's first messages for
-#: subscribers still connecting (rosbridge_server's PublisherConsistencyListener keeps 1 s of
-#: them): the page's one click, an advertise then a publish, reaches no subscriber.
-LOST_FIRST_PUBLISH = pytest.mark.xfail(
-    strict=True, reason="rostools bridge: no rosapi yet; the first publish after advertise is lost"
-)
-
-
-@pytest.fixture(params=[pytest.param("rostools", marks=LOST_FIRST_PUBLISH), "rosbridge_server"])
+@pytest.fixture(params=["rostools", "rosbridge_server"])
 def server(
     request: pytest.FixtureRequest, cli_env: dict[str, str], tmp_path: Path
 ) -> Iterator[Server]:

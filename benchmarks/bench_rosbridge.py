@@ -109,6 +109,14 @@ class Seen:
         """A quantile of the delays, ms."""
         return self.figures.delay(q) if self.figures and self.figures.messages[0] else None
 
+    @property
+    def cpu_per_message(self) -> float | None:
+        """The server's CPU ms for each message it sent: a machine's load changes it less."""
+        f = self.figures
+        if f is None or f.cpu is None or not f.messages[0]:
+            return None
+        return f.cpu / 100 * WINDOW / f.messages[0] * 1000
+
     def brief(self) -> str:
         """Its figures in a few words."""
         f = self.figures
@@ -116,7 +124,8 @@ class Seen:
             return self.failure
         p50, p99 = self.delay(0.5), self.delay(0.99)
         delays = f"p50/p99 {p50:.0f}/{p99:.0f} ms" if p50 is not None and p99 is not None else ""
-        cpu = f", CPU {f.cpu:.0f}%" if f.cpu is not None else ""
+        each = self.cpu_per_message
+        cpu = f", CPU {f.cpu:.0f}% ({each:.2f} ms a message)" if each is not None else ""
         twice = f", {f.duplicates} SENT TWICE" if f.duplicates else ""
         return f"{self.rate:.1f} msg/s ({f.rate:.0f} MB/s), {delays}{cpu}{twice}"
 
@@ -265,7 +274,7 @@ def compare(load: Load, direct: Seen, seen: dict[tuple[str, str], Seen]) -> list
             ">= 3x rosbridge_server",
             met,
             f"rostools {ours_json.brief()}; rosbridge_server {theirs_json.brief()}; direct "
-            f"{direct.brief()}{verdict}; {machine}",
+            f"{direct.brief()}{verdict}{_cost(ours_json, theirs_json)}; {machine}",
         )
     ]
     for enc in ("cbor-raw", "cbor"):
@@ -279,7 +288,7 @@ def compare(load: Load, direct: Seen, seen: dict[tuple[str, str], Seen]) -> list
                 ">= 0.9x direct",
                 ours.rate >= 0.9 * direct.rate if direct.rate else None,
                 f"rostools {ours.brief()}; direct {direct.brief()}; rosbridge_server "
-                f"{theirs.brief()} ({_ratio(ours.rate, theirs.rate)} of it)",
+                f"{theirs.brief()}; rostools / rosbridge_server {_ratio(ours.rate, theirs.rate)}",
             )
         )
     for enc in ENCODINGS:
@@ -309,7 +318,8 @@ def compare(load: Load, direct: Seen, seen: dict[tuple[str, str], Seen]) -> list
                 "report",
                 None,
                 f"the server process over the window (user + system, all threads), at "
-                f"{ours.rate:.1f} and {theirs.rate:.1f} msg/s; the reader's CPU "
+                f"{ours.rate:.1f} and {theirs.rate:.1f} msg/s; CPU ms a message "
+                f"{_each(ours)} and {_each(theirs)}; the reader's CPU "
                 f"{_reader_cpu(ours)} and {_reader_cpu(theirs)}",
             )
         )
@@ -322,6 +332,16 @@ def _ratio(a: float, b: float) -> str:
 
 def _ms(value: float | None) -> str:
     return "-" if value is None else f"{value:.1f} ms"
+
+
+def _cost(ours: Seen, theirs: Seen) -> str:
+    a, b = ours.cpu_per_message, theirs.cpu_per_message
+    return f"; rosbridge_server spends {b / a:.2f}x our CPU a message" if a and b else ""
+
+
+def _each(seen: Seen) -> str:
+    each = seen.cpu_per_message
+    return "-" if each is None else f"{each:.2f}"
 
 
 def _reader_cpu(seen: Seen) -> str:

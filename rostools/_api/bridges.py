@@ -89,14 +89,17 @@ def bridge(
     max_rates: Mapping[str, float] | None = None,
     read_only: bool = False,
     exclude: Sequence[str] = (),
+    protocol: str = "both",
 ) -> WebBridge:
     """A bridge of ``topics`` (none: all), not started: use it in a ``with``.
 
     ``port=0`` takes a free port. As ``rostools bridge``, it listens on loopback unless
-    ``address`` says otherwise, and asks clients for ``token`` when one is given.
+    ``address`` says otherwise, and asks clients for ``token`` when one is given. It speaks
+    the Foxglove protocol to clients that offer its subprotocol and rosbridge v2 to the rest;
+    ``protocol`` ("foxglove", "rosbridge") keeps it to one.
     """
     opts = BridgeOptions(
         topics=list(topics), exclude=list(exclude), address=address, port=port, token=token,
-        max_rates=dict(max_rates or {}), read_only=read_only,
+        max_rates=dict(max_rates or {}), read_only=read_only, protocol=protocol,
     )  # fmt: skip
     return WebBridge(opts, master_uri)

@@ -12,9 +12,7 @@ not exist"). A ROS node's call to a client's service reaches the client as a
 from __future__ import annotations
 
 import asyncio
-import itertools
 import json
-from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, Protocol
 
 from rostools.errors import NotFoundError, RostoolsError, ServiceError
@@ -23,11 +21,11 @@ from rostools.msgs.codegen import element
 from rostools.msgs.plain import to_rosbridge_json
 from rostools.msgs.rosbridge import RosbridgeFiller
 from rostools.node.service import ServiceType
+from rostools.web.rbclient import RosbridgeClient, Served
 from rostools.web.services import CALL_TIMEOUT, Service
 from rostools.wire.rosbridge import ProtocolError, need
 
 if TYPE_CHECKING:
-    from rostools.web.rosbridge import RosbridgeClient
     from rostools.web.state import BridgeState
 
 #: Service calls one client may have in flight.
@@ -44,18 +42,6 @@ class RosApiLike(Protocol):
     async def call(self, service: str, args: dict[str, Any]) -> dict[str, Any]:
         """The response's values; raises an error whose text is the failure's."""
         ...
-
-
-@dataclass
-class Served:
-    """A service a client serves."""
-
-    name: str
-    client: RosbridgeClient
-    request: str  # the request message's name
-    response: str
-    counter: itertools.count[int] = field(default_factory=lambda: itertools.count(1))
-    pending: dict[str, asyncio.Future[Any]] = field(default_factory=dict)
 
 
 class RbServices:

@@ -14,7 +14,6 @@ from __future__ import annotations
 
 import itertools
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
 from rostools.errors import RostoolsError
@@ -24,67 +23,15 @@ from rostools.msgs.rosbridge import RosbridgeFiller
 from rostools.msgs.topictype import TopicType
 from rostools.names import is_legal
 from rostools.node.connection import Frame
-from rostools.web.client import MAX_SUBSCRIPTIONS, QUEUE_MESSAGES, Client, Subscription
+from rostools.web.client import MAX_SUBSCRIPTIONS, QUEUE_MESSAGES, Subscription
+from rostools.web.rbclient import RosbridgeClient, TopicSubs
 from rostools.web.rbencode import Encoders
+from rostools.web.rbservices import RbServices
 from rostools.wire import rosbridge as rb
 from rostools.wire.rosbridge import ProtocolError, need
 
 if TYPE_CHECKING:
-    from rostools.web.rbservices import RbServices, Served
     from rostools.web.state import BridgeState
-
-
-class RosbridgeClient(Client):
-    """A client that speaks rosbridge v2."""
-
-    def __init__(self, socket: Any, name: str, on_gone: Callable[[Client], None]) -> None:
-        super().__init__(socket, name, on_gone)
-        self.level = rb.DEFAULT_LEVEL
-        #: Set by any message that carries ``fragment_size``, as in rosbridge.
-        self.fragment_size: int | None = None
-        self.topics: dict[str, TopicSubs] = {}
-        #: topic -> the ids of its advertisements (None for one without an id, or by publish)
-        self.advertised: dict[str, set[Any]] = {}
-        #: services this client serves (``advertise_service``)
-        self.served: dict[str, Served] = {}
-        self.fragments = rb.Fragments()
-        self.fragment_ids = itertools.count()
-        self.calls = 0
-
-    foxglove = False
-
-    def status(self, level: int, text: str) -> None:
-        """A status of the bridge's own (a Foxglove level: 0 info, 1 warning, 2 error)."""
-        self.tell(rb.LEVELS[min(max(level, 0), 2)], text)
-
-    def tell(self, level: str, text: str, ident: Any = None) -> None:
-        """A ``status`` message, if the client hears ``level``."""
-        if rb.heard(level, self.level):
-            self.send(rb.status(level, text, ident))
-
-    def cut(self, text: str) -> Sequence[str]:
-        """``text`` as it goes out: whole, or in fragments past the client's fragment size."""
-        size = self.fragment_size
-        if size is None or size <= 0 or len(text) <= size:
-            return (text,)
-        return rb.fragments(text, size, next(self.fragment_ids))
-
-
-@dataclass
-class TopicSubs:
-    """A client's subscriptions to one topic, as one queue."""
-
-    topic: str
-    sub: Subscription
-    #: subscription id (None for one without) -> what it asked: throttle_rate, queue_length,
-    #: compression, type
-    asks: dict[Any, dict[str, Any]] = field(default_factory=dict)
-
-    @property
-    def compression(self) -> str:
-        """The strongest compression asked for."""
-        asked = {a["compression"] for a in self.asks.values()}
-        return max(asked, key=rb.COMPRESSIONS.index) if asked else "none"
 
 
 class RosbridgeOps:
@@ -170,7 +117,7 @@ class RosbridgeOps:
                 raise ProtocolError(f"subscribe: {topic} is of type {known.type}, not {asked_type}")
             if known is None and not self.bridge.store.has_msg(asked_type):
                 raise ProtocolError(f"subscribe: {topic}: no message type {asked_type} is known")
-        elif known is None and topic not in self.bridge.current_graph().topics:
+        elif known is None and ask["compression"] != "cbor-raw" and not await self._on_graph(topic):
             raise ProtocolError(
                 f"subscribe: {topic} is not on the graph yet: give its type to subscribe before"
             )
@@ -198,6 +145,15 @@ class RosbridgeOps:
                 sub.last_taken = 0.0  # each latched message is sent, however throttled
                 client.offer(sub, stamp, frame, now)
             self.bridge.event("subscribed", client=client.name, topic=topic)
+
+    async def _on_graph(self, topic: str) -> bool:
+        """Whether ``topic`` is on the graph: at the last look, or the master's now."""
+        if topic in self.bridge.current_graph().topics:
+            return True
+        try:
+            return topic in await self.node.master.topic_types()
+        except RostoolsError:
+            return False
 
     def _apply(self, client: RosbridgeClient, subs: TopicSubs) -> None:
         """The queue's settings from every subscription to the topic."""

@@ -13,6 +13,7 @@ import hmac
 import logging
 import time
 from collections.abc import Callable, Sequence
+from functools import partial
 from http import HTTPStatus
 from typing import Any
 from urllib.parse import parse_qs, urlsplit
@@ -28,8 +29,9 @@ from rostools.web.client import Client
 from rostools.web.graph import GraphChange, GraphWatch
 from rostools.web.operations import Operations
 from rostools.web.options import BridgeOptions
+from rostools.web.rbclient import RosbridgeClient
 from rostools.web.rbservices import RbServices
-from rostools.web.rosbridge import RosbridgeClient, RosbridgeOps
+from rostools.web.rosbridge import RosbridgeOps
 from rostools.web.services import Service
 from rostools.web.state import BridgeState, Event
 from rostools.wire import foxglove
@@ -149,12 +151,30 @@ class Bridge(BridgeState):
         from websockets.exceptions import ConnectionClosed
 
         name = _peer_name(ws.remote_address)
-        if ws.subprotocol not in foxglove.SUBPROTOCOLS:
-            await self._serve_rosbridge(ws, name)
-            return
-        client = Client(ws, name, lambda c: self.spawn(ws.close(1008, "let go")))
+        let_go: Callable[[Client], None] = lambda c: self.spawn(ws.close(1008, "let go"))  # noqa: E731
+        client: Client
+        if ws.subprotocol in foxglove.SUBPROTOCOLS:
+            client = Client(ws, name, let_go)
+            handle = partial(self.ops.handle, client)
+        else:
+            client = rosbridge = RosbridgeClient(ws, name, let_go)
+            handle = partial(self.rosbridge.handle, rosbridge)
         self.clients.add(client)
-        self.event("connected", client=name, protocol=ws.subprotocol)
+        self.event("connected", client=name, protocol=ws.subprotocol or "rosbridge")
+        if client.foxglove:
+            self._greet(client)
+        try:
+            async for message in ws:
+                if client.closed:
+                    break
+                await handle(message)
+        except ConnectionClosed:
+            pass
+        finally:
+            await self._drop(client)
+
+    def _greet(self, client: Client) -> None:
+        """What a Foxglove client is told first: the server, its channels and services."""
         client.send(self._server_info())
         if self.channels:
             client.send(
@@ -162,41 +182,6 @@ class Bridge(BridgeState):
             )
         if self.services:
             client.send(self._services_message(list(self.services.values())))
-        try:
-            async for message in ws:
-                if client.closed:
-                    break
-                await self.ops.handle(client, message)
-        except ConnectionClosed:
-            pass
-        finally:
-            await self._drop(client)
-
-    async def _serve_rosbridge(self, ws: Any, name: str) -> None:
-        from websockets.exceptions import ConnectionClosed
-
-        client = RosbridgeClient(ws, name, lambda c: self.spawn(ws.close(1008, "let go")))
-        self.clients.add(client)
-        self.event("connected", client=name, protocol="rosbridge")
-        try:
-            async for message in ws:
-                if client.closed:
-                    break
-                await self.rosbridge.handle(client, message)
-        except ConnectionClosed:
-            pass
-        finally:
-            client.close()
-            self.clients.discard(client)
-            stats = client.stats
-            await self.rosbridge.forget_client(client)
-            self.event(
-                "disconnected",
-                client=client.name,
-                messages=stats.messages,
-                bytes=stats.bytes,
-                dropped=stats.dropped,
-            )
 
     def _server_info(self) -> dict[str, Any]:
         caps = [
@@ -221,9 +206,12 @@ class Bridge(BridgeState):
         client.close()
         self.clients.discard(client)
         stats = client.stats
-        for sub_id in list(client.subscriptions):
-            await self.ops.unsubscribe(client, sub_id)
-        await self.ops.forget_client(client)
+        if isinstance(client, RosbridgeClient):
+            await self.rosbridge.forget_client(client)
+        else:
+            for sub_id in list(client.subscriptions):
+                await self.ops.unsubscribe(client, sub_id)
+            await self.ops.forget_client(client)
         self.event(
             "disconnected",
             client=client.name,

@@ -1,7 +1,8 @@
 """The rosbridge v2 protocol's messages, sans-IO.
 
 What a client sends, checked, and what the bridge sends back (``status``, ``fragment``,
-``publish``), as rosbridge_server 0.11.17 and ROSBRIDGE_PROTOCOL.md have them.
+``publish``), as rosbridge_server 0.11.17 and the protocol's specification (in
+rosbridge_suite) have them.
 
 A client's message is one JSON object with an ``op``; anything else is a ``ProtocolError``
 whose text a ``status`` message carries back. ``Fragments`` puts a client's fragmented
@@ -16,7 +17,7 @@ from typing import Any
 
 #: The status levels, least severe first; a client hears a status at its level or above.
 LEVELS = ("info", "warning", "error", "none")
-#: The level a client starts at (ROSBRIDGE_PROTOCOL.md 3.2).
+#: The level a client starts at (the specification's section 3.2).
 DEFAULT_LEVEL = "error"
 #: Compressions a subscription may ask for; the strongest among a client's subscriptions to
 #: one topic wins, as in rosbridge.

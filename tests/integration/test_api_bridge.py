@@ -38,3 +38,27 @@ def test_a_bridge_on_the_callers_loop_and_with_a_token() -> None:
 def test_a_bridge_without_a_master_says_so() -> None:
     with pytest.raises(rostools.UnreachableError, match="cannot reach the master"):
         rostools.bridge(master_uri="http://127.0.0.1:9").start()
+
+
+def test_the_api_bridge_speaks_rosbridge_and_keeps_to_one_protocol(
+    ros_master: Master, ros_node: Node
+) -> None:
+    import json
+
+    from websockets.exceptions import InvalidStatus
+    from websockets.sync.client import connect
+
+    ros_node.publish("/api_rb", {"data": "latched"}, "std_msgs/String")
+    uri = ros_master.uri
+    with rostools.bridge(master_uri=uri, protocol="rosbridge") as running:
+        with connect(running.url, open_timeout=10) as ws:
+            ws.send(json.dumps({"op": "subscribe", "topic": "/api_rb", "type": "std_msgs/String"}))
+            got = json.loads(ws.recv(timeout=10))
+        assert got == {"op": "publish", "topic": "/api_rb", "msg": {"data": "latched"}}
+    with (
+        rostools.bridge(master_uri=uri, protocol="foxglove") as running,
+        pytest.raises(InvalidStatus),
+    ):
+        connect(running.url, open_timeout=10)
+    with pytest.raises(rostools.UsageError, match="--protocol ros2: choose one of"):
+        rostools.bridge(protocol="ros2")

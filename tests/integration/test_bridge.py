@@ -9,6 +9,7 @@ from pathlib import Path
 
 import pytest
 from websockets.exceptions import InvalidStatus
+from websockets.sync.client import connect
 
 from tests.support.env import run_cli
 from tests.support.foxglove import SDK, V1, Client, ros_string, start_bridge
@@ -122,7 +123,7 @@ def test_a_latched_message_reaches_every_new_subscriber(
         pub.stop()
 
 
-def test_a_token_and_a_subprotocol_are_required_before_the_upgrade(
+def test_a_token_is_required_before_the_upgrade_whatever_the_protocol(
     rostools_master: str, cli_env: dict[str, str]
 ) -> None:
     bridge, url = start_bridge(cli_env, "--token", "s3cret")
@@ -131,9 +132,12 @@ def test_a_token_and_a_subprotocol_are_required_before_the_upgrade(
             with pytest.raises(InvalidStatus) as refused:
                 Client(bad)
             assert refused.value.response.status_code == 401
+        # a client that offers no Foxglove subprotocol is spoken rosbridge v2 to, with the token
+        with connect(url + "/?token=s3cret", subprotocols=["not.foxglove"]) as other:  # type: ignore[list-item]
+            assert other.subprotocol is None
         with pytest.raises(InvalidStatus) as refused:
-            Client(url + "/?token=s3cret", "not.foxglove")
-        assert refused.value.response.status_code == 400
+            connect(url, subprotocols=["not.foxglove"])  # type: ignore[list-item]
+        assert refused.value.response.status_code == 401
         with Client(url + "/?token=s3cret") as client:
             assert client.server_info["op"] == "serverInfo"
         bridge.expect(r'"event": ?"refused".*token', 15)
@@ -369,6 +373,11 @@ def test_wss_with_a_certificate_and_a_warning_off_loopback(
         trusting = ssl.create_default_context(cafile=str(cert))
         with Client(url, ssl=trusting) as client:
             assert client.server_info["op"] == "serverInfo"
+        with connect(url, ssl=trusting) as rosbridge:  # a rosbridge client: wss:// as well
+            rosbridge.send(json.dumps({"op": "call_service", "id": 1, "service": "/none"}))
+            assert (
+                json.loads(rosbridge.recv(timeout=30))["values"] == "Service /none does not exist"
+            )
         with pytest.raises(ssl.SSLError):
             Client(url)  # a client that does not trust the certificate is not let in
     finally:

@@ -2,7 +2,9 @@
 
 Every fence names its language. ``console`` (``$ command`` lines, each followed by the output
 it shows), ``sh`` (a command a line) and ``python`` blocks are examples: a test runs them
-(tests/integration/test_doc_examples.py). ``text``, ``yaml`` and ``json`` blocks are data.
+(tests/integration/test_doc_examples.py); ``html`` blocks are pages, which a browser test
+runs (so each is marked ``not run``, naming that test). ``text``, ``yaml`` and ``json`` blocks
+are data.
 HTML comments right above a fence (hidden when the page is shown) say more:
 
 - ``<!-- not run: REASON -->``: an example no test can run here, and why;
@@ -18,7 +20,7 @@ import re
 from dataclasses import dataclass, field
 from pathlib import Path
 
-EXAMPLES = ("console", "sh", "python")
+EXAMPLES = ("console", "sh", "python", "html")
 DATA = ("text", "yaml", "json")
 MARKERS = ("not run", "output not compared", "exit", "excerpt", "xfail")
 _FENCE = re.compile(r"^(`{3,})(.*)$")
@@ -116,6 +118,8 @@ def problems(block: Block) -> list[str]:
             out.append(f"the marker {key!r} gives no reason")
     if block.markers and block.lang in DATA:
         out.append("a marker on a block that is data, not an example")
+    if block.lang == "html" and "not run" not in block.markers:
+        out.append("a page with no 'not run' marker naming the browser test that runs it")
     if "excerpt" in block.markers and block.lang != "python":
         out.append("an excerpt that is not Python")
     return out

@@ -80,8 +80,9 @@ def test_blocks_are_read_as_the_examples_test_reads_them(tmp_path: Path) -> None
         "<!-- exit: 6 -->\n```console\n$ rostools bag info a.bag \\\n    -y   # a comment\n"
         "path: a.bag\n...\n$ rostools msg md5 X\n```\n\n```\nrostools topic list\n```\n"
         "<!-- not run -->\n<!-- colour: blue -->\n```sh\nrostools core\n```\n"
+        "```html\n<p>a page</p>\n```\n"
     )
-    first, untagged, odd = blocks(page)
+    first, untagged, odd, page_block = blocks(page)
     assert isinstance(first, Block) and first.markers == {"exit": "6"}
     assert [(c.text, c.line, c.output) for c in first.commands()] == [
         ("rostools bag info a.bag -y", 3, ["path: a.bag", "..."]),
@@ -89,9 +90,13 @@ def test_blocks_are_read_as_the_examples_test_reads_them(tmp_path: Path) -> None
     ]
     assert problems(first) == []
     assert problems(untagged) == [
-        "a fence of no language (use one of ('console', 'sh', 'python', 'text', 'yaml', 'json'))"
+        "a fence of no language (use one of "
+        "('console', 'sh', 'python', 'html', 'text', 'yaml', 'json'))"
     ]
     assert problems(odd) == [
         "an unknown marker 'colour' (known: not run, output not compared, exit, excerpt, xfail)",
         "the marker 'not run' gives no reason",
+    ]
+    assert problems(page_block) == [
+        "a page with no 'not run' marker naming the browser test that runs it"
     ]

@@ -34,6 +34,7 @@ MODULES = [
     "benchmarks.bench_fixture",
     "benchmarks.bench_demo",
     "benchmarks.bench_bridge",
+    "benchmarks.bench_rosbridge",
 ]
 
 

@@ -4,6 +4,9 @@ Usage:
   bridge_peers.py reader URL TOPIC [--slow BYTES_PER_S]
       a Foxglove WebSocket client: subscribes to TOPIC's channel and reads every message
       (--slow: sleeps after each so that it reads BYTES_PER_S on average)
+  bridge_peers.py rosbridge URL TOPIC TYPE COMPRESSION
+      a rosbridge v2 client (rosbridge_server's or rostools bridge's): subscribes to TOPIC
+      with COMPRESSION (none: JSON, cbor, cbor-raw) and reads every message
   bridge_peers.py direct MASTER TOPIC
       a TCPROS subscriber (rostools' node, raw frames): the ceiling
   bridge_peers.py foxglove MASTER TOPIC TYPE
@@ -14,7 +17,10 @@ stdin, "START_NS END_NS" (wall clock), counts what arrives in that window, and p
 line once it is over: {"messages", "bytes", "duplicates", "delays_ns": [...]}. "bytes" counts
 ROS message bytes (the WebSocket message's 13-byte prefix left out); a message whose stamp is
 not newer than the last one's is a duplicate, counted apart. A delay is the arrival's wall-clock
-time less the message's header.stamp, which every message here has at bytes 4..12.
+time less the message's header.stamp, which every message here has at bytes 4..12. A rosbridge
+reader counts the WebSocket message's bytes, and reads the stamp without decoding the rest of a
+JSON message (its head: a client's CPU must not hold the server back); a CBOR message is
+decoded whole (cbor2, in C), cbor-raw's stamp read from its TCPROS bytes.
 The foxglove server prints {"port": N} once it listens and is subscribed, and runs until
 SIGINT.
 """
@@ -24,6 +30,7 @@ from __future__ import annotations
 import asyncio
 import json
 import os
+import re
 import signal
 import struct
 import sys
@@ -33,6 +40,9 @@ from typing import Any
 _STAMP = struct.Struct("<II")
 #: The Foxglove MessageData prefix: opcode, subscription id, receive time.
 PREFIX = 13
+#: header.stamp in a rosbridge JSON message's head (rosbridge_server writes spaces, we do not).
+_JSON_STAMP = re.compile(rb'"stamp":\s*\{\s*"secs":\s*(\d+),\s*"nsecs":\s*(\d+)')
+_HEAD = 512
 READ_TIMEOUT = 60.0
 
 
@@ -66,9 +76,12 @@ class Window:
 
     def note(self, now: int, payload: Any, size: int) -> bool:
         """Count a message that arrived at ``now``; whether the window is over."""
+        secs, nsecs = _STAMP.unpack_from(payload, 4)
+        return self.note_stamp(now, secs * 1_000_000_000 + nsecs, size)
+
+    def note_stamp(self, now: int, stamp: int, size: int) -> bool:
+        """Count a message stamped ``stamp`` that arrived at ``now``; whether the window is over."""
         if self.given.done() and self.start <= now < self.end:
-            secs, nsecs = _STAMP.unpack_from(payload, 4)
-            stamp = secs * 1_000_000_000 + nsecs
             if stamp <= self._last:  # the publisher's stamps only grow: sent twice
                 self.duplicates += 1
                 return False
@@ -138,6 +151,59 @@ async def reader(url: str, topic: str, slow: float) -> None:
     window.report()
 
 
+def rosbridge_stamp(data: bytes, compression: str) -> int:
+    """header.stamp (ns) of one rosbridge ``publish`` message."""
+    if compression == "none":
+        found = _JSON_STAMP.search(data, 0, _HEAD)
+        if found is None:
+            stamp = json.loads(data)["msg"]["header"]["stamp"]
+            return int(stamp["secs"]) * 1_000_000_000 + int(stamp["nsecs"])
+        return int(found[1]) * 1_000_000_000 + int(found[2])
+    import cbor2
+
+    msg = cbor2.loads(data)["msg"]
+    if compression == "cbor-raw":
+        secs, nsecs = _STAMP.unpack_from(msg["bytes"], 4)
+        return int(secs) * 1_000_000_000 + int(nsecs)
+    stamp = msg["header"]["stamp"]
+    return int(stamp["secs"]) * 1_000_000_000 + int(stamp["nsecs"])
+
+
+async def rosbridge(url: str, topic: str, type_name: str, compression: str) -> None:
+    """A rosbridge v2 client of either server: one subscription, every message read."""
+    from websockets.asyncio.client import connect
+
+    window = Window()
+    sub: dict[str, Any] = {"op": "subscribe", "id": "bench", "topic": topic, "type": type_name}
+    if compression != "none":
+        sub["compression"] = compression
+    async with connect(url, max_size=None, compression=None, open_timeout=30) as ws:
+        await ws.send(json.dumps(sub))
+        ready = False
+        while True:
+            timeout = READ_TIMEOUT
+            if window.given.done():
+                if not window.given.result():
+                    return
+                timeout = max(window.end - time.time_ns(), 0) / 1e9 + 0.1
+            try:
+                data = await asyncio.wait_for(ws.recv(decode=False), timeout)
+            except TimeoutError:
+                if window.given.done():
+                    break
+                raise
+            now = time.time_ns()
+            if b"publish" not in data[:64]:  # a status message: kept for the harness's error
+                print(bytes(data[:300]).decode(errors="replace"), file=sys.stderr, flush=True)
+                continue
+            if not ready:
+                print("ready", flush=True)
+                ready = True
+            if window.note_stamp(now, rosbridge_stamp(data, compression), len(data)):
+                break
+    window.report()
+
+
 async def direct(master: str, topic: str) -> None:
     """The ceiling: a plain TCPROS subscriber, stamps read from the raw frames."""
     from rostools.node.node import LiveNode
@@ -203,6 +269,8 @@ def main(argv: list[str]) -> None:
     if role == "reader":
         slow = float(argv[4]) if len(argv) > 4 and argv[3] == "--slow" else 0.0
         asyncio.run(reader(argv[1], argv[2], slow))
+    elif role == "rosbridge":
+        asyncio.run(rosbridge(argv[1], argv[2], argv[3], argv[4]))
     elif role == "direct":
         asyncio.run(direct(argv[1], argv[2]))
     elif role == "foxglove":

@@ -1,10 +1,13 @@
 // pub_sensors: a roscpp publisher of a camera's images or a lidar's point clouds at a steady
 // rate, each stamped with the wall-clock time of its publish, for benchmarks/bench_bridge.py.
 //
-// usage: pub_sensors TOPIC KIND RATE [--size BYTES] [--points N] [--queue Q] [--name NAME]
-//   KIND      image (sensor_msgs/Image, mono8, one row of --size pixels, default 1,000,000) or
+// usage: pub_sensors TOPIC KIND RATE [--size BYTES] [--width W --height H] [--rgb8]
+//                    [--points N] [--rgb] [--queue Q] [--name NAME]
+//   KIND      image (sensor_msgs/Image, mono8, one row of --size pixels, default 1,000,000;
+//             --width and --height: that shape instead; --rgb8: 3 bytes a pixel) or
 //             cloud (sensor_msgs/PointCloud2 of --points points of x, y, z, intensity as
-//             float32: 16 bytes a point, default 1,000,000)
+//             float32: 16 bytes a point, default 1,000,000; --rgb: the fourth field is rgb,
+//             a packed colour as PCL writes it)
 //   RATE      messages per second (> 0), held on average until SIGINT
 //   --queue   the publisher's queue per subscriber (default 4: a slow subscriber loses
 //             messages instead of holding gigabytes in this process)
@@ -57,9 +60,9 @@ sensor_msgs::PointField field(const std::string& name, uint32_t offset) {
 int main(int argc, char** argv) {
   peer::init(argc, argv, "pub_sensors");
   peer::Args args(argc, argv,
-                  "pub_sensors TOPIC KIND RATE [--size BYTES] [--points N] [--queue Q] "
-                  "[--name NAME]",
-                  {}, {"--size", "--points", "--queue"});
+                  "pub_sensors TOPIC KIND RATE [--size BYTES] [--width W --height H] [--rgb8] "
+                  "[--points N] [--rgb] [--queue Q] [--name NAME]",
+                  {"--rgb8", "--rgb"}, {"--size", "--width", "--height", "--points", "--queue"});
   const std::string topic = args.positional(0);
   const std::string kind = args.positional(1);
   const double rate = args.positional_number(2);
@@ -73,19 +76,20 @@ int main(int argc, char** argv) {
   sensor_msgs::PointCloud2 cloud;
   if (kind == "image") {
     const auto size = uint32_t(args.number("--size", 1000000));
+    const uint32_t channels = args.flag("--rgb8") ? 3 : 1;
     image.header.frame_id = "camera";
-    image.height = 1;
-    image.width = size;
-    image.encoding = "mono8";
-    image.step = size;
-    image.data.assign(size, 0x5a);
+    image.height = uint32_t(args.number("--height", 1));
+    image.width = uint32_t(args.number("--width", size));
+    image.encoding = channels == 3 ? "rgb8" : "mono8";
+    image.step = image.width * channels;
+    image.data.assign(size_t(image.step) * image.height, 0x5a);
     pub = nh.advertise<sensor_msgs::Image>(topic, queue);
   } else {
     const auto points = uint32_t(args.number("--points", 1000000));
     cloud.header.frame_id = "lidar";
     cloud.height = 1;
     cloud.width = points;
-    cloud.fields = {field("x", 0), field("y", 4), field("z", 8), field("intensity", 12)};
+    cloud.fields = {field("x", 0), field("y", 4), field("z", 8), field(args.flag("--rgb") ? "rgb" : "intensity", 12)};
     cloud.point_step = 16;
     cloud.row_step = 16 * points;
     cloud.is_dense = true;

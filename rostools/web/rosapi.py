@@ -52,8 +52,10 @@ _DEFAULTS = {"bool": "False", "float32": "0.0", "float64": "0.0", "string": ""}
 NODE_NAME = "/rosapi"
 #: What rosservice says of a master out of reach (rosapi and rosbridge pass it on).
 MASTER_GONE = "Unable to communicate with master!"
-#: How long a service's header is waited for (rosservice's probe: 5 s).
-PROBE_TIMEOUT = 5.0
+#: How long a service's header is waited for (rosservice's probe: 5 s). Twice that here: the
+#: probes of a listing run at once, and a loaded machine's rospy server took over 5 s to
+#: answer one of thirty (a dead provider costs the wait once a call, as rosservice's does).
+PROBE_TIMEOUT = 10.0
 
 Handler = Callable[["RosApi", Any], Awaitable[dict[str, Any]]]
 

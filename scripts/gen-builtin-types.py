@@ -55,6 +55,46 @@ SERVICES = {
     "roscpp_tutorials/TwoInts": "int64 a\nint64 b\n---\nint64 sum\n",
 }
 
+# rosapi 0.11.17's interfaces (rosbridge_suite), which `rostools bridge` serves as ROS services
+# (web/rosapi.py): rosapi/TypeDef and its 25 services, as in its msg/ and srv/ files.
+ROSAPI_MESSAGES = {
+    "rosapi/TypeDef": (
+        "string type\nstring[] fieldnames\nstring[] fieldtypes\nint32[] fieldarraylen\n"
+        "string[] examples\nstring[] constnames\nstring[] constvalues\n"
+    ),
+}
+ROSAPI_SERVICES = {
+    "rosapi/DeleteParam": "string name\n---\n",
+    "rosapi/GetActionServers": "---\nstring[] action_servers\n",
+    "rosapi/GetParam": "string name\nstring default\n---\nstring value\n",
+    "rosapi/GetParamNames": "---\nstring[] names\n",
+    "rosapi/GetTime": "---\ntime time\n",
+    "rosapi/HasParam": "string name\n---\nbool exists\n",
+    "rosapi/MessageDetails": "string type\n---\nrosapi/TypeDef[] typedefs\n",
+    "rosapi/NodeDetails": (
+        "string node\n---\nstring[] subscribing\nstring[] publishing\nstring[] services\n"
+    ),
+    "rosapi/Nodes": "---\nstring[] nodes\n",
+    "rosapi/Publishers": "string topic\n---\nstring[] publishers\n",
+    "rosapi/SearchParam": "string name\n---\nstring global_name\n",
+    "rosapi/ServiceHost": "string service\n---\nstring host\n",
+    "rosapi/ServiceNode": "string service\n---\nstring node\n",
+    "rosapi/ServiceProviders": "string service\n---\nstring[] providers\n",
+    "rosapi/ServiceRequestDetails": "string type\n---\nrosapi/TypeDef[] typedefs\n",
+    "rosapi/ServiceResponseDetails": "string type\n---\nrosapi/TypeDef[] typedefs\n",
+    "rosapi/ServiceType": "string service\n---\nstring type\n",
+    "rosapi/Services": "---\nstring[] services\n",
+    "rosapi/ServicesForType": "string type\n---\nstring[] services\n",
+    "rosapi/SetParam": "string name\nstring value\n---\n",
+    "rosapi/Subscribers": "string topic\n---\nstring[] subscribers\n",
+    "rosapi/TopicType": "string topic\n---\nstring type\n",
+    "rosapi/Topics": "---\nstring[] topics\nstring[] types\n",
+    "rosapi/TopicsAndRawTypes": (
+        "---\nstring[] topics\nstring[] types\nstring[] typedefs_full_text\n"
+    ),
+    "rosapi/TopicsForType": "string type\n---\nstring[] topics\n",
+}
+
 
 def build() -> str:
     """The table as JSON text."""
@@ -69,7 +109,9 @@ def build() -> str:
         text, _ = store.generate_msgdef(name)
         first = re.split(r"\n={80}\n", text)[0].rstrip("\n")
         msgs[f"{package}/{short}"] = first + "\n"
-    table = {"msg": msgs, "srv": dict(sorted(SERVICES.items()))}
+    msgs.update(ROSAPI_MESSAGES)
+    services = SERVICES | ROSAPI_SERVICES
+    table = {"msg": dict(sorted(msgs.items())), "srv": dict(sorted(services.items()))}
     return json.dumps(table, indent=0, sort_keys=True) + "\n"
 
 

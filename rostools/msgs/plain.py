@@ -9,7 +9,7 @@ nanoseconds; unlike rostopic it keeps ``uint8[]``/``char[]`` columns instead of 
 
 from __future__ import annotations
 
-import base64
+import binascii
 import json
 import math
 from collections.abc import Callable, Sequence
@@ -187,7 +187,9 @@ def _rosbridge_float(v: float) -> str:
 
 
 def _base64(values: Any) -> str:
-    return '"' + base64.b64encode(bytes(values)).decode() + '"'
+    """Standard base64 of a byte array (bytes, or a list of ints), as rosbridge writes it."""
+    data = values if isinstance(values, bytes | bytearray | memoryview) else bytes(values)
+    return binascii.b2a_base64(data, newline=False).decode("ascii")
 
 
 class _RosbridgeGen(_JsonGen):
@@ -211,7 +213,7 @@ class _RosbridgeGen(_JsonGen):
     def value(self, f: Field, expr: str) -> str:
         """As JSON's, but bytes as base64 and nested types in rosbridge's JSON."""
         if f.is_array and f.base in BYTE_TYPES:
-            return f"{{_b64({expr})}}"
+            return f'"{{_b64({expr})}}"'  # the quotes in the template: no copy to add them
         if f.is_array and f.base not in STRUCT_CODES and f.base not in _WRITTEN:
             item = to_rosbridge_json(self.codec, element(f.base))
             return f"{{_each({self.ref(item)}, {expr})}}"

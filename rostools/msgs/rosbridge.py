@@ -155,7 +155,7 @@ class RosbridgeFiller:
 
     @staticmethod
     def _mismatch(root: str, path: list[str], expected: str, value: Any) -> RosbridgeValueError:
-        found = type(value).__name__
+        found = type(value)  # written "<class 'int'>", as rosbridge writes it
         if not path:
             return RosbridgeValueError(
                 f"Expected a JSON object for type {root} but received a {found}"

@@ -38,6 +38,11 @@ MAX_CONTROL = 10_000
 DIRECT_WRITE = 64 * 1024
 
 
+#: A message as a subscription renders it: text, bytes, or bytes then a frame as it came (sent
+#: as one binary message without joining them: see ``DirectWrite``).
+Rendered = str | bytes | tuple[bytes, Frame]
+
+
 class Socket(Protocol):
     """What the writer needs of a WebSocket connection (``websockets``' has it)."""
 
@@ -61,7 +66,7 @@ class Subscription:
     limit: int = QUEUE_MESSAGES
     #: What a message is sent as, made when it is sent (a rosbridge client's JSON, CBOR or
     #: fragments); None: the Foxglove protocol's binary message, undecoded.
-    render: Callable[[int, Frame], Sequence[str | bytes]] | None = None
+    render: Callable[[int, Frame], Sequence[Rendered]] | None = None
     queued_bytes: int = 0
     last_taken: float = 0.0
     sent: int = 0
@@ -191,7 +196,12 @@ class Client:
                 self._waiting[sub_id] = None  # its turn comes again after the others'
             if sub.render is not None:
                 for part in sub.render(stamp, frame):
-                    await self.socket.send(part)
+                    if isinstance(part, tuple):
+                        await self._send_binary(*part)
+                    elif isinstance(part, str) and len(part) >= DIRECT_WRITE:
+                        await self._send_text(part)
+                    else:
+                        await self.socket.send(part)
             else:
                 await self._send_data(sub, stamp, frame)
             sub.sent += 1
@@ -199,7 +209,17 @@ class Client:
 
     async def _send_data(self, sub: Subscription, stamp: int, frame: Frame) -> None:
         """One Foxglove ``messageData``: its prefix, then the frame as it came."""
-        head = foxglove.message_data(sub.id, stamp)
+        await self._send_binary(foxglove.message_data(sub.id, stamp), frame)
+
+    async def _send_text(self, text: str) -> None:
+        """One big text message (rosbridge's JSON), framed here as for binary ones."""
+        if self._direct is not None and self._direct.ready():
+            await self._direct.send(b"", text.encode(), text=True)
+        else:
+            await self.socket.send(text)
+
+    async def _send_binary(self, head: bytes, frame: Frame) -> None:
+        """One binary message of ``head`` then ``frame``, a big frame uncopied."""
         if self._direct is not None and len(frame) >= DIRECT_WRITE and self._direct.ready():
             await self._direct.send(head, frame)
         else:
@@ -207,9 +227,9 @@ class Client:
 
 
 class DirectWrite:
-    """Big binary messages written to a ``websockets`` connection's transport, uncopied.
+    """Big messages written to a ``websockets`` connection's transport, uncopied.
 
-    The frame is the one ``websockets`` would send (FIN, binary, unmasked: a server's), its
+    The frame is the one ``websockets`` would send (FIN, binary or text, unmasked), its
     header and the message's prefix in one write and the message itself in another, so the
     message is copied once, into the transport's buffer, and only for what the socket does
     not take at once. Flow control is the connection's own (``drain``: ``WRITE_LIMIT``).
@@ -245,18 +265,19 @@ class DirectWrite:
             and not sock.transport.is_closing()
         )
 
-    async def send(self, head: bytes, frame: Frame) -> None:
-        """One binary message: ``head`` then ``frame``; waits while the transport is full."""
+    async def send(self, head: bytes, frame: Frame, text: bool = False) -> None:
+        """One message: ``head`` then ``frame``; waits while the transport is full."""
         transport = self.socket.transport
-        transport.write(binary_frame_header(len(head) + len(frame)) + head)
+        transport.write(frame_header(len(head) + len(frame), text) + head)
         transport.write(frame)
         await self.drain()
 
 
-def binary_frame_header(length: int) -> bytes:
-    """A server's WebSocket frame header of a whole binary message (RFC 6455, 5.2)."""
+def frame_header(length: int, text: bool = False) -> bytes:
+    """A server's WebSocket frame header of a whole binary or text message (RFC 6455, 5.2)."""
+    first = 0x81 if text else 0x82
     if length < 126:
-        return struct.pack("!BB", 0x82, length)
+        return struct.pack("!BB", first, length)
     if length < 65536:
-        return struct.pack("!BBH", 0x82, 126, length)
-    return struct.pack("!BBQ", 0x82, 127, length)
+        return struct.pack("!BBH", first, 126, length)
+    return struct.pack("!BBQ", first, 127, length)

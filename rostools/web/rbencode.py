@@ -24,7 +24,7 @@ from rostools.node.connection import Frame
 from rostools.wire import cbor
 from rostools.wire.rosbridge import publish_json
 
-Encoded = str | bytes
+Encoded = str | bytes | tuple[bytes, Frame]
 _NS = 1_000_000_000
 
 
@@ -57,8 +57,10 @@ class Encoders:
         self, topic: str, topic_type: TopicType | None, compression: str, stamp: int, frame: Frame
     ) -> Encoded:
         if compression == "cbor-raw":
-            raw = {"secs": stamp // _NS, "nsecs": stamp % _NS, "bytes": bytes(frame)}
-            return cbor.dumps({"op": "publish", "topic": topic, "msg": raw})
+            # the bytes are the last item: the frame follows its head as it came, uncopied
+            head = {"op": "publish", "topic": topic, "msg": {"secs": stamp // _NS,
+                    "nsecs": stamp % _NS, "bytes": b""}}  # fmt: skip
+            return (cbor.dumps(head)[:-1] + cbor.bytes_head(len(frame)), frame)
         if topic_type is None:
             raise ValueError(f"{topic}: its type is not known yet")
         msg = self._fn(topic_type, "decode")(frame)

@@ -23,7 +23,7 @@ from rostools.msgs.rosbridge import RosbridgeFiller
 from rostools.msgs.topictype import TopicType
 from rostools.names import is_legal
 from rostools.node.connection import Frame
-from rostools.web.client import MAX_SUBSCRIPTIONS, QUEUE_MESSAGES, Subscription
+from rostools.web.client import MAX_SUBSCRIPTIONS, QUEUE_MESSAGES, Rendered, Subscription
 from rostools.web.rbclient import RosbridgeClient, TopicSubs
 from rostools.web.rbencode import Encoders
 from rostools.web.rbservices import RbServices
@@ -169,15 +169,15 @@ class RosbridgeOps:
 
     def _renderer(
         self, client: RosbridgeClient, topic: str, compression: str, asked: list[str]
-    ) -> Callable[[int, Frame], Sequence[str | bytes]]:
-        def render(stamp: int, frame: Frame) -> Sequence[str | bytes]:
+    ) -> Callable[[int, Frame], Sequence[Rendered]]:
+        def render(stamp: int, frame: Frame) -> Sequence[Rendered]:
             topic_type = None
             if compression != "cbor-raw":
                 topic_type = self.known_type(topic)
                 if topic_type is None and asked:
                     topic_type = TopicType.of(self.bridge.store, asked[0])
             out = self.encoders.encode(topic, topic_type, compression, stamp, frame)
-            return (out,) if isinstance(out, bytes) else client.cut(out)
+            return client.cut(out) if isinstance(out, str) else (out,)
 
         return render
 

@@ -13,11 +13,12 @@ import hmac
 import logging
 import time
 from collections.abc import Callable, Sequence
+from functools import partial
 from http import HTTPStatus
 from typing import Any
 from urllib.parse import parse_qs, urlsplit
 
-from rostools.errors import RostoolsError
+from rostools.errors import NotFoundError, RostoolsError
 from rostools.msgs.store import TypeStore
 from rostools.msgs.topictype import TopicType
 from rostools.node.connection import Frame, InboundConnection
@@ -30,6 +31,7 @@ from rostools.web.operations import Operations
 from rostools.web.options import BridgeOptions
 from rostools.web.rbclient import RosbridgeClient
 from rostools.web.rbservices import RbServices
+from rostools.web.rosapi import RosApi
 from rostools.web.rosbridge import RosbridgeOps
 from rostools.web.services import Service
 from rostools.web.state import BridgeState, Event
@@ -60,7 +62,8 @@ class Bridge(BridgeState):
         self.links = Links(node, self.clock.now, time.monotonic, self._learnt)
         self.graph = GraphWatch(node.master, self._graph_changed)
         self.ops = Operations(self)
-        self.rosbridge = RosbridgeOps(self, RbServices(self))
+        self.rosapi = RosApi(node, store)
+        self.rosbridge = RosbridgeOps(self, RbServices(self, self.rosapi))
         self._last_time = 0.0
 
     # the run -------------------------------------------------------------------------------
@@ -96,6 +99,8 @@ class Bridge(BridgeState):
         try:
             self.port = server.sockets[0].getsockname()[1] if server.sockets else self.opts.port
             await self._first_look(stop)
+            if self.opts.protocol != "foxglove":
+                await self._serve_rosapi()
             self.event("listening", address=self.opts.address, port=self.port, url=self.url)
             if ready is not None:
                 ready(self)
@@ -108,6 +113,18 @@ class Bridge(BridgeState):
             await server.wait_closed()
             for task in list(self._tasks):
                 task.cancel()
+
+    async def _serve_rosapi(self) -> None:
+        """rosapi's services to the graph too, unless a rosapi_node serves them already."""
+        try:
+            await self.node.master.lookup_service("/rosapi/topics")
+        except NotFoundError:
+            await self.rosapi.advertise()
+            return
+        except RostoolsError as err:  # the master went away: the graph watch says so
+            log.debug("rosapi: %s", err)
+            return
+        self.event("warning", message="a rosapi node serves /rosapi/* already: left to it")
 
     async def _first_look(self, stop: asyncio.Event) -> None:
         """Wait for the first look at the graph (a master that is not there: keep trying)."""
@@ -150,12 +167,30 @@ class Bridge(BridgeState):
         from websockets.exceptions import ConnectionClosed
 
         name = _peer_name(ws.remote_address)
-        if ws.subprotocol not in foxglove.SUBPROTOCOLS:
-            await self._serve_rosbridge(ws, name)
-            return
-        client = Client(ws, name, lambda c: self.spawn(ws.close(1008, "let go")))
+        let_go: Callable[[Client], None] = lambda c: self.spawn(ws.close(1008, "let go"))  # noqa: E731
+        client: Client
+        if ws.subprotocol in foxglove.SUBPROTOCOLS:
+            client = Client(ws, name, let_go)
+            handle = partial(self.ops.handle, client)
+        else:
+            client = rosbridge = RosbridgeClient(ws, name, let_go)
+            handle = partial(self.rosbridge.handle, rosbridge)
         self.clients.add(client)
-        self.event("connected", client=name, protocol=ws.subprotocol)
+        self.event("connected", client=name, protocol=ws.subprotocol or "rosbridge")
+        if client.foxglove:
+            self._greet(client)
+        try:
+            async for message in ws:
+                if client.closed:
+                    break
+                await handle(message)
+        except ConnectionClosed:
+            pass
+        finally:
+            await self._drop(client)
+
+    def _greet(self, client: Client) -> None:
+        """What a Foxglove client is told first: the server, its channels and services."""
         client.send(self._server_info())
         if self.channels:
             client.send(
@@ -163,41 +198,6 @@ class Bridge(BridgeState):
             )
         if self.services:
             client.send(self._services_message(list(self.services.values())))
-        try:
-            async for message in ws:
-                if client.closed:
-                    break
-                await self.ops.handle(client, message)
-        except ConnectionClosed:
-            pass
-        finally:
-            await self._drop(client)
-
-    async def _serve_rosbridge(self, ws: Any, name: str) -> None:
-        from websockets.exceptions import ConnectionClosed
-
-        client = RosbridgeClient(ws, name, lambda c: self.spawn(ws.close(1008, "let go")))
-        self.clients.add(client)
-        self.event("connected", client=name, protocol="rosbridge")
-        try:
-            async for message in ws:
-                if client.closed:
-                    break
-                await self.rosbridge.handle(client, message)
-        except ConnectionClosed:
-            pass
-        finally:
-            client.close()
-            self.clients.discard(client)
-            stats = client.stats
-            await self.rosbridge.forget_client(client)
-            self.event(
-                "disconnected",
-                client=client.name,
-                messages=stats.messages,
-                bytes=stats.bytes,
-                dropped=stats.dropped,
-            )
 
     def _server_info(self) -> dict[str, Any]:
         caps = [
@@ -222,9 +222,12 @@ class Bridge(BridgeState):
         client.close()
         self.clients.discard(client)
         stats = client.stats
-        for sub_id in list(client.subscriptions):
-            await self.ops.unsubscribe(client, sub_id)
-        await self.ops.forget_client(client)
+        if isinstance(client, RosbridgeClient):
+            await self.rosbridge.forget_client(client)
+        else:
+            for sub_id in list(client.subscriptions):
+                await self.ops.unsubscribe(client, sub_id)
+            await self.ops.forget_client(client)
         self.event(
             "disconnected",
             client=client.name,
@@ -280,6 +283,7 @@ class Bridge(BridgeState):
 
     def _learnt(self, topic: str, topic_type: TopicType) -> None:
         """A publisher's header gave the type (and definition) of ``topic``."""
+        self.rosapi.learn(topic_type.type, topic_type.definition)
         link = self.links.links.get(topic)
         channel = self.by_topic.get(topic)
         if channel is None and topic in self.graph.graph.topics:

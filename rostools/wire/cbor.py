@@ -65,6 +65,11 @@ def _encode(value: Any, out: list[bytes]) -> None:
         raise TypeError(f"CBOR cannot hold a {type(value).__name__}")
 
 
+def bytes_head(length: int) -> bytes:
+    """The head of a byte string of ``length`` bytes (the bytes follow it as they are)."""
+    return _head(2, length)
+
+
 def dumps(value: Any) -> bytes:
     """The CBOR bytes of ``value``."""
     out: list[bytes] = []

@@ -107,7 +107,10 @@ def test_send_goal_to_a_rospy_server(graph: Graph, rospy_server: str) -> None:
         sender.stop()
     table = run_cli("action", "status", rospy_server, "--once", "-F", "json", env=graph.cli_env)
     states = [g["status"] for g in json.loads(table.stdout)["goals"]]
-    assert states.count("PREEMPTED") == 2 and "SUCCEEDED" in states, states
+    # actionlib keeps a finished goal's status for 5 s (status_list_timeout): on a loaded
+    # machine the first goals are gone by now, the last two preempted ones are not
+    assert states.count("PREEMPTED") == 2, states
+    assert set(states) <= {"SUCCEEDED", "ABORTED", "PREEMPTED"}, states
 
 
 def test_a_server_that_dies_mid_goal(graph: Graph) -> None:

@@ -13,7 +13,7 @@ from tests.conftest import MasterInfo
 from tests.support import cppbuild
 from tests.support.env import needs_ros1
 from tests.support.foxglove import Client, ros_string, start_bridge
-from tests.support.procs import Proc, start_ros1_node, wait_for
+from tests.support.procs import Proc, start_ros1_node, until_printed, wait_for
 
 pytestmark = [pytest.mark.interop, needs_ros1]
 
@@ -28,16 +28,9 @@ def failure(client: Client, call_id: int) -> dict[str, object]:
 
 def publish_until(client: Client, channel: int, text: str, node: Proc, seen: str) -> None:
     """Publish ``text`` from the client until ``node`` prints ``seen`` (it may connect late)."""
-
-    def printed() -> bool:
-        client.send(b"\x01" + struct.pack("<I", channel) + ros_string(text))
-        try:
-            node.expect(seen, 0.5)
-        except AssertionError:
-            return False
-        return True
-
-    wait_for(printed, 30, f"a subscriber to print {seen!r}")
+    until_printed(
+        lambda: client.send(b"\x01" + struct.pack("<I", channel) + ros_string(text)), node, seen
+    )
 
 
 def test_rospy_nodes_through_the_bridge(any_master: MasterInfo) -> None:

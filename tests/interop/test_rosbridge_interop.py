@@ -14,7 +14,7 @@ from tests.support import cppbuild
 from tests.support.env import needs_ros1
 from tests.support.foxglove import start_bridge
 from tests.support.load import scaled
-from tests.support.procs import Proc, start_ros1_node, wait_for
+from tests.support.procs import Proc, start_ros1_node, until_printed
 from tests.support.rosbridge_parity import Session, _is
 
 pytestmark = [pytest.mark.interop, needs_ros1]
@@ -31,16 +31,9 @@ def rosbridge(url: str) -> Session:
 
 def publish_until(s: Session, topic: str, text: str, node: Proc, seen: str) -> None:
     """Publish ``text`` until ``node`` prints ``seen`` (its subscriber may connect late)."""
-
-    def printed() -> bool:
-        s.send({"op": "publish", "topic": topic, "msg": {"data": text}})
-        try:
-            node.expect(seen, 0.5)
-        except AssertionError:
-            return False
-        return True
-
-    wait_for(printed, 30, f"a subscriber to print {seen!r}")
+    until_printed(
+        lambda: s.send({"op": "publish", "topic": topic, "msg": {"data": text}}), node, seen
+    )
 
 
 def test_rospy_nodes_through_rosbridge(any_master: MasterInfo) -> None:

@@ -89,6 +89,20 @@ def wait_for(
     raise AssertionError(f"timed out after {timeout:.3g} s waiting for {what}")
 
 
+def until_printed(act: Callable[[], object], node: Proc, seen: str, timeout: float = 30) -> None:
+    """Do ``act`` until ``node`` prints ``seen`` (a subscriber may connect after the first)."""
+
+    def printed() -> bool:
+        act()
+        try:
+            node.expect(seen, 0.5)
+        except AssertionError:
+            return False
+        return True
+
+    wait_for(printed, timeout, f"{seen!r} to be printed")
+
+
 def wait_for_name(names: Callable[[], list[str]], suffix: str, timeout: float = 15.0) -> str:
     """The first of ``names()`` that ends with ``suffix``, polling until there is one."""
     found: list[str] = []

@@ -311,6 +311,35 @@ def normalise(value: Any, key: str = "") -> Any:
     return value
 
 
+#: Each server's own nodes, topics and services, left out of the answers that list the graph:
+#: the graph compared is the one both serve.
+OWN = {
+    "rosbridge_server": re.compile(
+        r"^/(rosapi|rosbridge_websocket)(_<n>)?(/get_loggers|/set_logger_level)?$"
+        r"|^/(client_count|connected_clients)$"
+    ),
+    "rostools": re.compile(r"^/(rostools_bridge|rosapi)(_<n>)?(/get_loggers|/set_logger_level)?$"),
+}
+
+
+def without_own(answers: dict[str, list[Message]], server: str) -> dict[str, list[Message]]:
+    """``answers`` with ``server``'s own names out of every name list (and their types)."""
+    own = OWN[server]
+
+    def strip(value: Any) -> Any:
+        if isinstance(value, dict):
+            if isinstance(value.get("topics"), list) and isinstance(value.get("types"), list):
+                pairs = [p for p in zip(value["topics"], value["types"], strict=False)
+                         if not own.match(p[0])]  # fmt: skip
+                value = {**value, "topics": [t for t, _ in pairs], "types": [t for _, t in pairs]}
+            return {k: strip(v) for k, v in value.items()}
+        if isinstance(value, list):
+            return [strip(v) for v in value if not (isinstance(v, str) and own.match(v))]
+        return value
+
+    return {step: strip(said) for step, said in answers.items()}
+
+
 def differences(golden: Any, ours: Any, path: str = "") -> list[str]:
     """Where ``ours`` differs from ``golden``: one line per field (keys' order aside)."""
     if isinstance(golden, dict) and isinstance(ours, dict):

@@ -10,7 +10,7 @@ from typing import Any
 
 import pytest
 
-from rostools.web.client import DIRECT_WRITE, Client, Subscription, binary_frame_header
+from rostools.web.client import DIRECT_WRITE, Client, Subscription, frame_header
 from rostools.wire import foxglove
 
 #: Around each length form's edges (7-bit, 16-bit, 64-bit) and the direct path's threshold.
@@ -93,10 +93,11 @@ def test_messages_of_every_size_reach_a_websockets_client_whole_and_in_order(
 
 
 def test_a_frame_header_uses_the_shortest_length_form() -> None:
-    assert binary_frame_header(125) == b"\x82\x7d"
-    assert binary_frame_header(126) == b"\x82\x7e\x00\x7e"
-    assert binary_frame_header(65_535) == b"\x82\x7e\xff\xff"
-    assert binary_frame_header(65_536) == b"\x82\x7f" + (65_536).to_bytes(8, "big")
+    assert frame_header(125) == b"\x82\x7d"
+    assert frame_header(126) == b"\x82\x7e\x00\x7e"
+    assert frame_header(65_535) == b"\x82\x7e\xff\xff"
+    assert frame_header(65_536) == b"\x82\x7f" + (65_536).to_bytes(8, "big")
+    assert frame_header(125, text=True) == b"\x81\x7d"
 
 
 def test_a_closed_connection_is_not_written_directly() -> None:

@@ -79,11 +79,11 @@ def test_values_in_fill_a_message_as_rosbridge_populates_one() -> None:
         ("geometry_msgs/PoseStamped", {"pose": {"position": {"q": 1}}},
          "Message type geometry_msgs/Point does not have a field pose.position.q"),
         ("std_msgs/String", {"data": 5},
-         "std_msgs/String message requires a string for field data, but got a int"),
+         "std_msgs/String message requires a string for field data, but got a <class 'int'>"),
         ("std_msgs/Header", {"stamp": "now"},
-         "std_msgs/Header message requires a time for field stamp, but got a str"),
+         "std_msgs/Header message requires a time for field stamp, but got a <class 'str'>"),
         ("sensor_msgs/Image", {"data": "not base64!"},
-         "sensor_msgs/Image message requires a uint8[] for field data, but got a str"),
+         "sensor_msgs/Image message requires a uint8[] for field data, but got a <class 'str'>"),
     ],
 )  # fmt: skip
 def test_values_that_do_not_fit_are_named_as_rosbridge_names_them(
@@ -170,3 +170,14 @@ def test_png_compression_holds_the_text_padded_with_newlines() -> None:
     assert width == int((len(text.encode()) / 3) ** 0.5)
     assert pixels.rstrip(b"\n").decode() == text
     assert _png_pixels(base64.b64decode(png_text("a")))[2] == b"a\n\n"
+
+
+def test_cbor_raw_is_a_head_and_the_frame_as_it_came() -> None:
+    from rostools.web.rbencode import Encoders
+
+    frame = memoryview(b"\x02\x00\x00\x00hi" * 40_000)
+    head, same = Encoders(store()).encode("/t", None, "cbor-raw", 3 * 10**9 + 7, frame)
+    assert same is frame  # not copied: the socket writes it after the head
+    assert cbor2.loads(head + bytes(frame)) == {
+        "op": "publish", "topic": "/t", "msg": {"secs": 3, "nsecs": 7, "bytes": bytes(frame)},
+    }  # fmt: skip

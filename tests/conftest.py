@@ -9,6 +9,12 @@ from pathlib import Path
 from typing import Any
 
 import pytest
+from hypothesis import settings
+
+# Property tests check behaviour, not speed: hypothesis's 200 ms a case failed a test of the
+# chunk index under load (391 ms). The fuzz suites' own profile says the same.
+settings.register_profile("suite", deadline=None)
+settings.load_profile("suite")
 
 # Nodes that tests start in this process give out and bind loopback (rosgraph's rules would
 # otherwise give out this machine's name and listen on every interface).

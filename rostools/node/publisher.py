@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import struct
+import time
 from collections.abc import Callable, Hashable
 from typing import TYPE_CHECKING
 
@@ -46,6 +47,10 @@ class TopicPublisher:
         #: Called with each subscriber's header before it is checked: a publisher advertised
         #: with md5sum ``*`` may learn its type here (``self.type``) from what the peer wants.
         self.on_subscriber: Callable[[dict[str, str]], None] | None = None
+        #: Messages published before ``early_until`` (monotonic), for subscribers that connect
+        #: until then (``keep_early``).
+        self.early: list[Frame] = []
+        self.early_until = 0.0
 
     @property
     def subscriber_count(self) -> int:
@@ -58,9 +63,22 @@ class TopicPublisher:
         rospy counts the publishes that reach at least one subscriber, starting at 1, and
         each time it sends the latched message to a subscriber that connects later.
         """
+        if self.early_until:
+            if time.monotonic() >= self.early_until:
+                self.early_until, self.early = 0.0, []
+            elif len(self.early) < self.queue_size:
+                self.early.append(payload)
         if self.links:
             payload = self._counted(payload)
         self.publish_raw(payload, _COUNTED)
+
+    def keep_early(self, seconds: float) -> None:
+        """Send what is published in the next ``seconds`` to subscribers that connect in them.
+
+        rosbridge's publishers do so: a web client advertises and publishes at once, before
+        the graph's subscribers have connected, and its first message would be lost.
+        """
+        self.early_until = time.monotonic() + seconds
 
     def _counted(self, payload: Frame) -> Frame:
         """``payload`` with the next ``seq`` in its Header, if its type has one."""
@@ -107,6 +125,9 @@ class TopicPublisher:
         )
         link.on_close = self._lost
         self.links.append(link)
+        if self.early_until and time.monotonic() < self.early_until:
+            for payload in self.early:
+                link.send(self._counted(payload))
         for source, payload in self.latched.items():
             link.send(self._counted(payload) if source == _COUNTED else payload)
         return link

@@ -34,6 +34,11 @@ if TYPE_CHECKING:
     from rostools.web.state import BridgeState
 
 
+#: Seconds a new publisher keeps what a client publishes for subscribers still connecting
+#: (rosbridge's PublisherConsistencyListener: 1 s).
+EARLY = 1.0
+
+
 class RosbridgeOps:
     """The rosbridge v2 operations of one bridge, for all its rosbridge clients."""
 
@@ -249,7 +254,9 @@ class RosbridgeOps:
         latch = request.get("latch") is True
         queue_size = request.get("queue_size")
         size = queue_size if isinstance(queue_size, int) and queue_size > 0 else 100
-        await self.node.advertise(topic, topic_type, latch=latch, queue_size=size)
+        pub = await self.node.advertise(topic, topic_type, latch=latch, queue_size=size)
+        if current is None:
+            pub.keep_early(EARLY)
         if id(client) not in self.publishing.setdefault(topic, set()):
             self.publishing[topic].add(id(client))
             self.bridge.event(

@@ -19,7 +19,7 @@ from websockets.sync.client import ClientConnection, connect
 
 from tests.support.foxglove import V1, Client, ros_string, start_bridge
 from tests.support.load import scaled
-from tests.support.procs import Proc, publishers, start_cli, wait_for
+from tests.support.procs import Proc, publishers, start_cli, subscribers, wait_for
 from tests.support.rosbridge_parity import Session, _is
 
 Message = dict[str, Any]
@@ -295,3 +295,23 @@ def test_a_big_image_in_each_encoding(bridge: tuple[Proc, str], rostools_master:
                     assert bytes.fromhex(msg["data"]["bytes"]) == pixels
             s.send({"op": "unsubscribe", "topic": "/image"})
             s.inbox.clear()
+
+
+def test_a_publish_right_after_advertise_reaches_a_subscriber_already_waiting(
+    rostools_master: str, bridge: tuple[Proc, str]
+) -> None:
+    # the defect: the subscriber connected after the one publish, which was lost (rosbridge
+    # keeps a new publisher's first second of messages for subscribers still connecting)
+    import queue
+
+    import rostools
+
+    _, url = bridge
+    got: queue.Queue[str] = queue.Queue()
+    with rostools.Node("early_listener", rostools_master) as node, rosbridge(url) as ws:
+        node.subscribe("/early", lambda m: got.put(m.data), "std_msgs/String")
+        wait_for(lambda: bool(subscribers(rostools_master, "/early")), 15, "the subscriber")
+        s = Session(ws)
+        s.send({"op": "advertise", "topic": "/early", "type": "std_msgs/String"})
+        s.send({"op": "publish", "topic": "/early", "msg": {"data": "only once"}})
+        assert got.get(timeout=scaled(20)) == "only once"

@@ -18,7 +18,7 @@ import threading
 import time
 from collections.abc import Callable, Iterator
 from pathlib import Path
-from typing import Any
+from typing import Any, ClassVar
 
 from tests.support.load import scaled
 from tests.support.procs import Proc
@@ -37,14 +37,14 @@ def node_missing() -> str | None:
     return None
 
 
-def browser_missing() -> str | None:
-    """Why the browser peer cannot run here, or None."""
+def browser_missing(needs: str = "@foxglove/studio-base/assets/index.js") -> str | None:
+    """Why chromium cannot run a page on ``node_modules/NEEDS`` (Studio's) here, or None."""
     if reason := node_missing():
         return reason
     if not Path(CHROMIUM).exists():
         return f"no chromium at {CHROMIUM} (scripts/install-ros1-peers.sh installs it)"
-    if not (MODULES / "@foxglove" / "studio-base" / "assets" / "index.js").is_file():
-        return "@foxglove/studio-base is not installed in tests/peers/web"
+    if not (MODULES / needs).is_file():
+        return f"tests/peers/web has no node_modules/{needs}: run npm ci there"
     return None
 
 
@@ -52,13 +52,11 @@ class NodeClient:
     """``foxglove-client.mjs``: the npm FoxgloveClient, driven by commands, read by events."""
 
     def __init__(self, url: str, subprotocol: str | None = None) -> None:
-        argv = [
-            "node",
-            str(WEB / "foxglove-client.mjs"),
-            url,
-            *([subprotocol] if subprotocol else []),
-        ]
-        self.proc = Proc(argv, cwd=WEB, stdin=subprocess.PIPE)
+        self._start(["foxglove-client.mjs", url, *([subprotocol] if subprotocol else [])])
+
+    def _start(self, args: list[str], env: dict[str, str] | None = None) -> None:
+        """``node ARGS`` in ``tests/peers/web``, its stdin a pipe for commands."""
+        self.proc = Proc(["node", *args], env=env, cwd=WEB, stdin=subprocess.PIPE)
         #: Every event, and those no ``expect`` has taken yet.
         self.events: list[dict[str, Any]] = []
         self.pending: list[dict[str, Any]] = []
@@ -98,21 +96,105 @@ class NodeClient:
         self.proc.stop()
 
 
+class BrowserPage(NodeClient):
+    """``page.mjs``: a page in Debian's chromium, driven by commands, read by events."""
+
+    def __init__(self, url: str, shot: Path, home: Path) -> None:
+        env = dict(os.environ, CHROMIUM=CHROMIUM, HOME=str(home))
+        self._start(["page.mjs", url, str(shot)], env)
+        try:
+            self._answer("open", 60)
+        except BaseException:
+            self.stop()
+            raise
+
+    def said(self) -> list[dict[str, Any]]:
+        """What the page said so far: console, uncaught errors, requests refused or failed."""
+        kinds = ("console", "pageerror", "refused", "http")
+        return [e for e in self.events if e["event"] in kinds]
+
+    def frames(self, direction: str = "sent") -> list[str]:
+        """The page's WebSocket frames so far, ``sent`` or ``received`` (500 characters each)."""
+        return [e["data"] for e in self.events if e["event"] == "ws" and e["dir"] == direction]
+
+    def _answer(self, kind: str, timeout: float) -> dict[str, Any]:
+        event = self.expect(lambda e: e["event"] in (kind, "error"), timeout)
+        if event["event"] == "error":
+            raise AssertionError(f"{event['text']}; the page said {self.said()[-10:]}")
+        return event
+
+    def text(self, selector: str, match: str, timeout: float = 30.0) -> str:
+        """``selector``'s text once it matches the regex ``match`` (JavaScript's, multiline)."""
+        self.send(do="text", selector=selector, match=match, timeout=scaled(timeout))
+        text: str = self._answer("text", timeout + 30)["text"]  # the page's own deadline first
+        return text
+
+    def click(self, selector: str) -> None:
+        """Click the element ``selector`` names."""
+        self.send(do="click", selector=selector)
+        self._answer("clicked", 30)
+
+    def close(self) -> None:
+        """Take the screenshot, close the browser, stop the driver (once: then nothing)."""
+        if self.proc.popen.poll() is not None:
+            self.stop()  # its pipes and its group, if not yet
+            return
+        try:
+            self.send(do="close")
+            self._answer("closed", 60)
+        finally:
+            self.stop()
+
+
 @contextlib.contextmanager
-def studio_shell() -> Iterator[str]:
-    """Foxglove Studio 1.48's shell, served on a free loopback port: its ``index.html`` URL."""
-    handler = functools.partial(_Quiet, directory=str(WEB))
+def serve_web(pages: dict[str, str] | None = None) -> Iterator[str]:
+    """``tests/peers/web`` and ``pages`` (path -> HTML) on a free loopback port: its base URL.
+
+    ``pages`` is read at each request: a page may be added once the URL is known.
+    """
+    handler = functools.partial(_Quiet, directory=str(WEB), pages={} if pages is None else pages)
     server = http.server.ThreadingHTTPServer(("127.0.0.1", 0), handler)
     thread = threading.Thread(target=server.serve_forever, daemon=True)
     thread.start()
     try:
-        yield f"http://127.0.0.1:{server.server_address[1]}/studio.html"
+        yield f"http://127.0.0.1:{server.server_address[1]}/"
     finally:
         server.shutdown()
         server.server_close()
 
 
+@contextlib.contextmanager
+def studio_shell() -> Iterator[str]:
+    """Foxglove Studio 1.48's shell, served on a free loopback port: its ``index.html`` URL."""
+    with serve_web() as base:
+        yield f"{base}studio.html"
+
+
 class _Quiet(http.server.SimpleHTTPRequestHandler):
+    # a module script served as anything but JavaScript is refused by the browser
+    extensions_map: ClassVar[dict[str, str]] = {
+        **http.server.SimpleHTTPRequestHandler.extensions_map,
+        ".js": "text/javascript",
+        ".mjs": "text/javascript",
+    }
+
+    def __init__(self, *args: Any, pages: dict[str, str], **kwargs: Any) -> None:
+        self.pages = pages  # before the base class's __init__, which answers the request
+        super().__init__(*args, **kwargs)
+
+    def do_GET(self) -> None:
+        """A page of ``pages``, or a file."""
+        page = self.pages.get(self.path.partition("?")[0])
+        if page is None:
+            super().do_GET()
+            return
+        body = page.encode()
+        self.send_response(200)
+        self.send_header("Content-Type", "text/html; charset=utf-8")
+        self.send_header("Content-Length", str(len(body)))
+        self.end_headers()
+        self.wfile.write(body)
+
     def log_message(self, format: str, *args: Any) -> None:
         """Say nothing for each request."""
 

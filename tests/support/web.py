@@ -199,6 +199,18 @@ class _Quiet(http.server.SimpleHTTPRequestHandler):
         """Say nothing for each request."""
 
 
+def read_frames(path: Path) -> list[dict[str, Any]]:
+    """``studio.mjs --frames``'s file: each WebSocket frame, a text frame's JSON as ``json``."""
+    frames = []
+    for line in path.read_text().splitlines():
+        frame = json.loads(line)
+        if "text" in frame:
+            with contextlib.suppress(ValueError):
+                frame["json"] = json.loads(frame["text"])
+        frames.append(frame)
+    return frames
+
+
 def run_studio(page: str, out: Path, *args: str, timeout: float = 90.0) -> dict[str, Any]:
     """``studio.mjs PAGE OUT ARGS``: what Studio showed, as the driver prints it."""
     env = dict(os.environ, CHROMIUM=CHROMIUM, HOME=str(out.parent))

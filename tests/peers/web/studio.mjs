@@ -1,19 +1,27 @@
 // Foxglove Studio 1.48 in Debian's chromium (puppeteer-core): what it shows of a connection.
 //
 // usage: node studio.mjs PAGE_URL SCREENSHOT.png TIMEOUT_S [--topic T]... [--text RE] [--image T]
+//        [--no-rate] [--frames FILE]
 // It opens PAGE_URL (studio.html?ds=foxglove-websocket&ds.url=ws://...), waits until the
 // Topics list shows every --topic, types the first one into the Raw Messages panel until its
 // text matches --text, waits for the Image panel to draw --image T, saves a screenshot and
 // prints one JSON object: {"topics": page text of the topic list, "raw": the matched text,
-// "image": true|false}. Every wait is a poll with the deadline TIMEOUT_S.
+// "image": true|false}. Every wait is a poll with the deadline TIMEOUT_S. --no-rate: do not wait
+// for the first topic's rate. --frames FILE: every WebSocket frame of the page and its workers
+// (Studio's Rosbridge source opens its socket in a worker) as JSON lines, {"dir": "sent" or
+// "received", "text": a text frame} or {"dir", "binary": its length, "head": its first 128
+// bytes in hex}.
+import fs from "node:fs";
 import puppeteer from "puppeteer-core";
 
 const [page_url, out, timeout_s, ...rest] = process.argv.slice(2);
-const topics = [], opts = { text: null, image: false };
+const topics = [], opts = { text: null, image: false, rate: true, frames: null };
 for (let i = 0; i < rest.length; i++) {
   if (rest[i] === "--topic") topics.push(rest[++i]);
   else if (rest[i] === "--text") opts.text = new RegExp(rest[++i]);
   else if (rest[i] === "--image") opts.image = rest[++i];
+  else if (rest[i] === "--no-rate") opts.rate = false;
+  else if (rest[i] === "--frames") opts.frames = fs.openSync(rest[++i], "w");
 }
 const deadline = Date.now() + Number(timeout_s) * 1000;
 const sleep = (ms) => new Promise((r) => setTimeout(r, ms));
@@ -34,7 +42,25 @@ const browser = await puppeteer.launch({
 const result = { topics: "", raw: "", image: false };
 try {
   const page = await browser.newPage();
+  if (opts.frames !== null) {
+    // CDP's Network events, of the page's session and of each worker's
+    const log = (dir) => ({ response }) => {
+      const frame = response.opcode === 1 ? { dir, text: response.payloadData }
+        : { dir, binary: Buffer.from(response.payloadData, "base64").length,
+          head: Buffer.from(response.payloadData, "base64").subarray(0, 128).toString("hex") };
+      fs.writeSync(opts.frames, JSON.stringify(frame) + "\n");
+    };
+    const watch = (client) => {
+      client.on("Network.webSocketFrameSent", log("sent"));
+      client.on("Network.webSocketFrameReceived", log("received"));
+    };
+    watch(await page.createCDPSession().then(async (c) => (await c.send("Network.enable"), c)));
+    page.on("workercreated", (worker) => watch(worker.client));
+  }
   await page.setViewport({ width: 1400, height: 900 });
+  // puppeteer's own waits (30 s by default) get the whole deadline: under load, chromium took
+  // longer than 30 s to parse Studio's 56 MB bundle
+  page.setDefaultTimeout(Number(timeout_s) * 1000);
   await page.goto(page_url, { waitUntil: "domcontentloaded" });
   const text = () => page.evaluate(() => document.body.innerText);
   // the left sidebar's Topics tab lists the connection's topics with types and rates
@@ -56,7 +82,7 @@ try {
       return m && m[0];
     });
   }
-  if (topics.length) {
+  if (topics.length && opts.rate) {
     // the Topics panel gives a subscribed topic its count and rate: "/t", its type, N, "9.9 Hz"
     const escaped = topics[0].replace(/[.*+?^${}()|[\]\\]/g, "\\$&");
     const rated = new RegExp(escaped + "\\n[^\\n]+\\n\\d+\\n[\\d.]+ Hz");

@@ -13,6 +13,7 @@ import http.server
 import json
 import os
 import shutil
+import signal
 import subprocess
 import threading
 import time
@@ -96,11 +97,29 @@ class NodeClient:
         self.proc.stop()
 
 
+def reap_browser(pidfile: Path) -> None:
+    """Stop the chromium a driver wrote to ``pidfile``, if it is still there.
+
+    puppeteer starts chromium in a session of its own, so a driver killed before it closed
+    the browser (a timeout) left chromium running: one spun a core for an hour.
+    """
+    try:
+        pid_text, profile = pidfile.read_text().splitlines()[:2]
+        pid = int(pid_text)
+        running = Path(f"/proc/{pid}/cmdline").read_bytes().split(b"\0")
+    except (OSError, ValueError):
+        return  # never written, or gone
+    if profile and profile.encode() in running:  # that browser, not a PID used again
+        with contextlib.suppress(ProcessLookupError, PermissionError):
+            os.killpg(pid, signal.SIGKILL)  # its group: the browser and its helpers
+
+
 class BrowserPage(NodeClient):
     """``page.mjs``: a page in Debian's chromium, driven by commands, read by events."""
 
     def __init__(self, url: str, shot: Path, home: Path) -> None:
-        env = dict(os.environ, CHROMIUM=CHROMIUM, HOME=str(home))
+        self.pidfile = home / "browser.pid"
+        env = dict(os.environ, CHROMIUM=CHROMIUM, HOME=str(home), BROWSER_PIDFILE=str(self.pidfile))
         self._start(["page.mjs", url, str(shot)], env)
         try:
             self._answer("open", 60)
@@ -133,6 +152,13 @@ class BrowserPage(NodeClient):
         """Click the element ``selector`` names."""
         self.send(do="click", selector=selector)
         self._answer("clicked", 30)
+
+    def stop(self) -> None:
+        """Stop the driver, and its browser if the driver left it."""
+        try:
+            super().stop()
+        finally:
+            reap_browser(self.pidfile)
 
     def close(self) -> None:
         """Take the screenshot, close the browser, stop the driver (once: then nothing)."""
@@ -213,11 +239,15 @@ def read_frames(path: Path) -> list[dict[str, Any]]:
 
 def run_studio(page: str, out: Path, *args: str, timeout: float = 90.0) -> dict[str, Any]:
     """``studio.mjs PAGE OUT ARGS``: what Studio showed, as the driver prints it."""
-    env = dict(os.environ, CHROMIUM=CHROMIUM, HOME=str(out.parent))
-    done = subprocess.run(
-        ["node", str(WEB / "studio.mjs"), page, str(out), str(scaled(timeout)), *args],
-        cwd=WEB, env=env, capture_output=True, text=True, timeout=scaled(timeout) + 60,
-    )  # fmt: skip
+    pidfile = out.parent / f"{out.stem}.browser.pid"
+    env = dict(os.environ, CHROMIUM=CHROMIUM, HOME=str(out.parent), BROWSER_PIDFILE=str(pidfile))
+    try:
+        done = subprocess.run(
+            ["node", str(WEB / "studio.mjs"), page, str(out), str(scaled(timeout)), *args],
+            cwd=WEB, env=env, capture_output=True, text=True, timeout=scaled(timeout) + 60,
+        )  # fmt: skip
+    finally:
+        reap_browser(pidfile)
     lines = [line for line in done.stdout.splitlines() if line.startswith("{")]
     assert lines, f"studio.mjs printed nothing: {done.stderr[-2000:]}"
     result: dict[str, Any] = json.loads(lines[-1])

@@ -13,6 +13,7 @@
 // characters),
 // {"event": "error", "text"} for a command that failed (a wait says the text it saw; it ends at
 // the page's first uncaught error).
+import fs from "node:fs";
 import readline from "node:readline";
 import puppeteer from "puppeteer-core";
 
@@ -25,6 +26,12 @@ const browser = await puppeteer.launch({
   headless: true,
   args: ["--no-sandbox"],
 });
+// puppeteer starts chromium in a session of its own: the test stops it by this PID (and its
+// profile, which no other chromium has) if this driver is killed before it closes the browser
+if (process.env.BROWSER_PIDFILE) {
+  const profile = browser.process().spawnargs.find((a) => a.startsWith("--user-data-dir=")) ?? "";
+  fs.writeFileSync(process.env.BROWSER_PIDFILE, `${browser.process().pid}\n${profile}\n`);
+}
 const page = await browser.newPage();
 await page.setViewport({ width: 800, height: 400 });
 page.on("console", (m) => say({ event: "console", type: m.type(), text: m.text() }));

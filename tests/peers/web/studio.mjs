@@ -39,6 +39,12 @@ const browser = await puppeteer.launch({
   headless: true,
   args: ["--no-sandbox", "--use-angle=swiftshader", "--enable-unsafe-swiftshader", "--ignore-gpu-blocklist"],
 });
+// puppeteer starts chromium in a session of its own: the test stops it by this PID (and its
+// profile, which no other chromium has) if this driver is killed before it closes the browser
+if (process.env.BROWSER_PIDFILE) {
+  const profile = browser.process().spawnargs.find((a) => a.startsWith("--user-data-dir=")) ?? "";
+  fs.writeFileSync(process.env.BROWSER_PIDFILE, `${browser.process().pid}\n${profile}\n`);
+}
 const result = { topics: "", raw: "", image: false };
 try {
   const page = await browser.newPage();

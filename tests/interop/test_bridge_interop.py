@@ -4,20 +4,17 @@ from __future__ import annotations
 
 import struct
 import subprocess
-from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
 
 from tests.conftest import MasterInfo
-from tests.support import cppbuild
 from tests.support.env import needs_ros1
 from tests.support.foxglove import Client, ros_string, start_bridge
 from tests.support.procs import Proc, start_ros1_node, until_printed, wait_for
 
 pytestmark = [pytest.mark.interop, needs_ros1]
 
-_CPP_REASON = cppbuild.cpp_missing()
 ADD = struct.Struct("<qq")
 
 
@@ -95,21 +92,13 @@ def test_rospy_nodes_through_the_bridge(any_master: MasterInfo) -> None:
             proc.stop()
 
 
-@pytest.fixture(scope="module")
-def cpp_peers() -> Iterator[dict[str, Path]]:
-    """The roscpp peers, built once."""
-    if _CPP_REASON is not None:
-        pytest.skip(_CPP_REASON)
-    yield cppbuild.build_many(["talker", "listener", "add_two_ints_server"])
-
-
 def test_roscpp_nodes_through_the_bridge(
-    any_master: MasterInfo, cpp_peers: dict[str, Path]
+    any_master: MasterInfo, node_peers: dict[str, Path]
 ) -> None:
     env = any_master.ros_env
-    talker = Proc([str(cpp_peers["talker"]), "/cpp_chatter", "--rate", "20"], env=env)
-    listener = Proc([str(cpp_peers["listener"]), "/to_roscpp"], env=env)
-    server = Proc([str(cpp_peers["add_two_ints_server"]), "--mode", "throw"], env=env)
+    talker = Proc([str(node_peers["talker"]), "/cpp_chatter", "--rate", "20"], env=env)
+    listener = Proc([str(node_peers["listener"]), "/to_roscpp"], env=env)
+    server = Proc([str(node_peers["add_two_ints_server"]), "--mode", "throw"], env=env)
     bridge, url = start_bridge(any_master.cli_env)
     try:
         for proc in (talker, listener, server):

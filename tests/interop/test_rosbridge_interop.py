@@ -3,14 +3,12 @@ a real roscore: subscribe (JSON and cbor-raw), publish, service calls both ways.
 
 from __future__ import annotations
 
-from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
 from websockets.sync.client import connect
 
 from tests.conftest import MasterInfo
-from tests.support import cppbuild
 from tests.support.env import needs_ros1
 from tests.support.foxglove import start_bridge
 from tests.support.load import scaled
@@ -18,8 +16,6 @@ from tests.support.procs import Proc, start_ros1_node, until_printed
 from tests.support.rosbridge_parity import Session, _is
 
 pytestmark = [pytest.mark.interop, needs_ros1]
-
-_CPP_REASON = cppbuild.cpp_missing()
 
 
 def rosbridge(url: str) -> Session:
@@ -83,19 +79,13 @@ def test_rospy_nodes_through_rosbridge(any_master: MasterInfo) -> None:
             proc.stop()
 
 
-@pytest.fixture(scope="module")
-def cpp_peers() -> Iterator[dict[str, Path]]:
-    """The roscpp peers, built once."""
-    if _CPP_REASON is not None:
-        pytest.skip(_CPP_REASON)
-    yield cppbuild.build_many(["talker", "listener", "add_two_ints_server"])
-
-
-def test_roscpp_nodes_through_rosbridge(any_master: MasterInfo, cpp_peers: dict[str, Path]) -> None:
+def test_roscpp_nodes_through_rosbridge(
+    any_master: MasterInfo, node_peers: dict[str, Path]
+) -> None:
     env = any_master.ros_env
-    talker = Proc([str(cpp_peers["talker"]), "/cpp_chatter", "--rate", "20"], env=env)
-    listener = Proc([str(cpp_peers["listener"]), "/to_roscpp"], env=env)
-    server = Proc([str(cpp_peers["add_two_ints_server"]), "--mode", "throw"], env=env)
+    talker = Proc([str(node_peers["talker"]), "/cpp_chatter", "--rate", "20"], env=env)
+    listener = Proc([str(node_peers["listener"]), "/to_roscpp"], env=env)
+    server = Proc([str(node_peers["add_two_ints_server"]), "--mode", "throw"], env=env)
     bridge, url = start_bridge(any_master.cli_env)
     s = rosbridge(url)
     try:

@@ -19,6 +19,8 @@ from rostools.wire import rosbridge as rb
 class RosbridgeClient(Client):
     """A client that speaks rosbridge v2."""
 
+    foxglove = False
+
     def __init__(self, socket: Any, name: str, on_gone: Callable[[Client], None]) -> None:
         super().__init__(socket, name, on_gone)
         self.level = rb.DEFAULT_LEVEL
@@ -32,8 +34,6 @@ class RosbridgeClient(Client):
         self.fragments = rb.Fragments()
         self.fragment_ids = itertools.count()
         self.calls = 0
-
-    foxglove = False
 
     def status(self, level: int, text: str) -> None:
         """A status of the bridge's own (a Foxglove level: 0 info, 1 warning, 2 error)."""

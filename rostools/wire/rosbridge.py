@@ -45,6 +45,8 @@ def parse(text: str) -> dict[str, Any]:
     if not isinstance(message, dict):
         raise ProtocolError(f"a message must be a JSON object, not {type(message).__name__}")
     ident = message.get("id")
+    if isinstance(ident, dict | list):  # it keys a client's subscriptions and fragments
+        raise ProtocolError(f"id must be a string or a number, not {json.dumps(ident)[:40]}")
     op = message.get("op")
     if op is None:
         raise ProtocolError("a message without an op: every message needs one", ident)

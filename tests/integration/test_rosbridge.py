@@ -117,6 +117,11 @@ def test_bad_input_is_answered_by_a_status_with_the_ops_id(bridge: tuple[Proc, s
         )
         s.ws.send(b"\x00\x01")
         assert "binary messages are not understood" in s.until(_is("status"))["msg"]
+        # an id that cannot key a subscription (the defect: a TypeError ended the client)
+        s.send({"op": "subscribe", "id": ["a"], "topic": "/x", "type": "std_msgs/String"})
+        assert "id must be a string or a number" in s.until(_is("status"))["msg"]
+        s.send({"op": "no_such_op", "id": "still here"})
+        assert s.until(_is("status", id="still here"))
 
 
 def test_set_level_chooses_which_statuses_a_client_hears(bridge: tuple[Proc, str]) -> None:

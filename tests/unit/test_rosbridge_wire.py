@@ -103,6 +103,7 @@ def test_a_client_message_must_be_an_object_with_an_op() -> None:
         ("[1]", "must be a JSON object, not list"),
         ('{"id": "a"}', "a message without an op"),
         ('{"op": 5}', "op must be a string"),
+        ('{"op": "subscribe", "id": ["a"]}', "id must be a string or a number"),
     ]:
         with pytest.raises(rb.ProtocolError, match=said):
             rb.parse(text)

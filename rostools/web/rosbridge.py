@@ -13,6 +13,7 @@ costs only itself.
 from __future__ import annotations
 
 import itertools
+import logging
 from collections.abc import Callable, Sequence
 from typing import TYPE_CHECKING, Any
 
@@ -32,6 +33,8 @@ from rostools.wire.rosbridge import ProtocolError, need
 
 if TYPE_CHECKING:
     from rostools.web.state import BridgeState
+
+log = logging.getLogger(__name__)
 
 
 #: Seconds a new publisher keeps what a client publishes for subscribers still connecting
@@ -79,6 +82,10 @@ class RosbridgeOps:
             await handler(client, request)
         except ProtocolError as err:
             self.refuse(client, str(err), ident if err.ident is None else err.ident, err.level)
+        except (RostoolsError, ValueError, TypeError, KeyError) as err:
+            # a case no check foresaw: this op fails, the client and the bridge go on
+            log.warning("rosbridge client %s: %r", client.name, err, exc_info=True)
+            self.refuse(client, f"the op failed: {type(err).__name__}: {err}", ident)
 
     def refuse(
         self, client: RosbridgeClient, text: str, ident: Any = None, level: str = "error"

@@ -182,3 +182,45 @@ def test_cbor_raw_is_a_head_and_the_frame_as_it_came() -> None:
     assert cbor2.loads(head + bytes(frame)) == {
         "op": "publish", "topic": "/t", "msg": {"secs": 3, "nsecs": 7, "bytes": bytes(frame)},
     }  # fmt: skip
+
+
+def test_an_op_that_fails_unforeseen_is_a_status_and_the_client_goes_on() -> None:
+    import asyncio
+    from types import SimpleNamespace
+    from typing import Any
+
+    from rostools.web.rbclient import RosbridgeClient
+    from rostools.web.rosbridge import RosbridgeOps
+
+    class Quick:
+        def __init__(self) -> None:
+            self.sent: list[str | bytes] = []
+
+        async def send(self, message: str | bytes) -> None:
+            self.sent.append(message)
+
+    async def scenario() -> list[str | bytes]:
+        events: list[dict[str, Any]] = []
+        bridge = SimpleNamespace(node=None, store=store(), event=lambda k, **f: events.append(f))
+        services = SimpleNamespace(
+            op_call_service=None, op_service_response=None, op_advertise_service=None,
+            op_unadvertise_service=None,
+        )  # fmt: skip
+        ops = RosbridgeOps(bridge, services)  # type: ignore[arg-type]
+
+        async def broken(client: RosbridgeClient, request: dict[str, Any]) -> None:
+            raise KeyError("nothing foresaw this")
+
+        ops.handlers["subscribe"] = broken
+        socket = Quick()
+        client = RosbridgeClient(socket, "c", lambda c: None)
+        await ops.handle(client, json.dumps({"op": "subscribe", "id": "s1", "topic": "/t"}))
+        await ops.handle(client, json.dumps({"op": "no_such_op", "id": "s2"}))
+        await asyncio.sleep(0)  # the writer's turn
+        client.close()
+        assert events[0]["reason"].startswith("the op failed: KeyError")
+        return socket.sent
+
+    sent = [json.loads(m) for m in asyncio.run(scenario())]
+    assert [(m["id"], m["level"]) for m in sent] == [("s1", "error"), ("s2", "error")]
+    assert sent[0]["msg"] == "the op failed: KeyError: 'nothing foresaw this'"

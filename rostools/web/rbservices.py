@@ -75,18 +75,15 @@ class RbServices:
     async def _call(
         self, client: RosbridgeClient, service: str, name: str, args: Any, ident: Any
     ) -> None:
+        rosapi = self.rosapi if self.rosapi is not None and self.rosapi.handles(name) else None
         try:
-            if self.rosapi is not None and self.rosapi.handles(name):
-                if self.bridge.opts.read_only and name.rstrip("/").endswith(
-                    ("set_param", "delete_param")
-                ):
-                    raise ServiceError("this bridge is read-only (--read-only)")
-                values = json.dumps(
-                    await self.rosapi.call(name, args if isinstance(args, dict) else {})
-                )
+            if self.bridge.opts.read_only and (
+                rosapi is None or name.endswith(("set_param", "delete_param"))
+            ):
+                raise ServiceError("this bridge is read-only (--read-only)")
+            if rosapi is not None:
+                values = json.dumps(await rosapi.call(name, args if isinstance(args, dict) else {}))
             else:
-                if self.bridge.opts.read_only:
-                    raise ServiceError("this bridge is read-only (--read-only)")
                 values = await self._ros_call(name, args)
         except (RostoolsError, ValueError) as err:
             self._answer(client, service, ident, None, str(err))

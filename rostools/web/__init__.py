@@ -1,1 +1,1 @@
-"""``rostools bridge``: the live ROS 1 graph over WebSocket, in the Foxglove protocol."""
+"""``rostools bridge``: the live ROS 1 graph over WebSocket, as Foxglove's and rosbridge's."""

@@ -1,9 +1,10 @@
-"""The bridge: a ROS node with a WebSocket face that speaks the Foxglove protocol.
+"""The bridge: a ROS node with a WebSocket face, in the Foxglove protocol and rosbridge v2.
 
 It runs on the node's own event loop. The graph comes from ``GraphWatch``; each topic the
 options choose is a channel; a client's subscription subscribes the node to the topic (the
-first one) and lets go of it (the last one); frames go to the clients undecoded, each
-through its own queue (``client.Client``). What a client asks for is ``operations.py``'s.
+first one) and lets go of it (the last one); frames go to each client through its own queue
+(``client.Client``). A client that offers a Foxglove subprotocol is served by
+``operations.py``, any other by ``rosbridge.py`` (``--protocol`` restricts it).
 """
 
 from __future__ import annotations

@@ -9,6 +9,7 @@ from pathlib import Path
 import pytest
 
 from tests.conftest import MasterInfo
+from tests.interop.conftest import start_node_peers
 from tests.support.env import needs_ros1
 from tests.support.foxglove import Client, ros_string, start_bridge
 from tests.support.procs import Proc, start_ros1_node, until_printed, wait_for
@@ -96,9 +97,7 @@ def test_roscpp_nodes_through_the_bridge(
     any_master: MasterInfo, node_peers: dict[str, Path]
 ) -> None:
     env = any_master.ros_env
-    talker = Proc([str(node_peers["talker"]), "/cpp_chatter", "--rate", "20"], env=env)
-    listener = Proc([str(node_peers["listener"]), "/to_roscpp"], env=env)
-    server = Proc([str(node_peers["add_two_ints_server"]), "--mode", "throw"], env=env)
+    talker, listener, server = start_node_peers(node_peers, env)
     bridge, url = start_bridge(any_master.cli_env)
     try:
         for proc in (talker, listener, server):

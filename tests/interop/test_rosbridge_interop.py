@@ -9,6 +9,7 @@ import pytest
 from websockets.sync.client import connect
 
 from tests.conftest import MasterInfo
+from tests.interop.conftest import start_node_peers
 from tests.support.env import needs_ros1
 from tests.support.foxglove import start_bridge
 from tests.support.load import scaled
@@ -83,9 +84,7 @@ def test_roscpp_nodes_through_rosbridge(
     any_master: MasterInfo, node_peers: dict[str, Path]
 ) -> None:
     env = any_master.ros_env
-    talker = Proc([str(node_peers["talker"]), "/cpp_chatter", "--rate", "20"], env=env)
-    listener = Proc([str(node_peers["listener"]), "/to_roscpp"], env=env)
-    server = Proc([str(node_peers["add_two_ints_server"]), "--mode", "throw"], env=env)
+    talker, listener, server = start_node_peers(node_peers, env)
     bridge, url = start_bridge(any_master.cli_env)
     s = rosbridge(url)
     try:

@@ -55,6 +55,13 @@ SERVICES = {
     "roscpp_tutorials/TwoInts": "int64 a\nint64 b\n---\nint64 sum\n",
 }
 
+# tf's messages, which rosbags' Noetic store lacks: `rostools tf` reads /tf and /tf_static, and
+# tf1's tfMessage is the same bytes as tf2's TFMessage (tf/tfMessage in old bags).
+TF_MESSAGES = {
+    "tf2_msgs/TFMessage": "geometry_msgs/TransformStamped[] transforms\n",
+    "tf/tfMessage": "geometry_msgs/TransformStamped[] transforms\n",
+}
+
 # rosapi 0.11.17's interfaces (rosbridge_suite), which `rostools bridge` serves as ROS services
 # (web/rosapi.py): rosapi/TypeDef and its 25 services, as in its msg/ and srv/ files.
 ROSAPI_MESSAGES = {
@@ -110,6 +117,7 @@ def build() -> str:
         first = re.split(r"\n={80}\n", text)[0].rstrip("\n")
         msgs[f"{package}/{short}"] = first + "\n"
     msgs.update(ROSAPI_MESSAGES)
+    msgs.update(TF_MESSAGES)
     services = SERVICES | ROSAPI_SERVICES
     table = {"msg": dict(sorted(msgs.items())), "srv": dict(sorted(services.items()))}
     return json.dumps(table, indent=0, sort_keys=True) + "\n"

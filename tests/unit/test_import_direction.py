@@ -18,7 +18,7 @@ LAYERS: list[set[str]] = [
     {"errors", "lazy", "version"},
     {"names", "yamlio", "selection"},
     {"wire"},
-    {"msgs", "rates", "series"},
+    {"msgs", "rates", "series", "tf"},
     {"rosgraph"},
     {"node"},
     {"master", "bag", "action", "web"},

@@ -12,11 +12,14 @@ from typing import TYPE_CHECKING, Any
 
 from rostools.bag.model import counted
 from rostools.cli import output
-from rostools.cli.output import Format, emit
+from rostools.cli.output import Format, emit, render
+from rostools.errors import one_line
 
 if TYPE_CHECKING:
+    from rostools.bag import mcap_format
     from rostools.bag.base import BagReader
     from rostools.bag.ops import CopyReport
+    from rostools.bag.recover import RecoverReport
     from rostools.bag.rename import Renames
 
 
@@ -181,3 +184,28 @@ def human_size(size: float) -> str:
         if size < 1024.0:
             return f"{size:.1f} {suffix}"
     return "-"
+
+
+def recover_report(fmt: Format, report: RecoverReport, quiet: bool = False) -> None:
+    """What ``recover`` and ``reindex`` say of one rebuilt bag: a document, or notes and a line."""
+    if fmt is not Format.text:
+        data = {
+            "source": str(report.source), "output": str(report.output), "format": report.format,
+            "was_indexed": report.was_indexed, "messages": report.messages,
+            "connections": report.connections, "notes": list(report.notes),
+            "lost": list(report.lost),
+        }  # fmt: skip
+        output.put(render(fmt, data) + "\n")
+    elif not quiet:
+        for note in report.notes:
+            sys.stderr.write(f"note: {one_line(note)}\n")  # may quote the file's names
+        sys.stderr.write(f"recovered {counted(report.messages, 'message')} into {report.output}\n")
+
+
+def extras_of(path: Path) -> list[mcap_format.Attachment | mcap_format.Metadata]:
+    """An MCAP file's attachments and metadata records, in file order (a ``.bag`` has none)."""
+    from rostools.bag.access import open_bag
+    from rostools.bag.mcap_reader import McapReader
+
+    with open_bag(path) as bag:
+        return bag.extras() if isinstance(bag, McapReader) else []

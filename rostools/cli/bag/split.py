@@ -1,6 +1,6 @@
-"""``rostools bag merge|split``: the workbench commands that make new bags out of several or parts.
+"""``rostools bag split``: a bag cut into parts by size, duration or count.
 
-They share the options of ``filter`` and ``convert`` (``files.py``).
+It shares the options of ``filter`` and ``convert`` (``options.py``).
 """
 
 from __future__ import annotations
@@ -15,11 +15,8 @@ from rostools.bag.model import counted
 from rostools.cli import output
 from rostools.cli.bag.options import (
     CopyOutput,
-    CopyWindow,
-    FilterExprOpt,
-    OutArg,
 )
-from rostools.cli.bag.shared import Progress, copy_command, say_notes
+from rostools.cli.bag.shared import Progress, say_notes
 from rostools.cli.common import FormatOpt, output_format
 from rostools.cli.declare import command
 from rostools.cli.output import Format, emit
@@ -27,28 +24,6 @@ from rostools.errors import UsageError
 
 if TYPE_CHECKING:
     from rostools.bag.split import SplitReport
-
-
-@command()
-def merge(
-    ctx: typer.Context,
-    dst: OutArg,
-    sources: Annotated[list[Path], typer.Argument(help="The .bag or .mcap files to merge.")],
-    window: CopyWindow = CopyWindow(),  # noqa: B008 - a record of options, never changed
-    expression: FilterExprOpt = None,
-    how: CopyOutput = CopyOutput(),  # noqa: B008
-    fmt: FormatOpt = None,
-) -> None:
-    """Merge bags into one, in time order; the same connection in several is written once."""
-    from rostools.bag.merge import merge as run_merge
-
-    lo, hi = window.bounds(sources)
-    rules = how.renames()
-    copy_command(output_format(ctx, fmt), how.quiet, "merge", lambda progress: run_merge(
-        sources, dst, topics=window.topics or None, start=lo, end=hi, expression=expression,
-        compression=how.compression, progress=progress, overwrite=how.force, renames=rules,
-        check_crcs=not how.no_crc_check,
-    ))  # fmt: skip
 
 
 def _split_report(fmt: Format, report: SplitReport) -> None:

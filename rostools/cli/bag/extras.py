@@ -11,7 +11,7 @@ from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
-from rostools.bag.model import counted
+from rostools.bag.formats.model import counted
 from rostools.cli import output
 from rostools.cli.bag.options import BagArg, ForceOpt, QuietOpt
 from rostools.cli.bag.shared import Progress
@@ -21,12 +21,12 @@ from rostools.cli.output import Format, emit
 from rostools.errors import NotFoundError, QuietExit, UsageError, one_line
 
 if TYPE_CHECKING:
-    from rostools.bag import mcap_format as fmt_
+    from rostools.bag.formats import mcap_format as fmt_
 
 
 def _extras(path: Path) -> list[fmt_.Attachment | fmt_.Metadata]:
-    from rostools.bag.access import open_bag
-    from rostools.bag.mcap_reader import McapReader
+    from rostools.bag.formats.access import open_bag
+    from rostools.bag.formats.mcap_reader import McapReader
 
     with open_bag(path) as bag:
         return bag.extras() if isinstance(bag, McapReader) else []
@@ -69,7 +69,7 @@ def attachments(
     fmt: FormatOpt = None,
 ) -> None:
     """List an MCAP file's attachments, or extract one with --get NAME -o FILE."""
-    from rostools.bag.mcap_format import Attachment
+    from rostools.bag.formats.mcap_format import Attachment
 
     found = [a for a in _extras(bag) if isinstance(a, Attachment)]
     if get is None:
@@ -97,7 +97,7 @@ def attachments(
 @command()
 def metadata(ctx: typer.Context, bag: BagArg, fmt: FormatOpt = None) -> None:
     """An MCAP file's metadata records, as JSON (or YAML with -F yaml), in file order."""
-    from rostools.bag.mcap_format import Metadata
+    from rostools.bag.formats.mcap_format import Metadata
 
     records = [
         {"name": m.name, "metadata": dict(m.metadata)}
@@ -116,7 +116,7 @@ def doctor(
     quiet: QuietOpt = False,
 ) -> None:
     """Check bags without changing them: one line per finding; exit 1 if there is any."""
-    from rostools.bag.findings import doctor as check
+    from rostools.bag.tools.findings import doctor as check
 
     out = output_format(ctx, fmt)
     reports = []

@@ -14,7 +14,7 @@ from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
-from rostools.bag.model import counted
+from rostools.bag.formats.model import counted
 from rostools.cli import output
 from rostools.cli.bag.options import (
     BagArg,
@@ -33,8 +33,8 @@ from rostools.cli.output import Format, emit, render
 from rostools.errors import UsageError, one_line
 
 if TYPE_CHECKING:
-    from rostools.bag.ops import CopyReport
-    from rostools.bag.recover import RecoverReport
+    from rostools.bag.tools.ops import CopyReport
+    from rostools.bag.tools.recover import RecoverReport
 
 
 @command()
@@ -51,7 +51,7 @@ def info(
     fmt: FormatOpt = None,
 ) -> None:
     """Summarise bags from their index alone (rosbag info); exit 1 if unindexed, 6 if damaged."""
-    from rostools.bag.access import open_bag, topic_frequencies
+    from rostools.bag.formats.access import open_bag, topic_frequencies
     from rostools.cli.bag.infotext import (
         as_rosbag_reads,
         info_data,
@@ -120,7 +120,7 @@ def filter_(
 
     Filters see the topic names in the input; --rename applies as they are written.
     """
-    from rostools.bag.ops import filter_bag
+    from rostools.bag.tools.ops import filter_bag
 
     lo, hi = window.bounds([src])
     out = output_format(ctx, fmt)
@@ -149,7 +149,7 @@ def convert(
     fmt: FormatOpt = None,
 ) -> None:
     """Convert .bag to MCAP or back, losslessly (renaming topics or types if asked)."""
-    from rostools.bag.ops import convert as run_convert
+    from rostools.bag.tools.ops import convert as run_convert
 
     size = chunk_size * 1024 if chunk_size else None
     rules = how.renames()
@@ -204,8 +204,8 @@ def compress(
     fmt: FormatOpt = None,
 ) -> None:
     """Compress bags in place, keeping the original as x.orig.bag (rosbag compress)."""
-    from rostools.bag.access import detect_format
-    from rostools.bag.ops import compress as run_compress
+    from rostools.bag.formats.access import detect_format
+    from rostools.bag.tools.ops import compress as run_compress
 
     if bz2 and lz4:
         raise UsageError("--bz2 and --lz4 cannot be combined")
@@ -230,7 +230,7 @@ def decompress(
     fmt: FormatOpt = None,
 ) -> None:
     """Decompress bags in place, keeping the original as x.orig.bag (rosbag decompress)."""
-    from rostools.bag.ops import decompress as run_decompress
+    from rostools.bag.tools.ops import decompress as run_decompress
 
     def run(src: Path, dst: Path, progress: Any) -> CopyReport:
         return run_decompress(
@@ -250,7 +250,7 @@ def recover(
     fmt: FormatOpt = None,
 ) -> None:
     """Rebuild an unindexed or cut-short bag or MCAP; exit 6 if anything was lost."""
-    from rostools.bag.recover import recover as run_recover
+    from rostools.bag.tools.recover import recover as run_recover
 
     dst = dst or recovered_name(src)
     report = run_recover(src, dst, overwrite=force, check_crcs=not no_crc_check)
@@ -275,7 +275,7 @@ def reindex(
     Each bag is rebuilt as 'recover' does, or written into --output-dir; exit 6 if
     anything was lost.
     """
-    from rostools.bag.recover import recover as run_recover
+    from rostools.bag.tools.recover import recover as run_recover
     from rostools.cli.bag.inplace import each_in_place, swap
 
     fmt = output_format(ctx, fmt)

@@ -11,7 +11,7 @@ import sys
 from collections.abc import Callable
 from pathlib import Path
 
-from rostools.bag.model import counted, lost_data
+from rostools.bag.formats.model import counted, lost_data
 from rostools.errors import RostoolsError, UsageError, one_line
 
 #: Does one bag: ``(source, where to write, the bag it replaces or None)`` -> what was lost.

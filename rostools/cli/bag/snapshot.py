@@ -15,7 +15,7 @@ from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
-from rostools.bag.model import counted
+from rostools.bag.formats.model import counted
 from rostools.cli.bag.options import Buffering, OutputFile, Receiving, TopicOptions
 from rostools.cli.common import FormatOpt, node_session, output_format
 from rostools.cli.declare import command
@@ -27,9 +27,9 @@ if TYPE_CHECKING:
     import asyncio
     from collections.abc import Callable
 
-    from rostools.bag.snapshot import SnapshotOptions, Snapshotter
-    from rostools.bag.snapshot_job import SnapshotJob
-    from rostools.bag.snapshot_srv import SnapshotRequest
+    from rostools.bag.live.snapshot import SnapshotOptions, Snapshotter
+    from rostools.bag.live.snapshot_job import SnapshotJob
+    from rostools.bag.live.snapshot_srv import SnapshotRequest
     from rostools.node.node import LiveNode
 
 MB = 1024 * 1024
@@ -85,7 +85,7 @@ def snapshot_options(
 
     Unlike record, ``-x`` alone buffers every topic but those (as rosbag_snapshot's exclude).
     """
-    from rostools.bag.snapshot import SnapshotOptions
+    from rostools.bag.live.snapshot import SnapshotOptions
 
     if not (topics or choice.all_ or choice.node or choice.exclude or choice.types):
         raise UsageError("give topics to buffer, or -a, -e REGEX, --topic-types or --node NAME")
@@ -122,7 +122,7 @@ async def _buffer(
     """Run the snapshot recorder with its triggers: a signal, keys, and what it shows."""
     import asyncio
 
-    from rostools.bag.snapshot import Snapshotter
+    from rostools.bag.live.snapshot import Snapshotter
     from rostools.cli.bag.keys import keyboard
     from rostools.cli.bag.snapview import SnapshotTable
 
@@ -171,7 +171,7 @@ def _started(job: SnapshotJob, out: Format, silent: bool) -> None:
 
 def _written(job: SnapshotJob, out: Format, quiet: bool, table: Any) -> None:
     """A file is complete: a line (or an NDJSON record); a failure is one line, and goes on."""
-    from rostools.bag.bagfile import write_failure
+    from rostools.bag.live.bagfile import write_failure
     from rostools.cli import report
     from rostools.cli.bag.snapview import written_text
 
@@ -233,7 +233,7 @@ def trigger(
     async def main(n: LiveNode, stop: asyncio.Event) -> dict[str, Any]:
         import asyncio
 
-        from rostools.bag.snapshot_client import request_snapshot
+        from rostools.bag.live.snapshot_client import request_snapshot
 
         say = _say_continuing if continue_ and out is Format.text else None
 
@@ -266,7 +266,7 @@ async def _window(
     The clock is started here (under sim time it waits for ``/clock``); the window is read
     from it when the request is made, just before the call.
     """
-    from rostools.bag.snapshot_srv import SnapshotRequest, window
+    from rostools.bag.live.snapshot_srv import SnapshotRequest, window
     from rostools.node.clock import RosClock
 
     clock = RosClock()

@@ -11,7 +11,7 @@ from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
-from rostools.bag.model import counted
+from rostools.bag.formats.model import counted
 from rostools.cli import output
 from rostools.cli.bag.options import (
     CopyOutput,
@@ -26,7 +26,7 @@ from rostools.cli.output import Format, emit
 from rostools.errors import UsageError
 
 if TYPE_CHECKING:
-    from rostools.bag.split import SplitReport
+    from rostools.bag.tools.split import SplitReport
 
 
 @command()
@@ -40,7 +40,7 @@ def merge(
     fmt: FormatOpt = None,
 ) -> None:
     """Merge bags into one, in time order; the same connection in several is written once."""
-    from rostools.bag.merge import merge as run_merge
+    from rostools.bag.tools.merge import merge as run_merge
 
     lo, hi = window.bounds(sources)
     rules = how.renames()
@@ -98,8 +98,8 @@ def split(
     fmt: FormatOpt = None,
 ) -> None:
     """Split a bag into parts by duration, size, message count or times (record --split's names)."""
-    from rostools.bag.access import bag_info
-    from rostools.bag.split import Cut, split as run_split
+    from rostools.bag.formats.access import bag_info
+    from rostools.bag.tools.split import Cut, split as run_split
     from rostools.cli.units import parse_duration
 
     times: list[int] = []

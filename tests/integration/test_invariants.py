@@ -15,7 +15,7 @@ from pathlib import Path
 
 import pytest
 
-from rostools.bag.access import open_bag
+from rostools.bag.formats.access import open_bag
 from rostools.wire.tcpros import publisher_header
 from tests.support.env import run_cli
 from tests.support.fakepeer import FakePublisher, frame

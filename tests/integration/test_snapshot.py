@@ -12,10 +12,10 @@ from pathlib import Path
 
 import pytest
 
-from rostools.bag.access import open_bag
-from rostools.bag.snapshot import SnapshotOptions, Snapshotter, TriggerError
-from rostools.bag.snapshot_client import call
-from rostools.bag.snapshot_srv import TRIGGER, SnapshotRequest
+from rostools.bag.formats.access import open_bag
+from rostools.bag.live.snapshot import SnapshotOptions, Snapshotter, TriggerError
+from rostools.bag.live.snapshot_client import call
+from rostools.bag.live.snapshot_srv import TRIGGER, SnapshotRequest
 from rostools.master.server import MasterThread
 from rostools.msgs.topictype import TopicType
 from rostools.node.node import LiveNode

@@ -11,9 +11,9 @@ from typing import Any
 import pytest
 import yaml
 
-from rostools.bag import ops
-from rostools.bag.access import bag_info
-from rostools.bag.recover import recover
+from rostools.bag.formats.access import bag_info
+from rostools.bag.tools import ops
+from rostools.bag.tools.recover import recover
 from tests.support.bagdata import digest, first_chunk_data, headers, read_stream, write_sample
 from tests.support.env import CLI, SYSTEM_PYTHON, needs_ros1, run_system_python
 

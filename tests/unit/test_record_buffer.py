@@ -11,7 +11,7 @@ from typing import Any
 
 import pytest
 
-from rostools.bag import recorder
+from rostools.bag.live import recorder
 
 BUFFER = 1024 * 1024
 HEADER = {"topic": "/t", "type": "std_msgs/String", "md5sum": "992ce8a1687cec8c8bd883ec73ca41d1"}

@@ -20,7 +20,7 @@ from rostools.cli.output import emit
 from rostools.errors import NotFoundError, UsageError, one_line
 
 if TYPE_CHECKING:
-    from rostools.bag import mcap_format as fmt_
+    from rostools.bag.formats import mcap_format as fmt_
 
 
 def _attachment_rows(found: list[fmt_.Attachment]) -> list[dict[str, Any]]:
@@ -60,7 +60,7 @@ def attachments(
     fmt: FormatOpt = None,
 ) -> None:
     """List an MCAP file's attachments, or extract one with --get NAME -o FILE."""
-    from rostools.bag.mcap_format import Attachment
+    from rostools.bag.formats.mcap_format import Attachment
 
     found = [a for a in extras_of(bag) if isinstance(a, Attachment)]
     if get is None:

@@ -18,7 +18,7 @@ from rostools.cli.declare import command
 from rostools.errors import UsageError
 
 if TYPE_CHECKING:
-    from rostools.bag.ops import CopyReport
+    from rostools.bag.tools.ops import CopyReport
 
 
 @command()
@@ -36,8 +36,8 @@ def compress(
     fmt: FormatOpt = None,
 ) -> None:
     """Compress bags in place, keeping the original as x.orig.bag (rosbag compress)."""
-    from rostools.bag.access import detect_format
-    from rostools.bag.ops import compress as run_compress
+    from rostools.bag.formats.access import detect_format
+    from rostools.bag.tools.ops import compress as run_compress
 
     if bz2 and lz4:
         raise UsageError("--bz2 and --lz4 cannot be combined")
@@ -62,7 +62,7 @@ def decompress(
     fmt: FormatOpt = None,
 ) -> None:
     """Decompress bags in place, keeping the original as x.orig.bag (rosbag decompress)."""
-    from rostools.bag.ops import decompress as run_decompress
+    from rostools.bag.tools.ops import decompress as run_decompress
 
     def run(src: Path, dst: Path, progress: Any) -> CopyReport:
         return run_decompress(

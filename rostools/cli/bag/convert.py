@@ -29,7 +29,7 @@ def convert(
     fmt: FormatOpt = None,
 ) -> None:
     """Convert .bag to MCAP or back, losslessly (renaming topics or types if asked)."""
-    from rostools.bag.ops import convert as run_convert
+    from rostools.bag.tools.ops import convert as run_convert
 
     size = chunk_size * 1024 if chunk_size else None
     rules = how.renames()

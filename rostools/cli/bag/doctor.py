@@ -7,7 +7,7 @@ from typing import TYPE_CHECKING, Annotated
 
 import typer
 
-from rostools.bag.model import counted
+from rostools.bag.formats.model import counted
 from rostools.cli import output
 from rostools.cli.bag.options import QuietOpt
 from rostools.cli.bag.shared import Progress
@@ -28,7 +28,7 @@ def doctor(
     quiet: QuietOpt = False,
 ) -> None:
     """Check bags without changing them: one line per finding; exit 1 if there is any."""
-    from rostools.bag.findings import doctor as check
+    from rostools.bag.tools.findings import doctor as check
 
     out = output_format(ctx, fmt)
     reports = []

@@ -54,7 +54,7 @@ def filter_(
 
     Filters see the topic names in the input; --rename applies as they are written.
     """
-    from rostools.bag.ops import filter_bag
+    from rostools.bag.tools.ops import filter_bag
 
     lo, hi = window.bounds([src])
     out = output_format(ctx, fmt)

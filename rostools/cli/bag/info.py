@@ -30,7 +30,7 @@ def info(
     fmt: FormatOpt = None,
 ) -> None:
     """Summarise bags from their index alone (rosbag info); exit 1 if unindexed, 6 if damaged."""
-    from rostools.bag.access import open_bag, topic_frequencies
+    from rostools.bag.formats.access import open_bag, topic_frequencies
     from rostools.cli.bag.infotext import (
         as_rosbag_reads,
         info_data,

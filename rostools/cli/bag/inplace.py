@@ -13,12 +13,12 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from rostools.bag.model import counted, lost_data
+from rostools.bag.formats.model import counted, lost_data
 from rostools.cli.bag.shared import copy_command
 from rostools.errors import RostoolsError, UsageError, one_line
 
 if TYPE_CHECKING:
-    from rostools.bag.ops import CopyReport
+    from rostools.bag.tools.ops import CopyReport
     from rostools.cli.output import Format
 
 #: Does one bag: ``(source, where to write, the bag it replaces or None)`` -> what was lost.

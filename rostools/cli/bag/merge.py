@@ -35,7 +35,7 @@ def merge(
     fmt: FormatOpt = None,
 ) -> None:
     """Merge bags into one, in time order; the same connection in several is written once."""
-    from rostools.bag.merge import merge as run_merge
+    from rostools.bag.tools.merge import merge as run_merge
 
     lo, hi = window.bounds(sources)
     rules = how.renames()

@@ -19,7 +19,7 @@ if TYPE_CHECKING:
 @command()
 def metadata(ctx: typer.Context, bag: BagArg, fmt: FormatOpt = None) -> None:
     """An MCAP file's metadata records, as JSON (or YAML with -F yaml), in file order."""
-    from rostools.bag.mcap_format import Metadata
+    from rostools.bag.formats.mcap_format import Metadata
 
     records = [
         {"name": m.name, "metadata": dict(m.metadata)}

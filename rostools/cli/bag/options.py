@@ -17,8 +17,8 @@ from rostools.cli.declare import options_record
 from rostools.errors import UsageError
 
 if TYPE_CHECKING:
-    from rostools.bag.player import PlayOptions
-    from rostools.bag.rename import Renames
+    from rostools.bag.live.player import PlayOptions
+    from rostools.bag.tools.rename import Renames
 
 BagArg = Annotated[Path, typer.Argument(help="A .bag or .mcap file.")]
 OutArg = Annotated[Path, typer.Argument(help="The file to write; its name picks the format.")]
@@ -194,7 +194,7 @@ class OutputFile:
 
     def chunk_compression(self, storage: str) -> str | None:
         """The chunk compression from ``--bz2``/``--lz4``/``--compression`` (None: default)."""
-        from rostools.bag.access import WRITE_COMPRESSIONS
+        from rostools.bag.formats.access import WRITE_COMPRESSIONS
 
         picked = (("bz2", self.bz2), ("lz4", self.lz4), (self.compression, self.compression))
         chosen = [c for c, on in picked if on]
@@ -307,7 +307,7 @@ class Playback:
 
     def options(self, topics: list[str]) -> PlayOptions:
         """The player's options for ``topics``, checked as rosbag play checks them."""
-        from rostools.bag.player import PlayOptions
+        from rostools.bag.live.player import PlayOptions
 
         for value, flag in ((self.delay, "-d"), (self.start, "-s")):
             if value < 0:

@@ -29,7 +29,7 @@ def recover(
     fmt: FormatOpt = None,
 ) -> None:
     """Rebuild an unindexed or cut-short bag or MCAP; exit 6 if anything was lost."""
-    from rostools.bag.recover import recover as run_recover
+    from rostools.bag.tools.recover import recover as run_recover
 
     dst = dst or recovered_name(src)
     report = run_recover(src, dst, overwrite=force, check_crcs=not no_crc_check)

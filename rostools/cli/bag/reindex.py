@@ -36,7 +36,7 @@ def reindex(
     Each bag is rebuilt as 'recover' does, or written into --output-dir; exit 6 if
     anything was lost.
     """
-    from rostools.bag.recover import recover as run_recover
+    from rostools.bag.tools.recover import recover as run_recover
     from rostools.cli.bag.inplace import each_in_place, swap
 
     fmt = output_format(ctx, fmt)

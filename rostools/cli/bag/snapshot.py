@@ -15,7 +15,7 @@ from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
-from rostools.bag.model import counted
+from rostools.bag.formats.model import counted
 from rostools.cli.bag.options import Buffering, OutputFile, Receiving, TopicOptions
 from rostools.cli.common import FormatOpt, node_session, output_format
 from rostools.cli.declare import command
@@ -26,8 +26,8 @@ from rostools.errors import DataLossError, RostoolsError, UsageError, one_line
 if TYPE_CHECKING:
     import asyncio
 
-    from rostools.bag.snapshot import SnapshotOptions, Snapshotter
-    from rostools.bag.snapshot_job import SnapshotJob
+    from rostools.bag.live.snapshot import SnapshotOptions, Snapshotter
+    from rostools.bag.live.snapshot_job import SnapshotJob
     from rostools.node.node import LiveNode
 
 MB = 1024 * 1024
@@ -83,7 +83,7 @@ def snapshot_options(
 
     Unlike record, ``-x`` alone buffers every topic but those (as rosbag_snapshot's exclude).
     """
-    from rostools.bag.snapshot import SnapshotOptions
+    from rostools.bag.live.snapshot import SnapshotOptions
 
     if not (topics or choice.all_ or choice.node or choice.exclude or choice.types):
         raise UsageError("give topics to buffer, or -a, -e REGEX, --topic-types or --node NAME")
@@ -120,7 +120,7 @@ async def _buffer(
     """Run the snapshot recorder with its triggers: a signal, keys, and what it shows."""
     import asyncio
 
-    from rostools.bag.snapshot import Snapshotter
+    from rostools.bag.live.snapshot import Snapshotter
     from rostools.cli.bag.keys import keyboard
     from rostools.cli.bag.snapview import SnapshotTable
 
@@ -169,7 +169,7 @@ def _started(job: SnapshotJob, out: Format, silent: bool) -> None:
 
 def _written(job: SnapshotJob, out: Format, quiet: bool, table: Any) -> None:
     """A file is complete: a line (or an NDJSON record); a failure is one line, and goes on."""
-    from rostools.bag.bagfile import write_failure
+    from rostools.bag.live.bagfile import write_failure
     from rostools.cli import report
     from rostools.cli.bag.snapview import written_text
 

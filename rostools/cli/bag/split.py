@@ -11,7 +11,7 @@ from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
-from rostools.bag.model import counted
+from rostools.bag.formats.model import counted
 from rostools.cli import output
 from rostools.cli.bag.options import (
     CopyOutput,
@@ -23,7 +23,7 @@ from rostools.cli.output import Format, emit
 from rostools.errors import UsageError
 
 if TYPE_CHECKING:
-    from rostools.bag.split import SplitReport
+    from rostools.bag.tools.split import SplitReport
 
 
 def _split_report(fmt: Format, report: SplitReport) -> None:
@@ -73,8 +73,8 @@ def split(
     fmt: FormatOpt = None,
 ) -> None:
     """Split a bag into parts by duration, size, message count or times (record --split's names)."""
-    from rostools.bag.access import bag_info
-    from rostools.bag.split import Cut, split as run_split
+    from rostools.bag.formats.access import bag_info
+    from rostools.bag.tools.split import Cut, split as run_split
     from rostools.cli.units import parse_duration
 
     times: list[int] = []

@@ -21,7 +21,7 @@ if TYPE_CHECKING:
     import asyncio
     from collections.abc import Callable
 
-    from rostools.bag.snapshot_srv import SnapshotRequest
+    from rostools.bag.live.snapshot_srv import SnapshotRequest
     from rostools.node.node import LiveNode
 
 
@@ -72,7 +72,7 @@ def trigger(
     async def main(n: LiveNode, stop: asyncio.Event) -> dict[str, Any]:
         import asyncio
 
-        from rostools.bag.snapshot_client import request_snapshot
+        from rostools.bag.live.snapshot_client import request_snapshot
 
         say = _say_continuing if continue_ and out is Format.text else None
 
@@ -105,7 +105,7 @@ async def _window(
     The clock is started here (under sim time it waits for ``/clock``); the window is read
     from it when the request is made, just before the call.
     """
-    from rostools.bag.snapshot_srv import SnapshotRequest, window
+    from rostools.bag.live.snapshot_srv import SnapshotRequest, window
     from rostools.node.clock import RosClock
 
     clock = RosClock()

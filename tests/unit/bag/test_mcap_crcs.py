@@ -12,11 +12,11 @@ from pathlib import Path
 
 import pytest
 
-from rostools.bag import mcap_format as fmt
-from rostools.bag.access import open_writer
-from rostools.bag.findings import doctor
-from rostools.bag.mcap_reader import McapReader
-from rostools.bag.ops import convert
+from rostools.bag.formats import mcap_format as fmt
+from rostools.bag.formats.access import open_writer
+from rostools.bag.formats.mcap_reader import McapReader
+from rostools.bag.tools.findings import doctor
+from rostools.bag.tools.ops import convert
 from tests.support.bagdata import STRING_MD5, read_stream, write_sample
 
 COMPRESSIONS = ["none", "lz4", "zstd"]
@@ -204,8 +204,8 @@ def test_a_summary_that_fails_its_crc_is_not_trusted(tmp_path: Path) -> None:
 
 
 def test_recover_and_merge_write_crcs(tmp_path: Path) -> None:
-    from rostools.bag.merge import merge
-    from rostools.bag.recover import recover
+    from rostools.bag.tools.merge import merge
+    from rostools.bag.tools.recover import recover
 
     sample = write_sample(tmp_path / "open.mcap", 3000, chunk_size=9000, close=False)
     recover(sample.path, tmp_path / "recovered.mcap", chunk_size=20_000)

@@ -6,9 +6,9 @@ from pathlib import Path
 
 import pytest
 
-from rostools.bag import ops
-from rostools.bag.access import bag_info, open_bag, open_writer
-from rostools.bag.model import BagUsageError, UnsupportedBagError
+from rostools.bag.formats.access import bag_info, open_bag, open_writer
+from rostools.bag.formats.model import BagUsageError, UnsupportedBagError
+from rostools.bag.tools import ops
 from rostools.msgs.expr import ExpressionError
 from tests.support.bagdata import (
     STEP_NS,
@@ -65,7 +65,7 @@ def test_convert_keeps_unusual_headers(tmp_path: Path) -> None:
 
 
 def test_convert_refuses_non_ros1_messages(tmp_path: Path) -> None:
-    from rostools.bag import mcap_format as fmt
+    from rostools.bag.formats import mcap_format as fmt
 
     path = handmade_mcap(tmp_path / "cdr.mcap", "ros2", fmt.encode_channel(1, 0, "/x", "cdr", {}))
     with pytest.raises(UnsupportedBagError, match="cdr"):
@@ -168,10 +168,10 @@ def test_compress_and_decompress(tmp_path: Path, name: str, kind: str) -> None:
 
 
 def test_mcap_extras_follow_filter_recover_and_compress(tmp_path: Path) -> None:
-    from rostools.bag import mcap_format as fmt
-    from rostools.bag.mcap_reader import McapReader
-    from rostools.bag.mcap_writer import McapWriter
-    from rostools.bag.recover import recover
+    from rostools.bag.formats import mcap_format as fmt
+    from rostools.bag.formats.mcap_reader import McapReader
+    from rostools.bag.formats.mcap_writer import McapWriter
+    from rostools.bag.tools.recover import recover
 
     src = tmp_path / "src.mcap"
     with McapWriter(src) as writer:
@@ -205,7 +205,7 @@ def test_streaming_reads_hand_mapped_pages_back() -> None:
     """A 2 GB bag read from end to end kept 1.9 GB of mapped pages: RSS grew with the file."""
     import mmap
 
-    from rostools.bag.base import FORGET_STEP, Forgetting
+    from rostools.bag.formats.base import FORGET_STEP, Forgetting
 
     calls: list[tuple[int, int, int]] = []
 
@@ -228,8 +228,8 @@ def test_reading_a_big_bag_keeps_rss_flat(tmp_path: Path) -> None:
     import subprocess
     import sys
 
-    from rostools.bag.access import open_writer
-    from rostools.bag.base import FORGET_STEP
+    from rostools.bag.formats.access import open_writer
+    from rostools.bag.formats.base import FORGET_STEP
 
     path = tmp_path / "big.bag"
     payload = bytes(1_000_000)
@@ -240,7 +240,7 @@ def test_reading_a_big_bag_keeps_rss_flat(tmp_path: Path) -> None:
             writer.write(conn, i, len(payload).to_bytes(4, "little") + payload)
     script = (
         "import sys, zlib\n"
-        "from rostools.bag.access import open_bag\n"
+        "from rostools.bag.formats.access import open_bag\n"
         "def hwm():\n"
         "    for line in open('/proc/self/status'):\n"
         "        if line.startswith('VmHWM'): return int(line.split()[1]) * 1024\n"

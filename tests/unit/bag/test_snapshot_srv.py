@@ -8,8 +8,8 @@ from typing import Any
 
 import pytest
 
-from rostools.bag.snapshot import SnapshotOptions, Snapshotter, TriggerError, check_remote_name
-from rostools.bag.snapshot_srv import (
+from rostools.bag.live.snapshot import SnapshotOptions, Snapshotter, TriggerError, check_remote_name
+from rostools.bag.live.snapshot_srv import (
     FOREVER_SECS,
     TRIGGER_SNAPSHOT,
     TRIGGER_SNAPSHOT_TEXT,

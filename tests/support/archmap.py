@@ -64,16 +64,27 @@ def bounded_items(whole: str) -> list[str]:
     return items(bullet(whole, "Timeouts.")) + items(bullet(whole, "Limits on everything"))
 
 
+#: Folders that are no part of the source: virtual environments, builds, caches.
+NOT_SOURCE = {".git", ".venv", "build", "__pycache__", "node_modules", "mutants"}
+
+
 @cache
 def repo_files() -> tuple[str, ...]:
-    """Every file git tracks, and every file under rostools/ and tests/ (new ones too)."""
-    listed = subprocess.run(
-        ["git", "ls-files", "--cached", "--others", "--exclude-standard"],
-        cwd=ROOT,
-        capture_output=True,
-        text=True,
-        check=True,
-    ).stdout.split()
+    """Every file of the source tree: git's (new ones too), or, in an sdist, the tree's."""
+    try:
+        listed = subprocess.run(
+            ["git", "ls-files", "--cached", "--others", "--exclude-standard"],
+            cwd=ROOT,
+            capture_output=True,
+            text=True,
+            check=True,
+        ).stdout.split()
+    except (OSError, subprocess.CalledProcessError):  # no git, or not a clone
+        listed = [
+            p.relative_to(ROOT).as_posix()
+            for p in ROOT.rglob("*")
+            if p.is_file() and not NOT_SOURCE & set(p.relative_to(ROOT).parts)
+        ]
     return tuple(f for f in listed if (ROOT / f).is_file())
 
 

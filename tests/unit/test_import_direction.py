@@ -272,3 +272,12 @@ def test_quick_commands_reach_no_typer() -> None:
     assert not {m for m in seen if m.split(".")[0] in ("typer", "click")}, sorted(
         m for m in seen if m.startswith("rostools")
     )
+
+
+def test_the_trigger_and_the_ring_buffer_stand_alone() -> None:
+    """``bag trigger`` needs the service's bytes and error, not the snapshot recorder; the ring
+    buffer needs the entry overhead, not ``bag record`` (each imported the other for one name)."""
+    imports = _imports()
+    assert "rostools.bag.live.snapshot" not in imports["rostools.bag.live.snapshot_client"]
+    for module in ("ringbuffer", "snapshot_live", "snapshot_services"):
+        assert "rostools.bag.live.recorder" not in imports[f"rostools.bag.live.{module}"], module

@@ -122,14 +122,11 @@ def filter_(
     """
     from rostools.bag.tools.ops import filter_bag
 
-    lo, hi = window.bounds([src])
+    options = how.copy(window, [src], expression=expression)
     out = output_format(ctx, fmt)
     show = None if print_ is None else (print_, partial(_say, out))
-    rules = how.renames()
     copy_command(out, how.quiet or show is not None, "filter", lambda progress: filter_bag(
-        src, dst, topics=window.topics or None, start=lo, end=hi, expression=expression,
-        compression=how.compression, progress=progress, overwrite=how.force, show=show,
-        latched=latched, renames=rules, check_crcs=not how.no_crc_check,
+        src, dst, options, progress=progress, show=show, latched=latched
     ))  # fmt: skip
 
 
@@ -151,11 +148,9 @@ def convert(
     """Convert .bag to MCAP or back, losslessly (renaming topics or types if asked)."""
     from rostools.bag.tools.ops import convert as run_convert
 
-    size = chunk_size * 1024 if chunk_size else None
-    rules = how.renames()
+    options = how.copy(chunk_size=chunk_size * 1024 if chunk_size else None)
     copy_command(output_format(ctx, fmt), how.quiet, "convert", lambda progress: run_convert(
-        src, dst, compression=how.compression, chunk_size=size, progress=progress,
-        overwrite=how.force, renames=rules, check_crcs=not how.no_crc_check,
+        src, dst, options, progress=progress
     ))  # fmt: skip
 
 
@@ -204,17 +199,17 @@ def compress(
     fmt: FormatOpt = None,
 ) -> None:
     """Compress bags in place, keeping the original as x.orig.bag (rosbag compress)."""
-    from rostools.bag.formats.access import detect_format
     from rostools.bag.tools.ops import compress as run_compress
+    from rostools.bag.tools.options import CopyOptions
 
     if bz2 and lz4:
         raise UsageError("--bz2 and --lz4 cannot be combined")
+    # lz4, or the format's default (bz2 for .bag, zstd for MCAP)
+    options = CopyOptions(compression="lz4" if lz4 else None, overwrite=True,
+                          check_crcs=not no_crc_check)  # fmt: skip
 
     def run(src: Path, dst: Path, progress: Any) -> CopyReport:
-        kind = "lz4" if lz4 else ("bz2" if detect_format(src) == "bag" else "zstd")
-        return run_compress(
-            src, dst, kind, progress=progress, overwrite=True, check_crcs=not no_crc_check
-        )
+        return run_compress(src, dst, options, progress=progress)
 
     _in_place(ctx, bags, output_dir, force, fmt, quiet, "compress", run)
 
@@ -231,11 +226,12 @@ def decompress(
 ) -> None:
     """Decompress bags in place, keeping the original as x.orig.bag (rosbag decompress)."""
     from rostools.bag.tools.ops import decompress as run_decompress
+    from rostools.bag.tools.options import CopyOptions
+
+    options = CopyOptions(overwrite=True, check_crcs=not no_crc_check)
 
     def run(src: Path, dst: Path, progress: Any) -> CopyReport:
-        return run_decompress(
-            src, dst, progress=progress, overwrite=True, check_crcs=not no_crc_check
-        )
+        return run_decompress(src, dst, options, progress=progress)
 
     _in_place(ctx, bags, output_dir, force, fmt, quiet, "decompress", run)
 

@@ -42,12 +42,9 @@ def merge(
     """Merge bags into one, in time order; the same connection in several is written once."""
     from rostools.bag.tools.merge import merge as run_merge
 
-    lo, hi = window.bounds(sources)
-    rules = how.renames()
+    options = how.copy(window, sources, expression=expression)
     copy_command(output_format(ctx, fmt), how.quiet, "merge", lambda progress: run_merge(
-        sources, dst, topics=window.topics or None, start=lo, end=hi, expression=expression,
-        compression=how.compression, progress=progress, overwrite=how.force, renames=rules,
-        check_crcs=not how.no_crc_check,
+        sources, dst, options, progress=progress
     ))  # fmt: skip
 
 
@@ -121,10 +118,8 @@ def split(
     progress = Progress("split", chosen, how.quiet)
     try:
         report = run_split(
-            src, out or src, cut, repeat_latched=repeat_latched, compression=how.compression,
-            progress=progress, overwrite=how.force, renames=how.renames(),
-            check_crcs=not how.no_crc_check,
-        )  # fmt: skip
+            src, out or src, cut, how.copy(), repeat_latched=repeat_latched, progress=progress
+        )
     finally:
         progress.done()
     _split_report(chosen, report)

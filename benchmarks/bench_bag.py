@@ -148,8 +148,9 @@ def _convert_seconds(src: Path, compression: str) -> float:
     """Median wall time of ``convert(src, x.mcap)`` in a fresh process, output deleted after."""
     out = BUILD / "out.mcap"
     code = (
-        "import sys, time; from rostools.bag.tools.ops import convert; s = time.perf_counter(); "
-        "convert(sys.argv[1], sys.argv[2], compression=sys.argv[3], overwrite=True); "
+        "import sys, time; from rostools.bag.tools.ops import convert; "
+        "from rostools.bag.tools.options import CopyOptions; s = time.perf_counter(); "
+        "convert(sys.argv[1], sys.argv[2], CopyOptions(compression=sys.argv[3], overwrite=True)); "
         "print(time.perf_counter() - s)"
     )
     samples = []

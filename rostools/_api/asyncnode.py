@@ -30,11 +30,12 @@ from rostools.errors import (
 )
 from rostools.msgs.codec import DecodeError
 from rostools.msgs.message import Message
+from rostools.msgs.topictype import ServiceType
 from rostools.node.connection import Frame, InboundConnection
 from rostools.node.node import LiveNode
 from rostools.node.notice import Notice
 from rostools.node.publisher import TopicPublisher as CorePublisher
-from rostools.node.service import ServiceClient, ServiceServer, ServiceType
+from rostools.node.service import ServiceClient, ServiceServer
 from rostools.node.subscriber import Subscriber as CoreSubscriber
 from rostools.rosgraph.masterapi import SERVICE_TIMEOUT
 

@@ -177,7 +177,7 @@ async def start_rosout(master_uri: str, host: str) -> LiveNode:
 async def add_logger_services(node: LiveNode, store: TypeStore) -> None:
     """``~get_loggers`` and ``~set_logger_level``, which every rospy and roscpp node offers."""
     from rostools.msgs.codec import Codec
-    from rostools.node.service import ServiceType
+    from rostools.msgs.topictype import ServiceType
 
     codec = Codec.of(store)
     levels = {"ros": "info"}

@@ -13,7 +13,7 @@ import os
 from collections.abc import Callable
 from typing import Any
 
-from rostools.msgs.topictype import ANY, TopicType
+from rostools.msgs.topictype import ANY, ServiceType, TopicType
 from rostools.names import anonymous, canonicalize, make_global_ns, resolve, ros_namespace
 from rostools.node.connection import ConnectionHandler, Pending, ServerConnection
 from rostools.node.listen import Listener, listen
@@ -22,7 +22,7 @@ from rostools.node.notice import Notice, to_stderr
 from rostools.node.publisher import TopicPublisher
 from rostools.node.registration import Registrar, Registration
 from rostools.node.rpc import XmlRpcServer
-from rostools.node.service import ServiceHandler, ServiceServer, ServiceType
+from rostools.node.service import ServiceHandler, ServiceServer
 from rostools.node.subscriber import FramesCallback, Subscriber
 from rostools.node.watch import MasterWatch
 from rostools.rosgraph.network import bind_address, host_name

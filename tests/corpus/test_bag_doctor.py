@@ -11,6 +11,7 @@ import pytest
 from rostools.bag.formats.mcap_reader import McapReader
 from rostools.bag.tools.findings import doctor
 from rostools.bag.tools.ops import convert
+from rostools.bag.tools.options import CopyOptions
 from tests.support.env import CORPUS, needs_corpus, run_cli
 
 #: The corpus files that are damaged, or not bags at all: each must have findings.
@@ -75,7 +76,7 @@ def _mutants(data: bytes, rng: random.Random, lo: int, hi: int) -> list[tuple[st
 
 def _mcap_with_crcs(src: Path, dst: Path) -> Path:
     """``src`` as MCAP, written by our writer (which writes every CRC), in small chunks."""
-    convert(src, dst, compression="zstd", chunk_size=64 * 1024)
+    convert(src, dst, CopyOptions(compression="zstd", chunk_size=64 * 1024))
     return dst
 
 

@@ -14,9 +14,9 @@ import pytest
 
 from rostools.msgs.codec import Codec
 from rostools.msgs.store import BuiltinSource, TypeStore
-from rostools.msgs.topictype import TopicType
+from rostools.msgs.topictype import ServiceType, TopicType
 from rostools.node.node import LiveNode
-from rostools.node.service import ServiceClient, ServiceType
+from rostools.node.service import ServiceClient
 from rostools.web.rosapi import SERVICES, RosApi, RosApiFailure, action_servers
 from tests.support.procs import free_port
 from tests.support.rosbridge_parity import GOLDEN

@@ -98,12 +98,17 @@ def named_on_map(module: str, whole: str) -> bool:
     if len(parts) == 3 and parts[0] == "cli" and parts[2] in GROUP_ROLES:
         return f"`{parts[2]}`" in whole
     code_map = archmap.section(whole, "Code map")
-    top = parts[0]
     for row in code_map.splitlines():
         cells = row.split("|")
-        if len(cells) > 3 and (f"`{top}/`" in cells[2] or f"`{top}`" in cells[2]):
-            relative = "/".join(parts[1:]) or parts[0]  # as the row says it: codec.py, bag/x.py
-            if archmap.mentions(row, relative):
+        if len(cells) <= 3:
+            continue
+        # the row of its package, or of a sub-package (`bag/formats/`), says it relatively
+        if len(parts) == 1 and f"`{module}`" in cells[2]:
+            return True
+        for depth in range(1, len(parts)):
+            package = "/".join(parts[:depth])
+            in_row = f"`{package}/`" in cells[2] or (depth == 1 and f"`{package}`" in cells[2])
+            if in_row and archmap.mentions(row, "/".join(parts[depth:])):
                 return True
     return False
 

@@ -161,6 +161,34 @@ def test_no_module_imports_across_its_own_layer() -> None:
     assert not sideways, "\n".join(sorted(sideways))
 
 
+#: The rooms of ``bag/`` and the other rooms each may import (ARCHITECTURE.md, the code map).
+BAG_ROOMS: dict[str, set[str]] = {"formats": set(), "live": {"formats"}, "tools": {"formats"}}
+
+
+def _bag_room(module: str) -> str | None:
+    """``live`` for ``rostools.bag.live.player``; None outside ``bag`` and for its root."""
+    parts = module.split(".")
+    return parts[2] if parts[:2] == ["rostools", "bag"] and len(parts) > 2 else None
+
+
+def test_every_bag_module_is_in_a_room() -> None:
+    modules = [m for m in _imports() if m.startswith("rostools.bag.")]
+    assert {_bag_room(m) for m in modules} == set(BAG_ROOMS), sorted(modules)
+    assert all(m.count(".") == 3 or m in {f"rostools.bag.{r}" for r in BAG_ROOMS} for m in modules)
+
+
+def test_bag_rooms_import_only_formats() -> None:
+    """``live`` and ``tools`` import ``formats``, not each other; ``formats`` imports neither."""
+    crossing = [
+        f"{module} imports {target}"
+        for module, targets in _imports().items()
+        if (room := _bag_room(module))
+        for target in targets
+        if _bag_room(target) not in (None, room, *BAG_ROOMS[room])
+    ]
+    assert not crossing, "\n".join(sorted(crossing))
+
+
 def _group_of(module: str) -> str | None:
     """``topic`` for ``rostools.cli.topic.echo``; None for a module of ``cli`` itself."""
     parts = module.split(".")
@@ -244,3 +272,12 @@ def test_quick_commands_reach_no_typer() -> None:
     assert not {m for m in seen if m.split(".")[0] in ("typer", "click")}, sorted(
         m for m in seen if m.startswith("rostools")
     )
+
+
+def test_the_trigger_and_the_ring_buffer_stand_alone() -> None:
+    """``bag trigger`` needs the service's bytes and error, not the snapshot recorder; the ring
+    buffer needs the entry overhead, not ``bag record`` (each imported the other for one name)."""
+    imports = _imports()
+    assert "rostools.bag.live.snapshot" not in imports["rostools.bag.live.snapshot_client"]
+    for module in ("ringbuffer", "snapshot_live", "snapshot_services"):
+        assert "rostools.bag.live.recorder" not in imports[f"rostools.bag.live.{module}"], module

@@ -24,7 +24,7 @@ FEATURES: dict[str, tuple[str, str, str]] = {
         "rostools.bag.live.snapshot_services",
         "serve",
     ),
-    "bag play's pacing": ("play (`player.py`)", "rostools.bag.live.player", "Player"),
+    "bag play's pacing": ("`bag play`: `Player`, its pacing", "rostools.bag.live.player", "Player"),
     "the XML-RPC fault": ("answers and faults", "rostools.wire.xmlvalues", "Fault"),
     "the .bag index check": (
         "index entries are checked against them",

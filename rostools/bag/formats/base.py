@@ -10,7 +10,7 @@ from abc import ABC, abstractmethod
 from collections.abc import Callable, Collection, Iterable, Iterator, Mapping, Sequence
 from pathlib import Path
 from types import TracebackType
-from typing import TYPE_CHECKING
+from typing import Protocol
 
 from rostools.bag.formats.model import (
     BagFormatError,
@@ -25,9 +25,6 @@ from rostools.bag.formats.model import (
 from rostools.bag.formats.ordering import Block, Entry, RawMessage, ordered
 from rostools.bag.formats.sink import Sink
 from rostools.errors import InvalidDataError, cannot_write
-
-if TYPE_CHECKING:
-    from rostools.bag.tools.rename import Renames
 
 #: Times are u32 seconds in a ``.bag`` and u64 ns in MCAP; this bound covers both.
 MAX_TIME_NS = (1 << 64) - 1
@@ -402,6 +399,14 @@ class BagWriter(ABC):
             self.abort()
 
 
+class Renaming(Protocol):
+    """How a copy renames connections: ``bag.tools.rename.Renames`` (formats import no tool)."""
+
+    def connection(self, conn: Connection) -> Connection:
+        """``conn`` as it is written."""
+        ...
+
+
 class Targets(dict[int, Connection]):
     """Source connection id -> a writer's copy of that connection.
 
@@ -410,7 +415,7 @@ class Targets(dict[int, Connection]):
     """
 
     def __init__(
-        self, writer: BagWriter, sources: Iterable[Connection] = (), renames: Renames | None = None
+        self, writer: BagWriter, sources: Iterable[Connection] = (), renames: Renaming | None = None
     ) -> None:
         super().__init__()
         self.writer = writer

@@ -14,12 +14,9 @@ from collections.abc import Callable
 from rostools.bag.formats.model import NS_PER_SEC
 from rostools.node.connection import Frame, InboundConnection
 from rostools.node.node import LiveNode
-from rostools.node.service import ServiceType
 
 log = logging.getLogger(__name__)
 
-#: std_srvs/SetBool: ``bool data`` --- ``bool success, string message``.
-SET_BOOL = ServiceType("std_srvs/SetBool", "09fb03525b03e7ea1fd3992bafd87e16")
 _STAMP = struct.Struct("<II")  # header.stamp, after the u32 seq
 
 

@@ -20,10 +20,11 @@ from enum import Enum
 from rostools.bag.formats.access import latched_before, merged_messages
 from rostools.bag.formats.base import BagReader
 from rostools.bag.formats.model import NS_PER_SEC, Connection
-from rostools.bag.live.play_control import SET_BOOL, RateControl, set_bool_reply
+from rostools.bag.live.play_control import RateControl, set_bool_reply
 from rostools.errors import UsageError
 from rostools.msgs.topictype import TopicType
-from rostools.node.clock import CLOCK, TIME, tighten_timer_slack
+from rostools.msgs.wellknown import CLOCK, SET_BOOL
+from rostools.node.clock import TIME, tighten_timer_slack
 from rostools.node.connection import Frame
 from rostools.node.node import LiveNode
 from rostools.node.publisher import TopicPublisher

@@ -22,6 +22,7 @@ from pathlib import Path
 from typing import Any
 
 from rostools.bag.formats.access import file_name
+from rostools.bag.formats.model import ENTRY_OVERHEAD
 from rostools.bag.live.bagfile import BagFile, write_failure
 from rostools.bag.live.follow import (
     Follower,
@@ -30,7 +31,7 @@ from rostools.bag.live.follow import (
     TopicStats,
 )
 from rostools.errors import UsageError
-from rostools.msgs.topictype import TopicType
+from rostools.msgs.wellknown import STRING
 from rostools.node.connection import Frame, InboundConnection
 from rostools.node.node import LiveNode
 from rostools.node.publisher import TopicPublisher
@@ -39,11 +40,6 @@ log = logging.getLogger(__name__)
 
 #: How often the free disk space is checked against ``min_space`` (rosbag: 20 s).
 DISK_PERIOD = 1.0
-#: What one queued message costs beyond its bytes: the queue entry, its time stamp and the
-#: bytes object (measured: 137 B with CPython 3.11; rounded up for the allocator). ``-b``
-#: counts it, so the limit bounds the memory held, not only the payload: 100 topics of
-#: 16-byte messages hold ten times their payload.
-ENTRY_OVERHEAD = 160
 #: The writer gives back the budget of what it has written in steps of this many bytes.
 RELEASE_STEP = 1024 * 1024
 #: The writer takes what is queued this often (s), or as soon as the queue holds a
@@ -53,7 +49,6 @@ WRITE_PERIOD = 0.05
 WAKE_STEP = 1024 * 1024
 #: ``-p``: the name of each new file goes out latched on ``begin_write`` (rosbag record).
 BEGIN_WRITE = "begin_write"
-STRING = TopicType("std_msgs/String", "992ce8a1687cec8c8bd883ec73ca41d1", "string data\n")
 
 
 @dataclass

@@ -25,7 +25,7 @@ import itertools
 from collections.abc import Iterator, Mapping
 from dataclasses import dataclass, field
 
-from rostools.bag.live.recorder import ENTRY_OVERHEAD
+from rostools.bag.formats.model import ENTRY_OVERHEAD
 from rostools.node.connection import Frame
 
 

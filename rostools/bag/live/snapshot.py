@@ -29,7 +29,7 @@ from rostools.bag.live.ringbuffer import ConnInfo, Held, Lost, RingBuffer
 from rostools.bag.live.snapshot_job import FileSpec, SnapshotJob, wait_joined
 from rostools.bag.live.snapshot_live import LiveQueue
 from rostools.bag.live.snapshot_services import serve
-from rostools.bag.live.snapshot_srv import NO_DATA_MESSAGE, SnapshotRequest, window
+from rostools.bag.live.snapshot_srv import NO_DATA_MESSAGE, SnapshotRequest, TriggerError, window
 from rostools.errors import RostoolsError, UsageError
 from rostools.node.connection import Frame, InboundConnection
 from rostools.node.node import LiveNode
@@ -40,10 +40,6 @@ MAX_WRITES = 4
 FINISHED_KEPT = 1000
 #: How long the end of a snapshot waits for its files to be complete (s).
 CLOSE_TIMEOUT = 600.0
-
-
-class TriggerError(RostoolsError):
-    """A trigger that writes nothing: a bad name, too many files at once, no data, no disk."""
 
 
 @dataclass

@@ -13,13 +13,14 @@ import struct
 from collections.abc import Callable
 from typing import Any
 
-from rostools.bag.live.snapshot import TriggerError
-from rostools.bag.live.snapshot_srv import TRIGGER, TRIGGER_SNAPSHOT, SnapshotRequest, decode_answer
+from rostools.bag.live.snapshot_srv import SnapshotRequest, TriggerError, decode_answer
 from rostools.errors import NotFoundError, UnreachableError
+from rostools.msgs.topictype import ServiceType
+from rostools.msgs.wellknown import TRIGGER, TRIGGER_SNAPSHOT
 from rostools.names import namespace
 from rostools.node.connection import Frame, InboundConnection
 from rostools.node.node import LiveNode
-from rostools.node.service import ServiceClient, ServiceType
+from rostools.node.service import ServiceClient
 from rostools.node.session import first
 
 #: How long the client waits to be connected to ``~written`` before it calls.

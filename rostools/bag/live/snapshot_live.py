@@ -17,7 +17,7 @@ import collections
 import itertools
 import threading
 
-from rostools.bag.live.recorder import ENTRY_OVERHEAD
+from rostools.bag.formats.model import ENTRY_OVERHEAD
 from rostools.bag.live.ringbuffer import ConnInfo, Entry
 from rostools.node.connection import Frame
 

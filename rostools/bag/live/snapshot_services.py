@@ -20,11 +20,10 @@ import struct
 from collections.abc import Callable
 from typing import Protocol
 
-from rostools.bag.live.play_control import SET_BOOL
-from rostools.bag.live.recorder import STRING
 from rostools.bag.live.snapshot_job import SnapshotJob
-from rostools.bag.live.snapshot_srv import TRIGGER, TRIGGER_SNAPSHOT, SnapshotRequest, encode_answer
+from rostools.bag.live.snapshot_srv import SnapshotRequest, encode_answer
 from rostools.errors import RostoolsError
+from rostools.msgs.wellknown import SET_BOOL, STRING, TRIGGER, TRIGGER_SNAPSHOT
 from rostools.node.node import LiveNode
 from rostools.selection import Selection
 

@@ -21,25 +21,17 @@ from __future__ import annotations
 import struct
 from dataclasses import dataclass, field
 
-from rostools.errors import InvalidDataError
-from rostools.node.service import ServiceType
+from rostools.errors import InvalidDataError, RostoolsError
 
-TRIGGER_SNAPSHOT = ServiceType(
-    "rosbag_snapshot_msgs/TriggerSnapshot", "d5f2b150730729bd0435527e829e65e2"
-)
-#: The definition, for ``service type``-style tools and the md5 check in the tests.
-TRIGGER_SNAPSHOT_TEXT = (
-    "string filename\nstring[] topics\ntime start_time\ntime stop_time\n---\n"
-    "string NO_DATA_MESSAGE=no messages buffered on selected topics\n"
-    "bool success\nstring message\n"
-)
 NO_DATA_MESSAGE = "no messages buffered on selected topics"
-#: std_srvs/Trigger: no request; ``bool success, string message``.
-TRIGGER = ServiceType("std_srvs/Trigger", "937c9679a518e3a18d831e57125ea522")
 #: ``stop_time`` seconds that mean "until stopped" (``bag trigger --continue``).
 FOREVER_SECS = 0xFFFFFFFF
 _U32 = struct.Struct("<I")
 _TIME = struct.Struct("<II")
+
+
+class TriggerError(RostoolsError):
+    """A trigger that writes nothing: a bad name, too many files at once, no data, no disk."""
 
 
 @dataclass

@@ -24,7 +24,8 @@ from rostools.bag.formats.access import (
 )
 from rostools.bag.formats.base import BagReader, BagWriter, Targets, problems
 from rostools.bag.formats.model import BagUsageError, Connection
-from rostools.bag.tools.ops import PROGRESS_EVERY, CopyReport, Progress, compile_filter
+from rostools.bag.tools.ops import CopyReport, compile_filter
+from rostools.bag.tools.options import ALL, PROGRESS_EVERY, CopyOptions, Progress
 
 if TYPE_CHECKING:
     from rostools.bag.tools.rename import Renames
@@ -76,28 +77,21 @@ def check_types(
 def merge(
     sources: Sequence[str | Path],
     dst: str | Path,
+    options: CopyOptions = ALL,
     *,
-    topics: Collection[str] | None = None,
-    start: int | None = None,
-    end: int | None = None,
-    expression: str | None = None,
-    compression: str | None = None,
-    chunk_size: int | None = None,
     progress: Progress | None = None,
-    overwrite: bool = False,
-    renames: Renames | None = None,
-    check_crcs: bool = True,
 ) -> CopyReport:
     """Write the messages of every source into ``dst``, in time order (ties: argument order).
 
-    ``topics``, ``start``/``end`` (ns, inclusive) and ``expression`` select as in
-    ``ops.filter_bag``, on the input's names; ``renames`` applies as messages are written.
-    MCAP attachments and metadata of every input are copied into an MCAP output.
-    ``check_crcs`` as ``open_bag``'s.
+    ``options`` select as in ``ops.filter_bag``, on the input's names; their renames apply as
+    messages are written. MCAP attachments and metadata of every input are copied into an
+    MCAP output.
     """
+    topics, start, end, renames = options.topics, options.start, options.end, options.renames
+    expression = options.expression
     paths, dst = _checked_paths(sources, Path(dst))
     with contextlib.ExitStack() as stack:
-        readers = [stack.enter_context(open_bag(p, check_crcs=check_crcs)) for p in paths]
+        readers = [stack.enter_context(open_bag(p, check_crcs=options.check_crcs)) for p in paths]
         kind = format_for_name(dst)
         if kind != "mcap" or expression:  # an MCAP output takes any encoding as it is
             for reader in readers:
@@ -106,8 +100,9 @@ def merge(
         total = sum(r.info().message_count for r in readers)
         profile = mcap_profile(readers, topics)
         writer = open_writer(
-            dst, kind, compression, chunk_size, overwrite=overwrite, profile=profile
-        )
+            dst, kind, options.compression, options.chunk_size, overwrite=options.overwrite,
+            profile=profile,
+        )  # fmt: skip
         try:
             seen: dict[Key, Connection] = {}
             streams = [
@@ -126,7 +121,7 @@ def merge(
         source=paths[0],
         output=dst,
         format=kind,
-        compression=getattr(writer, "compression", compression or ""),
+        compression=getattr(writer, "compression", options.compression or ""),
         messages_read=read,
         messages_written=written,
         connections=len(seen),

@@ -9,11 +9,12 @@ lists what was left out (``CopyReport.lost``).
 
 from __future__ import annotations
 
+import dataclasses
 import itertools
 from collections.abc import Callable, Collection, Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Final
+from typing import TYPE_CHECKING, Any
 
 from rostools.bag.formats.access import (
     copy_extras,
@@ -33,17 +34,12 @@ from rostools.bag.formats.model import (
     lost_data,
 )
 from rostools.bag.formats.ordering import RawMessage
+from rostools.bag.tools.options import ALL, PROGRESS_EVERY, CopyOptions, Progress
 from rostools.errors import RostoolsError
 from rostools.msgs.expr import Expression, compile_expression
 
 if TYPE_CHECKING:
     from rostools.bag.formats.ros2 import ToRos1
-    from rostools.bag.tools.rename import Renames
-
-#: ``progress(done, total)`` is called about every this many messages (and at the end).
-PROGRESS_EVERY: Final = 4096
-#: Reports progress: messages done so far and the total the input holds.
-Progress = Callable[[int, int], None]
 
 
 @dataclass(frozen=True)
@@ -76,61 +72,49 @@ class CopyReport:
 def convert(
     src: str | Path,
     dst: str | Path,
+    options: CopyOptions = ALL,
     *,
-    compression: str | None = None,
-    chunk_size: int | None = None,
     format: str | None = None,
     progress: Progress | None = None,
-    overwrite: bool = False,
-    renames: Renames | None = None,
-    check_crcs: bool = True,
 ) -> CopyReport:
     """Copy every connection and message of ``src`` into ``dst`` (``.bag`` <-> MCAP).
 
     Lossless in connection headers (callerid, latching, definitions, extra fields), message
     bytes and times. The output format follows ``dst``'s name unless ``format`` is given.
-    ``renames`` renames topics and types on the way. ``check_crcs`` as ``open_bag``'s, as
-    for every function here that reads.
+    ``options`` may select and rename as for ``filter_bag``; every connection is copied.
     """
-    return _copy(
-        src, dst, compression, chunk_size, format, progress, overwrite, eager=True,
-        renames=renames, check_crcs=check_crcs,
-    )  # fmt: skip
+    return _copy(src, dst, options, format, progress, eager=True)
 
 
 def compress(
     src: str | Path,
     dst: str | Path,
-    compression: str = "bz2",
+    options: CopyOptions = ALL,
     *,
-    chunk_size: int | None = None,
     progress: Progress | None = None,
-    overwrite: bool = False,
-    check_crcs: bool = True,
 ) -> CopyReport:
-    """Rewrite a bag with chunk ``compression`` (``.bag``: bz2 or lz4; MCAP: zstd or lz4)."""
+    """Rewrite a bag with chunks compressed as ``options.compression`` says.
+
+    ``.bag``: bz2 (the default) or lz4; MCAP: zstd (the default) or lz4.
+    """
     fmt = _same_format(src)
-    return _copy(
-        src, dst, compression, chunk_size, fmt, progress, overwrite, eager=True,
-        check_crcs=check_crcs,
-    )  # fmt: skip
+    if options.compression is None:
+        options = dataclasses.replace(options, compression="bz2" if fmt == "bag" else "zstd")
+    return _copy(src, dst, options, fmt, progress, eager=True)
 
 
 def decompress(
     src: str | Path,
     dst: str | Path,
+    options: CopyOptions = ALL,
     *,
-    chunk_size: int | None = None,
     progress: Progress | None = None,
-    overwrite: bool = False,
-    check_crcs: bool = True,
 ) -> CopyReport:
-    """Rewrite a bag with uncompressed chunks."""
-    fmt = _same_format(src)
-    return _copy(
-        src, dst, "none", chunk_size, fmt, progress, overwrite, eager=True,
-        check_crcs=check_crcs,
-    )  # fmt: skip
+    """Rewrite a bag with uncompressed chunks (``options.compression`` must be None or none)."""
+    if options.compression not in (None, "none"):
+        raise BagUsageError(f"decompress writes no compression, not {options.compression}")
+    options = dataclasses.replace(options, compression="none")
+    return _copy(src, dst, options, _same_format(src), progress, eager=True)
 
 
 def _same_format(src: str | Path) -> str:
@@ -142,51 +126,26 @@ def _same_format(src: str | Path) -> str:
 def filter_bag(
     src: str | Path,
     dst: str | Path,
+    options: CopyOptions = ALL,
     *,
-    topics: Collection[str] | None = None,
-    start: int | None = None,
-    end: int | None = None,
-    expression: str | None = None,
-    compression: str | None = None,
-    chunk_size: int | None = None,
     progress: Progress | None = None,
-    overwrite: bool = False,
     show: tuple[str, Callable[[bool, Any], None]] | None = None,
     latched: bool = False,
-    renames: Renames | None = None,
-    check_crcs: bool = True,
 ) -> CopyReport:
-    """Copy the messages of ``src`` that pass the filters into ``dst``.
+    """Copy the messages of ``src`` that ``options`` select into ``dst``.
 
-    ``topics`` and ``start``/``end`` (inclusive, ns) select without decoding. ``expression``
-    is Python over ``topic``, ``m`` and ``t`` as in ``rosbag filter`` (``t`` has ``secs``,
-    ``nsecs``, ``to_sec()``); a message is decoded only when the expression mentions ``m``.
-    ``show`` is rosbag filter's ``--print``: an expression over the same names, whose value
-    goes to the callback with the verdict for every message the expression judges.
-    ``latched`` also copies, stamped at ``start``, the last message before ``start`` of every
-    latched connection, so the cut file starts with what a late subscriber would have had.
-    Only connections that keep a message are written. The output format follows ``dst``.
-    ``renames`` renames topics and types as they are written: ``topics`` and ``expression``
-    see the names in ``src``.
+    ``options.topics`` and ``start``/``end`` (inclusive, ns) select without decoding.
+    ``options.expression`` is Python over ``topic``, ``m`` and ``t`` as in ``rosbag filter``
+    (``t`` has ``secs``, ``nsecs``, ``to_sec()``); a message is decoded only when the
+    expression mentions ``m``. ``show`` is rosbag filter's ``--print``: an expression over the
+    same names, whose value goes to the callback with the verdict for every message the
+    expression judges. ``latched`` also copies, stamped at ``start``, the last message before
+    ``start`` of every latched connection, so the cut file starts with what a late subscriber
+    would have had. Only connections that keep a message are written. The output format
+    follows ``dst``. ``options.renames`` renames topics and types as they are written:
+    ``topics`` and ``expression`` see the names in ``src``.
     """
-    keep = compile_filter(expression or "True", show) if expression or show else None
-    return _copy(
-        src,
-        dst,
-        compression,
-        chunk_size,
-        None,
-        progress,
-        overwrite,
-        eager=False,
-        topics=topics,
-        start=start,
-        end=end,
-        keep=keep,
-        latched=latched,
-        renames=renames,
-        check_crcs=check_crcs,
-    )
+    return _copy(src, dst, options, None, progress, eager=False, show=show, latched=latched)
 
 
 # Filter is the public name the CLI uses; ``filter`` shadows a builtin inside this module only.
@@ -254,32 +213,31 @@ def _decoder(conn: Connection) -> Callable[[Any], Any]:
 def _copy(
     src: str | Path,
     dst: str | Path,
-    compression: str | None,
-    chunk_size: int | None,
+    options: CopyOptions,
     format: str | None,
     progress: Progress | None,
-    overwrite: bool,
     *,
     eager: bool,
-    topics: Collection[str] | None = None,
-    start: int | None = None,
-    end: int | None = None,
-    keep: Callable[[Connection, int, memoryview], bool] | None = None,
+    show: tuple[str, Callable[[bool, Any], None]] | None = None,
     latched: bool = False,
-    renames: Renames | None = None,
-    check_crcs: bool = True,
 ) -> CopyReport:
+    """``src`` into ``dst``; ``eager`` copies every connection, not only those written."""
+    expression = options.expression
+    keep = compile_filter(expression or "True", show) if expression or show else None
+    topics, start, end, renames = options.topics, options.start, options.end, options.renames
+    compression = options.compression
     src, dst = Path(src), Path(dst)
     if dst.exists() and src.resolve() == dst.resolve():
         raise BagUsageError(f"cannot use the same file as input and output: {src}")
     kind = format or format_for_name(dst)
-    with open_bag(src, check_crcs=check_crcs) as reader:
+    with open_bag(src, check_crcs=options.check_crcs) as reader:
         to_ros1 = _ros2_to_ros1(reader, kind, topics, keep is not None)
         total = reader.info().message_count
         profile = mcap_profile([reader], topics)
         writer = open_writer(
-            dst, kind, compression, chunk_size, overwrite=overwrite, profile=profile
-        )
+            dst, kind, compression, options.chunk_size, overwrite=options.overwrite,
+            profile=profile,
+        )  # fmt: skip
         try:
             stream = reader.messages(topics=topics, start=start, end=end)
             if latched and start is not None:
@@ -289,14 +247,7 @@ def _copy(
             if to_ros1 is not None:
                 stream = ((to_ros1.connection(c), t, to_ros1.message(c, d)) for c, t, d in stream)
                 sources = [to_ros1.connection(c) for c in sources]
-            whole = (
-                eager
-                and not renames
-                and not to_ros1
-                and topics is None
-                and start is None
-                and end is None
-            )
+            whole = eager and not renames and not to_ros1 and not options.selects
             out = Targets(writer, sources, renames)
             read, written, conns = _pump(reader, writer, out, stream, whole, keep, progress, total)
             extras = copy_extras(reader, writer, start, end)

@@ -11,7 +11,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 from rostools.bag.formats.access import (
     file_name,
@@ -23,10 +23,8 @@ from rostools.bag.formats.access import (
 )
 from rostools.bag.formats.base import BagWriter, Targets, problems
 from rostools.bag.formats.model import BagUsageError, Connection, counted, lost_data
-from rostools.bag.tools.ops import PROGRESS_EVERY, Progress
-
-if TYPE_CHECKING:
-    from rostools.bag.tools.rename import Renames
+from rostools.bag.tools.ops import compile_filter
+from rostools.bag.tools.options import ALL, PROGRESS_EVERY, CopyOptions, Progress
 
 
 @dataclass
@@ -119,10 +117,8 @@ class _Parts:
         self.base, self.kind, self.report, self.splitter = base, kind, report, splitter
         #: ``repeat_latched``: the last message of each latched connection, for the next part.
         self.latched: dict[int, tuple[Connection, memoryview]] | None = {} if repeat else None
-        #: open_writer's compression, chunk size, overwrite and profile, and the renames.
-        self.writing: tuple[str | None, int | None, bool, Any, Renames | None] = (
-            None, None, False, None, None
-        )  # fmt: skip
+        #: How parts are written, and the MCAP profile.
+        self.writing: tuple[CopyOptions, Any] = (ALL, None)
         self.writer: BagWriter | None = None
         self.targets: Targets | None = None
         self.part = Part(file_name(base, True, 0))
@@ -145,13 +141,14 @@ class _Parts:
 
     def _start(self, t: int) -> None:
         """Open the next part at time ``t``; it starts with the latched messages so far."""
-        compression, chunk_size, overwrite, profile, renames = self.writing
+        options, profile = self.writing
         parts = self.report.parts
         self.part = Part(file_name(self.base, True, len(parts)), start_ns=t)
         parts.append(self.part)
-        self.writer = open_writer(self.part.path, self.kind, compression, chunk_size,
-                                  overwrite=overwrite, profile=profile)  # fmt: skip
-        self.targets = Targets(self.writer, (), renames)
+        self.writer = open_writer(self.part.path, self.kind, options.compression,
+                                  options.chunk_size, overwrite=options.overwrite,
+                                  profile=profile)  # fmt: skip
+        self.targets = Targets(self.writer, (), options.renames)
         self.part_bytes = 0
         if self.latched and len(parts) > 1:
             for old, payload in self.latched.values():
@@ -173,38 +170,39 @@ def split(
     src: str | Path,
     base: str | Path,
     cut: Cut,
+    options: CopyOptions = ALL,
     *,
     repeat_latched: bool = False,
-    compression: str | None = None,
-    chunk_size: int | None = None,
     progress: Progress | None = None,
-    overwrite: bool = False,
-    renames: Renames | None = None,
-    check_crcs: bool = True,
 ) -> SplitReport:
     """Write ``src``'s messages into parts named after ``base`` (its suffix picks the format).
 
     ``repeat_latched``: each part after the first starts with the last message so far of every
     latched connection, stamped at the part's first message, as ``record --split`` does.
-    ``check_crcs`` as ``open_bag``'s.
+    ``options`` select and rename as for ``ops.filter_bag``; a part holds what they keep.
     """
     cut.check()
     src, base = Path(src), Path(base)
     kind = format_for_name(base)
     first = file_name(base, True, 0)
-    if first.exists() and not overwrite:
+    if first.exists() and not options.overwrite:
         raise BagUsageError(f"{first} exists (use -f to overwrite)")
     report = SplitReport(src)
-    with open_bag(src, check_crcs=check_crcs) as reader:
-        if kind != "mcap":  # an MCAP output takes any encoding as it is
-            require_ros1(reader, "bag split")
+    keep = compile_filter(options.expression) if options.expression else None
+    with open_bag(src, check_crcs=options.check_crcs) as reader:
+        if kind != "mcap" or keep:  # an MCAP output takes any encoding as it is
+            require_ros1(reader, "bag split", options.topics)
         info = reader.info()
         parts = _Parts(base, kind, report, _Splitter(cut, info.start_ns or 0), repeat_latched)
-        parts.writing = (compression, chunk_size, overwrite, mcap_profile([reader]), renames)
+        profile = mcap_profile([reader], options.topics)
+        parts.writing = (options, profile)
         read = 0
         try:
-            for conn, t, data in reader.messages():
-                parts.write(conn, t, data)
+            for conn, t, data in reader.messages(
+                topics=options.topics, start=options.start, end=options.end
+            ):
+                if keep is None or keep(conn, t, data):
+                    parts.write(conn, t, data)
                 read += 1
                 if progress is not None and read % PROGRESS_EVERY == 0:
                     progress(read, info.message_count)

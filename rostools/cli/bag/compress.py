@@ -36,17 +36,17 @@ def compress(
     fmt: FormatOpt = None,
 ) -> None:
     """Compress bags in place, keeping the original as x.orig.bag (rosbag compress)."""
-    from rostools.bag.formats.access import detect_format
     from rostools.bag.tools.ops import compress as run_compress
+    from rostools.bag.tools.options import CopyOptions
 
     if bz2 and lz4:
         raise UsageError("--bz2 and --lz4 cannot be combined")
+    # lz4, or the format's default (bz2 for .bag, zstd for MCAP)
+    options = CopyOptions(compression="lz4" if lz4 else None, overwrite=True,
+                          check_crcs=not no_crc_check)  # fmt: skip
 
     def run(src: Path, dst: Path, progress: Any) -> CopyReport:
-        kind = "lz4" if lz4 else ("bz2" if detect_format(src) == "bag" else "zstd")
-        return run_compress(
-            src, dst, kind, progress=progress, overwrite=True, check_crcs=not no_crc_check
-        )
+        return run_compress(src, dst, options, progress=progress)
 
     copy_in_place(bags, output_dir, force, output_format(ctx, fmt), quiet, "compress", run)
 
@@ -63,10 +63,11 @@ def decompress(
 ) -> None:
     """Decompress bags in place, keeping the original as x.orig.bag (rosbag decompress)."""
     from rostools.bag.tools.ops import decompress as run_decompress
+    from rostools.bag.tools.options import CopyOptions
+
+    options = CopyOptions(overwrite=True, check_crcs=not no_crc_check)
 
     def run(src: Path, dst: Path, progress: Any) -> CopyReport:
-        return run_decompress(
-            src, dst, progress=progress, overwrite=True, check_crcs=not no_crc_check
-        )
+        return run_decompress(src, dst, options, progress=progress)
 
     copy_in_place(bags, output_dir, force, output_format(ctx, fmt), quiet, "decompress", run)

@@ -31,9 +31,7 @@ def convert(
     """Convert .bag to MCAP or back, losslessly (renaming topics or types if asked)."""
     from rostools.bag.tools.ops import convert as run_convert
 
-    size = chunk_size * 1024 if chunk_size else None
-    rules = how.renames()
+    options = how.copy(chunk_size=chunk_size * 1024 if chunk_size else None)
     copy_command(output_format(ctx, fmt), how.quiet, "convert", lambda progress: run_convert(
-        src, dst, compression=how.compression, chunk_size=size, progress=progress,
-        overwrite=how.force, renames=rules, check_crcs=not how.no_crc_check,
+        src, dst, options, progress=progress
     ))  # fmt: skip

@@ -56,14 +56,11 @@ def filter_(
     """
     from rostools.bag.tools.ops import filter_bag
 
-    lo, hi = window.bounds([src])
+    options = how.copy(window, [src], expression=expression)
     out = output_format(ctx, fmt)
     show = None if print_ is None else (print_, partial(_say, out))
-    rules = how.renames()
     copy_command(out, how.quiet or show is not None, "filter", lambda progress: filter_bag(
-        src, dst, topics=window.topics or None, start=lo, end=hi, expression=expression,
-        compression=how.compression, progress=progress, overwrite=how.force, show=show,
-        latched=latched, renames=rules, check_crcs=not how.no_crc_check,
+        src, dst, options, progress=progress, show=show, latched=latched
     ))  # fmt: skip
 
 

@@ -37,10 +37,7 @@ def merge(
     """Merge bags into one, in time order; the same connection in several is written once."""
     from rostools.bag.tools.merge import merge as run_merge
 
-    lo, hi = window.bounds(sources)
-    rules = how.renames()
+    options = how.copy(window, sources, expression=expression)
     copy_command(output_format(ctx, fmt), how.quiet, "merge", lambda progress: run_merge(
-        sources, dst, topics=window.topics or None, start=lo, end=hi, expression=expression,
-        compression=how.compression, progress=progress, overwrite=how.force, renames=rules,
-        check_crcs=not how.no_crc_check,
+        sources, dst, options, progress=progress
     ))  # fmt: skip

@@ -18,6 +18,7 @@ from rostools.errors import UsageError
 
 if TYPE_CHECKING:
     from rostools.bag.live.player import PlayOptions
+    from rostools.bag.tools.options import CopyOptions
     from rostools.bag.tools.rename import Renames
 
 BagArg = Annotated[Path, typer.Argument(help="A .bag or .mcap file.")]
@@ -361,6 +362,23 @@ class CopyOutput:
         from rostools.cli.bag.shared import renames
 
         return renames(self.rename, self.rename_type)
+
+    def copy(
+        self, window: CopyWindow | None = None, paths: list[Path] | None = None, **more: Any
+    ) -> CopyOptions:
+        """The library's ``CopyOptions``: these options, ``window``'s and ``more``'s.
+
+        ``window``'s times count from the earliest start of ``paths``; ``more`` holds what a
+        command adds (``expression``, ``chunk_size``).
+        """
+        from rostools.bag.tools.options import CopyOptions
+
+        lo, hi = window.bounds(paths or []) if window else (None, None)
+        return CopyOptions(
+            topics=(window.topics or None) if window else None, start=lo, end=hi,
+            compression=self.compression, overwrite=self.force, renames=self.renames(),
+            check_crcs=not self.no_crc_check, **more,
+        )  # fmt: skip
 
 
 @options_record

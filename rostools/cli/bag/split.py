@@ -96,10 +96,8 @@ def split(
     progress = Progress("split", chosen, how.quiet)
     try:
         report = run_split(
-            src, out or src, cut, repeat_latched=repeat_latched, compression=how.compression,
-            progress=progress, overwrite=how.force, renames=how.renames(),
-            check_crcs=not how.no_crc_check,
-        )  # fmt: skip
+            src, out or src, cut, how.copy(), repeat_latched=repeat_latched, progress=progress
+        )
     finally:
         progress.done()
     _split_report(chosen, report)

@@ -10,11 +10,11 @@ from rostools.bag.live.play_control import RateControl, header_first, set_bool_r
 from rostools.bag.live.player import State, Status
 from rostools.cli.bag.play import status_line
 from rostools.msgs.store import TypeStore
-from rostools.node.service import ServiceType
+from rostools.msgs.topictype import ServiceType
 
 
 def test_set_bool_type_is_std_srvs() -> None:
-    from rostools.bag.live.play_control import SET_BOOL
+    from rostools.msgs.wellknown import SET_BOOL
 
     assert ServiceType.of(TypeStore.default(), "std_srvs/SetBool") == SET_BOOL
 

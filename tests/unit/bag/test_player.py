@@ -21,10 +21,9 @@ import pytest
 from rostools.bag.formats.access import open_bag, open_writer
 from rostools.bag.formats.base import BagReader
 from rostools.bag.live import player as player_module
-from rostools.bag.live.play_control import SET_BOOL
 from rostools.bag.live.player import CONNECT_GRACE, Player, PlayOptions, State, Status
 from rostools.errors import UsageError
-from rostools.node.clock import CLOCK
+from rostools.msgs.wellknown import CLOCK, SET_BOOL
 from tests.support.bagdata import STRING_MD5
 
 NS = 1_000_000_000

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import tracemalloc
 
-from rostools.bag.live.recorder import ENTRY_OVERHEAD
+from rostools.bag.formats.model import ENTRY_OVERHEAD
 from rostools.bag.live.ringbuffer import GONE_KEPT, ConnInfo, Lost, RingBuffer
 
 NS = 1_000_000_000

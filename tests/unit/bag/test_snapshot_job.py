@@ -11,9 +11,9 @@ from typing import Any
 import pytest
 
 from rostools.bag.formats.access import bag_info, detect_format
+from rostools.bag.formats.model import ENTRY_OVERHEAD
 from rostools.bag.live import snapshot_job
 from rostools.bag.live.bagfile import active_name
-from rostools.bag.live.recorder import ENTRY_OVERHEAD
 from rostools.bag.live.ringbuffer import ConnInfo, Held, Lost, RingBuffer
 from rostools.bag.live.snapshot_job import FileSpec, SnapshotJob, wait_joined
 from rostools.bag.live.snapshot_live import LiveQueue

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import threading
 
-from rostools.bag.live.recorder import ENTRY_OVERHEAD
+from rostools.bag.formats.model import ENTRY_OVERHEAD
 from rostools.bag.live.ringbuffer import ConnInfo
 from rostools.bag.live.snapshot_live import BATCH_BYTES, BATCH_MESSAGES, LiveQueue, LiveReader
 

@@ -36,6 +36,9 @@ TOOL = "rosconsole"
 if TYPE_CHECKING:
     NodeArg = Annotated[str, typer.Argument(help="The node; relative names join ROS_NAMESPACE.")]
     LoggerArg = Annotated[str, typer.Argument(help="A logger of the node (log list NODE).")]
+    SomeLoggerArg = Annotated[
+        str | None, typer.Argument(help="A logger of the node (default: every one).")
+    ]
     LevelArg = Annotated[str, typer.Argument(help="debug, info, warn, error or fatal.")]
 
 
@@ -104,7 +107,7 @@ def list_loggers(s: Settings, node: NodeArg, fmt: FormatOpt = None) -> None:
 
 
 @command(quick=True)
-def get(s: Settings, node: NodeArg, logger: LoggerArg | None = None, fmt: FormatOpt = None) -> None:
+def get(s: Settings, node: NodeArg, logger: SomeLoggerArg = None, fmt: FormatOpt = None) -> None:
     """A logger's level (rosconsole get); every logger's, with no LOGGER."""
     found = loggers_of(s.master(TOOL), node)
     out = s.output_format(fmt)
@@ -120,9 +123,12 @@ def get(s: Settings, node: NodeArg, logger: LoggerArg | None = None, fmt: Format
 
 @command("set", quick=True)
 def set_(s: Settings, node: NodeArg, logger: LoggerArg, level: LevelArg) -> None:
-    """Set a logger's level: debug, info, warn, error or fatal (rosconsole set)."""
+    """Set a logger's level: debug, info, warn, error or fatal (rosconsole set).
+
+    One call to the node's ``set_logger_level``. rosconsole asks ``get_loggers`` first, to
+    check that the logger exists; Debian's roscpp nodes crash after answering that (log4cxx
+    0.15), so the check is left to the node, which refuses what it cannot set.
+    """
     if level.lower() not in LEVELS:
         raise UsageError(f"invalid level {level!r}: one of {', '.join(LEVELS)}")
-    master = s.master(TOOL)
-    _level_of(loggers_of(master, node), node, logger)
-    _call(master, node, "set_logger_level", SET_LOGGER_LEVEL, encode_set(logger, level))
+    _call(s.master(TOOL), node, "set_logger_level", SET_LOGGER_LEVEL, encode_set(logger, level))

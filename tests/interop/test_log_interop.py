@@ -7,15 +7,18 @@ must change what each publishes to /rosout; ``log list``/``get`` must agree with
 
 from __future__ import annotations
 
+import json
 import re
 import subprocess
+import time
 from collections.abc import Iterator
+from typing import Any
 
 import pytest
 
 from tests.conftest import MasterInfo
 from tests.support import cppbuild
-from tests.support.env import needs_ros1, run_cli
+from tests.support.env import CORPUS, needs_corpus, needs_ros1, run_cli, run_system_python
 from tests.support.load import scaled
 from tests.support.procs import Proc, start_cli, start_ros1_node, wait_for
 
@@ -100,23 +103,38 @@ def _rounds(proc: Proc, level: str, after: int, count: int = 2) -> int:
 
 
 def test_log_set_changes_what_reaches_rosout(any_master: MasterInfo, nodes: LoggingNodes) -> None:
-    """debug appears after ``set debug``; info stops after ``set warn`` (both node kinds)."""
+    """debug appears after ``set debug``; info stops after ``set warn`` (both node kinds).
+
+    The messages are told apart by their stamps: /rosout reaches echo later than the node
+    logs, so a line read after ``set`` returned may have been logged before it.
+    """
     env, node, logger = any_master.cli_env, nodes.start(), nodes.logger
-    echo = start_cli("log", "echo", "-l", "debug", "--node", f"^{node}$", "--nocolor", env=env)
+    echo = start_cli("log", "echo", "-l", "debug", "--node", f"^{node}$", "-F", "json", env=env)
+
+    def logged(level: str, after: float, count: int = 2) -> list[dict[str, Any]]:
+        """Wait for ``count`` messages at ``level`` stamped after ``after``; all those seen."""
+        seen = 0
+        while seen < count:
+            msg = json.loads(echo.expect(rf'"msg":"{level} \d+"', 30))
+            stamp = msg["header"]["stamp"]
+            seen += stamp["secs"] + stamp["nsecs"] / 1e9 > after
+        return [json.loads(line) for line in echo.seen]
+
     try:
-        last = _rounds(echo, "info", -1)  # info reaches /rosout at the default level
+        logged("info", 0)  # info reaches /rosout at the default level
         done = run_cli("log", "set", node, logger, "debug", env=env)
         assert done.returncode == 0, done.stderr
-        last = _rounds(echo, "debug", last)
+        logged("debug", 0)
         done = run_cli("log", "set", node, logger, "warn", env=env)
         assert done.returncode == 0, done.stderr
-        set_at = _rounds(echo, "fatal", last, 1)  # a round that may still be the old level
-        later = _rounds(echo, "warn", set_at + 1, 3)
-        found = [m for line in echo.seen if (m := ROUND.search(line.strip()))]
-        lines = [(m.group(1), int(m.group(2))) for m in found]
-        after = [(lv, n) for lv, n in lines if set_at + 1 < n <= later]
-        assert after, echo.seen[-10:]
-        assert {lv for lv, _ in after} == {"warn", "error", "fatal"}, after
+        set_at = time.time()  # the node applied it before it answered
+        msgs = logged("warn", set_at, 3)
+        after = [
+            m
+            for m in msgs
+            if m["header"]["stamp"]["secs"] + m["header"]["stamp"]["nsecs"] / 1e9 > set_at
+        ]
+        assert {m["level"] for m in after} == {4, 8, 16}, [m["msg"] for m in after]
     finally:
         echo.stop()
 
@@ -221,3 +239,67 @@ def test_a_node_without_logger_services(any_master: MasterInfo) -> None:
     got = run_cli("log", "list", "/mute", env=any_master.cli_env)
     assert got.returncode == 3, got.stderr
     assert got.stderr.count("\n") == 1 and "node /mute does not serve get_loggers" in got.stderr
+
+
+LOG_BAGS = [
+    "ros1/roswire/example.bag",
+    "ros1/roswire/hello_world_example.bag",
+    "ros1/rosbag.js/example.bag",
+    "ros1/rosbag.js/example-lz4.bag",
+    "ros1/rosbag.js/example-bz2.bag",
+    "ros1/webviz/example.lz4.bag",
+    "ros1/rosbag2_bag_v2/test_bag_end_to_end.bag",  # "rosout", relative, with no messages
+    "ros1/rosbag2_bag_v2/test_bag_multiple_connections.bag",
+]
+#: Real rosbag's reading of the log messages echo -b picks: /rosout_agg's, else /rosout's.
+ROSBAG_LOGS = """
+import json, sys, rosbag
+bag = rosbag.Bag(sys.argv[1])
+topics = {c.topic for c in bag._get_connections() if c.datatype == "rosgraph_msgs/Log"}
+full = {("/" + t if not t.startswith("/") else t): t for t in topics}
+topic = full.get("/rosout_agg") or full["/rosout"]
+for _, m, _ in bag.read_messages(topics=[topic]):
+    h = m.header
+    print(json.dumps({"header": {"seq": h.seq, "stamp": {"secs": h.stamp.secs,
+        "nsecs": h.stamp.nsecs}, "frame_id": h.frame_id}, "level": m.level, "name": m.name,
+        "msg": m.msg, "file": m.file, "function": m.function, "line": m.line,
+        "topics": list(m.topics)}))
+"""
+
+
+@needs_corpus
+@pytest.mark.parametrize("rel", LOG_BAGS)
+def test_echo_bag_equals_what_rosbag_reads(rel: str) -> None:
+    """``log echo -b -l debug -F json``: the messages real rosbag decodes, field for field."""
+    path = CORPUS / rel
+    ours = run_cli("log", "echo", "-b", str(path), "-l", "debug", "--format", "json")
+    assert ours.returncode == 0, ours.stderr
+    theirs = [json.loads(line) for line in run_system_python(ROSBAG_LOGS, str(path)).splitlines()]
+    got = [json.loads(line) for line in ours.stdout.splitlines()]
+    assert got or "end_to_end" in rel
+    # rosconsole's filter: level at least debug (1); level 0 is no level, and not shown
+    assert got == [m for m in theirs if m["level"] >= 1]
+
+
+@needs_corpus
+def test_echo_bag_filters_and_text() -> None:
+    """Level, node and text filters on a bag; rosconsole's line for each message."""
+    path = CORPUS / "ros1/roswire/example.bag"
+    every = run_cli("log", "echo", "-b", str(path), "-l", "debug", "-F", "json").stdout
+    msgs = [json.loads(line) for line in every.splitlines()]
+    want = [m for m in msgs if m["level"] >= 2 and "mavros" in m["name"] and "EKF" in m["msg"]]
+    assert want and len(want) < len(msgs)
+    got = run_cli("log", "echo", "-b", str(path), "-l", "info", "--node", "mavros", "--grep", "EKF")
+    names = {1: "DEBUG", 2: "INFO ", 4: "WARN ", 8: "ERROR", 16: "FATAL"}
+    assert got.stdout.splitlines() == [
+        f"[ {names[m['level']]} ] [{m['name']}]: {m['msg']}" for m in want
+    ]
+
+
+@needs_corpus
+def test_echo_bag_without_logs_is_one_line() -> None:
+    """A bag with no rosgraph_msgs/Log: one line, exit 3."""
+    path = CORPUS / "ros1/rosbag.js/example.bag"
+    got = run_cli("log", "echo", "-b", str(path), "--topic", "/turtle1/cmd_vel")
+    assert got.returncode == 3 and got.stderr.count("\n") == 1, got.stderr
+    assert "has no rosgraph_msgs/Log messages on /turtle1/cmd_vel" in got.stderr

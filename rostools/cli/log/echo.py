@@ -288,14 +288,15 @@ def _from_bag(path: Path, topic: str | None, printer: LogPrinter, check_crcs: bo
     store = type_store()
     printer.strict = True
     with open_bag(path, check_crcs=check_crcs) as bag:
-        logs = {c.topic for c in bag.connections if c.type == LOG_TYPE}
-        wanted = topic or next((t for t in TOPICS if t in logs), None)
+        # a relative name (rosbag2_bag_v2's "rosout") is the global one, as a bag is read
+        logs = {_global(c.topic): c.topic for c in bag.connections if c.type == LOG_TYPE}
+        wanted = _global(topic) if topic else next((t for t in TOPICS if t in logs), None)
         if wanted is None or wanted not in logs:
             what = wanted or " or ".join(TOPICS)
             raise NotFoundError(f"{path} has no {LOG_TYPE} messages on {what}")
-        require_ros1(bag, "log echo -b", [wanted])
+        require_ros1(bag, "log echo -b", [logs[wanted]])
         renderers: dict[int, Renderer] = {}
-        for conn, t_ns, data in bag.messages(topics=[wanted]):
+        for conn, t_ns, data in bag.messages(topics=[logs[wanted]]):
             try:
                 renderer = renderers.get(id(conn))
                 if renderer is None:
@@ -311,3 +312,7 @@ def _from_bag(path: Path, topic: str | None, printer: LogPrinter, check_crcs: bo
         f"printed {counted(printer.printed, 'message')}",
         lambda n: sys.stderr.write(f"note: {n}\n"),
     )
+
+
+def _global(topic: str) -> str:
+    return topic if topic.startswith("/") else "/" + topic

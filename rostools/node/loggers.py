@@ -13,7 +13,13 @@ import struct
 
 TYPE_CHECKING = False  # ``typing`` is 5-10 ms of start-up; only annotations use it
 if TYPE_CHECKING:
-    from rostools.node.node import LiveNode
+    from typing import Any, Protocol
+
+    class _Serves(Protocol):
+        """What ``serve_loggers`` needs of a node (not ``LiveNode``: it imports this)."""
+
+        async def advertise_service(self, name: str, srv_type: Any, handler: Any) -> Any: ...
+
 
 #: The md5sums of the two service types (``tests/unit/test_log_wire.py`` checks them).
 GET_LOGGERS = ("roscpp/GetLoggers", "32e97e85527d4678a8f9279894bb64b0")
@@ -125,7 +131,7 @@ def get_loggers(request: bytes) -> bytes:
     return encode_loggers(our_loggers())
 
 
-async def serve_loggers(node: LiveNode) -> None:
+async def serve_loggers(node: _Serves) -> None:
     """Offer ``~get_loggers`` and ``~set_logger_level`` on ``node``, as every rospy node does."""
     from rostools.node.service import ServiceType
 

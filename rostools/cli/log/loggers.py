@@ -123,12 +123,10 @@ def get(s: Settings, node: NodeArg, logger: SomeLoggerArg = None, fmt: FormatOpt
 
 @command("set", quick=True)
 def set_(s: Settings, node: NodeArg, logger: LoggerArg, level: LevelArg) -> None:
-    """Set a logger's level: debug, info, warn, error or fatal (rosconsole set).
-
-    One call to the node's ``set_logger_level``. rosconsole asks ``get_loggers`` first, to
-    check that the logger exists; Debian's roscpp nodes crash after answering that (log4cxx
-    0.15), so the check is left to the node, which refuses what it cannot set.
-    """
+    """Set a logger's level: debug, info, warn, error or fatal (rosconsole set)."""
+    # One call to the node's set_logger_level. rosconsole asks get_loggers first, to check
+    # that the logger exists; Debian's roscpp nodes crash after answering that (log4cxx
+    # 0.15), so the check is left to the node, which refuses what it cannot set.
     if level.lower() not in LEVELS:
         raise UsageError(f"invalid level {level!r}: one of {', '.join(LEVELS)}")
     _call(s.master(TOOL), node, "set_logger_level", SET_LOGGER_LEVEL, encode_set(logger, level))

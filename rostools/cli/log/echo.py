@@ -257,7 +257,9 @@ async def _live(
         loop.call_at(loop.time() + max(deadline - time.monotonic(), 0), wake.set)
     watcher = loop.create_task(stop.wait())
     watcher.add_done_callback(lambda _: wake.set())
-    await node.subscribe(topic, on_frames, TopicType.of(renderer.codec.store, LOG_TYPE))
+    # small reads gather for 1 ms: at 10k messages a second, a wake-up each costs the CPU
+    log_type = TopicType.of(renderer.codec.store, LOG_TYPE)
+    await node.subscribe(topic, on_frames, log_type, coalesce=0.001)
     try:
         while not stop.is_set():
             if deadline is not None and time.monotonic() >= deadline:

@@ -8,7 +8,6 @@ alone: the quick ``log`` commands use the same functions, and load no type store
 
 from __future__ import annotations
 
-import logging
 import struct
 
 TYPE_CHECKING = False  # ``typing`` is 5-10 ms of start-up; only annotations use it
@@ -28,16 +27,10 @@ SET_LOGGER_LEVEL = ("roscpp/SetLoggerLevel", "51da076440d78ca1684d36c868df61ea")
 LEVELS = ("debug", "info", "warn", "error", "fatal")
 #: The root of the loggers a rostools node lists.
 ROOT = "rostools"
-#: rospy's names for Python's levels (``rospy.client._logging_level_names``).
-_NAMES = {
-    logging.DEBUG: "DEBUG",
-    logging.INFO: "INFO",
-    logging.WARNING: "WARN",
-    logging.ERROR: "ERROR",
-    logging.CRITICAL: "FATAL",
-}
-_PYTHON_LEVELS = {"DEBUG": logging.DEBUG, "INFO": logging.INFO, "WARN": logging.WARNING}
-_PYTHON_LEVELS |= {"ERROR": logging.ERROR, "FATAL": logging.CRITICAL}
+#: rospy's names for Python's levels (``rospy.client._logging_level_names``); the numbers are
+#: ``logging``'s, written out: the quick commands import this module, and not ``logging``.
+_NAMES = {10: "DEBUG", 20: "INFO", 30: "WARN", 40: "ERROR", 50: "FATAL"}
+_PYTHON_LEVELS = {name: level for level, name in _NAMES.items()}
 
 
 class LoggerBytesError(ValueError):
@@ -94,6 +87,8 @@ def decode_set(data: bytes) -> tuple[str, str]:
 
 def our_loggers() -> list[tuple[str, str]]:
     """rostools' loggers that exist in this process, with their effective levels."""
+    import logging
+
     known = logging.Logger.manager.loggerDict.items()
     ours = (
         n for n, found in known if n.startswith(ROOT + ".") and isinstance(found, logging.Logger)
@@ -115,6 +110,8 @@ def set_level(request: bytes) -> bytes:
     answers false; rospy logs and ignores it). Creating loggers on a peer's word would let it
     fill our memory.
     """
+    import logging
+
     from rostools.errors import ServiceError
 
     logger, level = decode_set(request)

@@ -303,3 +303,42 @@ def test_echo_bag_without_logs_is_one_line() -> None:
     got = run_cli("log", "echo", "-b", str(path), "--topic", "/turtle1/cmd_vel")
     assert got.returncode == 3 and got.stderr.count("\n") == 1, got.stderr
     assert "has no rosgraph_msgs/Log messages on /turtle1/cmd_vel" in got.stderr
+
+
+#: rosconsole echo's own printing of one message, colour on or off, with -v.
+ROSCONSOLE_PRINT = """
+import sys
+from rospy.rosconsole import RosConsoleEcho
+from rosgraph_msgs.msg import Log
+msg = Log()
+msg.deserialize(bytes.fromhex(sys.argv[1]))
+echo = object.__new__(RosConsoleEcho)
+echo._nocolor, echo._verbose = sys.argv[2] == "plain", True
+echo._level_string_map = {getattr(Log, lv): echo._stringify(lv) for lv in echo.LEVEL_COLOR}
+echo._print(msg)
+"""
+
+
+@pytest.mark.parametrize("colour", [False, True])
+@pytest.mark.parametrize("level", [1, 2, 4, 8, 16])
+def test_each_level_reads_as_rosconsole_prints_it(level: int, colour: bool) -> None:
+    """The line and -v's second line, as rosconsole echo's own code prints them.
+
+    rosconsole ends the node's bold with ``\\033[21m`` (double underline on most terminals);
+    we end it with ``\\033[22m``, normal intensity: the one escape allowed to differ.
+    """
+    from rostools.cli.log.echo import LogPrinter, _renderer
+    from rostools.cli.output import Format
+
+    renderer = _renderer()
+    msg = renderer.codec.message_class("rosgraph_msgs/Log")(
+        level=level, name="/n", msg="said 1", file="f.py", function="fn", line=3
+    )
+    msg.header.stamp.secs, msg.header.stamp.nsecs = 1_700_000_000, 250_000_000
+    data = msg.serialize()
+    theirs = run_system_python(ROSCONSOLE_PRINT, data.hex(), "colour" if colour else "plain")
+    printer = LogPrinter(1, None, None, Format.text, colour, True, None)
+    ours = printer.line(renderer.decode(data, 0)[0])
+    if not colour:  # rosconsole writes the bold escapes even with --nocolor
+        theirs = theirs.replace("\033[1m", "").replace("\033[21m", "")
+    assert ours == theirs.replace("\033[21m", "\033[22m")

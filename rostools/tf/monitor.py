@@ -82,10 +82,8 @@ class Monitor:
             for f in chain
             if (e := self.edges.by_child.get(f)) is not None and not e.static
         ]
-        if not stamps:
-            delay = 0.0  # static all along: known at any time
-        else:
-            delay = (now_ns - min(stamps)) / 1e9
+        # a chain static all along is known at any time
+        delay = (now_ns - min(stamps)) / 1e9 if stamps else 0.0
         self._net.append(delay)
         return delay
 

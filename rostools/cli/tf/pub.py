@@ -1,5 +1,8 @@
-"""``rostools tf pub``: one static transform, latched on ``/tf_static``, as tf2_ros's
-``static_transform_publisher`` publishes it."""
+"""``rostools tf pub``: one static transform, latched on ``/tf_static``.
+
+As tf2_ros's ``static_transform_publisher`` publishes it: the same values, stamped now, one
+``tf2_msgs/TFMessage`` per publisher, so that several (one per child) all stay visible.
+"""
 
 from __future__ import annotations
 
@@ -32,9 +35,9 @@ def parse(args: list[str], now_ns: int) -> Stamped:
     """The transform the arguments name, stamped ``now_ns`` (``UsageError`` if they name none)."""
     from rostools.tf.math import from_rpy
 
-    if len(args) not in (9, 10):
+    if len(args) not in (8, 9):
         raise UsageError(
-            f"tf pub takes 9 or 10 arguments, not {len(args)}",
+            f"tf pub takes 8 or 9 arguments, not {len(args)}",
             hint=f"{RPY_FORM}, or {QUATERNION_FORM}",
         )
     *numbers, parent, child = args
@@ -75,12 +78,13 @@ def pub(
     ctx: typer.Context,
     args: Annotated[
         list[str],
-        typer.Argument(
-            help=f"{RPY_FORM} (radians), or {QUATERNION_FORM}.", show_default=False
-        ),
+        typer.Argument(help=f"{RPY_FORM} (radians), or {QUATERNION_FORM}.", show_default=False),
     ],
 ) -> None:
-    """Publish a static transform on /tf_static, latched, until stopped (static_transform_publisher)."""
+    """Publish one static transform on /tf_static, latched, until stopped.
+
+    As static_transform_publisher: YAW PITCH ROLL in radians, or a unit quaternion.
+    """
     transform = parse(args, time.time_ns())
     node_session(ctx, partial(_publish, transform), "static_transform_publisher")
 

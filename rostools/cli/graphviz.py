@@ -10,6 +10,7 @@ person has the graph to render elsewhere.
 
 from __future__ import annotations
 
+import enum
 from pathlib import Path
 from typing import Final
 
@@ -28,6 +29,15 @@ DOT_FORMATS: Final = ("svg", "png", "pdf")
 DOT_SUFFIXES: Final = (".dot", ".gv")
 #: Seconds ``dot`` may take to lay out the graph.
 DOT_TIMEOUT: Final = 60.0
+
+
+class GraphFormat(str, enum.Enum):
+    """Output formats of a command that draws a graph: the usual ones and Graphviz."""
+
+    text = "text"
+    json = "json"
+    yaml = "yaml"
+    dot = "dot"
 
 
 def dot_id(text: str) -> str:

@@ -6,7 +6,6 @@ rqt_graph's picture without a GUI.
 
 from __future__ import annotations
 
-import enum
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated
 
@@ -15,7 +14,7 @@ import typer
 from rostools.cli import output
 from rostools.cli.common import master, settings
 from rostools.cli.declare import command
-from rostools.cli.graphviz import dot_id, dot_label, draw, picture_kind
+from rostools.cli.graphviz import GraphFormat, dot_id, dot_label, draw, picture_kind
 from rostools.cli.output import Format, emit
 from rostools.errors import one_line
 
@@ -24,15 +23,6 @@ if TYPE_CHECKING:
 
 
 from rostools.cli.node.shared import TOOL, warn
-
-
-class GraphFormat(str, enum.Enum):
-    """Output formats of ``node graph``: the usual ones and Graphviz."""
-
-    text = "text"
-    json = "json"
-    yaml = "yaml"
-    dot = "dot"
 
 
 def graph_text(graph: RosGraph) -> str:

@@ -5,7 +5,7 @@ from __future__ import annotations
 import typer
 
 from rostools.cli.register import add
-from rostools.cli.tf import echo, pub as tf_pub
+from rostools.cli.tf import echo, frames, pub
 
 app = typer.Typer(
     name="tf",
@@ -14,7 +14,7 @@ app = typer.Typer(
     add_completion=False,
 )
 add(app, echo.echo)
-add(app, tf_pub.pub)
+add(app, frames.frames, pub.pub)
 
 
 @app.callback()

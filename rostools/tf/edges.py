@@ -138,7 +138,7 @@ class Edges:
             if edge is None:  # a cache is static or not from its first entry on, as tf2's
                 edge = self.by_child[t.child] = Edge(t.child, static)
             if edge.insert(t.stamp_ns, t.parent, self.cache_ns):
-                edge.broadcaster = broadcaster or NO_AUTHORITY
+                edge.broadcaster = broadcaster  # as given, even empty: tf2 keeps it so
 
     def edges(self) -> list[Edge]:
         """The edges, by child frame name."""

@@ -119,7 +119,9 @@ def test_monitor_counts_delay_per_frame_and_rate_per_broadcaster() -> None:
     report = mon.report()
     (odom,) = [f for f in report["frames"] if f["frame"] == "odom"]  # type: ignore[attr-defined]
     assert odom["average_delay"] == pytest.approx(0.02) and odom["broadcaster"] == "/mover"
-    mover, stp = report["broadcasters"]  # type: ignore[misc]
+    broadcasters = report["broadcasters"]
+    assert isinstance(broadcasters, list)
+    mover, stp = broadcasters
     assert mover["rate"] == pytest.approx(11 / 1.0)  # tf_monitor's count over span
     assert stp["static"] and stp["rate"] is None
     text = report_text(report, None, None)

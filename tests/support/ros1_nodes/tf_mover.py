@@ -13,7 +13,7 @@ from geometry_msgs.msg import TransformStamped
 
 rospy.init_node("tf_mover")
 rate_hz = float(sys.argv[1])
-pairs = list(zip(sys.argv[2::2], sys.argv[3::2]))
+pairs = list(zip(sys.argv[2::2], sys.argv[3::2], strict=True))
 broadcaster = tf2_ros.TransformBroadcaster()
 rate = rospy.Rate(rate_hz)
 said = False

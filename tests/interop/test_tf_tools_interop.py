@@ -265,9 +265,9 @@ def test_tf_pub_is_seen_by_tf2_with_static_transform_publishers_values(
             a, b = seen[f"theirs_{kind}"], seen[f"ours_{kind}"]
             assert a["t"] == pytest.approx(b["t"], abs=1e-12)
             assert a["q"] == pytest.approx(b["q"], abs=1e-12)
-        # Ctrl-C: a clean end, and the publisher is gone from the master
-        for proc in ours:
-            proc.signal(signal.SIGINT)
+        # Ctrl-C or SIGTERM: a clean end, and the publisher is gone from the master
+        for proc, sig in zip(ours, (signal.SIGINT, signal.SIGTERM), strict=True):
+            proc.signal(sig)
             assert _wait_exit(proc, 30) == 0, proc.output()
         wait_for(lambda: len(publishers(info.uri, "/tf_static")) == 2, 15, "ours unregistered")
     finally:

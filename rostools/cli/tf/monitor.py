@@ -16,7 +16,7 @@ from typing import TYPE_CHECKING, Annotated
 import typer
 
 from rostools.cli import output
-from rostools.cli.common import node_session, settings
+from rostools.cli.common import FormatOpt, node_session, output_format
 from rostools.cli.declare import command
 from rostools.cli.output import Format
 from rostools.cli.tf.options import BagOpt, CountOpt
@@ -78,6 +78,7 @@ def monitor(
     target: Annotated[str | None, typer.Argument(help="The chain's other end.")] = None,
     bag: BagOpt = None,
     count: CountOpt = None,
+    fmt: FormatOpt = None,
 ) -> None:
     """Delay and rate per frame and per broadcaster (tf_monitor); live, a report a second."""
     if (source is None) != (target is None):
@@ -86,12 +87,12 @@ def monitor(
         raise UsageError("-n must be at least 1")
     a = strip_slash(source) if source is not None else None
     b = strip_slash(target) if target is not None else None
-    fmt = settings(ctx).format
+    chosen = output_format(ctx, fmt)
     if bag is not None:
         mon = _from_bag(bag, a, b)
-        _print(mon, a, b, fmt)
+        _print(mon, a, b, chosen)
         return
-    node_session(ctx, partial(_live, a, b, count, fmt), "tf_monitor", fmt)
+    node_session(ctx, partial(_live, a, b, count, chosen), "tf_monitor", chosen)
 
 
 def _print(mon: Monitor, a: str | None, b: str | None, fmt: Format) -> None:

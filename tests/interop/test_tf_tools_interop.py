@@ -15,20 +15,19 @@ import json
 import random
 import re
 import signal
-import subprocess
 from collections.abc import Iterator
 from pathlib import Path
+from typing import Any
 
 import pytest
 import yaml
 
-from rostools.tf.edges import Edges
+from rostools.tf.edges import DEFAULT_CACHE_NS, Edges
 from rostools.tf.records import Stamped
 from tests.conftest import MasterInfo
 from tests.support.env import CORPUS, SYSTEM_PYTHON, needs_corpus, needs_ros1, run_cli
 from tests.support.load import scaled
 from tests.support.procs import (
-    NODES,
     Proc,
     publishers,
     start_cli,
@@ -36,6 +35,7 @@ from tests.support.procs import (
     wait_for,
 )
 from tests.support.reap import run
+from tests.support.tf2peer import ask_tf2, needs_tf2, tf2_missing
 
 pytestmark = [pytest.mark.interop, needs_ros1]
 
@@ -44,27 +44,21 @@ TF_MONITOR = "/usr/lib/tf/tf_monitor"
 VIEW_FRAMES = "/usr/lib/tf2_tools/view_frames.py"
 
 
-def _tf2_missing() -> str | None:
+def _tools_missing() -> str | None:
     for tool in (STP, TF_MONITOR, VIEW_FRAMES):
         if not Path(tool).exists():
             return f"{tool} is not installed (scripts/install-ros1-peers.sh)"
-    probe = subprocess.run(
-        [SYSTEM_PYTHON, "-c", "import tf2_py, tf2_ros"], capture_output=True, check=False
-    )
-    if probe.returncode != 0:
-        return "the system python cannot import tf2_py (install-ros1-peers.sh: python3-tf2-ros)"
-    return None
+    return tf2_missing()
 
 
-needs_tf2 = pytest.mark.skipif((_why := _tf2_missing()) is not None, reason=_why or "")
+#: tf2_py and the three tools of tf2_ros, tf2_tools and tf.
+needs_tools = pytest.mark.skipif((_why := _tools_missing()) is not None, reason=_why or "")
 
 
-def tf2_yaml(stdin: str | None = None, bag: Path | None = None) -> dict[str, dict[str, object]]:
-    """tf2's ``allFramesAsYAML`` after feeding it (``tf2_buffer.py``), parsed."""
-    argv = [SYSTEM_PYTHON, str(NODES / "tf2_buffer.py"), *([str(bag)] if bag else [])]
-    done = run(argv, input=stdin, timeout=scaled(120))
-    assert done.returncode == 0, done.stderr[-2000:]
-    parsed = yaml.safe_load(done.stdout)
+def tf2_yaml(ops: list[list[Any]]) -> dict[str, dict[str, object]]:
+    """tf2's ``allFramesAsYAML`` after ``ops`` (``tf2_oracle.py``), parsed."""
+    answers = ask_tf2(DEFAULT_CACHE_NS, [*ops, ["yaml"]])
+    parsed = yaml.safe_load(answers[-1]["yaml"])
     return parsed if isinstance(parsed, dict) else {}
 
 
@@ -99,7 +93,7 @@ def test_edges_equal_tf2s_buffer_for_the_same_transforms() -> None:
     """Random feeds: repeats, stamps out of order and too old, refusals, statics, re-parenting."""
     rng = random.Random(36)
     frames = ["map", "odom", "base", "laser", "cam", "arm"]
-    lines: list[str] = []
+    ops: list[list[Any]] = []
     ours = Edges()
     for _ in range(3000):
         parent, child = rng.sample(frames, 2)
@@ -109,27 +103,12 @@ def test_edges_equal_tf2s_buffer_for_the_same_transforms() -> None:
         q = [0.0, 0.0, 0.0, 1.0] if rng.random() > 0.02 else [0.0, 0.0, 0.0, 2.0]
         who = rng.choice(["/a", "/b", ""])
         static = child == "laser"
-        lines.append(json.dumps(feed_line(parent, child, stamp_ns, q, who, static)))
+        ops.append(["set", parent, child, stamp_ns, [1.0, 2.0, 3.0, *q], static, who])
         t = Stamped(parent, child, stamp_ns, (1.0, 2.0, 3.0), tuple(q))  # type: ignore[arg-type]
         ours.add([t], who, static)
-    tf2 = tf2_yaml(stdin="\n".join(lines) + "\n")
+    tf2 = tf2_yaml(ops)
     assert len(tf2) >= 4
     assert_same_tree(ours_as_tf2([e.to_data() for e in ours.edges()]), tf2)
-
-
-def feed_line(
-    parent: str, child: str, stamp_ns: int, q: list[float], who: str, static: bool
-) -> dict[str, object]:
-    """One transform as ``tf2_buffer.py`` reads it."""
-    return {
-        "parent": parent,
-        "child": child,
-        "stamp_ns": stamp_ns,
-        "t": [1.0, 2.0, 3.0],
-        "q": q,
-        "who": who,
-        "static": static,
-    }
 
 
 @needs_tf2
@@ -140,7 +119,7 @@ def test_a_bags_tree_is_the_one_tf2_holds_at_its_end(name: str, cli_env: dict[st
     done = run_cli("--format", "json", "tf", "frames", "-b", str(bag), env=cli_env)
     assert done.returncode == 0, done.stderr
     ours = json.loads(done.stdout)
-    tf2 = tf2_yaml(bag=bag)
+    tf2 = tf2_yaml([["bag", str(bag)]])
     assert set(tf2) == {"turtle1", "turtle2", "carrot"}
     assert_same_tree(ours_as_tf2(ours["edges"]), tf2)
     assert ours["frames"] == ["carrot", "turtle1", "turtle2", "world"]
@@ -183,7 +162,7 @@ def our_edges(dot: str) -> set[tuple[str, str, str]]:
     return set(found)
 
 
-@needs_tf2
+@needs_tools
 def test_tf_frames_draws_the_edges_view_frames_finds(
     tf_graph: tuple[MasterInfo, list[str]], tmp_path: Path
 ) -> None:
@@ -214,7 +193,7 @@ def _wait_exit(proc: Proc, timeout: float) -> int:
     return proc.popen.wait(scaled(timeout))
 
 
-@needs_tf2
+@needs_tools
 def test_tf_monitor_rates_agree_with_tf_monitors(tf_graph: tuple[MasterInfo, list[str]]) -> None:
     info, (static_a, static_b, mover) = tf_graph
     theirs = Proc([TF_MONITOR], env=info.ros_env)
@@ -239,7 +218,7 @@ def test_tf_monitor_rates_agree_with_tf_monitors(tf_graph: tuple[MasterInfo, lis
     assert frames == {"odom": mover, "base": mover, "laser": static_a, "laser_optical": static_b}
 
 
-@needs_tf2
+@needs_tools
 def test_tf_pub_is_seen_by_tf2_with_static_transform_publishers_values(
     any_master: MasterInfo,
 ) -> None:

@@ -3,10 +3,12 @@
 Run with the system interpreter (``/usr/bin/python3``), where Debian's tf2_py and rosbag
 live. Reads one JSON document on stdin: ``{"cache_ns": N, "ops": [...]}``, each op one of
 ``["set", parent, child, stamp_ns, [tx, ty, tz, qx, qy, qz, qw], static, authority]``,
-``["lookup", target, source, time_ns]`` and ``["bag", path]`` (every ``/tf`` and
-``/tf_static`` message of a bag, in record order, read by the ``rosbag`` module). Writes one
-JSON list: per lookup ``{"ok": [stamp_ns, [seven values]]}`` or ``{"error": kind,
-"message": text}``. Nothing of rostools is imported here: this is the reference side.
+``["lookup", target, source, time_ns]``, ``["bag", path]`` (every ``/tf`` and
+``/tf_static`` message of a bag, in record order, read by the ``rosbag`` module, each from its
+connection's callerid) and ``["yaml"]``. Writes one JSON list: per lookup ``{"ok": [stamp_ns,
+[seven values]]}`` or ``{"error": kind, "message": text}``; per yaml ``{"yaml": text}``, the
+buffer's ``allFramesAsYAML`` (what view_frames draws). Nothing of rostools is imported here:
+this is the reference side.
 """
 
 from __future__ import annotations
@@ -39,12 +41,17 @@ def main():
             import rosbag
 
             with rosbag.Bag(op[1]) as bag:
-                for topic, msg, _ in bag.read_messages(topics=["/tf", "/tf_static", "tf"]):
+                topics = ["/tf", "/tf_static", "tf"]
+                for topic, msg, _, conn in bag.read_messages(topics, return_connection_header=True):
+                    who = conn.get("callerid", b"")  # rosbag hands the header over as bytes
+                    who = who.decode() if isinstance(who, bytes) else who
                     for m in msg.transforms:
                         if topic == "/tf_static":
-                            buffer.set_transform_static(m, "bag")
+                            buffer.set_transform_static(m, who)
                         else:
-                            buffer.set_transform(m, "bag")
+                            buffer.set_transform(m, who)
+        elif op[0] == "yaml":
+            answers.append({"yaml": buffer.all_frames_as_yaml()})
         else:
             _, target, source, at = op
             try:

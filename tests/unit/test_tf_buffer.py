@@ -6,8 +6,7 @@ from __future__ import annotations
 import math
 
 import pytest
-from hypothesis import given, settings
-from hypothesis import strategies as st
+from hypothesis import given, settings, strategies as st
 
 from rostools.tf.buffer import (
     ConnectivityError,
@@ -23,7 +22,7 @@ S = 1_000_000_000
 ID = (0.0, 0.0, 0.0, 1.0)
 
 
-def T(parent: str, child: str, stamp: int, xyz=(0.0, 0.0, 0.0), q=ID) -> Stamped:  # noqa: N802
+def T(parent: str, child: str, stamp: int, xyz=(0.0, 0.0, 0.0), q=ID) -> Stamped:
     return Stamped(parent, child, stamp, xyz, q)
 
 

@@ -40,11 +40,12 @@ RateOpt = Annotated[
     ),
 ]
 AtOpt = Annotated[
-    str | None,
+    list[str] | None,
     typer.Option(
         "--at",
         help="Look up at this time (s): absolute (ROS time), or +T/-T relative: to the bag's"
-        " start with -b, to now live. Default: the latest common time.",
+        " start with -b, to now live. Default: the latest common time. With -b, repeat it"
+        " for several times (one answer each).",
         show_default=False,
     ),
 ]
@@ -81,12 +82,15 @@ def echo(
     if not cache_time > 0:
         raise UsageError(f"--cache-time must be above 0, not {cache_time:g}")
     cache_ns = round(cache_time * 1e9)
-    when = _parse_at(at) if at is not None else None
+    times = [_parse_at(a) for a in at or []]
+    if len(times) > 1 and bag is None:
+        raise UsageError("several --at need --bag (live, one time is looked up at each tick)")
+    when = times[0] if times else None
     show = _printer(fmt, verbose, precision)
     if bag is not None:
         if timeout is not None:
             raise UsageError("--timeout does not apply to a bag (-b): it is read to its end")
-        _from_bag(bag, frames, when, rate, count, cache_ns, show, not no_crc_check)
+        _from_bag(bag, frames, times, rate, count, cache_ns, show, not no_crc_check)
         return
     if no_crc_check:
         raise UsageError("--no-crc-check needs --bag")
@@ -184,14 +188,14 @@ def _warn(err: Exception) -> None:
 def _from_bag(
     path: Path,
     frames: tuple[str, str],
-    when: tuple[bool, int] | None,
+    times: list[tuple[bool, int]],
     rate: float,
     count: int | None,
     cache_ns: int,
     show: Any,
     check_crcs: bool,
 ) -> None:
-    """Print from a bag: with ``--at``, one lookup over the whole recording.
+    """Print from a bag: with ``--at``, a lookup at each time over the whole recording.
 
     Otherwise step through it at ``rate`` (of the bag's record time): at each step, what a
     listener would print at that moment of a play.
@@ -201,14 +205,14 @@ def _from_bag(
 
     with open_feed(path, check_crcs) as feed:
         start = feed.start_ns or 0
-        if when is not None:
+        if times:
             if count is not None:
-                raise UsageError("-n does not apply to one lookup (--at)")
+                raise UsageError("-n does not apply to lookups at given times (--at)")
             whole = TransformBuffer(max(cache_ns, WHOLE_RECORDING_NS))
             for batch in feed.batches():
                 whole.set_transforms(batch.transforms, batch.broadcaster, batch.static)
-            relative, ns = when
-            show(_lookup(whole, frames, start + ns if relative else ns))
+            for relative, ns in times:
+                show(_lookup(whole, frames, start + ns if relative else ns))
             return
         buffer = TransformBuffer(cache_ns)
         period = max(1, round(1e9 / rate))

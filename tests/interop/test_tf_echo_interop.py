@@ -16,7 +16,8 @@ import pytest
 
 from tests.conftest import MasterInfo
 from tests.support.env import run_cli
-from tests.support.procs import Proc, start_ros1_node
+from tests.support.load import scaled
+from tests.support.procs import Proc, publishers, start_ros1_node, wait_for
 from tests.support.tf2peer import needs_tf2
 
 pytestmark = needs_tf2
@@ -103,6 +104,33 @@ def test_it_prints_at_its_rate_and_stops_at_its_count(tf_graph: MasterInfo) -> N
     stamps = [a["stamp_ns"] for a in answers]
     assert stamps == sorted(stamps) and len(set(stamps)) > 1  # the frame moves on
     assert time.monotonic() - started > 0.4  # four periods of 0.1 s at least
+
+
+def _complete(master: MasterInfo, deadline: float, *words: str) -> list[str]:
+    env = {**master.cli_env, "ROSTOOLS_COMPLETE_DEADLINE": str(deadline)}
+    argv = ["rostools", "tf", "echo", *words]
+    proc = run_cli("__complete", "bash", str(len(argv) - 1), *argv, env=env)
+    assert proc.returncode == 0, proc.stderr
+    return [line.split("\t")[0] for line in proc.stdout.splitlines()]
+
+
+def test_frame_names_complete_from_the_live_tf_topics(tf_graph: MasterInfo) -> None:
+    # generous: a loaded machine is slow to connect, and a deadline only bounds the wait
+    wait_for(lambda: _complete(tf_graph, 5, "") == ["base", "cam", "odom"], 60, "frames")
+    assert _complete(tf_graph, 5, "odom", "c") == ["cam"]
+
+
+def test_a_silent_tf_publisher_costs_completion_its_deadline_only(tf_graph: MasterInfo) -> None:
+    silent = start_ros1_node("tf_broadcaster.py", ["odom", "base", "silent"], tf_graph.ros_env)
+    try:
+        wait_for(lambda: "/silent_broadcaster" in publishers(tf_graph.uri, "/tf"), 60, "silent")
+        started = time.monotonic()
+        frames = _complete(tf_graph, 1, "")
+        # the interpreter's start-up is not under the deadline: a loaded machine's slack
+        assert time.monotonic() - started < scaled(20)
+        assert set(frames) <= {"base", "cam", "odom"}
+    finally:
+        silent.stop()
 
 
 def test_bad_input_is_one_line(tf_graph: MasterInfo) -> None:

@@ -64,6 +64,8 @@ KINDS: dict[tuple[str, ...] | str, str] = {
     ("service", "values"): "request",
     ("action", "action"): "action",
     ("action", "goal"): "goal",
+    ("tf", "source"): "frame",
+    ("tf", "target"): "frame",
     ("bag", "topics"): "",
     ("bag", "record", "topics"): "topic",
     ("bag", "snapshot", "topics"): "topic",

@@ -22,6 +22,7 @@ from rostools.tf.records import Stamped, strip_slash
 
 #: tf2's default cache time (``BufferCore::DEFAULT_CACHE_TIME``), in ns.
 DEFAULT_CACHE_NS = 10_000_000_000
+_NS = 1_000_000_000
 #: tf2's ``MAX_GRAPH_DEPTH``: a walk longer than this is a loop.
 MAX_DEPTH = 1000
 
@@ -101,6 +102,14 @@ def _rotate(q: tuple[float, ...], x: float, y: float, z: float) -> tuple[float, 
     )
 
 
+def _accum(
+    st: Seven, v: tuple[float, float, float], q: tuple[float, float, float, float]
+) -> tuple[tuple[float, float, float], tuple[float, float, float, float]]:
+    """tf2's ``TransformAccum::accum``: ``st`` applied after ``(v, q)``."""
+    x, y, z = _rotate(st, *v)
+    return (x + st[0], y + st[1], z + st[2]), _mul(st, q)
+
+
 def _acos(x: float) -> float:
     """tf2's ``tf2Acos``: clamped to [-1, 1] first."""
     return math.acos(-1.0 if x < -1.0 else 1.0 if x > 1.0 else x)
@@ -131,12 +140,6 @@ def _slerp(a: Seven, b: Seven, t: float) -> tuple[float, float, float, float]:
         (az * s0 + bz * s1) * d,
         (aw * s0 + bw * s1) * d,
     )
-
-
-def _seconds(ns: int) -> float:
-    """A ``ros::Duration``'s ``toSec()``: whole seconds plus 1e-9 times the nanoseconds."""
-    secs, nsecs = divmod(ns, 1_000_000_000)
-    return secs + 1e-9 * nsecs
 
 
 def _stamp(ns: int) -> str:
@@ -214,7 +217,9 @@ class _Cache:
         if self.parents[newer] != parent:
             return parent, self.data[older]  # the parent changed: the older holds, as tf2's
         one, two = self.data[older], self.data[newer]
-        ratio = _seconds(time - stamps[older]) / _seconds(stamps[newer] - stamps[older])
+        # ros::Duration::toSec() of each: whole seconds plus 1e-9 times the nanoseconds
+        a, b = time - stamps[older], stamps[newer] - stamps[older]
+        ratio = (a // _NS + 1e-9 * (a % _NS)) / (b // _NS + 1e-9 * (b % _NS))
         keep = 1.0 - ratio
         return parent, (
             keep * one[0] + ratio * two[0],
@@ -437,9 +442,7 @@ class TransformBuffer:
             if frame == target:
                 return (*sv, *sq)  # the target is the source's ancestor
             parent, st = found
-            x, y, z = _rotate(st, *sv)
-            sv = (x + st[0], y + st[1], z + st[2])
-            sq = _mul(st, sq)
+            sv, sq = _accum(st, sv, sq)
             top = frame
             frame = parent
             depth += 1
@@ -460,9 +463,7 @@ class TransformBuffer:
                 iq = (-tq[0], -tq[1], -tq[2], tq[3])
                 return (*_rotate(iq, -tv[0], -tv[1], -tv[2]), *iq)
             parent, st = found
-            x, y, z = _rotate(st, *tv)
-            tv = (x + st[0], y + st[1], z + st[2])
-            tq = _mul(st, tq)
+            tv, tq = _accum(st, tv, tq)
             frame = parent
             depth += 1
             if depth > MAX_DEPTH:

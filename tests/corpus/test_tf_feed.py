@@ -48,3 +48,15 @@ def test_the_feed_stops_at_an_end_time() -> None:
 def test_a_bag_without_tf_is_not_found() -> None:
     with pytest.raises(NotFoundError, match="holds no /tf"), open_feed(ROS1 / "embag/test.bag"):
         pass
+
+
+def test_frame_names_complete_from_a_bag() -> None:
+    from rostools.cli.completer import Completer
+
+    bag = str(ROS1 / "rosbag.js/example.bag")
+    words = ["rostools", "tf", "echo", "-b", bag, "turtle1", "t"]
+    got = [v for v, _ in Completer(words, len(words) - 1, 5).complete()]
+    assert got == ["turtle1", "turtle2"]
+    words = ["rostools", "tf", "echo", f"--bag={bag}", ""]
+    got = [v for v, _ in Completer(words, len(words) - 1, 5).complete()]
+    assert got == ["carrot", "turtle1", "turtle2", "world"]

@@ -24,6 +24,7 @@ if TYPE_CHECKING:
     from rostools.bag.model import Connection
     from rostools.node.connection import Frame, InboundConnection
     from rostools.node.node import LiveNode
+    from rostools.rosgraph.masterapi import MasterProxy
 
 #: The two topics, as tf2_ros's TransformListener names them.
 TF_TOPIC, TF_STATIC_TOPIC = "/tf", "/tf_static"
@@ -150,3 +151,60 @@ class LiveFeed:
         if self.skipped[who] == 1:
             text = f"skipped a TF message from {who} that does not decode: {err}"
             self.node.notify(Notice("message_skipped", text, {"node": who, "reason": str(err)}))
+
+
+def peek_frames(master: MasterProxy, found: set[str], left: Callable[[], float]) -> None:
+    """Add to ``found`` the frames each ``/tf`` and ``/tf_static`` publisher sends first.
+
+    Blocking and without a node (for completion): each publisher is asked for its topic and
+    read until its first message, each wait bounded by ``left()`` seconds. ``found`` fills
+    as answers come, so a caller that gives up keeps what arrived.
+    """
+    from rostools.rosgraph.masterapi import XmlRpcNode
+
+    pubs = master.system_state()[0]
+    for topic, nodes in pubs:
+        if topic not in (TF_TOPIC, TF_STATIC_TOPIC):
+            continue
+        for name in nodes:
+            uri = master.lookup_node(name)
+            node = XmlRpcNode(uri, master.caller_id, left(), what=f"node {name}")
+            answer = node.call("requestTopic", topic, [["TCPROS"]])
+            if isinstance(answer, list) and len(answer) >= 3 and answer[0] == "TCPROS":
+                for t in _first_message(str(answer[1]), int(answer[2]), topic, master, left):
+                    found.update((t.parent, t.child))
+
+
+def _first_message(
+    host: str, port: int, topic: str, master: MasterProxy, left: Callable[[], float]
+) -> list[Stamped]:
+    """One publisher's first message on ``topic``: its transforms ([] if it sends none)."""
+    import socket
+
+    from rostools.wire.tcpros import (
+        Accepted,
+        Failed,
+        Messages,
+        SubscriberStream,
+        subscriber_header,
+    )
+
+    header = subscriber_header(master.caller_id, topic, "*", "tf2_msgs/TFMessage", "", True)
+    with socket.create_connection((host, port), timeout=left()) as sock:
+        sock.sendall(header)  # it carries its own length
+        stream = SubscriberStream()
+        while True:
+            sock.settimeout(left())
+            buf = stream.get_buffer()
+            n = sock.recv_into(buf)
+            if n == 0:
+                return []
+            for event in stream.buffer_updated(n):
+                if isinstance(event, Failed):
+                    return []
+                if isinstance(event, Messages):
+                    try:
+                        return decode(event.frames[0])
+                    except (ValueError, struct.error):
+                        return []
+                assert isinstance(event, Accepted)

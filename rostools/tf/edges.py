@@ -24,6 +24,13 @@ MIN_SPAN = 0.0001
 NORM_TOLERANCE = 10e-6
 #: The broadcaster tf2 names when none was given.
 NO_AUTHORITY = "no recorded authority"
+#: How text names a broadcaster whose callerid was not recorded (tf_monitor's word).
+UNKNOWN_BROADCASTER = "unknown_publisher"
+
+
+def shown_broadcaster(who: str) -> str:
+    """A broadcaster as text shows it: a bag may not have kept its callerid."""
+    return who or UNKNOWN_BROADCASTER
 
 
 def refusal(t: Stamped) -> str | None:

@@ -96,6 +96,18 @@ def test_a_loop_is_drawn_once_where_it_closes() -> None:
     ]
 
 
+def test_a_broadcaster_a_bag_did_not_keep_is_shown_as_tf_monitor_names_it() -> None:
+    edges = Edges()
+    edges.add([tf("world", "turtle1", 1)], "", static=False)
+    assert edges.by_child["turtle1"].broadcaster == ""  # as tf2 keeps it, and JSON gives it
+    assert frames_text(edges).splitlines()[1].startswith("└── turtle1  [unknown_publisher, ")
+    mon = Monitor()
+    mon.add(S, "", False, [tf("world", "turtle1", 1)])
+    text = report_text(mon.report(), None, None)
+    assert "Frame: turtle1 published by unknown_publisher Average Delay: 0 " in text
+    assert "Node: unknown_publisher 1e+08 Hz," in text  # tf_monitor's count over a 10 ns floor
+
+
 def test_the_dot_has_view_frames_labels_and_edges() -> None:
     dot = frames_dot(tree(), 7 * S)
     assert '"base" -> "odom" [label="Broadcaster: /mover\\nAverage rate: 4.0\\n' in dot

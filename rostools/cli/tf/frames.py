@@ -23,7 +23,7 @@ from rostools.cli.graphviz import GraphFormat, dot_id, dot_label, draw, picture_
 from rostools.cli.output import Format, emit
 from rostools.cli.tf.options import BagOpt
 from rostools.errors import NotFoundError, UsageError, one_line
-from rostools.tf.edges import Edge, Edges
+from rostools.tf.edges import Edge, Edges, shown_broadcaster
 
 if TYPE_CHECKING:
     import asyncio
@@ -80,7 +80,7 @@ def frames_text(edges: Edges) -> str:
             about = "static" if edge.static else rate
             lines.append(
                 f"{stem}{'└── ' if last else '├── '}{one_line(child)}"
-                f"  [{one_line(edge.broadcaster)}, {about}]"
+                f"  [{one_line(shown_broadcaster(edge.broadcaster))}, {about}]"
             )
             if child not in seen:  # a loop is shown once, where it closes
                 walk(child, stem + ("    " if last else "│   "), seen | {child})

@@ -21,6 +21,7 @@ from rostools.cli.declare import command
 from rostools.cli.output import Format
 from rostools.cli.tf.options import BagOpt, CountOpt
 from rostools.errors import NotFoundError, UsageError, one_line
+from rostools.tf.edges import shown_broadcaster
 from rostools.tf.monitor import Monitor
 from rostools.tf.records import strip_slash
 
@@ -55,12 +56,13 @@ def report_text(data: dict[str, object], source: str | None, target: str | None)
     lines += ["", "Frames:"]
     for f in data["frames"]:  # type: ignore[attr-defined]
         lines.append(
-            f"Frame: {one_line(f['frame'])} published by {one_line(f['broadcaster'])}"
+            f"Frame: {one_line(f['frame'])} published by "
+            f"{one_line(shown_broadcaster(f['broadcaster']))}"
             f" Average Delay: {f['average_delay']:g} Max Delay: {f['max_delay']:g}"
         )
     lines += ["", "All Broadcasters:"]
     for b in data["broadcasters"]:  # type: ignore[attr-defined]
-        name = one_line(b["broadcaster"]) + (" (static)" if b["static"] else "")
+        name = one_line(shown_broadcaster(b["broadcaster"])) + (" (static)" if b["static"] else "")
         rate = "" if b["rate"] is None else f" {b['rate']:g} Hz,"
         lines.append(
             f"Node: {name}{rate} Average Delay: {b['average_delay']:g}"

@@ -82,6 +82,7 @@ RECIPES: dict[str, list[str]] = {
     "node machine": [],
     "node cleanup": ["--dry-run"],
     "node graph": [],
+    "tf echo": ["map", "base", "-n", "1"],
     "tf frames": ["-w", "1"],
     "tf monitor": ["-n", "1"],
     "bag info": ["{bag}", "--freq"],

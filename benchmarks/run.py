@@ -36,6 +36,7 @@ MODULES = [
     "benchmarks.bench_bridge",
     "benchmarks.bench_rosbridge",
     "benchmarks.bench_log",
+    "benchmarks.bench_tf",
 ]
 
 

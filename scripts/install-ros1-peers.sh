@@ -38,6 +38,9 @@ packages=(
   # the real rosbridge_server 0.11.17 (tests/peers/rosbridge), a parity peer of the bridge;
   # tornado too, since rosbridge_server's __init__ imports its tornado handler
   python3-twisted python3-autobahn python3-tornado python3-bson python3-pil python3-distutils
+  # tf2 and tf's tools, peers of `rostools tf` (echo.py, view_frames, tf_echo, tf_monitor,
+  # static_transform_publisher, tf2_py's BufferCore)
+  tf2-tools python3-tf2-ros libtf2-ros-dev tf-tools
 )
 # Node and npm, unless some are on PATH already: NodeSource's nodejs bundles npm and conflicts
 # with Debian's npm package, which would replace it with Debian's older Node.

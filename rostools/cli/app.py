@@ -25,6 +25,7 @@ GROUPS: dict[str, str] = {
     "log": "Node logs (rosconsole): echo /rosout, list, get and set logger levels.",
     "msg": "Message and service types: show, md5, list, package, packages, proto.",
     "node": "ROS nodes: list, info, ping, kill, machine, cleanup, and graph.",
+    "tf": "Transforms (tf2): echo, frames, monitor, pub.",
     "bag": "Bags (.bag and MCAP): record, play, info, filter, convert, cat, plot, and more.",
     "core": "Run the bundled master and parameter server (roscore).",
     "bridge": "Serve the live graph over WebSocket to Foxglove Studio, Lichtblick and browsers.",

@@ -3,7 +3,8 @@
 The shell scripts in ``completions/`` call this with the words of the command line. It walks
 ``tree.json`` (the command tree, generated from the Typer app) to see what the word under the
 cursor is: a group, a command, an option, an option's value or a positional argument of some
-kind. Live names (topics, services, nodes, parameters) come from the master; types from the
+kind. Live names (topics, services, nodes, parameters; tf frames from the first message of
+each ``/tf`` and ``/tf_static`` publisher) come from the graph; types from the
 type store; a topic's type and a message's YAML template after ``topic pub /t``, as rosbash
 offered. The graph queries run under a hard deadline (``DEADLINE``), counted from the first
 query, not from the process's start: a master that is down or slow costs at most that, and
@@ -349,6 +350,43 @@ class Completer:
             return []
         return self._template(lambda store: store.msg(stem + "Goal"))
 
+    def frames(self) -> Candidates:
+        """``tf echo <TAB>``: frame ids, from ``-b BAG``'s TF topics, else live.
+
+        Live, from what each ``/tf`` and ``/tf_static`` publisher sends first, under the
+        deadline; from a bag, what can be read by then.
+        """
+        from rostools.errors import RostoolsError
+
+        found: set[str] = set()
+        bag = self._bag_word()
+        try:
+            if bag is not None:
+                from rostools.cli.tf.shared import open_feed
+
+                with open_feed(Path(bag)) as feed:  # a big bag: what the deadline allows
+                    for batch in feed.batches():
+                        found.update(f for t in batch.transforms for f in (t.parent, t.child))
+                        if self.left() <= 0.001:
+                            break
+            else:
+                from rostools.cli.tf.shared import peek_frames
+
+                with self._querying() as master:
+                    peek_frames(master, found, self.left)
+        except (RostoolsError, OSError, ValueError, TypeError, _DeadlineError):
+            pass  # what arrived in time is offered
+        return [(f, "frame") for f in sorted(found)]
+
+    def _bag_word(self) -> str | None:
+        """The value of ``-b``/``--bag`` typed so far, if any."""
+        for i, word in enumerate(self.words[: self.cword]):
+            if word in ("-b", "--bag") and i + 1 < self.cword:
+                return self.words[i + 1]
+            if word.startswith("--bag="):
+                return word.split("=", 1)[1]
+        return None
+
     def _template(self, spec_of: Callable[[Any], Any]) -> Candidates:
         from rostools.errors import RostoolsError
         from rostools.msgs.describe import proto
@@ -378,6 +416,7 @@ _KINDS: dict[str, Callable[[Completer], Candidates]] = {
     "action": Completer.actions,
     "logger": Completer.loggers,
     "goal": Completer.goal_template,
+    "frame": Completer.frames,
 }
 
 

@@ -67,6 +67,8 @@ KINDS: dict[tuple[str, ...] | str, str] = {
     ("log", "logger"): "logger",
     ("log", "level"): "choice:debug,info,warn,error,fatal",
     ("log", "echo", "node_filter"): "node",
+    ("tf", "source"): "frame",
+    ("tf", "target"): "frame",
     ("bag", "topics"): "",
     ("bag", "record", "topics"): "topic",
     ("bag", "snapshot", "topics"): "topic",

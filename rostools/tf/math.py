@@ -67,24 +67,41 @@ def from_rpy(roll: ArrayLike, pitch: ArrayLike, yaw: ArrayLike) -> Array:
 
 
 def matrix(q: ArrayLike) -> Array:
-    """The 3x3 rotation matrix of a unit quaternion."""
-    x, y, z, w = np.moveaxis(_f(q), -1, 0)
+    """The 3x3 rotation matrix of a quaternion, as tf2's ``Matrix3x3::setRotation``.
+
+    Scaled by the squared norm, so a quaternion a little off unit length reads as tf2 reads it.
+    """
+    q = _f(q)
+    x, y, z, w = np.moveaxis(q, -1, 0)
+    s = 2.0 / np.sum(q * q, axis=-1)
+    xs, ys, zs = x * s, y * s, z * s
+    wx, wy, wz = w * xs, w * ys, w * zs
+    xx, xy, xz = x * xs, x * ys, x * zs
+    yy, yz, zz = y * ys, y * zs, z * zs
     return np.stack(
         [
-            np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)], -1),
-            np.stack([2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)], -1),
-            np.stack([2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)], -1),
+            np.stack([1.0 - (yy + zz), xy - wz, xz + wy], -1),
+            np.stack([xy + wz, 1.0 - (xx + zz), yz - wx], -1),
+            np.stack([xz - wy, yz + wx, 1.0 - (xx + yy)], -1),
         ],
         axis=-2,
     )
 
 
 def to_rpy(q: ArrayLike) -> Array:
-    """Roll, pitch and yaw (radians) of a unit quaternion, as tf2's ``getRPY`` reads its matrix."""
+    """Roll, pitch and yaw (radians) of a quaternion, as tf2's ``Matrix3x3::getRPY`` reads it.
+
+    At the singularity (pitch +-90 degrees) yaw is 0 and roll takes the whole turn, as tf2's.
+    """
     m = matrix(q)
-    pitch = np.arcsin(np.clip(-m[..., 2, 0], -1.0, 1.0))
-    roll = np.arctan2(m[..., 2, 1], m[..., 2, 2])
-    yaw = np.arctan2(m[..., 1, 0], m[..., 0, 0])
+    m20, m21, m22 = m[..., 2, 0], m[..., 2, 1], m[..., 2, 2]
+    locked = np.abs(m20) >= 1.0
+    pitch = np.where(
+        locked, np.where(m20 < 0, np.pi / 2, -np.pi / 2), -np.arcsin(np.clip(m20, -1, 1))
+    )
+    c = np.where(locked, 1.0, np.cos(pitch))
+    roll = np.where(locked, np.arctan2(m21, m22), np.arctan2(m21 / c, m22 / c))
+    yaw = np.where(locked, 0.0, np.arctan2(m[..., 1, 0] / c, m[..., 0, 0] / c))
     return np.stack([roll, pitch, yaw], axis=-1)
 
 

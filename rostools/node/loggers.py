@@ -20,7 +20,7 @@ if TYPE_CHECKING:
         async def advertise_service(self, name: str, srv_type: Any, handler: Any) -> Any: ...
 
 
-#: The md5sums of the two service types (``tests/unit/test_log_wire.py`` checks them).
+#: The md5sums of the two service types (``tests/integration/test_cli_log.py`` checks them).
 GET_LOGGERS = ("roscpp/GetLoggers", "32e97e85527d4678a8f9279894bb64b0")
 SET_LOGGER_LEVEL = ("roscpp/SetLoggerLevel", "51da076440d78ca1684d36c868df61ea")
 #: The levels a logger may be set to, by increasing severity, as rosconsole names them.

@@ -5,7 +5,7 @@ time of the newest; ``/tf_static``: the last one, stamped 0) and the broadcaster
 it. ``allFramesAsYAML`` reads each cache as parent, broadcaster, rate (entries over the span,
 the span at least 0.1 ms), most recent and oldest stamp, and buffer length (the span). ``Edges``
 keeps the same counts from the same inputs, without the transforms, so that its numbers equal
-tf2's for one feed (``tests/interop/test_tf_frames_interop.py`` feeds both).
+tf2's for one feed (``tests/interop/test_tf_tools_interop.py`` feeds both).
 """
 
 from __future__ import annotations
@@ -14,10 +14,9 @@ import bisect
 import math
 from dataclasses import dataclass, field
 
+from rostools.tf.buffer import DEFAULT_CACHE_NS
 from rostools.tf.records import Stamped
 
-#: tf2's default cache time (``BufferCore::DEFAULT_CACHE_TIME``), in ns.
-DEFAULT_CACHE_NS = 10_000_000_000
 #: tf2's floor under the span a rate is taken over, in seconds (``allFramesAsYAML``).
 MIN_SPAN = 0.0001
 #: How far from 1 a quaternion's squared norm may be before tf2 refuses it.

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import typer
 
-from rostools.cli.log import echo, loggers
+from rostools.cli.log import echo, query
 from rostools.cli.register import add
 
 app = typer.Typer(
@@ -13,4 +13,4 @@ app = typer.Typer(
     no_args_is_help=True,
     add_completion=False,
 )
-add(app, echo.echo, loggers.list_loggers, loggers.get, loggers.set_)
+add(app, echo.echo, query.list_loggers, query.get, query.set_)

@@ -212,7 +212,12 @@ def _from_bag(
             for batch in feed.batches():
                 whole.set_transforms(batch.transforms, batch.broadcaster, batch.static)
             for relative, ns in times:
-                show(_lookup(whole, frames, start + ns if relative else ns))
+                try:
+                    show(_lookup(whole, frames, start + ns if relative else ns))
+                except TransformError as err:
+                    if not relative and 0 < ns < start:  # meant from the start, likely
+                        err.hint = f"--at +{ns / 1e9:g} counts from the recording's start"
+                    raise
             return
         buffer = TransformBuffer(cache_ns)
         period = max(1, round(1e9 / rate))

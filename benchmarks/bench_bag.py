@@ -43,7 +43,7 @@ def _small_bag() -> Path:
         return SMALL_BAG
     import struct
 
-    from rostools.bag.access import open_writer
+    from rostools.bag.formats.access import open_writer
 
     BUILD.mkdir(parents=True, exist_ok=True)
     tmp = SMALL_BAG.with_suffix(".tmp")
@@ -78,7 +78,7 @@ def _mixed_bag(seconds: int = MIXED_SECONDS) -> Path:
         return path
     import numpy as np
 
-    from rostools.bag.access import open_writer
+    from rostools.bag.formats.access import open_writer
 
     BUILD.mkdir(parents=True, exist_ok=True)
     rng = np.random.default_rng(1)
@@ -148,8 +148,9 @@ def _convert_seconds(src: Path, compression: str) -> float:
     """Median wall time of ``convert(src, x.mcap)`` in a fresh process, output deleted after."""
     out = BUILD / "out.mcap"
     code = (
-        "import sys, time; from rostools.bag.ops import convert; s = time.perf_counter(); "
-        "convert(sys.argv[1], sys.argv[2], compression=sys.argv[3], overwrite=True); "
+        "import sys, time; from rostools.bag.tools.ops import convert; "
+        "from rostools.bag.tools.options import CopyOptions; s = time.perf_counter(); "
+        "convert(sys.argv[1], sys.argv[2], CopyOptions(compression=sys.argv[3], overwrite=True)); "
         "print(time.perf_counter() - s)"
     )
     samples = []
@@ -223,7 +224,7 @@ print(n / (time.perf_counter() - start))
 
 OUR_READ = r"""
 import sys, time
-from rostools.bag.access import open_bag
+from rostools.bag.formats.access import open_bag
 start = time.perf_counter()
 with open_bag(sys.argv[1]) as reader:
     n = sum(1 for _ in reader.messages())

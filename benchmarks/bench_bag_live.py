@@ -116,7 +116,7 @@ def _record(
     tag: str,
 ) -> Recording:
     """Run ``recorder`` (which writes ``out``) through one publishing run; count the file."""
-    from rostools.bag.access import bag_info
+    from rostools.bag.formats.access import bag_info
 
     BUILD.mkdir(parents=True, exist_ok=True)
     out.unlink(missing_ok=True)
@@ -359,7 +359,7 @@ def _play_bag() -> Path:
     """PLAY_MESSAGES std_msgs/String, data = the index, exactly PLAY_PERIOD_NS apart."""
     import struct
 
-    from rostools.bag.access import open_writer
+    from rostools.bag.formats.access import open_writer
 
     path = BUILD / f"play-{PLAY_MESSAGES}.bag"
     if path.exists():

@@ -69,7 +69,7 @@ def _stream(kind: str) -> Iterator[tuple[int, bytes]]:
 
 
 def ours_mcap_write(path: Path, kind: str, compression: str) -> int:
-    from rostools.bag.mcap_writer import McapWriter
+    from rostools.bag.formats.mcap_writer import McapWriter
 
     n = 0
     with McapWriter(path, compression=compression, overwrite=True) as writer:
@@ -97,7 +97,7 @@ def mcap_package_write(path: Path, kind: str, compression: str) -> int:
 
 
 def ours_read(path: Path, check_crcs: bool = True) -> int:
-    from rostools.bag.access import open_bag
+    from rostools.bag.formats.access import open_bag
 
     with open_bag(path, check_crcs=check_crcs) as reader:
         return sum(1 for _ in reader.messages())
@@ -112,7 +112,7 @@ def mcap_package_read(path: Path, validate_crcs: bool = False) -> int:
 
 
 def ours_bag_write(path: Path, kind: str) -> int:
-    from rostools.bag.access import open_writer
+    from rostools.bag.formats.access import open_writer
 
     n = 0
     with open_writer(path, format="bag", compression="none", overwrite=True) as writer:
@@ -275,7 +275,7 @@ def _subset_reads(path: Path) -> list[Result]:
         writer.finish()
 
     def ours(check: bool) -> int:
-        from rostools.bag.access import open_bag
+        from rostools.bag.formats.access import open_bag
 
         with open_bag(path, check_crcs=check) as reader:
             return sum(1 for _ in reader.messages(topics=["/imu"]))
@@ -363,7 +363,7 @@ def _salvaged(read: Callable[[], Iterator[Any]]) -> int:
 
 
 def _ours_iter(path: Path) -> Iterator[Any]:
-    from rostools.bag.access import open_bag
+    from rostools.bag.formats.access import open_bag
 
     with open_bag(path) as reader:
         yield from reader.messages()
@@ -394,7 +394,7 @@ def _salvage_files(compression: str) -> tuple[Path, Path]:
     """A file the mcap package wrote, cut in its middle chunk; and a copy taken mid-writing."""
     from mcap.writer import CompressionType, Writer
 
-    from rostools.bag.mcap_reader import McapReader
+    from rostools.bag.formats.mcap_reader import McapReader
 
     BUILD.mkdir(parents=True, exist_ok=True)
     full, cut = BUILD / "lib-full.mcap", BUILD / f"lib-cut-{compression}.mcap"
@@ -461,7 +461,7 @@ def _rosbags_iter(path: Path) -> Iterator[Any]:
 
 def bench_bag_salvage() -> list[Result]:
     """Messages read from a .bag still being written (no index yet) and one cut at 60%."""
-    from rostools.bag.access import open_writer
+    from rostools.bag.formats.access import open_writer
 
     BUILD.mkdir(parents=True, exist_ok=True)
     open_file, full, cut = (BUILD / f"lib-{name}.bag" for name in ("open", "full", "cut"))
@@ -525,7 +525,7 @@ def bench_mcap_conformance() -> Result | list[Result]:
     """Conformance files read to the messages the suite expects: ours and the mcap package."""
     from mcap.reader import make_reader
 
-    from rostools.bag.mcap_reader import McapReader
+    from rostools.bag.formats.mcap_reader import McapReader
 
     files = sorted((CORPUS / "mcap" / "conformance").rglob("*.mcap"))
     if not files:

@@ -251,7 +251,7 @@ def _record(
     duration: float = DURATION,
 ) -> _Recording:
     """One round on a fresh rosmaster: ``recorder`` (writing ``out``) takes one publishing run."""
-    from rostools.bag.access import bag_info
+    from rostools.bag.formats.access import bag_info
 
     BUILD.mkdir(parents=True, exist_ok=True)
     out.unlink(missing_ok=True)

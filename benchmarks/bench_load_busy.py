@@ -72,7 +72,7 @@ class _Outcome:
 def _count(out: Path, started_ns: int) -> tuple[int, int, float | None]:
     """Load topics with a message in ``out``, their messages, and when the last topic's first
     message was received, in seconds after ``started_ns`` ((0, 0, None) with no file)."""
-    from rostools.bag.access import open_bag
+    from rostools.bag.formats.access import open_bag
 
     if not out.exists():
         return 0, 0, None

@@ -87,7 +87,7 @@ def _wait_subscribed(
 
 def _count(out: Path) -> tuple[int, int, int]:
     """Messages on the load topics in ``out``, the fewest on one topic, and how many topics."""
-    from rostools.bag.access import bag_info
+    from rostools.bag.formats.access import bag_info
 
     if not out.exists():
         raise RuntimeError(f"no {out.name} was written; see {BUILD}")

@@ -155,7 +155,7 @@ def _point_bag() -> os.PathLike[str]:
     """1,000,000 geometry_msgs/PointStamped on 4 topics (x = i, stamped), frame_id 'map'."""
     if POINT_BAG.exists():
         return POINT_BAG
-    from rostools.bag.access import open_writer
+    from rostools.bag.formats.access import open_writer
     from rostools.msgs.store import TypeStore
 
     store = TypeStore.default()

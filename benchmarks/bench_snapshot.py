@@ -163,7 +163,7 @@ def bench_snapshot_buffering() -> list[Result]:
 
 
 def _count(path: Path, prefix: str) -> int:
-    from rostools.bag.access import bag_info
+    from rostools.bag.formats.access import bag_info
 
     if not path.exists():
         return 0
@@ -268,7 +268,7 @@ def snapshot_bound_mb(idle_mb: float, size_mb: float, files: int) -> float:
 
 def _stamps(path: Path) -> list[float]:
     """The header stamps of the images in ``path``, sorted (each image has its own)."""
-    from rostools.bag.access import open_bag
+    from rostools.bag.formats.access import open_bag
 
     with open_bag(path) as reader:
         stamps = [int.from_bytes(d[4:8], "little") + int.from_bytes(d[8:12], "little") / 1e9

@@ -8,9 +8,12 @@ whole process, timed wall to wall; ours and theirs alternate, median of ``RUNS``
 
 from __future__ import annotations
 
+import os
 import subprocess
+import sys
 import time
 import xmlrpc.client
+from pathlib import Path
 
 from benchmarks.common import (
     ROOT,
@@ -122,4 +125,48 @@ def _launcher_row(rostools: list[str], env: dict[str, str]) -> Result:
     )
 
 
-BENCHMARKS = {"startup": bench_startup}
+#: The quick path's commands: a change that only moves code must leave their start-up alone.
+QUICK = [["topic", "list"], ["param", "get", "/a"], ["msg", "md5", "std_msgs/String"]]
+#: How much slower than before the quick path may start (noise on a shared machine included).
+SAME = 1.05
+
+
+def bench_startup_trees() -> list[Result]:
+    """The quick path's cold start in this checkout beside another's, in one run.
+
+    ``ROSTOOLS_BENCH_BEFORE`` names the other checkout (say, main at a branch's start); both
+    are installed as users get them, into each checkout's ``benchmarks/.venv``, and their
+    runs alternate. ``theirs`` is the other checkout.
+    """
+    before = os.environ.get("ROSTOOLS_BENCH_BEFORE")
+    if not before:
+        print("startup_trees: set ROSTOOLS_BENCH_BEFORE to another checkout", file=sys.stderr)
+        return []
+    after_cmd, before_cmd = rostools_cmd(), rostools_cmd(Path(before))
+    results: list[Result] = []
+    with master() as uri:
+        env = ros_env(uri)
+        _populate(uri)
+        for command in QUICK:
+            t = time_commands(
+                {"ours": [*after_cmd, *command], "theirs": [*before_cmd, *command]},
+                runs=RUNS,
+                warmup=2,
+                env=env,
+            )
+            mine, then = t["ours"] * 1e3, t["theirs"] * 1e3
+            results.append(
+                Result(
+                    f"{' '.join(command[:2])} cold start, this checkout vs the one before",
+                    "ms",
+                    mine,
+                    then,
+                    f"<= {SAME}x before",
+                    mine <= SAME * then,
+                    f"rosmaster, {PUBLISHERS} publishers, median of {RUNS}, runs alternating",
+                )
+            )
+    return results
+
+
+BENCHMARKS = {"startup": bench_startup, "startup_trees": bench_startup_trees}

@@ -48,29 +48,24 @@ class Result:
         return d
 
 
-def rostools_cmd() -> list[str]:
+def rostools_cmd(root: Path = ROOT) -> list[str]:
     """The rostools console script of a normal (non-editable) install, as users get it.
 
     An editable install adds a meta-path finder that costs ~15 ms at every start-up.
+    ``root``: the checkout to install (another one's venv is its own ``benchmarks/.venv``).
     """
-    exe = BENCH_VENV / "bin" / "rostools"
-    stamp = BENCH_VENV / ".installed-from"
-    source_mtime = str(max(p.stat().st_mtime for p in (ROOT / "rostools").rglob("*.py")))
+    venv = root / "benchmarks" / ".venv"
+    exe = venv / "bin" / "rostools"
+    stamp = venv / ".installed-from"
+    source_mtime = str(max(p.stat().st_mtime for p in (root / "rostools").rglob("*.py")))
     if not exe.exists() or not stamp.exists() or stamp.read_text() != source_mtime:
-        if not (BENCH_VENV / "bin" / "python").exists():
-            subprocess.run([sys.executable, "-m", "venv", str(BENCH_VENV)], check=True)
+        if not (venv / "bin" / "python").exists():
+            subprocess.run([sys.executable, "-m", "venv", str(venv)], check=True)
+        pip = str(venv / "bin" / "pip")
         subprocess.run(
-            [
-                str(BENCH_VENV / "bin" / "pip"),
-                "install",
-                "-q",
-                "--force-reinstall",
-                "--no-deps",
-                str(ROOT),
-            ],
-            check=True,
+            [pip, "install", "-q", "--force-reinstall", "--no-deps", str(root)], check=True
         )
-        subprocess.run([str(BENCH_VENV / "bin" / "pip"), "install", "-q", str(ROOT)], check=True)
+        subprocess.run([pip, "install", "-q", str(root)], check=True)
         stamp.write_text(source_mtime)
     return [str(exe)]
 

@@ -89,9 +89,9 @@ GROUPS: dict[str, Group] = {
     ),
     "bag": Group(
         modules=(
-            "rostools/bag/rosbag1_reader.py",
-            "rostools/bag/mcap_reader.py",
-            "rostools/bag/recover.py",
+            "rostools/bag/formats/rosbag1_reader.py",
+            "rostools/bag/formats/mcap_reader.py",
+            "rostools/bag/tools/recover.py",
         ),
         tests=("tests/unit/bag",),
     ),
@@ -109,11 +109,11 @@ GROUPS: dict[str, Group] = {
     # bag snapshot's logic; its services and `bag trigger` are wire glue, tested end to end
     "snapshot": Group(
         modules=(
-            "rostools/bag/ringbuffer.py",
-            "rostools/bag/snapshot_live.py",
-            "rostools/bag/snapshot_job.py",
-            "rostools/bag/snapshot_srv.py",
-            "rostools/bag/snapshot.py",
+            "rostools/bag/live/ringbuffer.py",
+            "rostools/bag/live/snapshot_live.py",
+            "rostools/bag/live/snapshot_job.py",
+            "rostools/bag/live/snapshot_srv.py",
+            "rostools/bag/live/snapshot.py",
         ),
         tests=(
             "tests/unit/bag/test_ringbuffer.py",
@@ -125,7 +125,7 @@ GROUPS: dict[str, Group] = {
         ),
     ),
     "player": Group(
-        modules=("rostools/bag/player.py", "rostools/bag/play_control.py"),
+        modules=("rostools/bag/live/player.py", "rostools/bag/live/play_control.py"),
         tests=("tests/unit/bag/test_play_control.py", "tests/unit/bag/test_player.py"),
     ),
 }

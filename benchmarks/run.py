@@ -35,6 +35,7 @@ MODULES = [
     "benchmarks.bench_demo",
     "benchmarks.bench_bridge",
     "benchmarks.bench_rosbridge",
+    "benchmarks.bench_log",
     "benchmarks.bench_tf",
 ]
 

@@ -16,7 +16,7 @@ import sys
 import tempfile
 from pathlib import Path
 
-from rostools.bag.access import open_writer
+from rostools.bag.formats.access import open_writer
 from rostools.msgs.codec import Codec
 from rostools.msgs.message import Time
 from rostools.msgs.store import TypeStore

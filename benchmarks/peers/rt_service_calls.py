@@ -11,8 +11,9 @@ import sys
 import time
 
 from rostools.msgs.store import BuiltinSource, TypeStore
+from rostools.msgs.topictype import ServiceType
 from rostools.node.node import LiveNode
-from rostools.node.service import ServiceClient, ServiceType
+from rostools.node.service import ServiceClient
 from rostools.rosgraph.masterapi import MasterProxy
 from rostools.rosgraph.serviceclient import BlockingServiceClient
 

@@ -30,11 +30,12 @@ from rostools.errors import (
 )
 from rostools.msgs.codec import DecodeError
 from rostools.msgs.message import Message
+from rostools.msgs.topictype import ServiceType
 from rostools.node.connection import Frame, InboundConnection
 from rostools.node.node import LiveNode
 from rostools.node.notice import Notice
 from rostools.node.publisher import TopicPublisher as CorePublisher
-from rostools.node.service import ServiceClient, ServiceServer, ServiceType
+from rostools.node.service import ServiceClient, ServiceServer
 from rostools.node.subscriber import Subscriber as CoreSubscriber
 from rostools.rosgraph.masterapi import SERVICE_TIMEOUT
 
@@ -242,7 +243,10 @@ class AsyncPublisher:
         return messages.message(self.msg_type, msg).serialize()
 
     def publish(self, msg: Values = None, /, **fields: Any) -> None:
-        """Send a message (a message object, dict, list, YAML text, or field keywords)."""
+        """Send a message (a message object, dict, list, YAML text, or field keywords).
+
+        The message is built and checked here, so a bad value raises in the caller.
+        """
         data = messages.message(self.msg_type, msg, **fields).serialize()
         self.core.publish(data)
 
@@ -317,11 +321,9 @@ class AsyncNode:
         return self
 
     async def close(self) -> None:
-        """Unregister everything and close every connection.
-
-        A close while another is under way (the process's end meets the script's) waits
-        for that one.
-        """
+        """Unregister everything and close every connection; only the first close does it."""
+        # A close while another is under way (the process's end meets the script's) waits
+        # for that one.
         if self.started and self._closing is None:
             self.closed = True
             self._closing = asyncio.ensure_future(self._close())
@@ -357,7 +359,10 @@ class AsyncNode:
     async def advertise(
         self, topic: str, msg_type: str, *, latch: bool = False, queue_size: int = 100
     ) -> AsyncPublisher:
-        """A publisher of ``msg_type`` on ``topic`` (one per topic: the first call decides)."""
+        """A publisher of ``msg_type`` on ``topic`` (rospy's ``Publisher``).
+
+        One per topic: the first call decides its type, latching and queue.
+        """
         self._check_open()
         core = await self.core.advertise(
             topic, messages.topic_type(msg_type), latch=latch, queue_size=queue_size
@@ -406,10 +411,11 @@ class AsyncNode:
         *,
         queue_size: int = QUEUE_SIZE,
     ) -> AsyncSubscription:
-        """Receive ``topic``: with ``callback`` (called on the loop), or iterate the result.
+        """Receive ``topic``: with ``callback``, or iterate the returned subscription.
 
         The type is learnt from the publishers; ``msg_type`` only keeps the messages of
-        that type.
+        that type. ``AsyncNode`` calls ``callback`` on the loop, ``Node`` on the
+        subscription's own thread, one message at a time.
         """
         self._check_open()
         shared = await self._topic(topic)
@@ -515,6 +521,8 @@ class AsyncNode:
         """Serve ``service``: ``handler(request)`` returns the response (message, dict, ...).
 
         A handler that raises answers the caller with a failure and the error's text.
+        ``AsyncNode`` calls it on the loop (it may be a coroutine function), ``Node`` on a
+        worker thread.
         """
         self._check_open()
         req, resp, md5 = messages.service_types(srv_type)

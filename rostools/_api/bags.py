@@ -14,10 +14,10 @@ from typing import NamedTuple
 
 from rostools._api import messages
 from rostools._api.nodetask import NodeTask
-from rostools.bag.access import format_for_name, open_bag, require_ros1
-from rostools.bag.follow import Follower
-from rostools.bag.model import lost_data
-from rostools.bag.recorder import Recorder, RecordOptions
+from rostools.bag.formats.access import format_for_name, open_bag, require_ros1
+from rostools.bag.formats.model import lost_data
+from rostools.bag.live.follow import Follower
+from rostools.bag.live.recorder import Recorder, RecordOptions
 from rostools.errors import RostoolsError, TimeoutExpired, UsageError
 from rostools.msgs.message import Message, Time
 from rostools.node.node import LiveNode

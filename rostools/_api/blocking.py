@@ -18,6 +18,7 @@ from rostools._api import exiting, loop, messages
 from rostools._api.asyncnode import AsyncNode, AsyncPublisher, AsyncSubscription, Callback, log
 from rostools._api.messages import Values
 from rostools.msgs.message import Message
+from rostools.node.service import ServiceServer
 from rostools.rosgraph.masterapi import SERVICE_TIMEOUT
 
 _STOP = object()
@@ -35,6 +36,10 @@ class Publisher:
     def subscriber_count(self) -> int:
         """How many subscribers are connected now."""
         return self.inner.subscriber_count
+
+    def serialize(self, msg: Values) -> bytes:
+        """The wire bytes of ``msg`` (a message, dict, list or YAML), checked against the type."""
+        return messages.message(self.msg_type, msg).serialize()
 
     def publish(self, msg: Values = None, /, **fields: Any) -> None:
         """Send a message (a message object, dict, list, YAML text, or field keywords).
@@ -163,7 +168,7 @@ class Node:
         return self.aio.closed
 
     def close(self) -> None:
-        """Unregister everything and close every connection."""
+        """Unregister everything and close every connection; only the first close does it."""
         if not self.aio.closed:
             loop.run(self.aio.close())
 
@@ -182,7 +187,10 @@ class Node:
     def advertise(
         self, topic: str, msg_type: str, *, latch: bool = False, queue_size: int = 100
     ) -> Publisher:
-        """A publisher of ``msg_type`` on ``topic`` (rospy's ``Publisher``)."""
+        """A publisher of ``msg_type`` on ``topic`` (rospy's ``Publisher``).
+
+        One per topic: the first call decides its type, latching and queue.
+        """
         return Publisher(
             loop.run(self.aio.advertise(topic, msg_type, latch=latch, queue_size=queue_size))
         )
@@ -190,7 +198,12 @@ class Node:
     def publish(
         self, topic: str, msg: Values, msg_type: str | None = None, *, latch: bool = True
     ) -> Publisher:
-        """Publish one message; the topic latches unless told not to (``rostopic pub``)."""
+        """Publish one message, advertising the topic first if need be.
+
+        ``msg_type`` may be left out for a message object, or for a topic whose type the
+        master knows. The topic latches by default, as ``rostopic pub`` does, so subscribers
+        that connect later still get the message.
+        """
         return Publisher(loop.run(self.aio.publish(topic, msg, msg_type, latch=latch)))
 
     def subscribe(
@@ -201,7 +214,12 @@ class Node:
         *,
         queue_size: int = 1000,
     ) -> Subscription:
-        """Receive ``topic``: with ``callback``, or iterate the returned subscription."""
+        """Receive ``topic``: with ``callback``, or iterate the returned subscription.
+
+        The type is learnt from the publishers; ``msg_type`` only keeps the messages of
+        that type. ``AsyncNode`` calls ``callback`` on the loop, ``Node`` on the
+        subscription's own thread, one message at a time.
+        """
         if callback is None:
             return Subscription(
                 loop.run(self.aio.subscribe(topic, None, msg_type, queue_size=queue_size))
@@ -218,7 +236,7 @@ class Node:
         return loop.run(self.aio.wait_for_message(topic, timeout, msg_type))
 
     def last_messages(self) -> dict[str, Message | bytes | None]:
-        """The last message of every topic this node subscribes to."""
+        """The last message of every topic this node subscribes to (for reports)."""
         return loop.run(_call(self.aio.last_messages))
 
     def call_service(
@@ -230,23 +248,31 @@ class Node:
         timeout: float = SERVICE_TIMEOUT,
         **fields: Any,
     ) -> Message:
-        """Call ``service``; the response message."""
+        """Call ``service`` with a request (a message, dict, list, YAML or keywords).
+
+        The type is asked of the server when not given.
+        """
         return loop.run(
             self.aio.call_service(service, request, srv_type, timeout=timeout, **fields)
         )
 
     def advertise_service(
         self, service: str, srv_type: str, handler: Callable[[Message], Values]
-    ) -> None:
-        """Serve ``service``; ``handler(request)`` runs on a worker thread."""
+    ) -> ServiceServer:
+        """Serve ``service``: ``handler(request)`` returns the response (message, dict, ...).
+
+        A handler that raises answers the caller with a failure and the error's text.
+        ``AsyncNode`` calls it on the loop (it may be a coroutine function), ``Node`` on a
+        worker thread.
+        """
 
         async def in_thread(request: Message) -> Values:
             return await asyncio.get_running_loop().run_in_executor(None, handler, request)
 
-        loop.run(self.aio.advertise_service(service, srv_type, in_thread))
+        return loop.run(self.aio.advertise_service(service, srv_type, in_thread))
 
     def wait_for_service(self, service: str, timeout: float | None = None) -> None:
-        """Until the master knows ``service``."""
+        """Until the master knows ``service`` (rospy's ``wait_for_service``)."""
         loop.run(self.aio.wait_for_service(service, timeout))
 
     def get_param(self, key: str, default: Any = AsyncNode._MISSING) -> Any:

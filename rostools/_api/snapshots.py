@@ -12,10 +12,10 @@ from pathlib import Path
 
 from rostools._api import loop
 from rostools._api.bags import LiveRecorder
-from rostools.bag.bagfile import write_failure
-from rostools.bag.follow import Follower
-from rostools.bag.snapshot import SnapshotOptions, Snapshotter
-from rostools.bag.snapshot_srv import SnapshotRequest, window
+from rostools.bag.live.bagfile import write_failure
+from rostools.bag.live.follow import Follower
+from rostools.bag.live.snapshot import SnapshotOptions, Snapshotter
+from rostools.bag.live.snapshot_srv import SnapshotRequest, window
 from rostools.errors import UsageError, cannot_write
 from rostools.node.node import LiveNode
 

@@ -22,6 +22,7 @@ GROUPS: dict[str, str] = {
     "service": "Services: list, info, type, find, uri, args, call.",
     "action": "Actions (actionlib): list, info, send-goal, cancel, status.",
     "param": "The parameter server: list, get, set, delete, load, dump.",
+    "log": "Node logs (rosconsole): echo /rosout, list, get and set logger levels.",
     "msg": "Message and service types: show, md5, list, package, packages, proto.",
     "node": "ROS nodes: list, info, ping, kill, machine, cleanup, and graph.",
     "tf": "Transforms (tf2): echo, frames, monitor, pub.",

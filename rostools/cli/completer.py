@@ -309,6 +309,24 @@ class Completer:
             return []
         return self._template(lambda store: store.srv(srv_type).request)
 
+    def loggers(self) -> Candidates:
+        """``log get|set NODE <TAB>``: the node's loggers and their levels (its get_loggers)."""
+        if not self.positionals:
+            return []
+        from rostools.errors import RostoolsError
+        from rostools.node.loggers import GET_LOGGERS, LoggerBytesError, decode_loggers
+        from rostools.rosgraph.serviceclient import BlockingServiceClient
+
+        node = self.positionals[0]
+        name = (node if node.startswith("/") else "/" + node).rstrip("/") + "/get_loggers"
+        try:
+            with self._querying() as master:
+                client = BlockingServiceClient(master, name, timeout=master.timeout)
+                found = decode_loggers(client.call("/rostools_complete", GET_LOGGERS[1], b""))
+        except (RostoolsError, OSError, LoggerBytesError, _DeadlineError):
+            return []
+        return found
+
     def actions(self) -> Candidates:
         """Actions in the graph, with their types."""
         from rostools.action.pattern import find_actions
@@ -396,6 +414,7 @@ _KINDS: dict[str, Callable[[Completer], Candidates]] = {
     "message": Completer.message_template,
     "request": Completer.request_template,
     "action": Completer.actions,
+    "logger": Completer.loggers,
     "goal": Completer.goal_template,
     "frame": Completer.frames,
 }

@@ -86,9 +86,8 @@ class DemoGraph:
     async def _main(self) -> None:
         from rostools.msgs.codec import Codec
         from rostools.msgs.store import BuiltinSource, TypeStore
-        from rostools.msgs.topictype import TopicType
+        from rostools.msgs.topictype import ServiceType, TopicType
         from rostools.node.node import LiveNode
-        from rostools.node.service import ServiceType
 
         store = TypeStore([BuiltinSource()])
         srv_type = ServiceType.of(store, "rospy_tutorials/AddTwoInts")  # defines its messages

@@ -170,31 +170,4 @@ async def start_rosout(master_uri: str, host: str) -> LiveNode:
             agg.publish(frame)
 
     await node.subscribe("/rosout", forward, log_type)
-    await add_logger_services(node, store)
     return node
-
-
-async def add_logger_services(node: LiveNode, store: TypeStore) -> None:
-    """``~get_loggers`` and ``~set_logger_level``, which every rospy and roscpp node offers."""
-    from rostools.msgs.codec import Codec
-    from rostools.node.service import ServiceType
-
-    codec = Codec.of(store)
-    levels = {"ros": "info"}
-    get_type, set_type = (
-        ServiceType.of(store, "roscpp/GetLoggers"),
-        ServiceType.of(store, "roscpp/SetLoggerLevel"),
-    )
-
-    def get_loggers(request: bytes) -> bytes:
-        logger = codec.message_class("roscpp/Logger")
-        loggers = [logger(name, level) for name, level in sorted(levels.items())]
-        return codec.message_class("roscpp/GetLoggersResponse")(loggers).serialize()
-
-    def set_level(request: bytes) -> bytes:
-        msg = codec.decode("roscpp/SetLoggerLevelRequest", request)
-        levels[msg.logger] = msg.level.lower()
-        return b""
-
-    await node.advertise_service("~get_loggers", get_type, get_loggers)
-    await node.advertise_service("~set_logger_level", set_type, set_level)

@@ -1,4 +1,4 @@
-"""What a topic carries: type name, md5sum, full definition."""
+"""What a topic carries (type name, md5sum, full definition), and what a service does."""
 
 from __future__ import annotations
 
@@ -33,6 +33,18 @@ class TopicType(NamedTuple):
             except Exception:  # noqa: BLE001 - a broken definition only costs seq rewriting
                 has_header = False
         return cls(name, header.get("md5sum", "*"), definition, has_header)
+
+
+class ServiceType(NamedTuple):
+    """A service type as TCPROS headers carry it."""
+
+    type: str
+    md5sum: str
+
+    @classmethod
+    def of(cls, store: TypeStore, name: str) -> ServiceType:
+        """The service type ``name`` as the store knows it."""
+        return cls(store.srv(name).name, store.srv_md5(name))
 
 
 ANY = TopicType("*", "*", "")

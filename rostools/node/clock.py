@@ -7,22 +7,13 @@ import sys
 import time
 from typing import TYPE_CHECKING
 
-from rostools.msgs.topictype import TopicType
+from rostools.msgs.wellknown import CLOCK
 from rostools.node.connection import Frame, InboundConnection
 
 if TYPE_CHECKING:
     from rostools.node.node import LiveNode
     from rostools.node.subscriber import FramesCallback
 
-#: rosgraph_msgs/Clock, as roscpp and rospy announce it.
-CLOCK = TopicType(
-    "rosgraph_msgs/Clock",
-    "a9c97c1d230cfc112e270351a944ee47",
-    "# roslib/Clock is used for publishing simulated time in ROS. \n"
-    "# This message simply communicates the current time.\n"
-    "# For more information, see http://www.ros.org/wiki/Clock\n"
-    "time clock\n",
-)
 TIME = struct.Struct("<II")
 
 

@@ -13,7 +13,7 @@ import os
 from collections.abc import Callable
 from typing import Any
 
-from rostools.msgs.topictype import ANY, TopicType
+from rostools.msgs.topictype import ANY, ServiceType, TopicType
 from rostools.names import anonymous, canonicalize, make_global_ns, resolve, ros_namespace
 from rostools.node.connection import ConnectionHandler, Pending, ServerConnection
 from rostools.node.listen import Listener, listen
@@ -22,7 +22,7 @@ from rostools.node.notice import Notice, to_stderr
 from rostools.node.publisher import TopicPublisher
 from rostools.node.registration import Registrar, Registration
 from rostools.node.rpc import XmlRpcServer
-from rostools.node.service import ServiceHandler, ServiceServer, ServiceType
+from rostools.node.service import ServiceHandler, ServiceServer
 from rostools.node.subscriber import FramesCallback, Subscriber
 from rostools.node.watch import MasterWatch
 from rostools.rosgraph.network import bind_address, host_name
@@ -47,8 +47,12 @@ class LiveNode:
         ns: str | None = None,
         remappings: dict[str, str] | None = None,
         host: str | None = None,
+        logger_services: bool = True,
     ) -> None:
         """A node named ``name`` in ``ns`` (default: ``ROS_NAMESPACE``).
+
+        ``logger_services``: serve ``~get_loggers`` and ``~set_logger_level`` as rospy's
+        nodes do (``node/loggers.py``), registered in the background once the node starts.
 
         ``remappings`` are command-line ``name:=value`` pairs: ``__name``, ``__ns``,
         ``__master``, ``__ip``/``__hostname``, ``_private`` parameters and topic remaps.
@@ -96,6 +100,8 @@ class LiveNode:
         self._conn_ids = 0
         self.tcpros_port = 0
         self._methods = self._slave_api()
+        self._logger_services = logger_services
+        self._loggers_task: asyncio.Task[None] | None = None
 
     # life cycle -----------------------------------------------------------------------
 
@@ -115,7 +121,18 @@ class LiveNode:
                 await self.master.set_param(f"{self.name}/{key}", value)
         self._watch = MasterWatch(self)
         self._watch.start()
+        if self._logger_services:
+            # not awaited: a command's own registrations need not wait for these
+            self._loggers_task = asyncio.get_running_loop().create_task(self._serve_loggers())
         return self
+
+    async def _serve_loggers(self) -> None:
+        from rostools.node.loggers import serve_loggers
+
+        try:
+            await serve_loggers(self)
+        except Exception as err:  # noqa: BLE001 - the node works without them; say why at debug
+            log.debug("serving the logger services failed: %s", err)
 
     @property
     def uri(self) -> str:
@@ -136,6 +153,8 @@ class LiveNode:
         """Unregister everything, close every connection and server."""
         if self._watch is not None:
             self._watch.stop()
+        if self._loggers_task is not None:
+            self._loggers_task.cancel()
         self.registrar.close()
         calls = self.unregister_calls()
         if calls:

@@ -12,7 +12,7 @@ import inspect
 import logging
 import socket
 from collections.abc import Awaitable, Callable
-from typing import TYPE_CHECKING, NamedTuple
+from typing import TYPE_CHECKING
 from urllib.parse import urlsplit
 
 from rostools.errors import (
@@ -21,7 +21,7 @@ from rostools.errors import (
     TimeoutExpired,
     UnreachableError,
 )
-from rostools.msgs.store import TypeStore
+from rostools.msgs.topictype import ServiceType
 from rostools.node.connection import Frame, ServerConnection, set_nodelay
 from rostools.rosgraph.masterapi import SERVICE_TIMEOUT
 from rostools.wire.tcpros import (
@@ -46,18 +46,6 @@ ServiceHandler = Callable[[bytes], bytes | Awaitable[bytes]]
 RECEIVE_CHUNK = 64 * 1024
 #: Calls in a row that may complete without a turn of the event loop (``_read_now``).
 EAGER_READS = 16
-
-
-class ServiceType(NamedTuple):
-    """A service type as TCPROS headers carry it."""
-
-    type: str
-    md5sum: str
-
-    @classmethod
-    def of(cls, store: TypeStore, name: str) -> ServiceType:
-        """The service type ``name`` as the store knows it."""
-        return cls(store.srv(name).name, store.srv_md5(name))
 
 
 class ServiceServer:

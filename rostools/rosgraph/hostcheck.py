@@ -9,7 +9,6 @@ Blocking calls, each bounded by ``timeout``; nodes are asked in parallel.
 from __future__ import annotations
 
 import email.utils
-import http.client
 import os
 import socket
 import time
@@ -17,9 +16,9 @@ from collections.abc import Mapping
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import asdict, dataclass, field
 from typing import Any
-from urllib.parse import urlsplit
 
-from rostools.errors import RostoolsError
+from rostools.errors import NotFoundError, RostoolsError, TimeoutExpired, UnreachableError
+from rostools.rosgraph.masterapi import MasterError, XmlRpcNode, ros_value
 from rostools.rosgraph.network import (
     Failure,
     explain,
@@ -28,14 +27,15 @@ from rostools.rosgraph.network import (
     local_addresses,
     uri_host,
 )
-from rostools.wire.codes import SUCCESS
-from rostools.wire.xmlrpc import request_path
-from rostools.wire.xmlvalues import Fault, dumps_call, loads_response
 
 #: How far apart two clocks may be before we say so (s); HTTP dates have 1 s resolution.
 MAX_SKEW = 1.0
 #: Nodes asked at once.
 WORKERS = 16
+
+
+class _NotRosError(RostoolsError):
+    """The server answered, but not as a ROS master does: a fault, or no XML-RPC answer."""
 
 
 @dataclass
@@ -65,22 +65,20 @@ class Answer:
 
 
 def ask(uri: str, method: str, params: tuple[Any, ...], timeout: float) -> Answer:
-    """One XML-RPC call on a fresh connection, reading the ``Date`` header too."""
-    parts = urlsplit(uri)
-    conn = http.client.HTTPConnection(
-        parts.hostname or "localhost", parts.port or 80, timeout=timeout
-    )
+    """One XML-RPC call on a fresh connection, reading the ``Date`` header too.
+
+    Through the one client (``masterapi.XmlRpcNode``): its failures are its errors, raised
+    from the transport's (``_failure`` reads both).
+    """
+    caller, *args = params
+    client = XmlRpcNode(uri, str(caller), timeout, "node")
     try:
         sent = time.time()
-        body = dumps_call(method, params)
-        conn.request("POST", request_path(parts.path), body, {"Content-Type": "text/xml"})
-        response = conn.getresponse()
+        value, message = client.answered(method, *args)
         received = time.time()
-        data = response.read()
-        date = response.getheader("Date")
     finally:
-        conn.close()
-    value = loads_response(data)
+        client.http.close()
+    date = message.headers.get("date")
     skew = None
     if date:
         with_tz = email.utils.parsedate_to_datetime(date)
@@ -89,10 +87,14 @@ def ask(uri: str, method: str, params: tuple[Any, ...], timeout: float) -> Answe
 
 
 def _failure(err: BaseException, host: str, peer: bool = True) -> Failure:
-    if isinstance(err, UnicodeError):  # a peer's URI with U+2028 in its host: no name to look up
-        return explain(socket.gaierror(socket.EAI_NONAME, str(err)), host, peer)
-    if isinstance(err, (Fault, http.client.HTTPException, ValueError)):
-        return Failure(f"it does not speak the ROS XML-RPC API ({type(err).__name__})")
+    """Why a call to ``host`` failed, from the client's error and the transport's under it."""
+    cause = err.__cause__
+    if isinstance(err, UnreachableError | TimeoutExpired) and cause is not None:
+        return explain(cause, host, peer)
+    if isinstance(err, RostoolsError) and cause is not None:  # a fault, a bad answer
+        return Failure(f"it does not speak the ROS XML-RPC API ({type(cause).__name__})")
+    if isinstance(err, RostoolsError):  # no call was made: the URI is not one
+        return Failure(str(err))
     return explain(err, host, peer)
 
 
@@ -153,17 +155,18 @@ class Doctor:
             self.master_addresses = _resolve(host)
             pid = self._master("getPid", uri)
             given = self._master("getUri", uri)
-        except (OSError, http.client.HTTPException, Fault, ValueError) as err:
+        except (OSError, UnreachableError, TimeoutExpired, _NotRosError) as err:
             failure = _failure(err, host, peer=False)
             reason, hint = failure.reason, failure.hint
-            if isinstance(err, ConnectionRefusedError):
+            cause = err.__cause__ or err
+            if isinstance(cause, ConnectionRefusedError):
                 hint = (
                     "is a master running there, listening beyond loopback? ('rostools core' "
                     "listens on loopback unless given --host or ROS_IP)"
                 )
-            elif isinstance(err, socket.gaierror):
+            elif isinstance(cause, socket.gaierror):
                 hint = "use the master's address in ROS_MASTER_URI, or add its name to /etc/hosts"
-            code = 5 if isinstance(err, TimeoutError) else 4
+            code = 5 if isinstance(err, TimeoutExpired) else 4
             return Check(
                 "master", "fail", f"cannot reach the master at {uri}: {reason}", hint, code
             )
@@ -173,7 +176,7 @@ class Doctor:
         try:
             same = self._master("getPid", str(given)) == pid
             reason = "" if same else "another process answers there"
-        except (OSError, http.client.HTTPException, Fault, ValueError) as err:
+        except (OSError, UnreachableError, TimeoutExpired, _NotRosError) as err:
             same, reason = False, _failure(err, uri_host(str(given)), peer=False).reason
         if same:
             verdict = f"{uri} answers (pid {pid}); it gives out {given}, which reaches it too"
@@ -189,13 +192,20 @@ class Doctor:
         )
 
     def _master(self, method: str, uri: str, *args: Any) -> Any:
-        answer = ask(uri, method, (self.caller, *args), self.timeout)
+        try:
+            answer = ask(uri, method, (self.caller, *args), self.timeout)
+        except RostoolsError as err:
+            if isinstance(err, UnreachableError | TimeoutExpired) or err.__cause__ is None:
+                raise
+            raise _NotRosError(str(err)) from err.__cause__  # a fault or a bad answer
         if answer.skew is not None and uri == self.master_uri:
             self.skews["the master"] = answer.skew
-        code, message, value = answer.value
-        if code != SUCCESS:
-            raise RostoolsError(f"{method}: {message}")
-        return value
+        try:
+            return ros_value(answer.value, method, "master", args)
+        except (MasterError, NotFoundError):
+            raise  # a failure code: the master said no
+        except RostoolsError as err:  # not a [code, message, value] triple
+            raise _NotRosError(str(err)) from err
 
     # this host -------------------------------------------------------------------------
 

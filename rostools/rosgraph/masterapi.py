@@ -239,11 +239,16 @@ class XmlRpcNode:
 
     def raw(self, method: str, *args: Any) -> Any:
         """Call ``method(caller_id, *args)`` and return the whole answer."""
+        return self.answered(method, *args)[0]
+
+    def answered(self, method: str, *args: Any) -> tuple[Any, HttpMessage]:
+        """``raw``'s answer, and the HTTP message it came in (``doctor`` reads its ``Date``)."""
         try:
             request = format_request(
                 self.http.netloc, self.http.path, method, (self.caller_id, *args)
             )
-            return answer_value(self.http.post(request))
+            message = self.http.post(request)
+            return answer_value(message), message
         except Exception as err:
             error = call_error(err, self.uri, self.what, method, self.timeout)
             if error is None:

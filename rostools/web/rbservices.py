@@ -20,7 +20,7 @@ from rostools.msgs.codec import Codec
 from rostools.msgs.codegen import element
 from rostools.msgs.plain import to_rosbridge_json
 from rostools.msgs.rosbridge import RosbridgeFiller
-from rostools.node.service import ServiceType
+from rostools.msgs.topictype import ServiceType
 from rostools.web.rbclient import RosbridgeClient, Served
 from rostools.web.services import CALL_TIMEOUT, Service
 from rostools.wire.rosbridge import ProtocolError, need

@@ -32,9 +32,10 @@ from rostools.msgs.codec import Codec
 from rostools.msgs.rosbridge import RosbridgeFiller
 from rostools.msgs.spec import MsgSpec
 from rostools.msgs.store import TypeStore
+from rostools.msgs.topictype import ServiceType
 from rostools.node.clock import RosClock
 from rostools.node.mastercalls import LiveMaster
-from rostools.node.service import ServiceClient, ServiceType
+from rostools.node.service import ServiceClient
 from rostools.rosgraph.masterapi import MasterError
 
 if TYPE_CHECKING:

@@ -14,8 +14,9 @@ from dataclasses import dataclass
 
 from rostools.errors import RostoolsError
 from rostools.msgs.store import TypeStore
+from rostools.msgs.topictype import ServiceType
 from rostools.node.node import LiveNode
-from rostools.node.service import ServiceClient, ServiceType
+from rostools.node.service import ServiceClient
 from rostools.web.channels import ENCODING, SCHEMA_ENCODING
 
 log = logging.getLogger(__name__)

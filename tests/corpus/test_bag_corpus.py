@@ -12,11 +12,11 @@ from typing import Any
 import pytest
 import yaml
 
-from rostools.bag import mcap_format
-from rostools.bag.access import bag_info, open_bag, topic_frequencies
-from rostools.bag.mcap_reader import McapReader
-from rostools.bag.model import BagFormatError
-from rostools.bag.recover import recover
+from rostools.bag.formats import mcap_format
+from rostools.bag.formats.access import bag_info, open_bag, topic_frequencies
+from rostools.bag.formats.mcap_reader import McapReader
+from rostools.bag.formats.model import BagFormatError
+from rostools.bag.tools.recover import recover
 from rostools.errors import RostoolsError
 from tests.support.bagdata import digest
 from tests.support.env import CORPUS, SYSTEM_PYTHON, needs_corpus, needs_ros1, run_cli
@@ -312,7 +312,7 @@ def test_convert_keeps_mcap_attachments_and_metadata(path: Path, tmp_path: Path)
     """What the suite says the file holds comes out of our copy, indexed for the mcap library."""
     from mcap.reader import make_reader
 
-    from rostools.bag.ops import convert
+    from rostools.bag.tools.ops import convert
 
     expected = [
         r for r in json.loads(path.with_suffix(".json").read_text())["records"]

@@ -22,10 +22,10 @@ import subprocess
 from pathlib import Path
 from typing import Any
 
-from rostools.bag import rosbag1_format as fmt
-from rostools.bag.access import open_bag
-from rostools.bag.findings import doctor
-from rostools.bag.recover import recover
+from rostools.bag.formats import rosbag1_format as fmt
+from rostools.bag.formats.access import open_bag
+from rostools.bag.tools.findings import doctor
+from rostools.bag.tools.recover import recover
 from rostools.msgs.store import md5_of
 from rostools.wire.header import encode_fields, split_fields
 from tests.support.bagdata import bag_records, chunk_spans, digest, swap_spans

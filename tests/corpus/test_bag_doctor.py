@@ -8,9 +8,10 @@ from pathlib import Path
 
 import pytest
 
-from rostools.bag.findings import doctor
-from rostools.bag.mcap_reader import McapReader
-from rostools.bag.ops import convert
+from rostools.bag.formats.mcap_reader import McapReader
+from rostools.bag.tools.findings import doctor
+from rostools.bag.tools.ops import convert
+from rostools.bag.tools.options import CopyOptions
 from tests.support.env import CORPUS, needs_corpus, run_cli
 
 #: The corpus files that are damaged, or not bags at all: each must have findings.
@@ -50,7 +51,7 @@ def test_cli_lines_and_exit_codes() -> None:
 
 @needs_corpus
 def test_progress_is_reported_as_messages_are_read(monkeypatch: pytest.MonkeyPatch) -> None:
-    monkeypatch.setattr("rostools.bag.findings.PROGRESS_STEP", 100)
+    monkeypatch.setattr("rostools.bag.tools.findings.PROGRESS_STEP", 100)
     calls: list[tuple[int, int]] = []
     report = doctor(CORPUS / "ros1" / "roswire" / "example.bag", lambda *a: calls.append(a))
     assert calls[0] == (100, 1038) and calls[-1] == (1038, 1038) and len(calls) == 11
@@ -75,7 +76,7 @@ def _mutants(data: bytes, rng: random.Random, lo: int, hi: int) -> list[tuple[st
 
 def _mcap_with_crcs(src: Path, dst: Path) -> Path:
     """``src`` as MCAP, written by our writer (which writes every CRC), in small chunks."""
-    convert(src, dst, compression="zstd", chunk_size=64 * 1024)
+    convert(src, dst, CopyOptions(compression="zstd", chunk_size=64 * 1024))
     return dst
 
 

@@ -10,7 +10,7 @@ from typing import Any
 
 import pytest
 
-from rostools.bag.access import bag_info
+from rostools.bag.formats.access import bag_info
 from rostools.cli.tf.echo import WHOLE_RECORDING_NS
 from rostools.cli.tf.shared import open_feed
 from tests.support.env import CORPUS, needs_corpus, run_cli

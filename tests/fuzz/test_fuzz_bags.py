@@ -26,7 +26,7 @@ from types import FrameType
 import pytest
 from hypothesis import given, seed, strategies as st
 
-from rostools.bag.findings import doctor
+from rostools.bag.tools.findings import doctor
 from rostools.cli import main
 from tests.fuzz.conftest import FUZZ, SEED
 from tests.support.bagdamage import BAG_KINDS, MCAP_KINDS, Source, load, messages_of, mutate

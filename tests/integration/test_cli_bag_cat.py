@@ -9,7 +9,7 @@ from types import SimpleNamespace
 
 import pytest
 
-from rostools.bag.ops import convert
+from rostools.bag.tools.ops import convert
 from tests.support.bagdata import read_stream, write_sample
 from tests.support.env import CORPUS, needs_corpus, run_cli
 
@@ -87,7 +87,7 @@ def test_cat_decodes_ros2_cdr_through_rosbags() -> None:
 
 
 def test_a_message_that_does_not_decode_is_named(tmp_path: Path) -> None:
-    from rostools.bag.access import open_writer
+    from rostools.bag.formats.access import open_writer
     from tests.support.bagdata import STRING_MD5
 
     path = tmp_path / "bad.bag"

@@ -15,7 +15,7 @@ from pathlib import Path
 
 import pytest
 
-from rostools.bag import mcap_format as fmt
+from rostools.bag.formats import mcap_format as fmt
 from tests.support.env import run_cli
 
 DATA_LOSS = 6

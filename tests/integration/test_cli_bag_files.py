@@ -9,8 +9,8 @@ from pathlib import Path
 import pytest
 import yaml
 
-from rostools.bag import rosbag1_format as fmt
-from rostools.bag.access import bag_info, open_bag
+from rostools.bag.formats import rosbag1_format as fmt
+from rostools.bag.formats.access import bag_info, open_bag
 from tests.support.bagdata import (
     STEP_NS,
     STRING_MD5,
@@ -221,8 +221,8 @@ def test_filter_latched_keeps_what_a_late_subscriber_had(tmp_path: Path, out: st
 
 
 def test_convert_says_what_a_bag_cannot_hold(tmp_path: Path) -> None:
-    from rostools.bag import mcap_format as fmt
-    from rostools.bag.mcap_writer import McapWriter
+    from rostools.bag.formats import mcap_format as fmt
+    from rostools.bag.formats.mcap_writer import McapWriter
 
     with McapWriter(tmp_path / "x.mcap") as writer:
         conn = writer.add_connection("/s", "std_msgs/String", STRING_MD5, "string data\n")

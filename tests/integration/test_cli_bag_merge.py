@@ -6,7 +6,7 @@ import json
 import struct
 from pathlib import Path
 
-from rostools.bag.access import open_bag, open_writer
+from rostools.bag.formats.access import open_bag, open_writer
 from tests.support.bagdata import STRING_MD5, read_stream, write_sample
 from tests.support.env import needs_ros1, run_cli, run_system_python
 

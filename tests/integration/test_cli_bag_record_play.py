@@ -14,7 +14,7 @@ from pathlib import Path
 
 import pytest
 
-from rostools.bag.access import bag_info, detect_format, open_bag
+from rostools.bag.formats.access import bag_info, detect_format, open_bag
 from tests.support.bagdata import recorded, write_play_bag, write_static_bag
 from tests.support.env import needs_ros1, run_cli
 from tests.support.load import scaled
@@ -442,7 +442,7 @@ def test_play_keys_step_and_pause(
 def test_play_of_dense_messages_serves_late_subscribers_and_ctrl_c(
     rostools_master: str, cli_env: dict[str, str], tmp_path: Path
 ) -> None:
-    from rostools.bag.access import open_writer
+    from rostools.bag.formats.access import open_writer
     from tests.support.bagdata import STRING_MD5
 
     bag = tmp_path / "dense.bag"

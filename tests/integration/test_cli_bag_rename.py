@@ -6,7 +6,7 @@ from pathlib import Path
 
 import pytest
 
-from rostools.bag.access import open_bag, open_writer
+from rostools.bag.formats.access import open_bag, open_writer
 from rostools.msgs.store import TypeStore
 from tests.support.bagdata import read_stream, write_sample
 from tests.support.env import needs_ros1, run_cli, run_system_python

@@ -71,7 +71,7 @@ def test_rosbag_reads_every_part(tmp_path: Path) -> None:
 
 
 def test_size_cuts_after_the_part_is_full(tmp_path: Path) -> None:
-    from rostools.bag.split import Cut, split
+    from rostools.bag.tools.split import Cut, split
 
     sample = write_sample(tmp_path / "s.bag", 400)
     report = split(sample.path, tmp_path / "z.bag", Cut(size=4000))

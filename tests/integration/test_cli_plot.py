@@ -11,7 +11,7 @@ from pathlib import Path
 
 import pytest
 
-from rostools.bag.access import open_writer
+from rostools.bag.formats.access import open_writer
 from rostools.msgs.codec import Codec
 from rostools.msgs.message import Time
 from rostools.msgs.store import TypeStore

@@ -140,8 +140,9 @@ def _fake_server(behaviour: str) -> tuple[socket.socket, threading.Thread]:
 def test_persistent_async_client(services: Proc, rostools_master: str) -> None:
     from rostools.msgs.codec import Codec
     from rostools.msgs.store import BuiltinSource, TypeStore
+    from rostools.msgs.topictype import ServiceType
     from rostools.node.node import LiveNode
-    from rostools.node.service import ServiceClient, ServiceType
+    from rostools.node.service import ServiceClient
 
     store = TypeStore([BuiltinSource()])
     codec = Codec.of(store)

@@ -24,7 +24,15 @@ from tests.support.procs import Proc, core_and_env, free_port, start_cli, wait_f
 ROOT = Path(__file__).resolve().parent.parent.parent
 
 #: Commands that print no data (they act, or print a script): no --format to test.
-NOT_DATA = {"topic pub", "param set", "param delete", "param load", "completion show", "demo"}
+NOT_DATA = {
+    "topic pub",
+    "tf pub",
+    "param set",
+    "param delete",
+    "param load",
+    "completion show",
+    "demo",
+}
 
 #: Commands that run until stopped and serve each other: ``test_snapshot_and_trigger``.
 TOGETHER = {"bag snapshot", "bag trigger"}
@@ -80,6 +88,9 @@ RECIPES: dict[str, list[str]] = {
     "node machine": [],
     "node cleanup": ["--dry-run"],
     "node graph": [],
+    "tf echo": ["map", "base", "-n", "1"],
+    "tf frames": ["-w", "1"],
+    "tf monitor": ["-n", "1"],
     "bag info": ["{bag}", "--freq"],
     "bag filter": ["{bag}", "{tmp}/filtered.mcap", "topic == '/count'"],
     "bag convert": ["{bag}", "{tmp}/converted.mcap"],
@@ -142,12 +153,14 @@ def graph(tmp_path_factory: pytest.TempPathFactory) -> Iterator[tuple[dict[str, 
         Proc([*pub, "/tf_static", "tf2_msgs/TFMessage", STATIC_TF, "__name:=static_tf"], env=env),
         Proc([sys.executable, str(ROOT / "tests/support/rt_nodes/rt_services.py")], env=env),
         Proc([sys.executable, str(ROOT / "tests/support/rt_nodes/rt_actions.py")], env=env),
+        Proc([*CLI, "tf", "pub", "0", "0", "1", "0", "0", "0", "map", "base"], env=env),
     ]
     try:
         assert run_cli("param", "set", "/demo", "{a: 1, b: [x, y]}", env=env).returncode == 0
         wait_for(lambda: len(run_cli("topic", "list", env=env).stdout.split()) >= 5, 20, "graph")
         wait_for(lambda: "/add_two_ints" in run_cli("service", "list", env=env).stdout, 20, "srv")
         wait_for(lambda: "/fib" in run_cli("action", "list", env=env).stdout, 20, "action")
+        wait_for(lambda: "/tf_static" in run_cli("topic", "list", env=env).stdout, 20, "tf")
         write_sample(tmp / "sample.bag", 400)
         yield env, tmp
     finally:

@@ -10,7 +10,7 @@ from pathlib import Path
 
 import pytest
 
-from rostools.bag.access import bag_info
+from rostools.bag.formats.access import bag_info
 from tests.support.env import run_cli
 from tests.support.procs import wait_for
 

@@ -139,6 +139,10 @@ def until_stopped(command: str) -> str | None:
         return "printed"
     if re.match(r"rostools topic pub\b", command):
         return None if _bounded(command, "-1", "--once", "-f") else "connected"
+    if re.match(r"rostools tf pub\b", command):
+        return "Press Ctrl-C to stop"
+    if re.match(r"rostools tf monitor\b", command):
+        return None if _bounded(command, "-n", "--count", "-b", "--bag") else "printed"
     if re.match(r"rostools topic plot\b", command):
         return None if _bounded(command, "-n", "--timeout") else "connected"
     if re.match(r"rostools bag (record|snapshot)\b", command):

@@ -163,7 +163,7 @@ def test_header_and_bag_names_are_escaped(
 
 
 def test_bag_topic_names_are_escaped(cli_env: dict[str, str], tmp_path: Path) -> None:
-    from rostools.bag.access import open_writer
+    from rostools.bag.formats.access import open_writer
 
     topic = "/b" + RAW + NASTY
     bag = tmp_path / "names.bag"

@@ -15,7 +15,7 @@ from pathlib import Path
 
 import pytest
 
-from rostools.bag.access import open_bag
+from rostools.bag.formats.access import open_bag
 from rostools.wire.tcpros import publisher_header
 from tests.support.env import run_cli
 from tests.support.fakepeer import FakePublisher, frame
@@ -171,8 +171,10 @@ def test_snapshot_never_decodes(
         (["bag", "record", "/chatter", "-l", "1", "-O", "{tmp}/r.bag"], False, 0.0),
         (["topic", "hz", "/chatter", "--timeout", "1.2"], True, 0.001),
         (["topic", "bw", "/chatter", "--timeout", "1.2"], True, 0.001),
+        # log echo keeps no frame past its batch, but a reuse would buy it nothing
+        (["log", "echo", "--topic", "/chatter", "--timeout", "1.2"], False, 0.001),
     ],
-    ids=["echo", "record", "hz", "bw"],
+    ids=["echo", "record", "hz", "bw", "log-echo"],
 )
 def test_how_each_command_subscribes(
     monkeypatch: pytest.MonkeyPatch,

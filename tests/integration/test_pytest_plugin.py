@@ -13,7 +13,7 @@ import pytest
 # API's loop should be one per process: both are imported here, before any run.
 import rostools._api.functions
 import rostools.testing.helpers  # noqa: F401
-from rostools.bag.access import open_bag
+from rostools.bag.formats.access import open_bag
 
 pytest_plugins = ["pytester"]
 

@@ -21,8 +21,8 @@ from pathlib import Path
 
 import pytest
 
-from rostools.bag import follow, recorder
-from rostools.bag.access import open_bag
+from rostools.bag.formats.access import open_bag
+from rostools.bag.live import follow, recorder
 from rostools.errors import RostoolsError
 from rostools.master.server import MasterThread
 from rostools.msgs.topictype import TopicType

@@ -14,9 +14,9 @@ import pytest
 
 from rostools.msgs.codec import Codec
 from rostools.msgs.store import BuiltinSource, TypeStore
-from rostools.msgs.topictype import TopicType
+from rostools.msgs.topictype import ServiceType, TopicType
 from rostools.node.node import LiveNode
-from rostools.node.service import ServiceClient, ServiceType
+from rostools.node.service import ServiceClient
 from rostools.web.rosapi import SERVICES, RosApi, RosApiFailure, action_servers
 from tests.support.procs import free_port
 from tests.support.rosbridge_parity import GOLDEN
@@ -32,7 +32,8 @@ def on_graph(master: str, body: Callable[[RosApi, LiveNode], Awaitable[None]]) -
     the node /rosapi_graph, and a RosApi on a node of its own."""
 
     async def main() -> None:
-        graph = await LiveNode("rosapi_graph", master).start()
+        # no logger services: the node_details below are those of a node without them
+        graph = await LiveNode("rosapi_graph", master, logger_services=False).start()
         node = await LiveNode("rosapi_test", master).start()
         try:
             await graph.advertise("/chatter", TopicType.of(STORE, "std_msgs/String"))

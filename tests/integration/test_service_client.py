@@ -10,7 +10,8 @@ from typing import Any
 import pytest
 
 from rostools.errors import RostoolsError, ServiceError, TimeoutExpired
-from rostools.node.service import EAGER_READS, ServiceClient, ServiceType
+from rostools.msgs.topictype import ServiceType
+from rostools.node.service import EAGER_READS, ServiceClient
 from rostools.wire.header import encode_header
 
 TYPE = ServiceType("test_msgs/Echo", "0123456789abcdef0123456789abcdef")

@@ -12,12 +12,13 @@ from pathlib import Path
 
 import pytest
 
-from rostools.bag.access import open_bag
-from rostools.bag.snapshot import SnapshotOptions, Snapshotter, TriggerError
-from rostools.bag.snapshot_client import call
-from rostools.bag.snapshot_srv import TRIGGER, SnapshotRequest
+from rostools.bag.formats.access import open_bag
+from rostools.bag.live.snapshot import SnapshotOptions, Snapshotter
+from rostools.bag.live.snapshot_client import call
+from rostools.bag.live.snapshot_srv import SnapshotRequest, TriggerError
 from rostools.master.server import MasterThread
 from rostools.msgs.topictype import TopicType
+from rostools.msgs.wellknown import TRIGGER
 from rostools.node.node import LiveNode
 from rostools.node.publisher import TopicPublisher
 from tests.support.env import run_cli

@@ -18,7 +18,7 @@ from pathlib import Path
 
 import pytest
 
-from rostools.bag.access import bag_info
+from rostools.bag.formats.access import bag_info
 from tests.conftest import MasterInfo
 from tests.support.procs import Proc, wait_for
 

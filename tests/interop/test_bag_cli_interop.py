@@ -17,7 +17,7 @@ from pathlib import Path
 
 import pytest
 
-from rostools.bag.access import open_bag
+from rostools.bag.formats.access import open_bag
 from tests.conftest import MasterInfo
 from tests.interop.test_bag_interop import as_rosbag_sees, rosbag_view
 from tests.support import cppbuild
@@ -316,7 +316,7 @@ def test_play_waits_for_the_subscribers_the_master_listed(
     import json
     import struct
 
-    from rostools.bag.access import open_writer
+    from rostools.bag.formats.access import open_writer
     from tests.support.procs import ros_env
 
     bag = tmp_path / "k.bag"
@@ -480,7 +480,7 @@ def test_play_delivers_each_message_at_its_bag_time_over_the_rate(
     ``-r`` (the test before only checked that ``-r 10`` was quicker than ``-r 1``)."""
     import struct
 
-    from rostools.bag.access import open_writer
+    from rostools.bag.formats.access import open_writer
     from tests.support.procs import ros_env
 
     bag = tmp_path / "pace.bag"

@@ -11,9 +11,10 @@ from typing import Any
 import pytest
 import yaml
 
-from rostools.bag import ops
-from rostools.bag.access import bag_info
-from rostools.bag.recover import recover
+from rostools.bag.formats.access import bag_info
+from rostools.bag.tools import ops
+from rostools.bag.tools.options import CopyOptions
+from rostools.bag.tools.recover import recover
 from tests.support.bagdata import digest, first_chunk_data, headers, read_stream, write_sample
 from tests.support.env import CLI, SYSTEM_PYTHON, needs_ros1, run_system_python
 
@@ -148,7 +149,7 @@ def test_we_read_bags_rosbag_writes(tmp_path: Path, compression: str) -> None:
 def test_convert_round_trip_is_read_by_rosbag(tmp_path: Path) -> None:
     sample = write_sample(tmp_path / "a.bag", 1000, compression="lz4")
     ops.convert(sample.path, tmp_path / "b.mcap")
-    ops.convert(tmp_path / "b.mcap", tmp_path / "c.bag", compression="bz2")
+    ops.convert(tmp_path / "b.mcap", tmp_path / "c.bag", CopyOptions(compression="bz2"))
     views = rosbag_view(sample.path, tmp_path / "c.bag")
     assert views[sample.path]["stream"] == views[tmp_path / "c.bag"]["stream"]
     assert views[sample.path]["headers"] == views[tmp_path / "c.bag"]["headers"]

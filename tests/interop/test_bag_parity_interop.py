@@ -273,7 +273,7 @@ def test_play_off_a_terminal_says_what_rosbag_play_says(
     ours printed nothing. Now the same, on stderr, a status line a second ending in a newline
     (rosbag's end in \\r, one per message). Under --topics, the duration is that of what is
     played, as rosbag's: 2 s of /a, not the bag's 6 s."""
-    from rostools.bag.access import open_writer
+    from rostools.bag.formats.access import open_writer
     from tests.support.procs import ros_env
 
     bag = tmp_path / "p.bag"

@@ -17,7 +17,7 @@ from pathlib import Path
 
 import pytest
 
-from rostools.bag.access import open_bag
+from rostools.bag.formats.access import open_bag
 from tests.support.bagdata import recorded, write_play_bag
 from tests.support.env import ROOT, needs_ros1, run_cli
 from tests.support.procs import (

@@ -16,7 +16,7 @@ from pathlib import Path
 
 import pytest
 
-from rostools.bag.access import open_bag
+from rostools.bag.formats.access import open_bag
 from tests.conftest import MasterInfo
 from tests.support.bagdata import recorded
 from tests.support.env import run_cli

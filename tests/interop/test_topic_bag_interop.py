@@ -9,7 +9,7 @@ from pathlib import Path
 
 import pytest
 
-from rostools.bag.access import open_writer
+from rostools.bag.formats.access import open_writer
 from tests.support.env import needs_ros1, run_cli
 from tests.support.procs import Proc, ros_env, start_cli, wait_for
 

@@ -14,7 +14,7 @@ from pathlib import Path
 
 import pytest
 
-from rostools.bag.access import open_writer
+from rostools.bag.formats.access import open_writer
 from tests.multihost.conftest import Site
 from tests.support.bagdata import STRING_MD5
 from tests.support.env import SYSTEM_PYTHON, needs_ros1

@@ -14,10 +14,10 @@ from collections import Counter
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from rostools.bag import mcap_format, rosbag1_format as fmt
-from rostools.bag.access import open_bag
-from rostools.bag.mcap_reader import McapReader
-from rostools.bag.rosbag1_reader import Bag1Reader
+from rostools.bag.formats import mcap_format, rosbag1_format as fmt
+from rostools.bag.formats.access import open_bag
+from rostools.bag.formats.mcap_reader import McapReader
+from rostools.bag.formats.rosbag1_reader import Bag1Reader
 from tests.support.bagdata import bag_records, chunk_spans, swap_spans
 
 #: A message as the checks compare them: topic, time (ns), md5 of the bytes.

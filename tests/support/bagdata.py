@@ -11,8 +11,8 @@ import struct
 from dataclasses import dataclass
 from pathlib import Path
 
-from rostools.bag.access import open_bag, open_writer
-from rostools.bag.model import Connection
+from rostools.bag.formats.access import open_bag, open_writer
+from rostools.bag.formats.model import Connection
 
 STRING_MD5 = "992ce8a1687cec8c8bd883ec73ca41d1"
 INT32_MD5 = "da5909fbe378aeaf85e547e830cc1bb7"
@@ -156,7 +156,7 @@ def bag_records(raw: bytes, start: int = 13, end: int | None = None) -> list[Rec
 
     Top level by default; give a chunk's data span for the records inside an uncompressed one.
     """
-    from rostools.bag import rosbag1_format as fmt
+    from rostools.bag.formats import rosbag1_format as fmt
 
     end = len(raw) if end is None else end
     out: list[Record] = []
@@ -173,7 +173,7 @@ def bag_records(raw: bytes, start: int = 13, end: int | None = None) -> list[Rec
 
 def chunk_spans(raw: bytes) -> list[tuple[int, int]]:
     """[start, end) of each chunk record of a ``.bag`` together with the index records after it."""
-    from rostools.bag import rosbag1_format as fmt
+    from rostools.bag.formats import rosbag1_format as fmt
 
     records = bag_records(raw)
     starts = [r[0] for r in records if r[1] == fmt.OP_CHUNK]
@@ -204,7 +204,7 @@ def recorded(path: Path, topic: str) -> int:
 
 def handmade_mcap(path: Path, profile: str, records: bytes = b"") -> Path:
     """An unindexed MCAP file: magic, header, ``records``, data end, an empty footer."""
-    from rostools.bag import mcap_format as fmt
+    from rostools.bag.formats import mcap_format as fmt
 
     out = fmt.MAGIC + fmt.encode_header(profile, "") + records
     path.write_bytes(out + fmt.encode_data_end() + fmt.encode_footer(0, 0, b""))
@@ -230,7 +230,7 @@ def bag_connection(conn: int, topic: str, *, in_record: bool = True) -> bytes:
     """A ``.bag`` CONNECTION record of std_msgs/String; ``in_record`` False leaves out the
     record header's topic field (the connection header in its data still names the topic,
     as the format says)."""
-    from rostools.bag import rosbag1_format as fmt
+    from rostools.bag.formats import rosbag1_format as fmt
     from rostools.wire.header import encode_fields
 
     fields = {"op": bytes([fmt.OP_CONNECTION]), "conn": fmt.U32.pack(conn)}
@@ -243,7 +243,7 @@ def bag_connection(conn: int, topic: str, *, in_record: bool = True) -> bytes:
 
 def bag_message(conn: int, t_ns: int, text: bytes = b"") -> bytes:
     """A ``.bag`` MSG_DATA record: a std_msgs/String of ``text`` on connection ``conn``."""
-    from rostools.bag import rosbag1_format as fmt
+    from rostools.bag.formats import rosbag1_format as fmt
 
     fields = {"op": bytes([fmt.OP_MSG_DATA]), "conn": fmt.U32.pack(conn)}
     fields["time"] = fmt.pack_time(t_ns)
@@ -252,7 +252,7 @@ def bag_message(conn: int, t_ns: int, text: bytes = b"") -> bytes:
 
 def bag_chunk(records: bytes, compression: str | None = "none") -> bytes:
     """A ``.bag`` CHUNK record holding ``records``; None leaves the compression field out."""
-    from rostools.bag import rosbag1_format as fmt
+    from rostools.bag.formats import rosbag1_format as fmt
 
     fields = {"op": bytes([fmt.OP_CHUNK]), "size": fmt.U32.pack(len(records))}
     if compression is None:
@@ -264,7 +264,7 @@ def bag_chunk(records: bytes, compression: str | None = "none") -> bytes:
 def handmade_bag(path: Path, records: bytes) -> Path:
     """An unclosed ``.bag`` (index_pos 0, as rosbag leaves one while recording): the magic,
     rosbag's padded bag header, then ``records``."""
-    from rostools.bag import rosbag1_format as fmt
+    from rostools.bag.formats import rosbag1_format as fmt
 
     header = fmt.encode_header(
         {

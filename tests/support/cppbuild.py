@@ -43,7 +43,7 @@ LIBS = [
 ]
 # Added when topic_tools is installed: sub_count then subscribes with topic_tools::ShapeShifter.
 TOPIC_TOOLS = ["-DHAVE_TOPIC_TOOLS=1", "-ltopic_tools"]
-PROGRAMS = ("pub_rate", "sub_count", "listener", "talker", "add_two_ints_server")
+PROGRAMS = ("pub_rate", "sub_count", "listener", "talker", "add_two_ints_server", "log_levels")
 
 _locks_guard = threading.Lock()
 _locks: dict[str, threading.Lock] = {}

@@ -14,10 +14,10 @@ from pathlib import Path
 from typing import Any
 
 from rostools._api.messages import message, store
-from rostools.bag import mcap_format as fmt
-from rostools.bag.access import open_writer
-from rostools.bag.base import BagWriter
-from rostools.bag.mcap_writer import McapWriter
+from rostools.bag.formats import mcap_format as fmt
+from rostools.bag.formats.access import open_writer
+from rostools.bag.formats.base import BagWriter
+from rostools.bag.formats.mcap_writer import McapWriter
 
 #: The first message's time: 2023-11-14 22:13:20.123456789 UTC.
 START_NS = 1_700_000_000_123_456_789

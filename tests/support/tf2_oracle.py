@@ -6,9 +6,10 @@ live. Reads one JSON document on stdin: ``{"cache_ns": N, "ops": [...]}``, each 
 ``["lookup", target, source, time_ns]``, ``["shift", offset_ns]`` (every later time is
 handed to tf2_py less ``offset_ns``: see ``time``) and ``["bag", path, until_ns]`` (the ``/tf`` and
 ``/tf_static`` messages of a bag recorded up to ``until_ns``, all when it is None, in record
-order, read by the ``rosbag`` module). Writes one
-JSON list: per lookup ``{"ok": [stamp_ns, [seven values]]}`` or ``{"error": kind,
-"message": text}``. Nothing of rostools is imported here: this is the reference side.
+order, read by the ``rosbag`` module, each from its connection's callerid) and ``["yaml"]``.
+Writes one JSON list: per lookup ``{"ok": [stamp_ns, [seven values]]}`` or ``{"error": kind,
+"message": text}``; per yaml ``{"yaml": text}``, the buffer's ``allFramesAsYAML`` (what
+view_frames draws). Nothing of rostools is imported here: this is the reference side.
 """
 
 from __future__ import annotations
@@ -18,14 +19,18 @@ import sys
 
 
 def _messages(path):
-    """The TF messages of a bag as ``(topic, message, record time ns)``, in record order."""
+    """The TF messages of a bag as ``(topic, message, record time ns, callerid)``, in record
+    order."""
     import rosbag
 
     bag = rosbag.Bag(path)
 
     def read():
-        for topic, msg, t in bag.read_messages(topics=["/tf", "/tf_static", "tf"]):
-            yield topic, msg, t.secs * 1_000_000_000 + t.nsecs
+        topics = ["/tf", "/tf_static", "tf"]
+        for topic, msg, t, conn in bag.read_messages(topics, return_connection_header=True):
+            who = conn.get("callerid", b"")  # rosbag hands the header over as bytes
+            who = who.decode() if isinstance(who, bytes) else who
+            yield topic, msg, t.secs * 1_000_000_000 + t.nsecs, who
 
     return {"it": read(), "next": None}
 
@@ -83,14 +88,16 @@ def main():
                 if item is False or (until is not None and item[2] > until):
                     break
                 reader["next"] = None
-                topic, msg, stamp = item
+                topic, msg, stamp, who = item
                 for m in msg.transforms:
                     static = topic == "/tf_static"  # its stamp is never read: tf2 drops it
                     m.header.stamp = time(0 if static else stamp_of_msg(m.header.stamp))
                     if static:
-                        buffer.set_transform_static(m, "bag")
+                        buffer.set_transform_static(m, who)
                     else:
-                        buffer.set_transform(m, "bag")
+                        buffer.set_transform(m, who)
+        elif op[0] == "yaml":
+            answers.append({"yaml": buffer.all_frames_as_yaml()})
         else:
             _, target, source, at = op
             try:

@@ -32,7 +32,7 @@ needs_tf2 = pytest.mark.skipif(_REASON is not None, reason=_REASON or "")
 
 
 def ask_tf2(cache_ns: int, ops: list[list[Any]]) -> list[dict[str, Any]]:
-    """tf2's answers to ``ops`` (see ``tf2_oracle.py``), one per lookup."""
+    """tf2's answers to ``ops`` (see ``tf2_oracle.py``), one per lookup or yaml."""
     env = {k: v for k, v in os.environ.items() if not k.startswith("ROS_")}
     proc = run(
         [SYSTEM_PYTHON, str(Path(__file__).with_name("tf2_oracle.py"))],

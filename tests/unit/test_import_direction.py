@@ -114,10 +114,10 @@ def test_no_module_imports_upward() -> None:
 
 def test_the_package_root_counts_as_a_module() -> None:
     """``from rostools import __version__`` imports the package root, the top of the layers:
-    the check let it through (bag/mcap_writer.py did it), as if the root were no module."""
+    the check let it through (bag/formats/mcap_writer.py did it), as if the root were no module."""
     imports = _imports()
     assert _unit("rostools") == "__init__" and _layer("__init__") == len(LAYERS) - 1
-    assert "rostools.version" in imports["rostools.bag.mcap_writer"]
+    assert "rostools.version" in imports["rostools.bag.formats.mcap_writer"]
     assert not [m for m, targets in imports.items() if "rostools" in targets], "the root imported"
 
 
@@ -159,6 +159,34 @@ def test_no_module_imports_across_its_own_layer() -> None:
         if _unit(target) != _unit(module) and _layer(_unit(target)) == _layer(_unit(module))
     ]
     assert not sideways, "\n".join(sorted(sideways))
+
+
+#: The rooms of ``bag/`` and the other rooms each may import (ARCHITECTURE.md, the code map).
+BAG_ROOMS: dict[str, set[str]] = {"formats": set(), "live": {"formats"}, "tools": {"formats"}}
+
+
+def _bag_room(module: str) -> str | None:
+    """``live`` for ``rostools.bag.live.player``; None outside ``bag`` and for its root."""
+    parts = module.split(".")
+    return parts[2] if parts[:2] == ["rostools", "bag"] and len(parts) > 2 else None
+
+
+def test_every_bag_module_is_in_a_room() -> None:
+    modules = [m for m in _imports() if m.startswith("rostools.bag.")]
+    assert {_bag_room(m) for m in modules} == set(BAG_ROOMS), sorted(modules)
+    assert all(m.count(".") == 3 or m in {f"rostools.bag.{r}" for r in BAG_ROOMS} for m in modules)
+
+
+def test_bag_rooms_import_only_formats() -> None:
+    """``live`` and ``tools`` import ``formats``, not each other; ``formats`` imports neither."""
+    crossing = [
+        f"{module} imports {target}"
+        for module, targets in _imports().items()
+        if (room := _bag_room(module))
+        for target in targets
+        if _bag_room(target) not in (None, room, *BAG_ROOMS[room])
+    ]
+    assert not crossing, "\n".join(sorted(crossing))
 
 
 def _group_of(module: str) -> str | None:
@@ -244,3 +272,12 @@ def test_quick_commands_reach_no_typer() -> None:
     assert not {m for m in seen if m.split(".")[0] in ("typer", "click")}, sorted(
         m for m in seen if m.startswith("rostools")
     )
+
+
+def test_the_trigger_and_the_ring_buffer_stand_alone() -> None:
+    """``bag trigger`` needs the service's bytes and error, not the snapshot recorder; the ring
+    buffer needs the entry overhead, not ``bag record`` (each imported the other for one name)."""
+    imports = _imports()
+    assert "rostools.bag.live.snapshot" not in imports["rostools.bag.live.snapshot_client"]
+    for module in ("ringbuffer", "snapshot_live", "snapshot_services"):
+        assert "rostools.bag.live.recorder" not in imports[f"rostools.bag.live.{module}"], module

@@ -11,7 +11,8 @@ from typing import Any
 
 import pytest
 
-from rostools.bag import recorder
+from rostools.bag.formats.model import ENTRY_OVERHEAD
+from rostools.bag.live import recorder
 
 BUFFER = 1024 * 1024
 HEADER = {"topic": "/t", "type": "std_msgs/String", "md5sum": "992ce8a1687cec8c8bd883ec73ca41d1"}
@@ -61,8 +62,8 @@ def test_a_batch_being_written_counts_too(tmp_path: Path, monkeypatch: pytest.Mo
         assert taken.wait(10)
         _flood(rec, 20_000)  # while the writer is stuck on the first batch
         # Resetting the count when the writer took its batch let the queue fill again: 2x.
-        assert rec.queued_bytes + rec.writing_bytes <= BUFFER + 500 * recorder.ENTRY_OVERHEAD
-        held = sum(len(e[4]) + recorder.ENTRY_OVERHEAD for e in rec.queue)
+        assert rec.queued_bytes + rec.writing_bytes <= BUFFER + 500 * ENTRY_OVERHEAD
+        held = sum(len(e[4]) + ENTRY_OVERHEAD for e in rec.queue)
         assert held == rec.queued_bytes  # how much the writer took depends on when it woke
     finally:
         release.set()

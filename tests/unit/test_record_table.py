@@ -9,7 +9,7 @@ from typing import Any
 
 from rich.console import Console
 
-from rostools.bag.follow import TopicStats
+from rostools.bag.live.follow import TopicStats
 from rostools.cli.bag.record import LiveTable
 
 

@@ -9,8 +9,8 @@ from typing import Any
 
 from rich.console import Console
 
-from rostools.bag.ringbuffer import ConnInfo
-from rostools.bag.snapshot import SnapshotOptions, Snapshotter
+from rostools.bag.live.ringbuffer import ConnInfo
+from rostools.bag.live.snapshot import SnapshotOptions, Snapshotter
 from rostools.cli.bag.snapview import SnapshotTable
 
 NS = 1_000_000_000

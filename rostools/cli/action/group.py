@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import typer
 
-from rostools.cli.action import control, goal, query
+from rostools.cli.action import control, query, send_goal
 from rostools.cli.register import add
 
 app = typer.Typer(
@@ -13,4 +13,4 @@ app = typer.Typer(
     no_args_is_help=True,
     add_completion=False,
 )
-add(app, query.list_actions, query.info, goal.send_goal, control.cancel, control.status)
+add(app, query.list_actions, query.info, send_goal.send_goal, control.cancel, control.status)

@@ -18,7 +18,7 @@ from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
-from rostools.bag.model import counted
+from rostools.bag.formats.model import counted
 from rostools.cli import output
 from rostools.cli.bag.options import EndOpt, FilterExprOpt, StartOpt
 from rostools.cli.bag.shared import check_read, time_window
@@ -28,10 +28,10 @@ from rostools.cli.render import Renderer
 from rostools.errors import InvalidDataError, UsageError
 
 if TYPE_CHECKING:
-    from rostools.bag.base import BagReader
-    from rostools.bag.model import Connection
-    from rostools.bag.ordering import Entry
-    from rostools.bag.ros2 import Ros2Types
+    from rostools.bag.formats.base import BagReader
+    from rostools.bag.formats.model import Connection
+    from rostools.bag.formats.ordering import Entry
+    from rostools.bag.formats.ros2 import Ros2Types
 
 
 #: Lines are written in batches of this many, or of this many characters, whichever is first.
@@ -72,7 +72,7 @@ class _Lines:
         self.stamp = self.renderer.stamp
 
     def _ros2(self, conn: Connection, types: Ros2Types) -> None:
-        from rostools.bag import ros2
+        from rostools.bag.formats import ros2
         from rostools.msgs.plain import dumps
 
         types.learn(conn.type, conn.definition)
@@ -133,8 +133,8 @@ def cat(
     no_crc_check: NoCrcCheckOpt = False,
 ) -> None:
     """Print the messages of bags, one JSON object per line, in time order across files."""
-    from rostools.bag.access import open_bag
-    from rostools.bag.ops import compile_filter
+    from rostools.bag.formats.access import open_bag
+    from rostools.bag.tools.ops import compile_filter
 
     paths = [Path(a) for a in args if not (a.startswith("/") and not Path(a).is_file())]
     topics = [a for a in args if a.startswith("/") and not Path(a).is_file()] or None
@@ -170,9 +170,9 @@ def _cdr_connections(
 
     Encodings that are neither ROS 1 nor CDR are refused in one line (``--raw`` prints any).
     """
-    from rostools.bag.mcap_reader import McapReader
-    from rostools.bag.model import UnsupportedBagError
-    from rostools.bag.ros2 import cdr_connections
+    from rostools.bag.formats.mcap_reader import McapReader
+    from rostools.bag.formats.model import UnsupportedBagError
+    from rostools.bag.formats.ros2 import cdr_connections
 
     if raw or not isinstance(reader, McapReader):
         return set()
@@ -201,7 +201,7 @@ def _print(
     count: int | None,
 ) -> int:
     """Print the messages; how many."""
-    from rostools.bag.ros2 import Ros2Types
+    from rostools.bag.formats.ros2 import Ros2Types
 
     lines: dict[tuple[int, int], _Lines] = {}
     ros2_types: dict[int, Ros2Types] = {}

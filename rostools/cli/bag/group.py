@@ -4,7 +4,25 @@ from __future__ import annotations
 
 import typer
 
-from rostools.cli.bag import cat, extras, files, play, plot, record, snapshot, workbench
+from rostools.cli.bag import (
+    attachments,
+    cat,
+    compress,
+    convert,
+    doctor,
+    filter,
+    info,
+    merge,
+    metadata,
+    play,
+    plot,
+    record,
+    recover,
+    reindex,
+    snapshot,
+    split,
+    trigger,
+)
 from rostools.cli.register import add
 
 app = typer.Typer(
@@ -17,7 +35,7 @@ app = typer.Typer(
     no_args_is_help=True,
     add_completion=False,
 )
-add(app, files.info, files.filter_, files.convert, files.compress, files.decompress)
-add(app, files.recover, files.reindex, workbench.merge, workbench.split, cat.cat, plot.plot_cmd)
-add(app, play.play, record.record, snapshot.snapshot, snapshot.trigger)
-add(app, extras.attachments, extras.metadata, extras.doctor)
+add(app, info.info, filter.filter_, convert.convert, compress.compress, compress.decompress)
+add(app, recover.recover, reindex.reindex, merge.merge, split.split, cat.cat, plot.plot_cmd)
+add(app, play.play, record.record, snapshot.snapshot, trigger.trigger)
+add(app, attachments.attachments, metadata.metadata, doctor.doctor)

@@ -7,7 +7,7 @@ import re
 import time
 from typing import Any
 
-from rostools.bag.model import BagInfo
+from rostools.bag.formats.model import BagInfo
 from rostools.cli.bag.shared import human_size
 from rostools.errors import UsageError, one_line
 

@@ -7,12 +7,19 @@ skipped with a line saying why, and the others are done. The exit code is the wo
 
 from __future__ import annotations
 
+import dataclasses
 import sys
 from collections.abc import Callable
 from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
-from rostools.bag.model import counted, lost_data
+from rostools.bag.formats.model import counted, lost_data
+from rostools.cli.bag.shared import copy_command
 from rostools.errors import RostoolsError, UsageError, one_line
+
+if TYPE_CHECKING:
+    from rostools.bag.tools.ops import CopyReport
+    from rostools.cli.output import Format
 
 #: Does one bag: ``(source, where to write, the bag it replaces or None)`` -> what was lost.
 Step = Callable[[Path, Path, Path | None], list[str]]
@@ -86,3 +93,30 @@ def _outcome(
     err: RostoolsError = lost_data(what, lost) if lost else RostoolsError(what)
     err.exit_code = max([e.exit_code for _, e in failed] + [err.exit_code if lost else 0])
     return err
+
+
+def copy_in_place(
+    bags: list[Path],
+    output_dir: Path | None,
+    force: bool,
+    fmt: Format,
+    quiet: bool,
+    label: str,
+    run: Callable[[Path, Path, Any], CopyReport],
+) -> None:
+    """rosbag compress's way: write beside, keep the original as ``x.orig.bag``.
+
+    ``run(source, destination, progress)`` copies one bag. A damaged bag is rewritten with
+    what reads (the original is kept all the same); exit 6 at the end, naming what was left
+    out.
+    """
+
+    def one(path: Path, dst: Path, keep: Path | None) -> list[str]:
+        def step(progress: Any) -> CopyReport:
+            return dataclasses.replace(run(path, dst, progress), output=keep or dst)
+
+        report = copy_command(fmt, quiet, label, step, check=False, say=not quiet)
+        swap(path, dst, keep)
+        return list(report.lost)
+
+    each_in_place(bags, output_dir, force, quiet, label, one)

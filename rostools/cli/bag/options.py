@@ -17,8 +17,9 @@ from rostools.cli.declare import options_record
 from rostools.errors import UsageError
 
 if TYPE_CHECKING:
-    from rostools.bag.player import PlayOptions
-    from rostools.bag.rename import Renames
+    from rostools.bag.live.player import PlayOptions
+    from rostools.bag.tools.options import CopyOptions
+    from rostools.bag.tools.rename import Renames
 
 BagArg = Annotated[Path, typer.Argument(help="A .bag or .mcap file.")]
 OutArg = Annotated[Path, typer.Argument(help="The file to write; its name picks the format.")]
@@ -194,7 +195,7 @@ class OutputFile:
 
     def chunk_compression(self, storage: str) -> str | None:
         """The chunk compression from ``--bz2``/``--lz4``/``--compression`` (None: default)."""
-        from rostools.bag.access import WRITE_COMPRESSIONS
+        from rostools.bag.formats.access import WRITE_COMPRESSIONS
 
         picked = (("bz2", self.bz2), ("lz4", self.lz4), (self.compression, self.compression))
         chosen = [c for c, on in picked if on]
@@ -307,7 +308,7 @@ class Playback:
 
     def options(self, topics: list[str]) -> PlayOptions:
         """The player's options for ``topics``, checked as rosbag play checks them."""
-        from rostools.bag.player import PlayOptions
+        from rostools.bag.live.player import PlayOptions
 
         for value, flag in ((self.delay, "-d"), (self.start, "-s")):
             if value < 0:
@@ -361,6 +362,23 @@ class CopyOutput:
         from rostools.cli.bag.shared import renames
 
         return renames(self.rename, self.rename_type)
+
+    def copy(
+        self, window: CopyWindow | None = None, paths: list[Path] | None = None, **more: Any
+    ) -> CopyOptions:
+        """The library's ``CopyOptions``: these options, ``window``'s and ``more``'s.
+
+        ``window``'s times count from the earliest start of ``paths``; ``more`` holds what a
+        command adds (``expression``, ``chunk_size``).
+        """
+        from rostools.bag.tools.options import CopyOptions
+
+        lo, hi = window.bounds(paths or []) if window else (None, None)
+        return CopyOptions(
+            topics=(window.topics or None) if window else None, start=lo, end=hi,
+            compression=self.compression, overwrite=self.force, renames=self.renames(),
+            check_crcs=not self.no_crc_check, **more,
+        )  # fmt: skip
 
 
 @options_record

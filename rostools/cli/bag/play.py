@@ -10,7 +10,7 @@ from typing import TYPE_CHECKING, Annotated
 
 import typer
 
-from rostools.bag.model import counted
+from rostools.bag.formats.model import counted
 from rostools.cli import output
 from rostools.cli.bag.keys import keyboard
 from rostools.cli.bag.options import Playback
@@ -23,8 +23,8 @@ from rostools.errors import UsageError, one_line
 if TYPE_CHECKING:
     import asyncio
 
-    from rostools.bag.base import BagReader
-    from rostools.bag.player import PlayOptions, Status
+    from rostools.bag.formats.base import BagReader
+    from rostools.bag.live.player import PlayOptions, Status
     from rostools.node.node import LiveNode
 
 
@@ -46,7 +46,7 @@ def split_bags_and_topics(args: list[str], topics: list[str]) -> tuple[list[Path
 
 def status_line(status: Status) -> str:
     """rosbag play's status line: `` [RUNNING]  Bag Time: ...   Duration: ... / ...``."""
-    from rostools.bag.player import State
+    from rostools.bag.live.player import State
 
     tail = f"   Delay: {status.delay:.2f} " if status.state is State.DELAYED else " " * 15
     return (
@@ -79,7 +79,7 @@ def play(
     Remap topics with old:=new arguments. Keys: space pauses, s steps while paused, t turns
     --pause-topics on and off. The service ~pause_playback (std_srvs/SetBool) pauses too.
     """
-    from rostools.bag.access import open_bag, require_ros1
+    from rostools.bag.formats.access import open_bag, require_ros1
 
     paths, wanted = split_bags_and_topics(bags or [], topics or [])
     paths += [Path(b) for b in bag_list or []]
@@ -111,7 +111,7 @@ async def _play(
     """Play ``readers`` on ``node``; with the status line and key hints when ``shown``."""
     import asyncio
 
-    from rostools.bag.player import Player
+    from rostools.bag.live.player import Player
 
     player = Player(node, readers, opts)
     if shown is not None:
@@ -154,7 +154,7 @@ class StatusLines:
         """Show ``status``."""
         import time
 
-        from rostools.bag.player import State
+        from rostools.bag.live.player import State
 
         if self.terminal:
             sys.stderr.write(status_line(status))

@@ -14,7 +14,7 @@ from typing import TYPE_CHECKING, Annotated
 
 import typer
 
-from rostools.bag.model import counted
+from rostools.bag.formats.model import counted
 from rostools.cli import output
 from rostools.cli.bag.options import EndOpt, StartOpt
 from rostools.cli.bag.shared import check_read, time_window
@@ -24,7 +24,7 @@ from rostools.cli.output import Format
 from rostools.errors import InvalidDataError, NotFoundError, one_line
 
 if TYPE_CHECKING:
-    from rostools.bag.base import BagReader
+    from rostools.bag.formats.base import BagReader
     from rostools.msgs.expr import Expression
     from rostools.msgs.sample import Sampler
     from rostools.series import SeriesSet
@@ -60,7 +60,7 @@ def plot_cmd(
     fmt: FormatOpt = None,
 ) -> None:
     """Plot fields of a bag's topics in the terminal or into an image (one pass)."""
-    from rostools.bag.access import open_bag, require_ros1
+    from rostools.bag.formats.access import open_bag, require_ros1
     from rostools.cli import plotting
     from rostools.series import SeriesSet
 

@@ -10,7 +10,7 @@ from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
-from rostools.bag.model import counted
+from rostools.bag.formats.model import counted
 from rostools.cli import output
 from rostools.cli.bag.options import OutputFile, Receiving, Splitting, TopicOptions
 from rostools.cli.bag.shared import human_size
@@ -24,7 +24,7 @@ from rostools.errors import DataLossError, UsageError, one_line
 if TYPE_CHECKING:
     import asyncio
 
-    from rostools.bag.recorder import Recorder, RecordOptions
+    from rostools.bag.live.recorder import Recorder, RecordOptions
     from rostools.node.node import LiveNode
 
 
@@ -167,7 +167,7 @@ def _record_options(
     limit: int | None,
 ) -> RecordOptions:
     """The recorder's options from the command line's, checked as rosbag record checks them."""
-    from rostools.bag.recorder import RecordOptions
+    from rostools.bag.live.recorder import RecordOptions
 
     choice.check(topics)
     for value, flag in ((splitting.size, "--size"), (splitting.max_splits, "--max-splits"),
@@ -192,7 +192,7 @@ async def _run(
     opts: RecordOptions, live: bool, quiet: bool, n: LiveNode, stop: asyncio.Event
 ) -> Recorder:
     """Record until stopped or a limit is reached: with the live table, or lines on stderr."""
-    from rostools.bag.recorder import Recorder
+    from rostools.bag.live.recorder import Recorder
 
     rec = Recorder(n, opts)
     rec.check_disk(started=False)  # before saying "Recording to"

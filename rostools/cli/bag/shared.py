@@ -10,14 +10,17 @@ from collections.abc import Callable, Iterable, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from rostools.bag.model import counted
+from rostools.bag.formats.model import counted
 from rostools.cli import output
-from rostools.cli.output import Format, emit
+from rostools.cli.output import Format, emit, render
+from rostools.errors import one_line
 
 if TYPE_CHECKING:
-    from rostools.bag.base import BagReader
-    from rostools.bag.ops import CopyReport
-    from rostools.bag.rename import Renames
+    from rostools.bag.formats import mcap_format
+    from rostools.bag.formats.base import BagReader
+    from rostools.bag.tools.ops import CopyReport
+    from rostools.bag.tools.recover import RecoverReport
+    from rostools.bag.tools.rename import Renames
 
 
 def time_window(
@@ -26,7 +29,7 @@ def time_window(
     """``--start``/``--end`` as ns bounds, counted from the earliest start among ``paths``."""
     if start is None and end is None:
         return None, None
-    from rostools.bag.access import bag_info
+    from rostools.bag.formats.access import bag_info
 
     begin = min(bag_info(p).start_ns or 0 for p in paths)
     lo = None if start is None else begin + (seconds_to_ns(start) or 0)
@@ -36,7 +39,7 @@ def time_window(
 
 def renames(topics: list[str] | None, types: list[str] | None) -> Renames | None:
     """The rules of ``--rename`` and ``--rename-type``, or None when there are none."""
-    from rostools.bag.rename import Renames
+    from rostools.bag.tools.rename import Renames
 
     return Renames.parse(topics or [], types or []) or None
 
@@ -58,7 +61,7 @@ def check_read(readers: Sequence[BagReader], done: str, unindexed_fails: bool = 
     ``done`` says what the command did, for the error line. With ``unindexed_fails``, a bag
     read without its index is exit 1 (``bag info``, as rosbag info).
     """
-    from rostools.bag.base import after_reading
+    from rostools.bag.formats.base import after_reading
 
     after_reading(readers, done, say_note, unindexed_fails=unindexed_fails)
 
@@ -181,3 +184,28 @@ def human_size(size: float) -> str:
         if size < 1024.0:
             return f"{size:.1f} {suffix}"
     return "-"
+
+
+def recover_report(fmt: Format, report: RecoverReport, quiet: bool = False) -> None:
+    """What ``recover`` and ``reindex`` say of one rebuilt bag: a document, or notes and a line."""
+    if fmt is not Format.text:
+        data = {
+            "source": str(report.source), "output": str(report.output), "format": report.format,
+            "was_indexed": report.was_indexed, "messages": report.messages,
+            "connections": report.connections, "notes": list(report.notes),
+            "lost": list(report.lost),
+        }  # fmt: skip
+        output.put(render(fmt, data) + "\n")
+    elif not quiet:
+        for note in report.notes:
+            sys.stderr.write(f"note: {one_line(note)}\n")  # may quote the file's names
+        sys.stderr.write(f"recovered {counted(report.messages, 'message')} into {report.output}\n")
+
+
+def extras_of(path: Path) -> list[mcap_format.Attachment | mcap_format.Metadata]:
+    """An MCAP file's attachments and metadata records, in file order (a ``.bag`` has none)."""
+    from rostools.bag.formats.access import open_bag
+    from rostools.bag.formats.mcap_reader import McapReader
+
+    with open_bag(path) as bag:
+        return bag.extras() if isinstance(bag, McapReader) else []

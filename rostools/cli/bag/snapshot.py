@@ -1,8 +1,8 @@
-"""``rostools bag snapshot`` (a dash cam: the last minutes in memory) and ``bag trigger``.
+"""``rostools bag snapshot``: a dash cam, the last minutes in memory.
 
-``snapshot`` buffers topics and writes a file when triggered: ``trigger_snapshot``
-(rosbag_snapshot's service), ``~trigger``, SIGUSR1, or the ``s`` key. ``trigger`` is the client
-of ``trigger_snapshot``: it waits until the file is complete and prints its name.
+It buffers topics and writes a file when triggered: ``trigger_snapshot`` (rosbag_snapshot's
+service), ``~trigger``, SIGUSR1, or the ``s`` key. ``bag trigger`` (``trigger.py``) is the
+client of ``trigger_snapshot``.
 """
 
 from __future__ import annotations
@@ -15,21 +15,19 @@ from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
-from rostools.bag.model import counted
+from rostools.bag.formats.model import counted
 from rostools.cli.bag.options import Buffering, OutputFile, Receiving, TopicOptions
 from rostools.cli.common import FormatOpt, node_session, output_format
 from rostools.cli.declare import command
-from rostools.cli.output import Format, check_writable, emit, write
+from rostools.cli.output import Format, check_writable, write
 from rostools.cli.units import parse_duration
 from rostools.errors import DataLossError, RostoolsError, UsageError, one_line
 
 if TYPE_CHECKING:
     import asyncio
-    from collections.abc import Callable
 
-    from rostools.bag.snapshot import SnapshotOptions, Snapshotter
-    from rostools.bag.snapshot_job import SnapshotJob
-    from rostools.bag.snapshot_srv import SnapshotRequest
+    from rostools.bag.live.snapshot import SnapshotOptions, Snapshotter
+    from rostools.bag.live.snapshot_job import SnapshotJob
     from rostools.node.node import LiveNode
 
 MB = 1024 * 1024
@@ -85,7 +83,7 @@ def snapshot_options(
 
     Unlike record, ``-x`` alone buffers every topic but those (as rosbag_snapshot's exclude).
     """
-    from rostools.bag.snapshot import SnapshotOptions
+    from rostools.bag.live.snapshot import SnapshotOptions
 
     if not (topics or choice.all_ or choice.node or choice.exclude or choice.types):
         raise UsageError("give topics to buffer, or -a, -e REGEX, --topic-types or --node NAME")
@@ -122,7 +120,7 @@ async def _buffer(
     """Run the snapshot recorder with its triggers: a signal, keys, and what it shows."""
     import asyncio
 
-    from rostools.bag.snapshot import Snapshotter
+    from rostools.bag.live.snapshot import Snapshotter
     from rostools.cli.bag.keys import keyboard
     from rostools.cli.bag.snapview import SnapshotTable
 
@@ -171,7 +169,7 @@ def _started(job: SnapshotJob, out: Format, silent: bool) -> None:
 
 def _written(job: SnapshotJob, out: Format, quiet: bool, table: Any) -> None:
     """A file is complete: a line (or an NDJSON record); a failure is one line, and goes on."""
-    from rostools.bag.bagfile import write_failure
+    from rostools.bag.live.bagfile import write_failure
     from rostools.cli import report
     from rostools.cli.bag.snapview import written_text
 
@@ -184,100 +182,3 @@ def _written(job: SnapshotJob, out: Format, quiet: bool, table: Any) -> None:
         table.written(job)
     elif not quiet and job.error is None:
         _line(written_text(summary))
-
-
-@command()
-def trigger(
-    ctx: typer.Context,
-    node: Annotated[
-        str | None,
-        typer.Argument(help="The snapshot node (default: trigger_snapshot in this namespace)."),
-    ] = None,
-    output_name_: Annotated[
-        str | None,
-        typer.Option("--output-name", "-O", help="The file's name in the recorder's folder."),
-    ] = None,
-    topics: Annotated[
-        list[str] | None, typer.Option("--topics", help="Only these topics (repeatable, or a,b).")
-    ] = None,
-    before: Annotated[
-        str | None, typer.Option("--before", help="From the buffer: 20, 20s, 1m (default all).")
-    ] = None,
-    after: Annotated[
-        str | None, typer.Option("--after", help="Then live messages for this long: 10s.")
-    ] = None,
-    continue_: Annotated[
-        bool,
-        typer.Option("--continue", help="Go on writing live messages until Ctrl-C here."),
-    ] = False,
-    timeout: Annotated[
-        str | None, typer.Option("--timeout", help="Give up waiting for the file (exit 5).")
-    ] = None,
-    fmt: FormatOpt = None,
-) -> None:
-    """Ask a snapshot recorder for a file; print its name once it is complete.
-
-    The recorder is 'rostools bag snapshot' or rosbag_snapshot. With --format json: the file's
-    name, message count, time span and the messages of the window lost. Exit 6 if some were.
-    """
-    if continue_ and after:
-        raise UsageError("--continue writes until stopped; it takes no --after")
-    limit = parse_duration(timeout, "--timeout") if timeout else None
-    spans = (
-        parse_duration(before, "--before") if before else None,
-        parse_duration(after, "--after") if after else 0.0,
-    )
-    chosen = [t for item in topics or [] for t in item.split(",") if t]
-    out = output_format(ctx, fmt)
-
-    async def main(n: LiveNode, stop: asyncio.Event) -> dict[str, Any]:
-        import asyncio
-
-        from rostools.bag.snapshot_client import request_snapshot
-
-        say = _say_continuing if continue_ and out is Format.text else None
-
-        async def trigger() -> dict[str, Any]:
-            request = await _window(n, output_name_ or "", chosen, spans, continue_)
-            return await request_snapshot(n, node, request, stop, say)
-
-        try:  # every wait is within --timeout: the master's answers too
-            return await asyncio.wait_for(trigger(), limit)
-        except asyncio.TimeoutError:
-            from rostools.errors import TimeoutExpired
-
-            raise TimeoutExpired(f"the snapshot was not complete within {timeout}") from None
-
-    summary = node_session(ctx, main, "rostools_trigger")
-    emit(out, summary, lambda d: one_line(d["name"]))
-    if summary.get("error"):
-        raise DataLossError(f"{summary['name']}: {summary['error']}")
-    if summary.get("lost"):
-        from rostools.cli.bag.snapview import lost_text
-
-        raise DataLossError(f"{summary['name']}: {lost_text(summary)}")
-
-
-async def _window(
-    node: LiveNode, name: str, topics: list[str], spans: tuple[float | None, float], forever: bool
-) -> Callable[[], SnapshotRequest]:
-    """The request, its window in ROS time as this node sees it (``/clock`` under sim time).
-
-    The clock is started here (under sim time it waits for ``/clock``); the window is read
-    from it when the request is made, just before the call.
-    """
-    from rostools.bag.snapshot_srv import SnapshotRequest, window
-    from rostools.node.clock import RosClock
-
-    clock = RosClock()
-    await clock.start(node)
-
-    def request() -> SnapshotRequest:
-        start, stop = window(clock.now(), *spans, forever)
-        return SnapshotRequest(name, topics, start, stop)
-
-    return request
-
-
-def _say_continuing(name: str) -> None:
-    _line(f"writing {name} until Ctrl-C")

@@ -15,8 +15,8 @@ from rostools.cli.liveview import LiveView
 from rostools.errors import one_line
 
 if TYPE_CHECKING:
-    from rostools.bag.snapshot import Snapshotter
-    from rostools.bag.snapshot_job import SnapshotJob
+    from rostools.bag.live.snapshot import Snapshotter
+    from rostools.bag.live.snapshot_job import SnapshotJob
 
 #: Files written that the table keeps listing.
 SHOWN_FILES = 5

@@ -79,7 +79,7 @@ def show(
 
 
 def _store_from_bag(store: TypeStore, bag: Path, name: str) -> tuple[TypeStore, str]:
-    from rostools.bag.connections import read_connections
+    from rostools.bag.formats.connections import read_connections
 
     for conn in read_connections(bag):
         if conn.type == name or conn.type.rpartition("/")[2] == name:

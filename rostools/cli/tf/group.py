@@ -5,7 +5,7 @@ from __future__ import annotations
 import typer
 
 from rostools.cli.register import add
-from rostools.cli.tf import echo
+from rostools.cli.tf import echo, frames, monitor, pub
 
 app = typer.Typer(
     name="tf",
@@ -14,6 +14,7 @@ app = typer.Typer(
     add_completion=False,
 )
 add(app, echo.echo)
+add(app, frames.frames, monitor.monitor, pub.pub)
 
 
 @app.callback()

@@ -20,8 +20,8 @@ from rostools.errors import InvalidDataError, NotFoundError
 from rostools.tf.records import TF_MD5, Stamped, decode
 
 if TYPE_CHECKING:
-    from rostools.bag.base import BagReader
-    from rostools.bag.model import Connection
+    from rostools.bag.formats.base import BagReader
+    from rostools.bag.formats.model import Connection
     from rostools.node.connection import Frame, InboundConnection
     from rostools.node.node import LiveNode
     from rostools.rosgraph.masterapi import MasterProxy
@@ -90,7 +90,7 @@ class BagFeed:
 @contextlib.contextmanager
 def open_feed(path: Path, check_crcs: bool = True) -> Iterator[BagFeed]:
     """The TF feed of the bag at ``path`` (``NotFoundError`` when it has no TF topic)."""
-    from rostools.bag.access import open_bag
+    from rostools.bag.formats.access import open_bag
 
     with open_bag(path, check_crcs=check_crcs) as reader:
         yield BagFeed(reader)

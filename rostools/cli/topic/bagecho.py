@@ -20,9 +20,9 @@ def echo_bag(
 
     ``check_crcs`` False: ``--no-crc-check``.
     """
-    from rostools.bag.access import open_bag, require_ros1
-    from rostools.bag.base import after_reading
-    from rostools.bag.model import counted
+    from rostools.bag.formats.access import open_bag, require_ros1
+    from rostools.bag.formats.base import after_reading
+    from rostools.bag.formats.model import counted
     from rostools.cli.topic.printing import Echo
     from rostools.errors import InvalidDataError
     from rostools.msgs.topicpath import split_field

@@ -15,7 +15,7 @@ from rostools.errors import NotFoundError
 
 def list_bag_topics(bag: Path, namespace: str | None, fmt: Format) -> None:
     """Print the topics of a bag (its connections, first appearance first)."""
-    from rostools.bag.connections import read_connections
+    from rostools.bag.formats.connections import read_connections
 
     topics: dict[str, str] = {}
     for conn in read_connections(bag):
@@ -31,7 +31,7 @@ def list_bag_topics(bag: Path, namespace: str | None, fmt: Format) -> None:
 
 def _count(bag: Path, namespace: str, topics: list[str], fmt: Format) -> None:
     """rostopic's "N message(s) from DATE to DATE" for the topics under ``namespace``."""
-    from rostools.bag.access import open_bag
+    from rostools.bag.formats.access import open_bag
 
     count, first, last = 0, 0, 0
     if topics:

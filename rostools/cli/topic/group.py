@@ -5,7 +5,7 @@ from __future__ import annotations
 import typer
 
 from rostools.cli.register import add
-from rostools.cli.topic import echo, meters, plot, pub, query
+from rostools.cli.topic import bw, delay, echo, hz, plot, pub, query
 
 app = typer.Typer(
     name="topic",
@@ -14,4 +14,4 @@ app = typer.Typer(
     add_completion=False,
 )
 add(app, query.list_topics, query.info, query.find, query.type_)
-add(app, echo.echo, pub.pub, meters.hz, meters.bw, meters.delay, plot.plot)
+add(app, echo.echo, pub.pub, hz.hz, bw.bw, delay.delay, plot.plot)

@@ -1,8 +1,10 @@
-"""``rostools topic hz|bw|delay``: rate meters that never decode what they only count."""
+"""What ``topic hz``, ``bw`` and ``delay`` share: the meter that subscribes, feeds and reports.
+
+The meters never decode what they only count.
+"""
 
 from __future__ import annotations
 
-import struct
 import sys
 import time
 from collections.abc import Callable
@@ -11,12 +13,10 @@ from typing import TYPE_CHECKING, Annotated, Any
 import typer
 
 from rostools.cli import output
-from rostools.cli.common import FormatOpt, node_session, output_format
-from rostools.cli.declare import command
+from rostools.cli.common import node_session
 from rostools.cli.output import Format
-from rostools.cli.topic.live import FilterOpt, StrictOpt, TimeoutOpt, Undecodable, wait_for_topic
-from rostools.errors import NotFoundError, TimeoutExpired, UsageError, one_line
-from rostools.names import script_resolve
+from rostools.cli.topic.live import Undecodable, wait_for_topic
+from rostools.errors import TimeoutExpired, UsageError, one_line
 
 if TYPE_CHECKING:
     import asyncio
@@ -26,7 +26,6 @@ if TYPE_CHECKING:
     from rostools.node.connection import Frame, InboundConnection
     from rostools.node.node import LiveNode
 
-_STAMP = struct.Struct("<II")
 WindowOpt = Annotated[int | None, typer.Option("--window", "-w", help="Messages to average over.")]
 HzWindowOpt = Annotated[
     int | None,
@@ -211,177 +210,10 @@ class Meter:
                 return "done" if self.received else "timeout"
 
 
-def _run(ctx: typer.Context, meter: Meter, sink: Any, report: Any) -> None:
+def run_meter(ctx: typer.Context, meter: Meter, sink: Any, report: Any) -> None:
+    """Run ``meter`` as the command's node until it stops; no message in ``--timeout``: exit 5."""
     result = node_session(
         ctx, lambda node, stop: meter.run(node, stop, sink, report), "rostools_rates", meter.fmt
     )
     if result == "timeout":
         raise TimeoutExpired(f"no message on {', '.join(meter.topics)} within {meter.timeout:g} s")
-
-
-@command()
-def hz(
-    ctx: typer.Context,
-    topics: Annotated[list[str], typer.Argument(help="One or more topics.")],
-    window: HzWindowOpt = None,
-    filter_expr: FilterOpt = None,
-    wall_time: Annotated[
-        bool,
-        typer.Option(
-            "--wall-time", help="Time arrivals by the wall clock, even under /use_sim_time."
-        ),
-    ] = False,
-    tcp_nodelay: NodelayOpt = False,
-    timeout: TimeoutOpt = None,
-    strict: StrictOpt = False,
-    fmt: FormatOpt = None,
-) -> None:
-    """The publishing rate of topics (rostopic hz); counts raw frames, decodes only for --filter."""
-    from rostools.rates import DEFAULT_SPAN, DEFAULT_WINDOW, RateMeter, format_rate, rate_table
-
-    fmt = output_format(ctx, fmt)
-    names = [script_resolve(t, "rostopic") for t in topics]
-    span = 0.0 if window else DEFAULT_SPAN  # an explicit window is rostopic's, exactly
-    meters = {n: RateMeter(window or DEFAULT_WINDOW, span) for n in names}
-    runner = Meter(names, timeout, fmt, tcp_nodelay, wall_time, COALESCE, strict)
-    check = _filter(filter_expr, runner.skip)
-
-    def sink(topic: str, frames: list[Frame], conn: InboundConnection, now: float) -> None:
-        if check is not None:
-            frames = check(frames, conn, topic)
-        meters[topic].add(len(frames), now)
-
-    def report(last: bool = False) -> None:
-        rows = [(n, s) for n in names if (s := meters[n].report(last)) is not None]
-        if fmt is not Format.text:
-            for n, s in rows:
-                row = {"topic": n, "rate": s.value, "min": s.min, "max": s.max,
-                       "std_dev": s.std_dev, "window": s.window}  # fmt: skip
-                output.write(fmt, row)
-        elif not rows:
-            output.put("no new messages\n")
-        elif len(names) == 1:
-            output.put(format_rate(rows[0][1]) + "\n")
-        else:
-            output.put(rate_table(rows))
-
-    _run(ctx, runner, sink, report)
-
-
-def _filter(
-    expr: str | None, skip: Callable[[DecodeError, InboundConnection, Frame], None]
-) -> Callable[[list[Frame], InboundConnection, str], list[Frame]] | None:
-    """A frames filter that decodes and evaluates ``expr``, or None.
-
-    A message that does not decode goes to ``skip`` and is not counted.
-    """
-    if not expr:
-        return None
-    from rostools.msgs import learnt
-    from rostools.msgs.codec import DECODE_ERRORS, DecodeError, why_not
-    from rostools.msgs.expr import compile_expression
-    from rostools.msgs.store import TypeStore
-
-    wanted = compile_expression(expr)
-    base = TypeStore.default()
-
-    def keep(frames: list[Frame], conn: InboundConnection, topic: str) -> list[Frame]:
-        header = conn.header or {}
-        kind, md5 = header.get("type", ""), header.get("md5sum", "")
-        decode = learnt.decoder(base, kind, md5, header.get("message_definition", ""))
-        kept = []
-        for data in frames:
-            try:
-                msg = decode(data, 0)[0]
-            except (DecodeError, *DECODE_ERRORS) as err:
-                why = f"a message on {topic} does not decode as {kind}: {why_not(err)}"
-                skip(DecodeError(why), conn, data)
-                continue
-            if wanted(topic, msg):
-                kept.append(data)
-        return kept
-
-    return keep
-
-
-@command()
-def bw(
-    ctx: typer.Context,
-    topic: Annotated[str, typer.Argument(help="A topic.")],
-    window: WindowOpt = None,
-    timeout: TimeoutOpt = None,
-    fmt: FormatOpt = None,
-) -> None:
-    """The bandwidth a topic uses (rostopic bw), from the size of each raw frame."""
-    from rostools.rates import BandwidthMeter, format_bandwidth
-
-    fmt = output_format(ctx, fmt)
-    name = script_resolve(topic, "rostopic")
-    meter = BandwidthMeter(window or 100)
-    runner = Meter([name], timeout, fmt, coalesce=COALESCE)
-
-    def sink(t: str, frames: list[Frame], conn: InboundConnection, now: float) -> None:
-        meter.add([len(f) for f in frames], now)
-
-    def report(last: bool = False) -> None:
-        stats = meter.report(runner.now())
-        if stats is None:
-            return
-        row = {"topic": name, "bytes_per_s": stats.rate, "mean": stats.mean,
-               "min": stats.min, "max": stats.max, "window": stats.window}  # fmt: skip
-        output.write(fmt, row, lambda _: format_bandwidth(stats))
-
-    _run(ctx, runner, sink, report)
-
-
-@command()
-def delay(
-    ctx: typer.Context,
-    topic: Annotated[str, typer.Argument(help="A topic whose messages start with a Header.")],
-    window: WindowOpt = None,
-    tcp_nodelay: NodelayOpt = False,
-    timeout: TimeoutOpt = None,
-    strict: StrictOpt = False,
-    fmt: FormatOpt = None,
-) -> None:
-    """Now minus header.stamp of each message (rostopic delay); reads only the stamp."""
-    from rostools.msgs import learnt
-    from rostools.msgs.codec import DecodeError
-    from rostools.msgs.store import TypeStore
-    from rostools.rates import DEFAULT_WINDOW, DelayMeter, format_delay
-
-    fmt = output_format(ctx, fmt)
-    name = script_resolve(topic, "rostopic")
-    meter = DelayMeter(window or DEFAULT_WINDOW)
-    runner = Meter([name], timeout, fmt, tcp_nodelay, strict=strict)
-    base = TypeStore.default()
-    checked: dict[str, bool] = {}
-
-    def sink(t: str, frames: list[Frame], conn: InboundConnection, now: float) -> None:
-        header = conn.header or {}
-        kind = header.get("type", "")
-        if kind not in checked:
-            md5, definition = header.get("md5sum", ""), header.get("message_definition", "")
-            checked[kind] = learnt.codec(base, kind, md5, definition).store.msg(kind).has_header
-        if not checked[kind]:
-            raise NotFoundError(f"{t} carries {kind}, which has no Header to take a stamp from")
-        ref = runner.clock.now() / 1e9  # ROS time: /clock under sim time, else the wall clock
-        delays = []
-        for data in frames:
-            if len(data) < 4 + _STAMP.size:  # seq, then the stamp
-                why = f"a message on {t} is {len(data)} bytes, too short for a {kind} Header"
-                runner.skip(DecodeError(why), conn, data)
-                continue
-            secs, nsecs = _STAMP.unpack_from(data, 4)
-            delays.append(ref - (secs + nsecs * 1e-9))
-        meter.add(delays)
-
-    def report(last: bool = False) -> None:
-        stats = meter.report(last)
-        if stats is None:
-            return
-        row = {"topic": name, "delay": stats.value, "min": stats.min, "max": stats.max,
-               "std_dev": stats.std_dev, "window": stats.window}  # fmt: skip
-        output.write(fmt, row, lambda _: format_delay(stats))
-
-    _run(ctx, runner, sink, report)

@@ -22,10 +22,9 @@ from rostools._api.messages import message, store
 from rostools.action.server import ActionServer, ServerGoalHandle
 from rostools.action.types import ActionTypes
 from rostools.msgs.codec import Codec
-from rostools.msgs.topictype import TopicType
+from rostools.msgs.topictype import ServiceType, TopicType
 from rostools.node.node import LiveNode
 from rostools.node.publisher import TopicPublisher
-from rostools.node.service import ServiceType
 
 #: topic -> (type, rate in Hz)
 TOPICS = {

@@ -13,8 +13,8 @@ import os
 from rostools.errors import ServiceError
 from rostools.msgs.codec import Codec
 from rostools.msgs.store import BuiltinSource, TypeStore
+from rostools.msgs.topictype import ServiceType
 from rostools.node.node import LiveNode
-from rostools.node.service import ServiceType
 
 
 async def main() -> None:

@@ -6,10 +6,10 @@ from pathlib import Path
 
 import pytest
 
-from rostools.bag import rosbag1_format as bagfmt
-from rostools.bag.access import detect_format, format_for_name, open_bag
-from rostools.bag.connections import read_connections
-from rostools.bag.model import BagFormatError, UnsupportedBagError
+from rostools.bag.formats import rosbag1_format as bagfmt
+from rostools.bag.formats.access import detect_format, format_for_name, open_bag
+from rostools.bag.formats.connections import read_connections
+from rostools.bag.formats.model import BagFormatError, UnsupportedBagError
 from rostools.errors import InvalidDataError, NotFoundError, RostoolsError
 from tests.support.bagdata import write_sample
 

@@ -12,10 +12,10 @@ from pathlib import Path
 
 import pytest
 
-from rostools.bag import rosbag1_format as fmt
-from rostools.bag.access import open_writer
-from rostools.bag.model import BagFormatError, UnsupportedBagError
-from rostools.bag.rosbag1_reader import Bag1Reader
+from rostools.bag.formats import rosbag1_format as fmt
+from rostools.bag.formats.access import open_writer
+from rostools.bag.formats.model import BagFormatError, UnsupportedBagError
+from rostools.bag.formats.rosbag1_reader import Bag1Reader
 from rostools.wire.header import encode_fields
 from tests.support.bagdata import (
     STRING_MD5,

@@ -10,13 +10,13 @@ from pathlib import Path
 
 import pytest
 
-from rostools.bag import mcap_format, rosbag1_format as fmt
-from rostools.bag.access import bag_info, open_bag, open_writer
-from rostools.bag.findings import doctor
-from rostools.bag.mcap_reader import McapReader
-from rostools.bag.ops import convert
-from rostools.bag.recover import recover
-from rostools.bag.rosbag1_reader import Bag1Reader
+from rostools.bag.formats import mcap_format, rosbag1_format as fmt
+from rostools.bag.formats.access import bag_info, open_bag, open_writer
+from rostools.bag.formats.mcap_reader import McapReader
+from rostools.bag.formats.rosbag1_reader import Bag1Reader
+from rostools.bag.tools.findings import doctor
+from rostools.bag.tools.ops import convert
+from rostools.bag.tools.recover import recover
 from rostools.errors import DataLossError, RostoolsError
 from tests.support.bagdata import (
     INT32_MD5,

@@ -7,12 +7,12 @@ from pathlib import Path
 
 import pytest
 
-from rostools.bag import mcap_format as fmt
-from rostools.bag.access import open_writer
-from rostools.bag.base import Targets
-from rostools.bag.fastcopy import convert_chunks
-from rostools.bag.mcap_writer import McapWriter
-from rostools.bag.rosbag1_reader import Bag1Reader
+from rostools.bag.formats import mcap_format as fmt
+from rostools.bag.formats.access import open_writer
+from rostools.bag.formats.base import Targets
+from rostools.bag.formats.fastcopy import convert_chunks
+from rostools.bag.formats.mcap_writer import McapWriter
+from rostools.bag.formats.rosbag1_reader import Bag1Reader
 from tests.support.bagdata import read_stream, write_sample
 
 
@@ -112,7 +112,7 @@ def test_overlapping_chunks_are_not_fast(tmp_path: Path) -> None:
 
 def test_python_writer_header_order(tmp_path: Path) -> None:
     """rosbag's Python writer puts op first in message headers; the fast path reads both."""
-    from rostools.bag import rosbag1_format as bagfmt
+    from rostools.bag.formats import rosbag1_format as bagfmt
 
     sample = write_sample(tmp_path / "x.bag", 300, compression="none")
     raw = bytearray(sample.path.read_bytes())

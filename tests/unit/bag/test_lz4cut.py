@@ -8,8 +8,8 @@ import lz4.frame
 import pytest
 from hypothesis import given, settings, strategies as st
 
-from rostools.bag import lz4cut
-from rostools.bag.rosbag1_format import lz4_compress
+from rostools.bag.formats import lz4cut
+from rostools.bag.formats.rosbag1_format import lz4_compress
 
 
 def compressible(n: int, seed: int = 1) -> bytes:

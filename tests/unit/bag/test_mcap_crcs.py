@@ -12,11 +12,12 @@ from pathlib import Path
 
 import pytest
 
-from rostools.bag import mcap_format as fmt
-from rostools.bag.access import open_writer
-from rostools.bag.findings import doctor
-from rostools.bag.mcap_reader import McapReader
-from rostools.bag.ops import convert
+from rostools.bag.formats import mcap_format as fmt
+from rostools.bag.formats.access import open_writer
+from rostools.bag.formats.mcap_reader import McapReader
+from rostools.bag.tools.findings import doctor
+from rostools.bag.tools.ops import convert
+from rostools.bag.tools.options import CopyOptions
 from tests.support.bagdata import STRING_MD5, read_stream, write_sample
 
 COMPRESSIONS = ["none", "lz4", "zstd"]
@@ -116,9 +117,9 @@ def test_the_mcap_package_validates_our_crcs(tmp_path: Path, compression: str) -
 def test_converted_files_carry_crcs(tmp_path: Path, compression: str) -> None:
     """.bag -> MCAP takes the chunk-for-chunk fast path (``fastcopy``); MCAP -> MCAP does not."""
     sample = write_sample(tmp_path / "x.bag", 3000, chunk_size=9000)
-    convert(sample.path, tmp_path / "fast.mcap", compression=compression)
+    convert(sample.path, tmp_path / "fast.mcap", CopyOptions(compression=compression))
     again = tmp_path / "again.mcap"
-    convert(tmp_path / "fast.mcap", again, compression=compression, chunk_size=20_000)
+    convert(tmp_path / "fast.mcap", again, CopyOptions(compression=compression, chunk_size=20_000))
     for name in ("fast.mcap", "again.mcap"):
         assert check_crcs(tmp_path / name) > 2
         got = _mcap_package_reads(tmp_path / name)
@@ -204,13 +205,17 @@ def test_a_summary_that_fails_its_crc_is_not_trusted(tmp_path: Path) -> None:
 
 
 def test_recover_and_merge_write_crcs(tmp_path: Path) -> None:
-    from rostools.bag.merge import merge
-    from rostools.bag.recover import recover
+    from rostools.bag.tools.merge import merge
+    from rostools.bag.tools.recover import recover
 
     sample = write_sample(tmp_path / "open.mcap", 3000, chunk_size=9000, close=False)
     recover(sample.path, tmp_path / "recovered.mcap", chunk_size=20_000)
     other = write_sample(tmp_path / "x.bag", 500)
-    merge([tmp_path / "recovered.mcap", other.path], tmp_path / "merged.mcap", chunk_size=20_000)
+    merge(
+        [tmp_path / "recovered.mcap", other.path],
+        tmp_path / "merged.mcap",
+        CopyOptions(chunk_size=20_000),
+    )
     for name, count in (("recovered.mcap", 3000), ("merged.mcap", 3500)):
         assert check_crcs(tmp_path / name) > 2
         assert len(_mcap_package_reads(tmp_path / name)) == count

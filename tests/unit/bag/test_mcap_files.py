@@ -7,8 +7,8 @@ from pathlib import Path
 
 import pytest
 
-from rostools.bag import mcap_format as fmt
-from rostools.bag.mcap_reader import McapReader
+from rostools.bag.formats import mcap_format as fmt
+from rostools.bag.formats.mcap_reader import McapReader
 from tests.support.bagdata import SAMPLE_CONNECTIONS, write_sample
 
 

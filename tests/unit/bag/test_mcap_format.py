@@ -8,7 +8,7 @@ import zlib
 import pytest
 from hypothesis import given, strategies as st
 
-from rostools.bag import mcap_format as fmt
+from rostools.bag.formats import mcap_format as fmt
 
 text = st.text(max_size=20)
 u16 = st.integers(0, 0xFFFF)
@@ -125,7 +125,7 @@ def test_chunk_decompression(compression: str) -> None:
 
 
 def test_unknown_chunk_compression_is_unsupported() -> None:
-    from rostools.bag.model import UnsupportedBagError
+    from rostools.bag.formats.model import UnsupportedBagError
 
     with pytest.raises(UnsupportedBagError):
         fmt.decompress("brotli", b"", 0)

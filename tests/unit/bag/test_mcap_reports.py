@@ -11,10 +11,10 @@ from pathlib import Path
 
 import pytest
 
-from rostools.bag import mcap_format as fmt
-from rostools.bag.access import open_writer
-from rostools.bag.mcap_reader import McapReader
-from rostools.bag.model import BagFormatError
+from rostools.bag.formats import mcap_format as fmt
+from rostools.bag.formats.access import open_writer
+from rostools.bag.formats.mcap_reader import McapReader
+from rostools.bag.formats.model import BagFormatError
 from tests.support.bagdata import (
     STRING_MD5,
     handmade_mcap,

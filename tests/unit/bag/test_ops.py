@@ -6,9 +6,10 @@ from pathlib import Path
 
 import pytest
 
-from rostools.bag import ops
-from rostools.bag.access import bag_info, open_bag, open_writer
-from rostools.bag.model import BagUsageError, UnsupportedBagError
+from rostools.bag.formats.access import bag_info, open_bag, open_writer
+from rostools.bag.formats.model import BagUsageError, UnsupportedBagError
+from rostools.bag.tools import ops
+from rostools.bag.tools.options import CopyOptions
 from rostools.msgs.expr import ExpressionError
 from tests.support.bagdata import (
     STEP_NS,
@@ -28,7 +29,7 @@ def test_convert_round_trip(tmp_path: Path, first: str, second: str) -> None:
     sample = write_sample(tmp_path / "src.bag", 300, chunk_size=3000)
     report = ops.convert(sample.path, tmp_path / first)
     assert (report.messages_read, report.messages_written, report.connections) == (300, 300, 4)
-    ops.convert(tmp_path / first, tmp_path / second, compression="lz4")
+    ops.convert(tmp_path / first, tmp_path / second, CopyOptions(compression="lz4"))
     for path in (tmp_path / first, tmp_path / second):
         assert read_stream(path) == sample.stream
         assert headers(path) == headers(sample.path)
@@ -65,7 +66,7 @@ def test_convert_keeps_unusual_headers(tmp_path: Path) -> None:
 
 
 def test_convert_refuses_non_ros1_messages(tmp_path: Path) -> None:
-    from rostools.bag import mcap_format as fmt
+    from rostools.bag.formats import mcap_format as fmt
 
     path = handmade_mcap(tmp_path / "cdr.mcap", "ros2", fmt.encode_channel(1, 0, "/x", "cdr", {}))
     with pytest.raises(UnsupportedBagError, match="cdr"):
@@ -76,7 +77,7 @@ def test_convert_refuses_non_ros1_messages(tmp_path: Path) -> None:
 def test_same_file_is_refused(tmp_path: Path) -> None:
     sample = write_sample(tmp_path / "x.bag", 5)
     with pytest.raises(BagUsageError, match="same file"):
-        ops.convert(sample.path, sample.path, overwrite=True)
+        ops.convert(sample.path, sample.path, CopyOptions(overwrite=True))
 
 
 @pytest.mark.parametrize("out", ["y.mcap", "y.bag"])
@@ -96,7 +97,9 @@ def test_progress(tmp_path: Path, out: str) -> None:
 def test_filter_by_topic_and_time(tmp_path: Path, out: str) -> None:
     sample = write_sample(tmp_path / "x.bag", 400)
     lo, hi = 100 * STEP_NS, 200 * STEP_NS
-    report = ops.filter(sample.path, tmp_path / out, topics=["/chatter"], start=lo, end=hi)
+    report = ops.filter(
+        sample.path, tmp_path / out, CopyOptions(topics=["/chatter"], start=lo, end=hi)
+    )
     expected = [m for m in sample.stream if m[0] == "/chatter" and lo <= m[2] <= hi]
     assert read_stream(tmp_path / out) == expected
     assert report.messages_written == len(expected)
@@ -107,7 +110,7 @@ def test_filter_by_topic_and_time(tmp_path: Path, out: str) -> None:
 def test_filter_expression_decodes_messages(tmp_path: Path) -> None:
     sample = write_sample(tmp_path / "x.bag", 400)
     expression = "topic == '/count' and m.data % 3 == 0 and t.secs == 0 and t.to_sec() < 1"
-    ops.filter(sample.path, tmp_path / "f.bag", expression=expression)
+    ops.filter(sample.path, tmp_path / "f.bag", CopyOptions(expression=expression))
     expected = [
         m
         for i, m in enumerate(sample.stream)
@@ -123,19 +126,21 @@ def test_filter_without_m_never_decodes(tmp_path: Path) -> None:
     conn = writer.add_connection("/opaque", "nobody/Knows", "0" * 32, "")
     writer.write(conn, 1, b"not a message of any type")
     writer.close()
-    ops.filter(src, tmp_path / "f.bag", expression="topic == '/opaque' and t.nsecs == 1")
+    ops.filter(
+        src, tmp_path / "f.bag", CopyOptions(expression="topic == '/opaque' and t.nsecs == 1")
+    )
     assert read_stream(tmp_path / "f.bag") == [("/opaque", "", 1, b"not a message of any type")]
     with pytest.raises(UnsupportedBagError, match="nobody/Knows"):
-        ops.filter(src, tmp_path / "g.bag", expression="m is not None")
+        ops.filter(src, tmp_path / "g.bag", CopyOptions(expression="m is not None"))
     assert not (tmp_path / "g.bag").exists()
 
 
 def test_filter_expression_errors(tmp_path: Path) -> None:
     sample = write_sample(tmp_path / "x.bag", 10)
     with pytest.raises(ExpressionError, match="filter expression 'topic ==' is not a Python"):
-        ops.filter(sample.path, tmp_path / "f.bag", expression="topic ==")
+        ops.filter(sample.path, tmp_path / "f.bag", CopyOptions(expression="topic =="))
     with pytest.raises(ExpressionError, match="ZeroDivisionError"):
-        ops.filter(sample.path, tmp_path / "f.bag", expression="1 / 0")
+        ops.filter(sample.path, tmp_path / "f.bag", CopyOptions(expression="1 / 0"))
     assert not (tmp_path / "f.bag").exists()
 
 
@@ -143,7 +148,9 @@ def test_filter_print_shows_every_verdict(tmp_path: Path) -> None:
     sample = write_sample(tmp_path / "x.bag", 8)
     said: list[tuple[bool, object]] = []
     show = ("(topic, m.data) if topic == '/count' else topic", lambda v, x: said.append((v, x)))
-    ops.filter(sample.path, tmp_path / "f.bag", expression="topic != '/point'", show=show)
+    ops.filter(
+        sample.path, tmp_path / "f.bag", CopyOptions(expression="topic != '/point'"), show=show
+    )
     expected = [
         (m[0] != "/point", (m[0], i) if m[0] == "/count" else m[0])
         for i, m in enumerate(sample.stream)
@@ -158,7 +165,7 @@ def test_compress_and_decompress(tmp_path: Path, name: str, kind: str) -> None:
     sample = write_sample(tmp_path / name, 300, compression="none")
     packed = tmp_path / ("packed" + Path(name).suffix)
     plain = tmp_path / ("plain" + Path(name).suffix)
-    ops.compress(sample.path, packed, kind)
+    ops.compress(sample.path, packed, CopyOptions(compression=kind))
     ops.decompress(packed, plain)
     assert [c.compression for c in bag_info(packed).compression] == [kind]
     assert [c.compression for c in bag_info(plain).compression] == ["none"]
@@ -168,10 +175,10 @@ def test_compress_and_decompress(tmp_path: Path, name: str, kind: str) -> None:
 
 
 def test_mcap_extras_follow_filter_recover_and_compress(tmp_path: Path) -> None:
-    from rostools.bag import mcap_format as fmt
-    from rostools.bag.mcap_reader import McapReader
-    from rostools.bag.mcap_writer import McapWriter
-    from rostools.bag.recover import recover
+    from rostools.bag.formats import mcap_format as fmt
+    from rostools.bag.formats.mcap_reader import McapReader
+    from rostools.bag.formats.mcap_writer import McapWriter
+    from rostools.bag.tools.recover import recover
 
     src = tmp_path / "src.mcap"
     with McapWriter(src) as writer:
@@ -187,10 +194,10 @@ def test_mcap_extras_follow_filter_recover_and_compress(tmp_path: Path) -> None:
             return [r.name for r in reader.extras()]
 
     assert names(src) == ["calib.yaml", "robot", "map.pgm"]
-    cut = ops.filter_bag(src, tmp_path / "cut.mcap", start=10, end=20)
+    cut = ops.filter_bag(src, tmp_path / "cut.mcap", CopyOptions(start=10, end=20))
     assert (cut.extras_copied, cut.extras_left_out) == (2, 1)  # map.pgm was logged at 25
     assert names(tmp_path / "cut.mcap") == ["calib.yaml", "robot"]
-    ops.compress(src, tmp_path / "lz4.mcap", "lz4")
+    ops.compress(src, tmp_path / "lz4.mcap", CopyOptions(compression="lz4"))
     assert names(tmp_path / "lz4.mcap") == names(src)
     raw = src.read_bytes()
     footer = fmt.parse_footer(raw)
@@ -205,7 +212,7 @@ def test_streaming_reads_hand_mapped_pages_back() -> None:
     """A 2 GB bag read from end to end kept 1.9 GB of mapped pages: RSS grew with the file."""
     import mmap
 
-    from rostools.bag.base import FORGET_STEP, Forgetting
+    from rostools.bag.formats.base import FORGET_STEP, Forgetting
 
     calls: list[tuple[int, int, int]] = []
 
@@ -228,8 +235,8 @@ def test_reading_a_big_bag_keeps_rss_flat(tmp_path: Path) -> None:
     import subprocess
     import sys
 
-    from rostools.bag.access import open_writer
-    from rostools.bag.base import FORGET_STEP
+    from rostools.bag.formats.access import open_writer
+    from rostools.bag.formats.base import FORGET_STEP
 
     path = tmp_path / "big.bag"
     payload = bytes(1_000_000)
@@ -240,7 +247,7 @@ def test_reading_a_big_bag_keeps_rss_flat(tmp_path: Path) -> None:
             writer.write(conn, i, len(payload).to_bytes(4, "little") + payload)
     script = (
         "import sys, zlib\n"
-        "from rostools.bag.access import open_bag\n"
+        "from rostools.bag.formats.access import open_bag\n"
         "def hwm():\n"
         "    for line in open('/proc/self/status'):\n"
         "        if line.startswith('VmHWM'): return int(line.split()[1]) * 1024\n"

@@ -4,8 +4,8 @@ from __future__ import annotations
 
 from hypothesis import given, strategies as st
 
-from rostools.bag.model import Connection
-from rostools.bag.ordering import Block, Entry, merge, ordered
+from rostools.bag.formats.model import Connection
+from rostools.bag.formats.ordering import Block, Entry, merge, ordered
 
 CONNS = [
     Connection(i, f"/t{i}", "std_msgs/Empty", "d41d8cd98f00b204e9800998ecf8427e", "")

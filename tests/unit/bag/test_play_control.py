@@ -6,15 +6,15 @@ import struct
 
 import pytest
 
-from rostools.bag.play_control import RateControl, header_first, set_bool_reply
-from rostools.bag.player import State, Status
+from rostools.bag.live.play_control import RateControl, header_first, set_bool_reply
+from rostools.bag.live.player import State, Status
 from rostools.cli.bag.play import status_line
 from rostools.msgs.store import TypeStore
-from rostools.node.service import ServiceType
+from rostools.msgs.topictype import ServiceType
 
 
 def test_set_bool_type_is_std_srvs() -> None:
-    from rostools.bag.play_control import SET_BOOL
+    from rostools.msgs.wellknown import SET_BOOL
 
     assert ServiceType.of(TypeStore.default(), "std_srvs/SetBool") == SET_BOOL
 
@@ -98,7 +98,7 @@ def test_rate_control_follows_the_newest_stamp(caplog: pytest.LogCaptureFixture)
     assert not control.holds(102_750_000_000) and control.holds(102_750_000_001)
     control._frames([b"short"], stamped, 0.0)  # type: ignore[arg-type]
     assert control.last_ns == 102_250_000_000  # too short for a stamp: ignored
-    with caplog.at_level("WARNING", logger="rostools.bag.play_control"):
+    with caplog.at_level("WARNING", logger="rostools.bag.live.play_control"):
         for conn in (_Conn({"message_definition": "float64 x\n"}), _Conn({}), _Conn(None)):
             control._frames([_stamped(200, 0)], conn, 0.0)  # type: ignore[arg-type]
     assert control.last_ns == 102_250_000_000  # no Header first: not a stamp

@@ -18,13 +18,12 @@ from typing import Any
 
 import pytest
 
-from rostools.bag import player as player_module
-from rostools.bag.access import open_bag, open_writer
-from rostools.bag.base import BagReader
-from rostools.bag.play_control import SET_BOOL
-from rostools.bag.player import CONNECT_GRACE, Player, PlayOptions, State, Status
+from rostools.bag.formats.access import open_bag, open_writer
+from rostools.bag.formats.base import BagReader
+from rostools.bag.live import player as player_module
+from rostools.bag.live.player import CONNECT_GRACE, Player, PlayOptions, State, Status
 from rostools.errors import UsageError
-from rostools.node.clock import CLOCK
+from rostools.msgs.wellknown import CLOCK, SET_BOOL
 from tests.support.bagdata import STRING_MD5
 
 NS = 1_000_000_000

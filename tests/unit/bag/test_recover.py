@@ -13,11 +13,11 @@ from pathlib import Path
 
 import pytest
 
-from rostools.bag.access import bag_info, open_bag, open_writer
-from rostools.bag.mcap_reader import McapReader
-from rostools.bag.model import BagFormatError, BagUsageError, UnsupportedBagError
-from rostools.bag.recover import RecoverReport, recover, reindex
-from rostools.bag.rosbag1_reader import Bag1Reader
+from rostools.bag.formats.access import bag_info, open_bag, open_writer
+from rostools.bag.formats.mcap_reader import McapReader
+from rostools.bag.formats.model import BagFormatError, BagUsageError, UnsupportedBagError
+from rostools.bag.formats.rosbag1_reader import Bag1Reader
+from rostools.bag.tools.recover import RecoverReport, recover, reindex
 from rostools.errors import DataLossError
 from tests.support.bagdata import (
     STRING_MD5,
@@ -204,7 +204,7 @@ CHILD = textwrap.dedent(
     import sys, time
     sys.path.insert(0, {root!r})
     from tests.support.bagdata import SAMPLE_CONNECTIONS, message
-    from rostools.bag.access import open_writer
+    from rostools.bag.formats.access import open_writer
 
     path, compression = sys.argv[1], sys.argv[2]
     writer = open_writer(path, compression=compression, chunk_size=20_000)
@@ -289,7 +289,7 @@ def test_a_corrupt_chunk_is_skipped_and_reported(
 
 def _cdr_mcap(path: Path) -> Path:
     """An unindexed MCAP of one ROS 2 channel (CDR), as a ros2 bag recorder writes them."""
-    from rostools.bag import mcap_format as fmt
+    from rostools.bag.formats import mcap_format as fmt
 
     schema = fmt.encode_schema(1, "std_msgs/msg/String", "ros2msg", b"string data")
     return handmade_mcap(path, "ros2", schema + fmt.encode_channel(1, 1, "/x", "cdr", {}))

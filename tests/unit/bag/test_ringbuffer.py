@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import tracemalloc
 
-from rostools.bag.recorder import ENTRY_OVERHEAD
-from rostools.bag.ringbuffer import GONE_KEPT, ConnInfo, Lost, RingBuffer
+from rostools.bag.formats.model import ENTRY_OVERHEAD
+from rostools.bag.live.ringbuffer import GONE_KEPT, ConnInfo, Lost, RingBuffer
 
 NS = 1_000_000_000
 A = ConnInfo("/a", {"callerid": "/pa", "type": "std_msgs/String"})

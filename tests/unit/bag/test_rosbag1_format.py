@@ -7,7 +7,7 @@ import os
 import pytest
 from hypothesis import given, strategies as st
 
-from rostools.bag import rosbag1_format as fmt
+from rostools.bag.formats import rosbag1_format as fmt
 
 field_names = st.text(
     alphabet=st.characters(min_codepoint=33, max_codepoint=126, exclude_characters="="),
@@ -93,7 +93,7 @@ def test_corrupt_chunk_data_is_a_record_error() -> None:
 
 
 def test_unknown_compression_is_unsupported() -> None:
-    from rostools.bag.model import UnsupportedBagError
+    from rostools.bag.formats.model import UnsupportedBagError
 
     with pytest.raises(UnsupportedBagError):
         fmt.compress("zstd", b"")

@@ -7,9 +7,9 @@ from pathlib import Path
 
 import pytest
 
-from rostools.bag import rosbag1_format as bagfmt
-from rostools.bag.access import bag_info, open_bag, open_writer
-from rostools.bag.model import BagUsageError, UnsupportedBagError
+from rostools.bag.formats import rosbag1_format as bagfmt
+from rostools.bag.formats.access import bag_info, open_bag, open_writer
+from rostools.bag.formats.model import BagUsageError, UnsupportedBagError
 from rostools.errors import UsageError
 from tests.support.bagdata import SAMPLE_CONNECTIONS, STEP_NS, read_stream, write_sample
 
@@ -179,7 +179,7 @@ def test_writer_choices(tmp_path: Path) -> None:
     writer.close()
     assert (tmp_path / "named.bag").read_bytes().startswith(b"\x89MCAP0\r\n")
     with pytest.raises(UnsupportedBagError):
-        from rostools.bag.rosbag1_writer import Bag1Writer
+        from rostools.bag.formats.rosbag1_writer import Bag1Writer
 
         Bag1Writer(tmp_path / "z.bag", compression="gzip")
 
@@ -196,7 +196,7 @@ def test_abort_and_exceptions_delete_the_file(tmp_path: Path, name: str) -> None
 
 @pytest.mark.parametrize("name", ["x.bag", "x.mcap"])
 def test_times_and_frequencies(tmp_path: Path, name: str) -> None:
-    from rostools.bag.access import topic_frequencies
+    from rostools.bag.formats.access import topic_frequencies
 
     sample = write_sample(tmp_path / name, 401, chunk_size=3000)
     with open_bag(sample.path) as reader:

@@ -8,8 +8,8 @@ from pathlib import Path
 
 import pytest
 
-from rostools.bag import sink as sink_module
-from rostools.bag.sink import BIG_PAYLOAD, Sink, WriteError, frozen
+from rostools.bag.formats import sink as sink_module
+from rostools.bag.formats.sink import BIG_PAYLOAD, Sink, WriteError, frozen
 
 
 def test_partial_writes_are_completed(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
@@ -44,7 +44,7 @@ def test_mutable_payloads_are_copied() -> None:
 
 
 def test_a_reused_buffer_does_not_change_written_messages(tmp_path: Path) -> None:
-    from rostools.bag.access import open_bag, open_writer
+    from rostools.bag.formats.access import open_bag, open_writer
 
     for name in ("x.bag", "x.mcap"):
         writer = open_writer(tmp_path / name, compression="none")
@@ -100,7 +100,7 @@ def test_after_a_failed_write_nothing_more_is_written(
 def test_a_writer_on_a_full_disk_leaves_no_file_and_no_descriptor(
     name: str, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    from rostools.bag.access import open_writer
+    from rostools.bag.formats.access import open_writer
 
     _full_disk(monkeypatch)
     fds = len(os.listdir("/proc/self/fd"))

@@ -10,13 +10,13 @@ from typing import Any
 
 import pytest
 
-from rostools.bag import snapshot_job
-from rostools.bag.access import bag_info, detect_format
-from rostools.bag.bagfile import active_name
-from rostools.bag.recorder import ENTRY_OVERHEAD
-from rostools.bag.ringbuffer import ConnInfo, Held, Lost, RingBuffer
-from rostools.bag.snapshot_job import FileSpec, SnapshotJob, wait_joined
-from rostools.bag.snapshot_live import LiveQueue
+from rostools.bag.formats.access import bag_info, detect_format
+from rostools.bag.formats.model import ENTRY_OVERHEAD
+from rostools.bag.live import snapshot_job
+from rostools.bag.live.bagfile import active_name
+from rostools.bag.live.ringbuffer import ConnInfo, Held, Lost, RingBuffer
+from rostools.bag.live.snapshot_job import FileSpec, SnapshotJob, wait_joined
+from rostools.bag.live.snapshot_live import LiveQueue
 from tests.support.bagdata import read_stream
 
 NS = 1_000_000_000

@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import threading
 
-from rostools.bag.recorder import ENTRY_OVERHEAD
-from rostools.bag.ringbuffer import ConnInfo
-from rostools.bag.snapshot_live import BATCH_BYTES, BATCH_MESSAGES, LiveQueue, LiveReader
+from rostools.bag.formats.model import ENTRY_OVERHEAD
+from rostools.bag.live.ringbuffer import ConnInfo
+from rostools.bag.live.snapshot_live import BATCH_BYTES, BATCH_MESSAGES, LiveQueue, LiveReader
 
 NS = 1_000_000_000
 A = ConnInfo("/a", {"callerid": "/pa"})

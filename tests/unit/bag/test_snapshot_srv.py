@@ -8,29 +8,16 @@ from typing import Any
 
 import pytest
 
-from rostools.bag.snapshot import SnapshotOptions, Snapshotter, TriggerError, check_remote_name
-from rostools.bag.snapshot_srv import (
+from rostools.bag.live.snapshot import SnapshotOptions, Snapshotter, check_remote_name
+from rostools.bag.live.snapshot_srv import (
     FOREVER_SECS,
-    TRIGGER_SNAPSHOT,
-    TRIGGER_SNAPSHOT_TEXT,
     SnapshotRequest,
+    TriggerError,
     decode_answer,
     encode_answer,
     window,
 )
 from rostools.errors import InvalidDataError
-from rostools.msgs.store import PathSource, TypeStore
-
-
-def test_the_type_and_md5sum_are_rosbag_snapshots(tmp_path: Path) -> None:
-    package = tmp_path / "rosbag_snapshot_msgs"
-    (package / "srv").mkdir(parents=True)
-    (package / "package.xml").write_text("<package><name>rosbag_snapshot_msgs</name></package>")
-    (package / "srv" / "TriggerSnapshot.srv").write_text(TRIGGER_SNAPSHOT_TEXT)
-    store = TypeStore([PathSource([tmp_path])])
-    assert store.srv_md5(TRIGGER_SNAPSHOT.type) == TRIGGER_SNAPSHOT.md5sum
-    # as genmsg computes it for the .srv of ros/rosbag_snapshot (1.0.6)
-    assert TRIGGER_SNAPSHOT.md5sum == "d5f2b150730729bd0435527e829e65e2"
 
 
 def test_requests_and_answers_round_trip() -> None:

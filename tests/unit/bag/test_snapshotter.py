@@ -10,11 +10,11 @@ from typing import Any
 
 import pytest
 
-from rostools.bag.recorder import ENTRY_OVERHEAD
-from rostools.bag.ringbuffer import Lost
-from rostools.bag.snapshot import SnapshotOptions, Snapshotter, TriggerError
-from rostools.bag.snapshot_job import SnapshotJob
-from rostools.bag.snapshot_srv import NO_DATA_MESSAGE, SnapshotRequest, window
+from rostools.bag.formats.model import ENTRY_OVERHEAD
+from rostools.bag.live.ringbuffer import Lost
+from rostools.bag.live.snapshot import SnapshotOptions, Snapshotter
+from rostools.bag.live.snapshot_job import SnapshotJob
+from rostools.bag.live.snapshot_srv import NO_DATA_MESSAGE, SnapshotRequest, TriggerError, window
 from rostools.errors import UsageError
 from tests.unit.bag.test_snapshot_job import PATIENCE, STRING, frame, written
 

@@ -41,12 +41,6 @@ TOGETHER = {"bag snapshot", "bag trigger"}
 #: ``bridge`` in test_bridge.py, whose every test reads its events).
 SERVERS = {"core", "bridge"}
 
-#: What the graph's latched /tf_static says: base -> cam.
-STATIC_TF = (
-    "{transforms: [{header: {frame_id: base}, child_frame_id: cam,"
-    " transform: {translation: {x: 1}, rotation: {w: 1}}}]}"
-)
-
 #: command -> its arguments; ``{bag}``, ``{tmp}`` are filled in. ``-F json`` is added.
 RECIPES: dict[str, list[str]] = {
     "topic list": ["-v"],
@@ -103,7 +97,6 @@ RECIPES: dict[str, list[str]] = {
     "bag merge": ["{tmp}/merged.mcap", "{bag}", "{bag}"],
     "bag split": ["{bag}", "--count", "100", "-o", "{tmp}/part.bag", "-f"],
     "bag cat": ["{bag}", "-n", "3"],
-    "tf echo": ["base", "cam", "-n", "1", "--timeout", "30"],
     "bag plot": ["{bag}", "/point/x", "/count/data"],
     "bag doctor": ["{bag}"],
     "bag attachments": ["{bag}"],
@@ -150,7 +143,6 @@ def graph(tmp_path_factory: pytest.TempPathFactory) -> Iterator[tuple[dict[str, 
             [*pub, "-r", "20", "/stamped", "geometry_msgs/PointStamped", "{header: auto}"], env=env
         ),
         Proc([*pub, "/victim_topic", "std_msgs/Empty", "{}", "__name:=victim"], env=env),
-        Proc([*pub, "/tf_static", "tf2_msgs/TFMessage", STATIC_TF, "__name:=static_tf"], env=env),
         Proc([sys.executable, str(ROOT / "tests/support/rt_nodes/rt_services.py")], env=env),
         Proc([sys.executable, str(ROOT / "tests/support/rt_nodes/rt_actions.py")], env=env),
         Proc([*CLI, "tf", "pub", "0", "0", "1", "0", "0", "0", "map", "base"], env=env),

@@ -43,3 +43,10 @@ def test_tf_echo_prints_without_importing_numpy() -> None:
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == "False"
+
+
+def test_a_quaternion_off_unit_length_reads_as_tf2_reads_it() -> None:
+    # tf2's Matrix3x3::setRotation scales by the squared norm: (0, 0, 1, 1) is 90 degrees of yaw
+    quarter = [[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]]
+    assert np.allclose(tfmath.matrix((0.0, 0.0, 1.0, 1.0)), quarter)
+    assert np.allclose(np.array(scalar.matrix((0.0, 0.0, 1.0, 1.0))), quarter)

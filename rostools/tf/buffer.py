@@ -105,9 +105,27 @@ def _rotate(q: tuple[float, ...], x: float, y: float, z: float) -> tuple[float, 
 def _accum(
     st: Seven, v: tuple[float, float, float], q: tuple[float, float, float, float]
 ) -> tuple[tuple[float, float, float], tuple[float, float, float, float]]:
-    """tf2's ``TransformAccum::accum``: ``st`` applied after ``(v, q)``."""
-    x, y, z = _rotate(st, *v)
-    return (x + st[0], y + st[1], z + st[2]), _mul(st, q)
+    """tf2's ``TransformAccum::accum``: ``st`` applied after ``(v, q)``.
+
+    ``_rotate`` and ``_mul`` written out, in their order of operations: the walk's inner loop.
+    """
+    tx, ty, tz, qx, qy, qz, qw = st
+    x, y, z = v
+    px = qw * x + qy * z - qz * y
+    py = qw * y + qz * x - qx * z
+    pz = qw * z + qx * y - qy * x
+    pw = -qx * x - qy * y - qz * z
+    bx, by, bz, bw = q
+    return (
+        pw * -qx + px * qw + py * -qz - pz * -qy + tx,
+        pw * -qy + py * qw + pz * -qx - px * -qz + ty,
+        pw * -qz + pz * qw + px * -qy - py * -qx + tz,
+    ), (
+        qw * bx + qx * bw + qy * bz - qz * by,
+        qw * by + qy * bw + qz * bx - qx * bz,
+        qw * bz + qz * bw + qx * by - qy * bx,
+        qw * bw - qx * bx - qy * by - qz * bz,
+    )
 
 
 def _acos(x: float) -> float:
@@ -183,6 +201,35 @@ class _Cache:
     def get(self, time: int) -> tuple[str, Seven] | str:
         """The parent and transform at ``time`` (0: the latest), or tf2's reason it has none."""
         stamps = self.stamps
+        if stamps:  # the usual cases first: the latest, and between two stamps
+            if time == 0:
+                return self.parents[-1], self.data[-1]
+            if stamps[0] < time < stamps[-1]:
+                return self._between(time, bisect_right(stamps, time))
+        return self._edge(time)
+
+    def _between(self, time: int, newer: int) -> tuple[str, Seven]:
+        """Interpolated between the stamps at ``newer - 1`` and ``newer``."""
+        stamps, parents = self.stamps, self.parents
+        older = newer - 1
+        parent = parents[older]
+        if parents[newer] != parent:
+            return parent, self.data[older]  # the parent changed: the older holds, as tf2's
+        one, two = self.data[older], self.data[newer]
+        # ros::Duration::toSec() of each: whole seconds plus 1e-9 times the nanoseconds
+        a, b = time - stamps[older], stamps[newer] - stamps[older]
+        ratio = (a // _NS + 1e-9 * (a % _NS)) / (b // _NS + 1e-9 * (b % _NS))
+        keep = 1.0 - ratio
+        return parent, (
+            keep * one[0] + ratio * two[0],
+            keep * one[1] + ratio * two[1],
+            keep * one[2] + ratio * two[2],
+            *_slerp(one, two, ratio),
+        )
+
+    def _edge(self, time: int) -> tuple[str, Seven] | str:
+        """tf2's ``findClosest`` where ``time`` is not strictly inside: a stamp, or why not."""
+        stamps = self.stamps
         n = len(stamps)
         if n == 0:
             return "Lookup would require extrapolation into the past, but the cache is empty"
@@ -205,27 +252,10 @@ class _Cache:
                 f"Lookup would require extrapolation {_stamp(time - latest)}s into the future."
                 f"  Requested time {_stamp(time)} but the latest data is at time {_stamp(latest)}"
             )
-        if time < earliest:
-            return (
-                f"Lookup would require extrapolation {_stamp(earliest - time)}s into the past."
-                f"  Requested time {_stamp(time)} but the earliest data is at time "
-                f"{_stamp(earliest)}"
-            )
-        i = bisect_right(stamps, time)
-        older, newer = i - 1, i
-        parent = self.parents[older]
-        if self.parents[newer] != parent:
-            return parent, self.data[older]  # the parent changed: the older holds, as tf2's
-        one, two = self.data[older], self.data[newer]
-        # ros::Duration::toSec() of each: whole seconds plus 1e-9 times the nanoseconds
-        a, b = time - stamps[older], stamps[newer] - stamps[older]
-        ratio = (a // _NS + 1e-9 * (a % _NS)) / (b // _NS + 1e-9 * (b % _NS))
-        keep = 1.0 - ratio
-        return parent, (
-            keep * one[0] + ratio * two[0],
-            keep * one[1] + ratio * two[1],
-            keep * one[2] + ratio * two[2],
-            *_slerp(one, two, ratio),
+        return (
+            f"Lookup would require extrapolation {_stamp(earliest - time)}s into the past."
+            f"  Requested time {_stamp(time)} but the earliest data is at time "
+            f"{_stamp(earliest)}"
         )
 
 

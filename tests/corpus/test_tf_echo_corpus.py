@@ -125,3 +125,26 @@ def test_relative_times_count_from_the_start_of_the_recording() -> None:
     relative, _ = _echo(path, pair, "--at", "+2.5")
     absolute, _ = _echo(path, pair, "--at", _seconds(info.start_ns + 2_500_000_000))
     assert relative == absolute and relative[0]["stamp_ns"] == info.start_ns + 2_500_000_000
+
+
+@pytest.mark.parametrize(
+    ("args", "code", "words"),
+    [
+        (["a", "b", "-b", "{corpus}/embag/test.bag"], 3, "holds no /tf"),
+        (["world", "nowhere", "-b", "{turtles}"], 3, "does not exist"),
+        (["world", "carrot", "-b", "{turtles}", "--at", "-5"], 1, "into the past"),
+        (["world", "carrot", "-b", "{turtles}", "--at", "5"], 1, "counts from the recording"),
+        (["world", "carrot", "-b", "{turtles}", "--at", "soon"], 2, "--at takes seconds"),
+        (["world", "carrot", "-b", "{turtles}", "--at", "+1", "-n", "2"], 2, "-n does not"),
+        (["world", "carrot", "-b", "{turtles}", "-r", "0"], 2, "--rate must be above 0"),
+        (["world", "carrot", "-b", "{turtles}", "--timeout", "1"], 2, "does not apply"),
+        (["", "carrot", "-b", "{turtles}"], 2, "cannot be empty"),
+    ],
+)
+def test_bad_input_from_a_bag_is_one_line(args: list[str], code: int, words: str) -> None:
+    turtles = str(ROS1 / "rosbag.js/example.bag")
+    argv = [a.replace("{corpus}", str(ROS1)).replace("{turtles}", turtles) for a in args]
+    proc = run_cli("tf", "echo", *argv)
+    assert proc.returncode == code, proc.stderr
+    assert words in proc.stderr and len(proc.stderr.splitlines()) == 1
+    assert proc.stdout == ""

@@ -135,14 +135,10 @@ def _printer(fmt: Format, verbose: bool, precision: int) -> Any:
 
 def _record(t: Stamped) -> dict[str, Any]:
     """One answer as data: tf2's names, the RPY and the matrix."""
-    import numpy as np
+    from rostools.tf import scalar
 
-    from rostools.tf import math as tfmath
-
-    rpy = [float(v) for v in tfmath.to_rpy(t.rotation)]
-    m = np.eye(4)
-    m[:3, :3] = tfmath.matrix(t.rotation)
-    m[:3, 3] = t.translation
+    angles = list(scalar.rpy(t.rotation))
+    rows = [[*row, v] for row, v in zip(scalar.matrix(t.rotation), t.translation, strict=True)]
     return {
         "time": t.stamp_ns / 1e9,
         "stamp_ns": t.stamp_ns,
@@ -150,9 +146,9 @@ def _record(t: Stamped) -> dict[str, Any]:
         "child_frame_id": t.child,
         "translation": list(t.translation),
         "rotation": list(t.rotation),
-        "rpy": rpy,
-        "rpy_degrees": [math.degrees(v) for v in rpy],
-        "matrix": m.tolist(),
+        "rpy": angles,
+        "rpy_degrees": [math.degrees(v) for v in angles],
+        "matrix": [*rows, [0.0, 0.0, 0.0, 1.0]],
     }
 
 
@@ -212,7 +208,12 @@ def _from_bag(
             for batch in feed.batches():
                 whole.set_transforms(batch.transforms, batch.broadcaster, batch.static)
             for relative, ns in times:
-                show(_lookup(whole, frames, start + ns if relative else ns))
+                try:
+                    show(_lookup(whole, frames, start + ns if relative else ns))
+                except TransformError as err:
+                    if not relative and 0 < ns < start:  # meant from the start, likely
+                        err.hint = f"--at +{ns / 1e9:g} counts from the recording's start"
+                    raise
             return
         buffer = TransformBuffer(cache_ns)
         period = max(1, round(1e9 / rate))

@@ -17,7 +17,9 @@ if TYPE_CHECKING:
     class _Serves(Protocol):
         """What ``serve_loggers`` needs of a node (not ``LiveNode``: it imports this)."""
 
-        async def advertise_service(self, name: str, srv_type: Any, handler: Any) -> Any: ...
+        async def advertise_service(
+            self, name: str, srv_type: Any, handler: Any, *, quiet: bool = False
+        ) -> Any: ...
 
 
 #: The md5sums of the two service types (``tests/integration/test_cli_log.py`` checks them).
@@ -132,5 +134,8 @@ async def serve_loggers(node: _Serves) -> None:
     """Offer ``~get_loggers`` and ``~set_logger_level`` on ``node``, as every rospy node does."""
     from rostools.msgs.topictype import ServiceType
 
-    await node.advertise_service("~get_loggers", ServiceType(*GET_LOGGERS), get_loggers)
-    await node.advertise_service("~set_logger_level", ServiceType(*SET_LOGGER_LEVEL), set_level)
+    # quiet: a slow master is said for what the user asked, not for these
+    await node.advertise_service("~get_loggers", ServiceType(*GET_LOGGERS), get_loggers, quiet=True)
+    await node.advertise_service(
+        "~set_logger_level", ServiceType(*SET_LOGGER_LEVEL), set_level, quiet=True
+    )

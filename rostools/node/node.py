@@ -261,9 +261,12 @@ class LiveNode:
             await self.master.call("unregisterPublisher", topic, self.uri)
 
     async def advertise_service(
-        self, name: str, srv_type: ServiceType, handler: ServiceHandler
+        self, name: str, srv_type: ServiceType, handler: ServiceHandler, *, quiet: bool = False
     ) -> ServiceServer:
-        """Serve ``name`` (registered with the master)."""
+        """Serve ``name`` (registered with the master).
+
+        ``quiet``: a master slow to take it is not said (the node's own logger services).
+        """
         name = self.resolve(name)
         server = self.services[name] = ServiceServer(self, name, srv_type, handler)
         await self.registrar.register(
@@ -273,6 +276,7 @@ class LiveNode:
                 (name, server.uri, self.uri),
                 lambda _: None,
                 lambda: self.services.get(name) is server,
+                quiet,
             )
         )
         return server

@@ -55,6 +55,8 @@ class Registration:
     params: tuple[Any, ...]
     take: Callable[[Any], None]
     current: Callable[[], bool]
+    #: Not the user's own (a node's logger services): its waits are counted, never said.
+    quiet: bool = False
 
 
 @dataclass
@@ -62,8 +64,10 @@ class _Episode:
     """A time the master was slow: since when, registrations tried again, and taken."""
 
     since: float = field(default_factory=time.monotonic)
-    retried: int = 1
+    retried: int = 0
     taken: int = 0
+    #: Whether its first line was said: only a registration that is not quiet says it.
+    said: bool = False
 
 
 class Registrar:
@@ -91,7 +95,7 @@ class Registrar:
         try:
             value = await self._batched(reg)
         except NOT_YET as err:
-            self._start_episode(err, reg.name)
+            self._start_episode(err, reg)
             self.pending[reg.name] = asyncio.get_running_loop().create_task(self._again(reg))
             return
         self.confirmed = True
@@ -173,7 +177,7 @@ class Registrar:
                 self.confirmed = True
                 if reg.current():
                     reg.take(value)
-                    if self._episode is not None:
+                    if self._episode is not None and not reg.quiet:
                         self._episode.taken += 1
                 break
         finally:
@@ -181,17 +185,21 @@ class Registrar:
                 del self.pending[reg.name]
                 self._end_episode()
 
-    def _start_episode(self, err: RostoolsError, name: str) -> None:
-        """One line when the first registration of an episode has to wait."""
-        if self._episode is not None:
-            self._episode.retried += 1
+    def _start_episode(self, err: RostoolsError, reg: Registration) -> None:
+        """One line when the first registration of an episode that is not quiet has to wait."""
+        if self._episode is None:
+            self._episode = _Episode()
+        if reg.quiet:
             return
-        self._episode = _Episode()
+        self._episode.retried += 1
+        if self._episode.said:
+            return
+        self._episode.said = True
         self.owner.notify(
             Notice(
                 "register_retry",
-                f"{err}; registering {name} again until it answers",
-                {"uri": self.owner.master_uri, "name": name},
+                f"{err}; registering {reg.name} again until it answers",
+                {"uri": self.owner.master_uri, "name": reg.name},
             )
         )
 

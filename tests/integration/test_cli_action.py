@@ -16,6 +16,7 @@ from typing import Any
 import pytest
 
 from tests.support.env import run_cli
+from tests.support.load import scaled
 from tests.support.procs import Proc, core_and_env, start_cli, wait_for
 
 ROOT = Path(__file__).resolve().parent.parent.parent
@@ -93,9 +94,12 @@ def test_outcomes_and_exit_codes(env: dict[str, str]) -> None:
 
 
 def test_timeout_cancels_and_another_client_preempts(env: dict[str, str]) -> None:
-    late = run_cli("action", "send-goal", "/fib", "1000", "--timeout", "0.6", "-F", "json", env=env)
+    # long enough to connect on a loaded machine, far short of the goal's 50 s
+    limit = round(scaled(0.6), 1)
+    late = run_cli("action", "send-goal", "/fib", "1000", "--timeout", str(limit), "-F", "json",
+                   env=env)  # fmt: skip
     assert late.returncode == 5, late.stderr
-    assert "did not finish within 0.6 s; canceled it" in last_line(late.stderr)
+    assert f"did not finish within {limit:g} s; canceled it" in last_line(late.stderr)
     got = events(late.stdout)
     assert {"event": "cancel", "goal_id": got[0]["goal_id"], "reason": "timeout"} in got
     assert got[-1]["status"] == "PREEMPTED" and got[-1]["result"]["result"] > 0

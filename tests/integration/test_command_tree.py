@@ -27,6 +27,7 @@ ROOT = Path(__file__).resolve().parent.parent.parent
 NOT_DATA = {
     "topic pub",
     "tf pub",
+    "log set",
     "param set",
     "param delete",
     "param load",
@@ -83,6 +84,9 @@ RECIPES: dict[str, list[str]] = {
     "node cleanup": ["--dry-run"],
     "node graph": [],
     "tf echo": ["map", "base", "-n", "1"],
+    "log echo": ["--level", "debug", "-n", "1"],
+    "log list": ["/rosout"],
+    "log get": ["/rosout"],
     "tf frames": ["-w", "1"],
     "tf monitor": ["-n", "1"],
     "bag info": ["{bag}", "--freq"],
@@ -146,6 +150,7 @@ def graph(tmp_path_factory: pytest.TempPathFactory) -> Iterator[tuple[dict[str, 
         Proc([sys.executable, str(ROOT / "tests/support/rt_nodes/rt_services.py")], env=env),
         Proc([sys.executable, str(ROOT / "tests/support/rt_nodes/rt_actions.py")], env=env),
         Proc([*CLI, "tf", "pub", "0", "0", "1", "0", "0", "0", "map", "base"], env=env),
+        Proc([*pub, "-r", "5", "/rosout", "rosgraph_msgs/Log", "{level: 4, msg: hi}"], env=env),
     ]
     try:
         assert run_cli("param", "set", "/demo", "{a: 1, b: [x, y]}", env=env).returncode == 0

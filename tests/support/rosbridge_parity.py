@@ -284,7 +284,8 @@ def _web_service(s: Session) -> list[Message]:
     return said
 
 
-NODE_SUFFIX = re.compile(r"(_\d+)+$")
+#: An anonymous node's numbers, at the end of its name or of the node part of a service's.
+NODE_SUFFIX = re.compile(r"(_\d+)+(?=$|/get_loggers$|/set_logger_level$)")
 HELLO = re.compile(r"^hello \d+$")
 #: Lists whose order a master does not fix.
 NAME_LISTS = {"topics", "services", "nodes", "names", "publishers", "subscribers", "providers"}

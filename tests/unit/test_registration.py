@@ -159,6 +159,39 @@ def test_one_line_for_an_episode_however_many_registrations_wait() -> None:
     assert "has taken 50 registration(s)" in owner.notices[1].message
 
 
+def test_a_quiet_registration_waits_unsaid_and_leaves_the_line_to_the_users_own() -> None:
+    # the defect: a node's logger services, registered in the background as it starts, were
+    # first to wait on a slow master, so `bag record` said "registering service
+    # /rostools_record_.../set_logger_level again" and never named the topic that waited
+    tries: dict[str, int] = {}
+
+    def late_once(name: str) -> Any:
+        tries[name] = tries.get(name, 0) + 1
+        return LATE if tries[name] == 1 else name
+
+    master, taken = _Master(late_once), []
+    owner = _Owner(master)
+    quiet = Registration("service /n/get_loggers", "registerService", ("/n/get_loggers",),
+                         taken.append, lambda: True, quiet=True)  # fmt: skip
+
+    async def main() -> list[Notice]:
+        registrar = Registrar(owner)  # type: ignore[arg-type]
+        await registrar.register(quiet)
+        await _settle(registrar)
+        alone = list(owner.notices)
+        await registrar.register(Registration(**{**vars(quiet), "name": "service /n/x"}))
+        await registrar.register(_reg("/chatter", taken))
+        await _settle(registrar)
+        return alone
+
+    alone = asyncio.run(main())
+    assert alone == []  # a quiet registration alone says nothing, and is taken
+    assert "/n/get_loggers" in taken
+    assert [n.event for n in owner.notices] == ["register_retry", "registered"]
+    assert "registering /chatter again" in owner.notices[0].message
+    assert "has taken 1 registration(s)" in owner.notices[1].message
+
+
 def test_a_closed_endpoint_is_not_registered_again() -> None:
     master, taken = _Master([LATE, ["uri"]]), []
     owner = _Owner(master)

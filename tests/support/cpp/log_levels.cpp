@@ -6,6 +6,7 @@
 
 int main(int argc, char** argv) {
   peer::init(argc, argv, "log_levels_cpp");
+  peer::Args args(argc, argv, "log_levels [--name NAME=log_levels_cpp] [--anonymous]", {}, {});
   ros::NodeHandle nh;
   ros::AsyncSpinner spinner(1);  // the logger services are served while the loop sleeps
   spinner.start();

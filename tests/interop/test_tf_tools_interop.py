@@ -135,16 +135,23 @@ def tf_graph(any_master: MasterInfo) -> Iterator[tuple[MasterInfo, list[str]]]:
     Yields the master and the broadcasters' node names, once all three are heard.
     """
     env = any_master.ros_env
-    procs = [
-        Proc([STP, "0.1", "0", "0.2", "0", "0", "0", "base", "laser"], env=env),
-        Proc([STP, "0", "0", "0.5", "0", "0", "0", "1", "laser", "laser_optical"], env=env),
-    ]
-    mover = start_ros1_node("tf_mover.py", ["50", "map", "odom", "odom", "base"], env)
-    procs.append(mover)
+    procs: list[Proc] = []
+    statics: list[str] = []
     try:
+        # one at a time, so that each anonymous name is known to be its frame's broadcaster
+        for args in (
+            ["0.1", "0", "0.2", "0", "0", "0", "base", "laser"],
+            ["0", "0", "0.5", "0", "0", "0", "1", "laser", "laser_optical"],
+        ):
+            procs.append(Proc([STP, *args], env=env))
+            wait_for(lambda: len(publishers(any_master.uri, "/tf_static")) > len(statics), 20,
+                     "a static_transform_publisher")  # fmt: skip
+            (new,) = set(publishers(any_master.uri, "/tf_static")) - set(statics)
+            statics.append(new)
+        mover = start_ros1_node("tf_mover.py", ["50", "map", "odom", "odom", "base"], env)
+        procs.append(mover)
         mover.expect("broadcasting", 30)
-        wait_for(lambda: len(publishers(any_master.uri, "/tf_static")) == 2, 20, "two statics")
-        yield any_master, [*sorted(publishers(any_master.uri, "/tf_static")), "/tf_mover"]
+        yield any_master, [*statics, "/tf_mover"]
     finally:
         for p in procs:
             p.stop()

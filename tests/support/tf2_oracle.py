@@ -6,7 +6,8 @@ live. Reads one JSON document on stdin: ``{"cache_ns": N, "ops": [...]}``, each 
 ``["lookup", target, source, time_ns]``, ``["shift", offset_ns]`` (every later time is
 handed to tf2_py less ``offset_ns``: see ``time``) and ``["bag", path, until_ns]`` (the ``/tf`` and
 ``/tf_static`` messages of a bag recorded up to ``until_ns``, all when it is None, in record
-order, read by the ``rosbag`` module, each from its connection's callerid) and ``["yaml"]``.
+order, read by the ``rosbag`` module, each from its connection's callerid), ``["yaml"]`` and
+``["reset", cache_ns]`` (a new, empty buffer, unshifted: many cases in one run).
 Writes one JSON list: per lookup ``{"ok": [stamp_ns, [seven values]]}`` or ``{"error": kind,
 "message": text}``; per yaml ``{"yaml": text}``, the buffer's ``allFramesAsYAML`` (what
 view_frames draws). Nothing of rostools is imported here: this is the reference side.
@@ -65,7 +66,10 @@ def main():
         return ns + shift[0] if ns else 0
 
     for op in doc["ops"]:
-        if op[0] == "shift":
+        if op[0] == "reset":
+            buffer = tf2_py.BufferCore(rospy.Duration(0, op[1]))
+            shift[0] = 0
+        elif op[0] == "shift":
             shift[0] = op[1]
         elif op[0] == "set":
             _, parent, child, stamp, seven, static, authority = op

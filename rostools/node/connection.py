@@ -11,6 +11,7 @@ import asyncio
 import collections
 import contextlib
 import logging
+import select
 import socket
 import time
 from collections.abc import Callable
@@ -101,8 +102,11 @@ class Pending:
 
     def _drop_oldest(self) -> None:
         self._trim = None
-        while len(self._waiting) > self.limit:
-            oldest = next(iter(self._waiting))
+        # A loaded loop can reach this before it has read headers that already wait in the
+        # sockets: those peers have spoken, and only the silent ones are dropped.
+        spoke = _readable(self._waiting)
+        silent = [conn for conn in self._waiting if conn not in spoke]
+        for oldest in silent[: max(0, len(self._waiting) - self.limit)]:
             del self._waiting[oldest]
             self.dropped += 1
             # One line per server, not one per connection of a flood.
@@ -112,10 +116,24 @@ class Pending:
                 "oldest, from %s", self.limit, oldest.peer,
             )  # fmt: skip
             oldest.abort()
+        if len(self._waiting) > self.limit:  # the speakers' headers are read by then
+            self._trim = asyncio.get_running_loop().call_later(PENDING_GRACE, self._drop_oldest)
 
     def discard(self, conn: ServerConnection) -> None:
         """``conn`` sent its header or closed."""
         self._waiting.pop(conn, None)
+
+
+def _readable(conns: dict[ServerConnection, None]) -> set[ServerConnection]:
+    """Those of ``conns`` whose sockets hold bytes not read yet (poll: no FD_SETSIZE limit)."""
+    by_fd: dict[int, ServerConnection] = {}
+    poller = select.poll()
+    for conn in conns:
+        sock = conn.transport.get_extra_info("socket") if conn.transport else None
+        if sock is not None and sock.fileno() >= 0:
+            by_fd[sock.fileno()] = conn
+            poller.register(sock.fileno(), select.POLLIN)
+    return {by_fd[fd] for fd, _ in poller.poll(0)}
 
 
 class ServerConnection(asyncio.BufferedProtocol):

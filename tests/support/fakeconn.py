@@ -9,8 +9,9 @@ from typing import Any
 class FakeTransport(asyncio.Transport):
     """Enough of a transport to feed a protocol bytes, see what it writes and see it close."""
 
-    def __init__(self) -> None:
+    def __init__(self, sock: Any = None) -> None:
         super().__init__()
+        self.sock = sock  # what get_extra_info("socket") gives, if anything
         self.closed = False
         self.written = b""
 
@@ -27,6 +28,8 @@ class FakeTransport(asyncio.Transport):
         return self.closed
 
     def get_extra_info(self, name: str, default: Any = None) -> Any:
+        if name == "socket" and self.sock is not None:
+            return self.sock
         return ("127.0.0.1", 1) if name == "peername" else default
 
     def set_write_buffer_limits(self, high: Any = None, low: Any = None) -> None:

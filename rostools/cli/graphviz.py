@@ -11,10 +11,15 @@ person has the graph to render elsewhere.
 from __future__ import annotations
 
 import enum
+from collections.abc import Callable
 from pathlib import Path
-from typing import Final
+from typing import Annotated, Final
 
-from rostools.cli.output import check_writable
+import typer
+
+from rostools.cli import output
+from rostools.cli.common import settings
+from rostools.cli.output import Format, check_writable, emit
 from rostools.errors import (
     NotFoundError,
     RostoolsError,
@@ -38,6 +43,51 @@ class GraphFormat(str, enum.Enum):
     json = "json"
     yaml = "yaml"
     dot = "dot"
+
+
+#: ``--format`` of a command that draws: the usual formats, and the DOT itself.
+GraphFormatOpt = Annotated[
+    GraphFormat | None,
+    typer.Option(
+        "--format", "-F", help="text (a tree), json, yaml or dot (Graphviz).", show_default=False
+    ),
+]
+#: ``-o`` of a command that draws: a picture through Graphviz, or the DOT.
+PictureOpt = Annotated[
+    Path | None,
+    typer.Option(
+        "--output",
+        "-o",
+        help="Draw into a file through Graphviz's dot: .svg, .png, .pdf (.dot, .gv: the DOT).",
+        show_default=False,
+    ),
+]
+
+
+def show_graph(
+    ctx: typer.Context,
+    fmt: GraphFormat | None,
+    out: Path | None,
+    dot: Callable[[], str],
+    text: Callable[[], str | None],
+    data: Callable[[], object],
+) -> None:
+    """Draw into ``out``, or print the graph as ``fmt`` (or the run's format) asks.
+
+    ``text`` gives None when it has said why there is nothing to show.
+    """
+    if out is not None:
+        draw(dot() + "\n", out)
+        return
+    chosen = fmt if fmt is not None else GraphFormat(settings(ctx).format.value)
+    if chosen is GraphFormat.dot:
+        output.put(dot() + "\n")
+    elif chosen is GraphFormat.text:
+        shown = text()
+        if shown is not None:
+            output.put(shown + "\n")
+    else:
+        emit(Format(chosen.value), data())
 
 
 def dot_id(text: str) -> str:

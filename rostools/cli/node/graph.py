@@ -6,16 +6,20 @@ rqt_graph's picture without a GUI.
 
 from __future__ import annotations
 
-from pathlib import Path
 from typing import TYPE_CHECKING, Annotated
 
 import typer
 
-from rostools.cli import output
-from rostools.cli.common import master, settings
+from rostools.cli.common import master
 from rostools.cli.declare import command
-from rostools.cli.graphviz import GraphFormat, dot_id, dot_label, draw, picture_kind
-from rostools.cli.output import Format, emit
+from rostools.cli.graphviz import (
+    GraphFormatOpt,
+    PictureOpt,
+    dot_id,
+    dot_label,
+    picture_kind,
+    show_graph,
+)
 from rostools.errors import one_line
 
 if TYPE_CHECKING:
@@ -76,24 +80,8 @@ def graph_cmd(
         bool,
         typer.Option("-a", "--all", help="Include /rosout, /rosout_agg and the rosout node."),
     ] = False,
-    fmt: Annotated[
-        GraphFormat | None,
-        typer.Option(
-            "--format",
-            "-F",
-            help="text (a tree), json, yaml or dot (Graphviz).",
-            show_default=False,
-        ),
-    ] = None,
-    out: Annotated[
-        Path | None,
-        typer.Option(
-            "--output",
-            "-o",
-            help="Draw into a file through Graphviz's dot: .svg, .png, .pdf (.dot: the DOT).",
-            show_default=False,
-        ),
-    ] = None,
+    fmt: GraphFormatOpt = None,
+    out: PictureOpt = None,
 ) -> None:
     """Nodes and the topics between them, like rqt_graph, from the master's registrations."""
     from rostools.rosgraph.state import build_graph, system_state
@@ -102,16 +90,13 @@ def graph_cmd(
         picture_kind(out)  # a bad name fails before the master is asked
     proxy = master(ctx, TOOL)
     graph = build_graph(system_state(proxy), proxy.topic_types(), include_debug=all_)
-    if out is not None:
-        draw(graph_dot(graph) + "\n", out)
-        return
-    chosen = fmt if fmt is not None else GraphFormat(settings(ctx).format.value)
-    if chosen is GraphFormat.dot:
-        output.put(graph_dot(graph) + "\n")
-    elif chosen is GraphFormat.text:
+
+    def text() -> str | None:
         if graph.nodes:
-            output.put(graph_text(graph) + "\n")
-        else:
-            warn("no nodes are registered")
-    else:
-        emit(Format(chosen.value), graph.to_data())
+            return graph_text(graph)
+        warn("no nodes are registered")
+        return None
+
+    show_graph(
+        ctx, fmt, out, dot=lambda: graph_dot(graph), text=text, data=graph.to_data
+    )  # fmt: skip

@@ -16,11 +16,16 @@ from typing import TYPE_CHECKING, Annotated
 
 import typer
 
-from rostools.cli import output
-from rostools.cli.common import FINITE, node_session, settings
+from rostools.cli.common import FINITE, node_session
 from rostools.cli.declare import command
-from rostools.cli.graphviz import GraphFormat, dot_id, dot_label, draw, picture_kind
-from rostools.cli.output import Format, emit
+from rostools.cli.graphviz import (
+    GraphFormatOpt,
+    PictureOpt,
+    dot_id,
+    dot_label,
+    picture_kind,
+    show_graph,
+)
 from rostools.cli.tf.options import BagOpt
 from rostools.errors import NotFoundError, UsageError, one_line
 from rostools.tf.edges import Edge, Edges, shown_broadcaster
@@ -101,30 +106,14 @@ def frames_data(edges: Edges) -> dict[str, object]:
 def frames(
     ctx: typer.Context,
     bag: BagOpt = None,
-    out: Annotated[
-        Path | None,
-        typer.Option(
-            "--output",
-            "-o",
-            help="Draw into a file through Graphviz's dot: .svg, .png, .pdf (.dot, .gv: the DOT).",
-            show_default=False,
-        ),
-    ] = None,
+    out: PictureOpt = None,
     wait: Annotated[
         float,
         typer.Option(
             "--wait", "-w", click_type=FINITE, help="Seconds to listen (live; view_frames' 5)."
         ),
     ] = WAIT,
-    fmt: Annotated[
-        GraphFormat | None,
-        typer.Option(
-            "--format",
-            "-F",
-            help="text (a tree), json, yaml or dot (Graphviz).",
-            show_default=False,
-        ),
-    ] = None,
+    fmt: GraphFormatOpt = None,
 ) -> None:
     """Draw the tree of frames, as view_frames, with each edge's broadcaster and rate."""
     if out is not None:
@@ -139,16 +128,14 @@ def frames(
     if not edges.by_child:
         where = f"in {bag}" if bag is not None else f"within {wait:g} s"
         raise NotFoundError(f"no tf data received {where}")
-    if out is not None:
-        draw(frames_dot(edges, at_ns) + "\n", out)
-        return
-    chosen = fmt if fmt is not None else GraphFormat(settings(ctx).format.value)
-    if chosen is GraphFormat.dot:
-        output.put(frames_dot(edges, at_ns) + "\n")
-    elif chosen is GraphFormat.text:
-        output.put(frames_text(edges) + "\n")
-    else:
-        emit(Format(chosen.value), frames_data(edges))
+    show_graph(
+        ctx,
+        fmt,
+        out,
+        dot=lambda: frames_dot(edges, at_ns),
+        text=lambda: frames_text(edges),
+        data=lambda: frames_data(edges),
+    )
 
 
 def _from_bag(path: Path) -> tuple[Edges, int]:

@@ -7,8 +7,14 @@ a lazy import is still a dependency, and a circle of them is still a circle.
 from __future__ import annotations
 
 import ast
+import functools
 import json
 from pathlib import Path
+
+import pytest
+
+# One worker reads the tree once for all of them (each read parses ~400 files).
+pytestmark = pytest.mark.xdist_group("import_direction")
 
 ROOT = Path(__file__).resolve().parents[2] / "rostools"
 
@@ -40,6 +46,17 @@ def _layer(unit: str) -> int:
     raise AssertionError(f"rostools/{unit} is on no layer: add it to LAYERS and ARCHITECTURE.md")
 
 
+@functools.cache
+def _parsed(path: Path) -> ast.Module:
+    """``path``'s syntax tree, parsed once per process."""
+    return ast.parse(path.read_text(), str(path))
+
+
+def _is_type_checking(test: ast.expr) -> bool:
+    """``if TYPE_CHECKING:`` (the only spelling rostools uses)."""
+    return isinstance(test, ast.Name) and test.id == "TYPE_CHECKING"
+
+
 def _nodes(tree: ast.AST, at_run_time: bool, on_import: bool) -> list[ast.AST]:
     """Every node of ``tree``; with ``at_run_time``, not those under ``if TYPE_CHECKING:``;
     with ``on_import``, not those in functions either (what importing the module runs)."""
@@ -48,7 +65,7 @@ def _nodes(tree: ast.AST, at_run_time: bool, on_import: bool) -> list[ast.AST]:
     skipped = {
         id(n)
         for block in ast.walk(tree)
-        if (isinstance(block, ast.If) and ast.unparse(block.test) == "TYPE_CHECKING")
+        if (isinstance(block, ast.If) and _is_type_checking(block.test))
         or (on_import and isinstance(block, ast.FunctionDef | ast.AsyncFunctionDef))
         for statement in (block.body if isinstance(block, ast.If) else [block])
         for n in ast.walk(statement)
@@ -64,7 +81,15 @@ def _imports(
     ``at_run_time`` leaves out what is imported for annotations only, ``on_import`` also
     what functions import when they run.
     """
-    graph: dict[str, set[str]] = {}
+    return {m: set(t) for m, t in _read_imports(at_run_time, outside, on_import).items()}
+
+
+@functools.cache
+def _read_imports(
+    at_run_time: bool, outside: tuple[str, ...], on_import: bool
+) -> dict[str, frozenset[str]]:
+    """``_imports`` as read once per process (callers get copies)."""
+    graph: dict[str, frozenset[str]] = {}
     for path in ROOT.rglob("*.py"):
         parts = path.relative_to(ROOT.parent).with_suffix("").parts
         module = ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
@@ -73,7 +98,7 @@ def _imports(
         # The package's own block of TYPE_CHECKING imports is its list of public names, which
         # load on first use (rostools.lazy): no import of anything when the package loads.
         runtime_only = at_run_time or module == "rostools"
-        for node in _nodes(ast.parse(path.read_text(), str(path)), runtime_only, on_import):
+        for node in _nodes(_parsed(path), runtime_only, on_import):
             if isinstance(node, ast.Import):
                 found |= {a.name for a in node.names if a.name.startswith(("rostools", *outside))}
             elif (
@@ -97,7 +122,7 @@ def _imports(
                             (ROOT.parent / Path(*sub.split("."))).with_suffix(".py").exists()
                         )
                         found.add(sub if is_module else base)
-        graph[module] = found - {module}
+        graph[module] = frozenset(found - {module})
     return graph
 
 

@@ -124,10 +124,12 @@ def any_master(request, cli_env: dict[str, str], tmp_path: Path):  # type: ignor
     uri = f"http://127.0.0.1:{port}"
     cli_env["ROS_MASTER_URI"] = uri
     env = ros_env(uri, tmp_path / "ros_home")
+    # a test of what roslaunch does (rosout respawned) asks for roscore itself
+    launch = request.node.get_closest_marker("roslaunch") is not None
     proc = (
         start_rostools_core(port, cli_env)
         if request.param == "rostools"
-        else start_roscore(port, env)
+        else start_roscore(port, env, launch=launch)
     )
     try:
         yield MasterInfo(request.param, uri, env, cli_env)

@@ -167,7 +167,7 @@ def test_rostools_param_matches_rosparam_on_a_real_roscore(
     uri = f"http://127.0.0.1:{port}"
     env = ros_env(uri, tmp_path / "home")
     cli_env["ROS_MASTER_URI"] = uri
-    master = start_roscore(port, env)
+    master = start_roscore(port, env, launch=True)  # roscore itself, roslaunch and all
     info = MasterInfo("roscore", uri, env, cli_env)
     yaml_file = tmp_path / "p.yaml"
     yaml_file.write_text("a: 1\nb: {c: [1, 2], d: x}\n---\n_ns: sub\ne: deg(90)\n")

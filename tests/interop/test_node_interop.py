@@ -206,6 +206,7 @@ def test_graph_matches_rostopic(any_master: MasterInfo, graph: dict[str, Proc]) 
     assert "    └── /rosout [rosgraph_msgs/Log] ← /listener, /talker\n" in everything
 
 
+@pytest.mark.roslaunch  # roslaunch respawns rosout
 def test_rosout_comes_back_after_a_real_rosnode_kill(any_master: MasterInfo) -> None:
     """roscore respawns its rosout; rostools core does the same (a new node URI each time)."""
 

@@ -411,16 +411,70 @@ def child_pids(parent: int) -> list[int]:
     return children
 
 
-def start_roscore(port: int, env: dict[str, str]) -> Proc:
-    """The real ``roscore -p PORT`` (master and rosout), once the master answers."""
-    proc = Roscore(["roscore", "-p", str(port)], env=env)
+def start_roscore(port: int, env: dict[str, str], *, launch: bool = False) -> Proc:
+    """A real ROS 1 core on ``port``, once its master answers.
+
+    ``roscore`` is roslaunch starting ``rosmaster --core``, setting ``/run_id``,
+    ``/rosversion`` and ``/rosdistro``, and starting ``rosout``. Without ``launch`` those real
+    parts are started here as roslaunch starts them, without roslaunch, which takes 3 to 5
+    s of a loaded machine to start (105 tests start a core). With ``launch``, ``roscore -p``.
+    """
+    proc = Roscore(["roscore", "-p", str(port)], env=env) if launch else CoreParts(port, env)
     uri = f"http://127.0.0.1:{port}/"
     wait_for(lambda: master_answers(uri) or proc.popen.poll() is not None, 30, "roscore")
     if proc.popen.poll() is not None:
         raise AssertionError(f"roscore exited: {proc.output()}")
-    # a roscore killed with pytest would stop them in its own time, past the reaper's grace
-    proc.reap_children()
+    if isinstance(proc, CoreParts):
+        proc.start_rosout(uri)
+    else:
+        # a roscore killed with pytest would stop them in its own time, past the reaper's grace
+        proc.reap_children()
     return proc
+
+
+class CoreParts(Proc):
+    """``rosmaster --core``, then roscore's parameters and ``rosout``, as roslaunch starts them.
+
+    Each runs in a process group of its own, as under roscore; ``stop`` stops both.
+    """
+
+    def __init__(self, port: int, env: dict[str, str]) -> None:
+        import uuid
+
+        self.env = env
+        self.run_id = str(uuid.uuid1())
+        home = Path(env.get("ROS_HOME", Path.home() / ".ros"))
+        self.logs = Path(env.get("ROS_LOG_DIR", home / "log")) / self.run_id
+        argv = ["rosmaster", "--core", "-p", str(port), "-w", "3"]
+        super().__init__([*argv, f"__log:={self.logs / 'master.log'}"], env=env)
+        self.rosout: Proc | None = None
+
+    def start_rosout(self, uri: str) -> None:
+        """roscore's parameters (as roslaunch sets them, before its nodes), then ``rosout``."""
+        with xmlrpc.client.ServerProxy(uri) as master:
+            master.setParam("/roslaunch", "/run_id", self.run_id)
+            for name, value in _ros_versions().items():
+                master.setParam("/roslaunch", name, value)
+        log = f"__log:={self.logs / 'rosout-1.log'}"
+        self.rosout = Proc(["/usr/lib/rosout/rosout", "__name:=rosout", log], env=self.env)
+
+    def stop(self, timeout: float | None = 0) -> int:
+        """SIGKILL rosout and the master (no test checks roscore's own shutdown)."""
+        if self.rosout is not None:
+            self.rosout.stop(timeout)
+        return super().stop(timeout)
+
+
+_versions: dict[str, str] = {}
+
+
+def _ros_versions() -> dict[str, str]:
+    """``/rosversion`` and ``/rosdistro`` as roslaunch sets them (``rosversion``), asked once."""
+    if not _versions:
+        for name, args in (("/rosversion", ["roslaunch"]), ("/rosdistro", ["-d"])):
+            done = subprocess.run(["rosversion", *args], capture_output=True, text=True, check=True)
+            _versions[name] = done.stdout.strip() + "\n"
+    return _versions
 
 
 NODES = Path(__file__).with_name("ros1_nodes")

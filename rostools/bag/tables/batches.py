@@ -140,8 +140,10 @@ def topic_batches(
     ``start``/``end``: record times in seconds since the epoch, both included. ``md5sum``
     picks one definition of a topic the bags hold with several (``table_schemas`` lists
     them); without it such a topic is a ``UsageError`` naming them. ``flatten``: dotted
-    column names for nested messages (``header.stamp``); arrays stay lists. The bags stay open
-    until the reader is exhausted or closed.
+    column names for nested messages (``header.stamp``); arrays stay lists. Memory stays
+    bounded: a batch is ``batch_rows`` messages or ``BATCH_BYTES`` of them. The bags stay open
+    until the reader is exhausted or closed. Without pyarrow: ``MissingExtraError`` (exit 2)
+    naming ``pip install 'rostools[arrow]'``.
     """
     pa = pyarrow("bag tables")
     if batch_rows < 1:

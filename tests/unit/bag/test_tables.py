@@ -268,3 +268,29 @@ def test_uniform_batches_are_read_in_one_go_and_others_are_not(tmp_path: Path) -
     assert not fill_uniform(decoder, [payloads[0], payloads[3]])  # same size, not UTF-8
     assert not fill_uniform(decoder, [payloads[0] + b"\x00"] * 2)  # bytes after the message
     assert decoder.finish(0)[0].to_pylist() == []  # and nothing was filled by the refusals
+
+
+def test_a_damaged_bag_gives_what_reads_then_says_what_it_lost(tmp_path: Path) -> None:
+    from rostools.errors import DataLossError
+
+    store = TypeStore.default()
+    codec = Codec.of(store)
+    point = codec.message_class("geometry_msgs/Point")
+    path = tmp_path / "cut.mcap"
+    with open_writer(path, compression="none", chunk_size=1000) as writer:
+        conn = writer.add_connection(
+            "/p", "geometry_msgs/Point", store.md5("geometry_msgs/Point"), POINT
+        )
+        for i in range(200):
+            writer.write(conn, (i + 1) * 1_000_000, codec.serialize(point(x=float(i), y=1234.5)))
+    raw = bytearray(path.read_bytes())
+    middle = raw.index(codec.serialize(point(x=100.0, y=1234.5)))
+    raw[middle + 20] ^= 0xFF  # in a chunk: its CRC no longer holds, so the chunk is left out
+    path.write_bytes(bytes(raw))
+    got: list[float] = []
+    with pytest.raises(DataLossError, match=r"^read 1\d\d messages of /p, but left out") as caught:
+        for batch in topic_batches([path], "/p", batch_rows=50):
+            got += batch.column("x").to_pylist()
+    assert caught.value.exit_code == 6
+    assert 150 < len(got) < 200 and 100.0 not in got  # one chunk's messages, and only those
+    assert got == sorted(set(got)) and got[:50] == [float(i) for i in range(50)]

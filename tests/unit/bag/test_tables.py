@@ -294,3 +294,11 @@ def test_a_damaged_bag_gives_what_reads_then_says_what_it_lost(tmp_path: Path) -
     assert caught.value.exit_code == 6
     assert 150 < len(got) < 200 and 100.0 not in got  # one chunk's messages, and only those
     assert got == sorted(set(got)) and got[:50] == [float(i) for i in range(50)]
+
+
+def test_an_array_past_arrows_offsets_is_refused_not_wrapped() -> None:
+    from rostools.bag.tables.columns import MAX_OFFSET, _offsets
+
+    assert _offsets([MAX_OFFSET - 1, 1]).to_pylist() == [0, MAX_OFFSET - 1, MAX_OFFSET]
+    with pytest.raises(InvalidDataError, match=r"^an array of 2147483648 elements is too long"):
+        _offsets([MAX_OFFSET, 1])

@@ -52,6 +52,9 @@ if TYPE_CHECKING:  # the stable API: type checkers read these imports, rostools.
         SnapshotRecorder as SnapshotRecorder,
         snapshot as snapshot,
     )
+    from rostools.bag.tables.sql import (
+        bag_sql as bag_sql,
+    )
     from rostools.errors import (
         DataLossError as DataLossError,
         NotFoundError as NotFoundError,

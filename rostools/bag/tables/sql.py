@@ -27,6 +27,9 @@ if TYPE_CHECKING:
 
     from rostools.bag.tables.batches import TopicTable
 
+#: The first DuckDB that scans a ``TopicSource`` anew each time a query reads it; before 1.5 a
+#: PyCapsule object is read once (a self-join fails, 1.4 reads it as it is registered).
+MIN_DUCKDB = (1, 5)
 #: DuckDB's words for a table that is not there (``Catalog Error: Table with name x does not
 #: exist!``), as its 0.10 to 1.x and 2.x releases write them.
 _NO_TABLE = re.compile(r"Table with name (.+?) does not exist")
@@ -38,7 +41,19 @@ def duckdb_module(what: str = "") -> Any:
         import duckdb
     except ImportError:
         raise MissingExtraError("duckdb", "sql", what=what) from None
+    if _older(duckdb.__version__, MIN_DUCKDB):
+        need = ".".join(map(str, MIN_DUCKDB))
+        raise UsageError(
+            f"{what or 'rostools'} needs duckdb {need} or later, not {duckdb.__version__}:"
+            " pip install -U 'rostools[sql]'"
+        )
     return duckdb
+
+
+def _older(version: str, than: tuple[int, int]) -> bool:
+    """Whether a ``major.minor...`` version string is older than ``than``."""
+    numbers = [int(m) for m in re.findall(r"\d+", version)[:2]]
+    return tuple(numbers) < than
 
 
 class TopicSource:
@@ -201,9 +216,9 @@ def bag_sql(
     ``bag_sql('SELECT avg(linear_acceleration.z) FROM "/imu"', "run.bag")`` decodes ``/imu``
     alone. The table goes on to pandas (``.to_pandas()``) or Polars (``pl.from_arrow``).
     ``topics`` limits the views; ``start`` and ``end`` are record times in seconds since the
-    epoch, as ``bag_table`` takes them. Errors are rostools' (a missing extra or bad SQL: ``UsageError``, exit 2; a topic
-    the bags lack: ``NotFoundError``, exit 3), raised whether DuckDB finds them as it reads
-    the statement or as it runs it.
+    epoch, as ``bag_table`` takes them. Errors are rostools' (a missing extra or bad SQL:
+    ``UsageError``, exit 2; a topic the bags lack: ``NotFoundError``, exit 3), raised whether
+    DuckDB finds them as it reads the statement or as it runs it.
     """
     files = [paths] if isinstance(paths, str | Path) else list(paths)
     db = connect(files, topics=topics, start=start, end=end)

@@ -14,6 +14,7 @@ import enum
 
 from rostools.cli import output
 from rostools.cli.declare import command
+from rostools.errors import one_line
 
 TYPE_CHECKING = False  # ``typing`` is 5-10 ms of start-up; only annotations use it
 if TYPE_CHECKING:
@@ -30,6 +31,13 @@ if TYPE_CHECKING:
 MAX_TABLE_ROWS = 1000
 #: Rows fetched from DuckDB at a time for CSV and JSON: memory stays bounded by this.
 FETCH_ROWS = 10_000
+
+
+#: DuckDB's number types: a table aligns them to the right.
+NUMERIC = frozenset(
+    ("TINYINT", "SMALLINT", "INTEGER", "BIGINT", "HUGEINT", "UTINYINT", "USMALLINT", "UINTEGER",
+     "UBIGINT", "UHUGEINT", "FLOAT", "DOUBLE", "DECIMAL")
+)  # fmt: skip
 
 
 class QueryFormat(str, enum.Enum):
@@ -168,13 +176,16 @@ def _table(relation: Any) -> None:
     from rich.markup import escape
     from rich.table import Table
 
-    names = list(relation.columns)
-    table = Table(*(escape(output.one_line(n)) for n in names), show_lines=False)
+    table = Table()
+    for name, kind in zip(relation.columns, relation.types, strict=True):
+        # numbers to the right, as DuckDB's own shell aligns them
+        right = str(kind).split("(")[0] in NUMERIC
+        table.add_column(escape(one_line(name)), justify="right" if right else "left")
     shown = 0
     more = 0
     for row in _rows(_as_text(relation)):
         if shown < MAX_TABLE_ROWS:
-            table.add_row(*("NULL" if v is None else escape(output.one_line(v)) for v in row))
+            table.add_row(*("NULL" if v is None else escape(one_line(v)) for v in row))
             shown += 1
         else:
             more += 1

@@ -275,3 +275,15 @@ def test_the_streaming_reader_feeds_duckdb_pandas_and_polars(imu_bag: Path) -> N
     pl = pytest.importorskip("polars", reason="the test extra installs polars")
     column = pl.from_arrow(flat)["linear_acceleration.z"]  # type: ignore[index]
     assert column.to_list() == [i / 4 for i in range(IMU_COUNT)]
+
+
+@needs_corpus
+def test_a_topic_of_a_type_the_bag_does_not_define_says_why() -> None:
+    """webviz's bag leaves its one type's definition out: no view, and a query that names it
+    gets the reason, not DuckDB's "does not exist"."""
+    bag = CORPUS / "ros1" / "webviz" / "bag-with-empty-message-definition.bag"
+    done = query('SELECT count(*) FROM "/led_array_status"', str(bag), code=3)
+    assert done.stderr == (
+        "rostools: /led_array_status: unknown message type led_array_msgs/Status;"
+        " the bag does not define it (ROSTOOLS_MSG_PATH can)\n"
+    )

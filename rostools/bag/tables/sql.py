@@ -119,11 +119,19 @@ def arrow_reader(relation: Any, rows: int) -> Any:
 class BagDatabase:
     """An in-memory DuckDB connection with a view per topic of the bags (``connect``)."""
 
-    def __init__(self, connection: Any, sources: dict[str, TopicSource]) -> None:
+    def __init__(
+        self,
+        connection: Any,
+        sources: dict[str, TopicSource],
+        unreadable: dict[str, str] | None = None,
+    ) -> None:
         #: The DuckDB connection: ``connection.sql(...)`` as DuckDB's own.
         self.connection = connection
         #: Each view's name and the topic it reads.
         self.sources = sources
+        #: Tables the bags hold but that cannot be read (``TopicTable.error``): no view; a
+        #: query that names one gets that error.
+        self.unreadable = unreadable or {}
 
     def sql(self, statement: str) -> Any:
         """Run ``statement``: its ``DuckDBPyRelation`` (None for one that returns no rows).
@@ -161,6 +169,8 @@ class BagDatabase:
         if missing:
             topics = ", ".join(f'"{name}"' for name in sorted(self.sources)) or "none"
             name = missing.group(1)
+            if name in self.unreadable:
+                return NotFoundError(self.unreadable[name])
             hint = None if "/" in name else 'a topic is a quoted name: SELECT * FROM "/imu"'
             return NotFoundError(f"no topic {name} in the bags: they hold {topics}", hint=hint)
         # DuckDB's first line says it all; the lines after it echo the statement with a caret
@@ -196,11 +206,15 @@ def connect(
             raise NotFoundError(f"no topic {', '.join(missing)} in the bags: they hold {there}")
     connection = duckdb.connect(":memory:")
     sources: dict[str, TopicSource] = {}
+    unreadable: dict[str, str] = {}
     for table in tables:
+        if table.error is not None:  # a type the bag does not define: said if a query names it
+            unreadable[table.name] = table.error
+            continue
         source = TopicSource(files, table, start, end)
         connection.register(table.name, source)
         sources[table.name] = source
-    return BagDatabase(connection, sources)
+    return BagDatabase(connection, sources, unreadable)
 
 
 def bag_sql(

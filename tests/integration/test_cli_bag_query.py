@@ -287,3 +287,9 @@ def test_a_topic_of_a_type_the_bag_does_not_define_says_why() -> None:
         "rostools: /led_array_status: unknown message type led_array_msgs/Status;"
         " the bag does not define it (ROSTOOLS_MSG_PATH can)\n"
     )
+
+
+def test_json_rows_whatever_the_columns_are_named(imu_bag: Path) -> None:
+    """A column named as the relation that to_json reads (it was "q") is still a column."""
+    done = query('SELECT 1 AS q, 2 AS "row", 3 AS row_', str(imu_bag), "-F", "json")
+    assert json.loads(done.stdout) == {"q": 1, "row": 2, "row_": 3}

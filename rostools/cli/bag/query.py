@@ -154,7 +154,11 @@ def _json(relation: Any) -> None:
 
     from rostools.msgs.plain import dumps
 
-    rows = relation.query("q", "SELECT to_json(q) FROM q")
+    # A relation's name in an expression is its whole row, unless a column has that name
+    alias = "row"
+    while alias in relation.columns:
+        alias += "_"
+    rows = relation.query(alias, f'SELECT to_json("{alias}") FROM "{alias}"')
     lines: list[str] = []
     for (text,) in _rows(rows):
         # DuckDB writes NaN and Infinity bare, which JSON lacks; Python reads them, and

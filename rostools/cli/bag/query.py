@@ -158,7 +158,7 @@ def _json(relation: Any) -> None:
     alias = "row"
     while alias in relation.columns:
         alias += "_"
-    rows = relation.query(alias, f'SELECT to_json("{alias}") FROM "{alias}"')
+    rows = relation.query(alias, f'SELECT to_json("{alias}") FROM "{alias}"')  # noqa: S608 - our name
     lines: list[str] = []
     for (text,) in _rows(rows):
         # DuckDB writes NaN and Infinity bare, which JSON lacks; Python reads them, and

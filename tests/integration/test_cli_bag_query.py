@@ -293,3 +293,16 @@ def test_json_rows_whatever_the_columns_are_named(imu_bag: Path) -> None:
     """A column named as the relation that to_json reads (it was "q") is still a column."""
     done = query('SELECT 1 AS q, 2 AS "row", 3 AS row_', str(imu_bag), "-F", "json")
     assert json.loads(done.stdout) == {"q": 1, "row": 2, "row_": 3}
+
+
+def test_a_table_shows_its_first_rows_and_counts_the_rest(imu_bag: Path) -> None:
+    from rostools.cli.bag.query import MAX_TABLE_ROWS
+
+    done = query(f"SELECT range AS i FROM range({MAX_TABLE_ROWS + 5})", str(imu_bag))
+    cells = [line.strip("│ ") for line in done.stdout.splitlines() if line.startswith("│")]
+    assert cells == [str(i) for i in range(MAX_TABLE_ROWS)]
+    assert done.stderr == (
+        f"({MAX_TABLE_ROWS + 5} rows, 5 not shown: --format csv or json prints every row)\n"
+    )
+    every = query(f"SELECT range FROM range({MAX_TABLE_ROWS + 5})", str(imu_bag), "-F", "csv")
+    assert every.stdout.splitlines()[1:] == [str(i) for i in range(MAX_TABLE_ROWS + 5)]

@@ -130,6 +130,8 @@ class StringColumn(Node):
         self.pa, self.length, self.is_array = pa, length, is_array
         self.values: list[str] = []
         self.counts: list[int] = []
+        #: The batch's strings as one Arrow array, when ``uniform.py`` read them so.
+        self.built: Any = None
         if not is_array:
             self.type = pa.string()
         else:
@@ -137,6 +139,8 @@ class StringColumn(Node):
 
     def finish(self, rows: int) -> Any:
         """The strings, or lists of them."""
+        if self.built is not None:
+            return self.built
         values = self.pa.array(self.values, self.pa.string())
         if not self.is_array:
             return values
@@ -148,6 +152,7 @@ class StringColumn(Node):
         """Forget the batch."""
         self.values.clear()
         self.counts.clear()
+        self.built = None
 
 
 class BytesColumn(Node):
@@ -255,6 +260,7 @@ class ColumnDecoder:
     def __init__(self, codec: Codec, type_name: str) -> None:
         self.pa = pa = pyarrow()
         self.codec = codec
+        self.type_name = type_name
         self.runs: list[Run] = []
         self.nodes: list[Node] = []
         gen = _Gen(self, pa)
@@ -262,6 +268,8 @@ class ColumnDecoder:
         gen.flush()
         gen.line(f"if pos > end: {gen.ref(_short, 'f')}()")
         self.fill = gen.compile("fill(buf)", "columns", type_name, bind=True)
+        #: Runs and strings in wire order when that is all the type holds (``uniform.py``).
+        self.ops = gen.ops
         self.fields = list(self.root.type)
 
     def finish(self, rows: int) -> list[Any]:
@@ -289,7 +297,9 @@ class _Gen(GeneratedCode):
         self.decoder, self.pa = decoder, pa
         self.lines.append(self.indent + "pos = 0")
         self.lines.append(self.indent + "end = len(buf)")
-        self.pending: list[tuple[str, Any, RunColumn | None]] = []
+        #: What the function reads, in order, while it is only runs and strings: (run, its
+        #: size) or (string column, 0). None once it reads an array: no uniform batches then.
+        self.ops: list[tuple[Run | StringColumn, int]] | None = []
         self.pending_columns: list[tuple[str, str, int | None]] = []
         self.waiting: dict[str, RunColumn] = {}  # the pending columns, by their key in the run
         self.size = 0  # bytes pending in the current run
@@ -303,6 +313,8 @@ class _Gen(GeneratedCode):
         if not self.pending_columns:
             return
         run = self._new_run()
+        if self.ops is not None:
+            self.ops.append((run, self.size))
         parts = self.ref(run.parts.append, "a")
         self.line(f"{parts}(buf[pos:pos + {self.size}])")
         self.line(f"pos += {self.size}")
@@ -359,6 +371,7 @@ class _Gen(GeneratedCode):
             if not f.is_array or f.length is not None:
                 return self.fixed(f.base, f.length)
             n = self.count()
+            self.ops = None
             if f.base in BYTE_TYPES:
                 column: Node = self.node(BytesColumn(pa))
                 add = self.ref(column.values.append, "a")  # type: ignore[attr-defined]
@@ -376,6 +389,7 @@ class _Gen(GeneratedCode):
             self.node(strings)
             add = self.ref(strings.values.append, "a")
             if f.is_array:
+                self.ops = None
                 n = str(f.length) if f.length is not None else self.count()
                 self.flush()
                 if f.length is None:
@@ -384,12 +398,15 @@ class _Gen(GeneratedCode):
                 self.line(f"for _ in range({n}):")
                 self.indent += "    "
             self.read_string(add)
+            if self.ops is not None:
+                self.ops.append((strings, 0))
             if f.is_array:
                 self.indent = self.indent[:-4]
             return strings
         spec = self.decoder.codec.store.msg(f.base)
         if not f.is_array:
             return self.message(spec, f.name)
+        self.ops = None
         n = str(f.length) if f.length is not None else self.count()
         self.flush()
         size = self.decoder.codec.min_size(f.base)

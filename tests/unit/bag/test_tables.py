@@ -7,6 +7,7 @@ from __future__ import annotations
 import subprocess
 import sys
 from pathlib import Path
+from typing import Any
 
 import pytest
 
@@ -210,3 +211,60 @@ def test_the_synthetic_store_is_what_the_bag_defines(synthetic: Path) -> None:
     # the bag's own definition is what the tables read: rostools' store has no tabletest types
     assert not TypeStore.default().has_msg(EVERYTHING)
     assert synthetic_store().has_msg(EVERYTHING)
+
+
+def _odometry_bag(path: Path, frames: list[bytes]) -> list[Any]:
+    store = TypeStore.default()
+    codec = Codec.of(store)
+    odom = codec.message_class("nav_msgs/Odometry")
+    sent = []
+    with open_writer(path) as writer:
+        conn = writer.add_connection(
+            "/odom", "nav_msgs/Odometry", store.md5("nav_msgs/Odometry"),
+            store.full_text("nav_msgs/Odometry"),
+        )  # fmt: skip
+        for i, frame in enumerate(frames):
+            msg = odom()
+            msg.header.seq, msg.header.stamp.secs, msg.header.frame_id = i, i, frame
+            msg.child_frame_id = "base_link"
+            msg.pose.pose.position.x = i / 3
+            msg.twist.covariance = [float(i)] * 36
+            writer.write(conn, (i + 1) * 1_000_000_000, codec.serialize(msg))
+            sent.append(msg)
+    return sent
+
+
+def test_a_batch_of_one_layout_reads_as_the_codec_decodes(tmp_path: Path) -> None:
+    # batches of 3: one layout; a frame_id of another length; one that is not UTF-8
+    frames = [b"odom"] * 3 + [b"odom", b"map", b"odom"] + [b"odom", b"o\xffom", b"odom"] + [b""] * 3
+    sent = _odometry_bag(tmp_path / "odom.bag", frames)
+    table = rostools.bag_table(tmp_path / "odom.bag", "/odom")
+    by_batches = pa.Table.from_batches(
+        list(topic_batches([tmp_path / "odom.bag"], "/odom", batch_rows=3))
+    )
+    assert by_batches.equals(table)
+    rows = plain_rows(table)
+    assert [r["header"]["frame_id"] for r in rows] == [f.decode("utf-8", "replace") for f in frames]
+    assert [r["header"]["seq"] for r in rows] == list(range(12))
+    assert [r["pose"]["pose"]["position"]["x"] for r in rows] == [
+        m.pose.pose.position.x for m in sent
+    ]
+    assert [r["twist"]["covariance"] for r in rows] == [list(m.twist.covariance) for m in sent]
+    assert {r["child_frame_id"] for r in rows} == {"base_link"}
+
+
+def test_uniform_batches_are_read_in_one_go_and_others_are_not(tmp_path: Path) -> None:
+    from rostools.bag.formats.access import open_bag
+    from rostools.bag.tables.batches import _decoder
+    from rostools.bag.tables.uniform import fill_uniform
+
+    _odometry_bag(tmp_path / "odom.bag", [b"odom", b"odom", b"map", b"o\xffom"])
+    with open_bag(tmp_path / "odom.bag") as reader:
+        payloads = [bytes(d) for _, _, d in reader.messages()]
+        decoder = _decoder(list(reader.connections))
+    assert fill_uniform(decoder, payloads[:2])
+    decoder.clear()
+    assert not fill_uniform(decoder, payloads[1:3])  # two sizes
+    assert not fill_uniform(decoder, [payloads[0], payloads[3]])  # same size, not UTF-8
+    assert not fill_uniform(decoder, [payloads[0] + b"\x00"] * 2)  # bytes after the message
+    assert decoder.finish(0)[0].to_pylist() == []  # and nothing was filled by the refusals

@@ -30,6 +30,10 @@ if TYPE_CHECKING:
 #: The first DuckDB that scans a ``TopicSource`` anew each time a query reads it; before 1.5 a
 #: PyCapsule object is read once (a self-join fails, 1.4 reads it as it is registered).
 MIN_DUCKDB = (1, 5)
+#: Messages a view hands DuckDB at a time. DuckDB works on 2,048 rows at once; batches smaller
+#: than ``topic_batches``' default keep the peak down (a 200,000-Imu bag's count: 320 MB at
+#: 65,536 rows, 240 MB at this) and cost no time.
+BATCH_ROWS = 16_384
 #: DuckDB's words for a table that is not there (``Catalog Error: Table with name x does not
 #: exist!``), as its 0.10 to 1.x and 2.x releases write them.
 _NO_TABLE = re.compile(r"Table with name (.+?) does not exist")
@@ -90,7 +94,7 @@ class TopicSource:
 
         reader = topic_batches(
             self.paths, self.table.topic, start=self.start, end=self.end,
-            md5sum=self.table.md5sum,
+            md5sum=self.table.md5sum, batch_rows=BATCH_ROWS,
         )  # fmt: skip
 
         def guarded() -> Any:

@@ -20,6 +20,7 @@ from typing import Any
 import numpy as np
 
 from rostools.bag.tables.arrow import pyarrow
+from rostools.errors import InvalidDataError
 from rostools.msgs.codec import BYTE_TYPES, Codec, DecodeError
 from rostools.msgs.codegen import GeneratedCode
 from rostools.msgs.spec import Field, MsgSpec
@@ -156,20 +157,26 @@ class StringColumn(Node):
 
 
 class BytesColumn(Node):
-    """``uint8[]``/``char[]``: Arrow binary."""
+    """``uint8[]``/``char[]``: Arrow binary, its bytes joined once per batch (one copy)."""
 
     def __init__(self, pa: Any) -> None:
         self.pa = pa
         self.type = pa.binary()
-        self.values: list[bytes] = []
+        self.counts: list[int] = []
+        self.parts: list[Any] = []
 
     def finish(self, rows: int) -> Any:
         """The byte strings."""
-        return self.pa.array(self.values, self.type)
+        pa = self.pa
+        data = pa.py_buffer(b"".join(self.parts))
+        return pa.BinaryArray.from_buffers(
+            self.type, rows, [None, _offsets(self.counts).buffers()[1], data]
+        )
 
     def clear(self) -> None:
         """Forget the batch."""
-        self.values.clear()
+        self.counts.clear()
+        self.parts.clear()
 
 
 class VarArrayColumn(Node):
@@ -242,11 +249,18 @@ class MessageArrayColumn(Node):
         self.counts.clear()
 
 
+#: Arrow's lists, strings and binary values of one batch hold at most this many elements or
+#: bytes (their offsets are 32-bit); ``BATCH_BYTES`` keeps batches far below it.
+MAX_OFFSET = (1 << 31) - 1
+
+
 def _offsets(counts: list[int]) -> Any:
     pa = pyarrow()
-    offsets = np.zeros(len(counts) + 1, np.int32)
+    offsets = np.zeros(len(counts) + 1, np.int64)
     np.cumsum(counts, out=offsets[1:])
-    return pa.array(offsets)
+    if offsets[-1] > MAX_OFFSET:  # one message of 2 GiB: refused, not wrapped around
+        raise InvalidDataError(f"an array of {int(offsets[-1])} elements is too long for a table")
+    return pa.array(offsets.astype(np.int32))
 
 
 class ColumnDecoder:
@@ -254,7 +268,8 @@ class ColumnDecoder:
 
     ``fill(buf)`` appends one message's fields (raises on bytes that do not fit); ``finish(n)``
     gives the arrays of the ``n`` messages filled since the last ``clear``; ``fields`` are the
-    top-level Arrow fields, in the message's order.
+    top-level Arrow fields, in the message's order. One per stream: its columns are its own,
+    so two streams of one type (two views DuckDB scans on two threads) never share them.
     """
 
     def __init__(self, codec: Codec, type_name: str) -> None:
@@ -373,11 +388,13 @@ class _Gen(GeneratedCode):
             n = self.count()
             self.ops = None
             if f.base in BYTE_TYPES:
-                column: Node = self.node(BytesColumn(pa))
-                add = self.ref(column.values.append, "a")  # type: ignore[attr-defined]
-                self.line(f"{add}(bytes(buf[pos:pos + {n}]))")
+                blobs = BytesColumn(pa)
+                self.node(blobs)
+                self.line(f"if pos + {n} > end: {self.ref(_short, 'f')}()")
+                self.line(f"{self.ref(blobs.counts.append, 'a')}({n})")
+                self.line(f"{self.ref(blobs.parts.append, 'a')}(buf[pos:pos + {n}])")
                 self.line(f"pos += {n}")
-                return column
+                return blobs
             var = VarArrayColumn(pa, f.base)
             self.node(var)
             self.line(f"{self.ref(var.counts.append, 'a')}({n})")
@@ -449,13 +466,4 @@ class _Gen(GeneratedCode):
         self.line(f"if {count} * {max(size, 1)} > end - pos: {short}()")
 
 
-def decoder_for(codec: Codec, type_name: str) -> ColumnDecoder:
-    """The column decoder of ``type_name`` (one per codec and type, built on first use)."""
-    table: dict[str, ColumnDecoder] = codec.store.cache.setdefault("columns", {})
-    found = table.get(type_name)
-    if found is None:
-        found = table[type_name] = ColumnDecoder(codec, type_name)
-    return found
-
-
-__all__: Sequence[str] = ("ColumnDecoder", "arrow_scalar", "decoder_for")
+__all__: Sequence[str] = ("ColumnDecoder", "arrow_scalar")

@@ -268,3 +268,79 @@ def test_uniform_batches_are_read_in_one_go_and_others_are_not(tmp_path: Path) -
     assert not fill_uniform(decoder, [payloads[0], payloads[3]])  # same size, not UTF-8
     assert not fill_uniform(decoder, [payloads[0] + b"\x00"] * 2)  # bytes after the message
     assert decoder.finish(0)[0].to_pylist() == []  # and nothing was filled by the refusals
+
+
+def test_a_damaged_bag_gives_what_reads_then_says_what_it_lost(tmp_path: Path) -> None:
+    from rostools.errors import DataLossError
+
+    store = TypeStore.default()
+    codec = Codec.of(store)
+    point = codec.message_class("geometry_msgs/Point")
+    path = tmp_path / "cut.mcap"
+    with open_writer(path, compression="none", chunk_size=1000) as writer:
+        conn = writer.add_connection(
+            "/p", "geometry_msgs/Point", store.md5("geometry_msgs/Point"), POINT
+        )
+        for i in range(200):
+            writer.write(conn, (i + 1) * 1_000_000, codec.serialize(point(x=float(i), y=1234.5)))
+    raw = bytearray(path.read_bytes())
+    middle = raw.index(codec.serialize(point(x=100.0, y=1234.5)))
+    raw[middle + 20] ^= 0xFF  # in a chunk: its CRC no longer holds, so the chunk is left out
+    path.write_bytes(bytes(raw))
+    got: list[float] = []
+    with pytest.raises(DataLossError, match=r"^read 1\d\d messages of /p, but left out") as caught:
+        for batch in topic_batches([path], "/p", batch_rows=50):
+            got += batch.column("x").to_pylist()
+    assert caught.value.exit_code == 6
+    assert 150 < len(got) < 200 and 100.0 not in got  # one chunk's messages, and only those
+    assert got == sorted(set(got)) and got[:50] == [float(i) for i in range(50)]
+
+
+def test_an_array_past_arrows_offsets_is_refused_not_wrapped() -> None:
+    from rostools.bag.tables.columns import MAX_OFFSET, _offsets
+
+    assert _offsets([MAX_OFFSET - 1, 1]).to_pylist() == [0, MAX_OFFSET - 1, MAX_OFFSET]
+    with pytest.raises(InvalidDataError, match=r"^an array of 2147483648 elements is too long"):
+        _offsets([MAX_OFFSET, 1])
+
+
+def test_two_tables_of_one_type_read_at_once_keep_their_own_rows(tmp_path: Path) -> None:
+    # DuckDB scans the views of a query on threads of its own: two topics of one type at once
+    import threading
+
+    store = TypeStore.default()
+    codec = Codec.of(store)
+    stamped = codec.message_class("geometry_msgs/PointStamped")
+    path = tmp_path / "two.bag"
+    with open_writer(path) as writer:
+        conns = [
+            writer.add_connection(
+                topic,
+                "geometry_msgs/PointStamped",
+                store.md5("geometry_msgs/PointStamped"),
+                store.full_text("geometry_msgs/PointStamped"),
+            )
+            for topic in ("/a", "/b")
+        ]
+        for i in range(3000):
+            for sign, conn in zip((1.0, -1.0), conns, strict=True):
+                msg = stamped()
+                msg.point.x = sign * i
+                msg.header.frame_id = "f" * (i % 3)  # layouts differ: message by message
+                writer.write(conn, (i + 1) * 1_000_000, codec.serialize(msg))
+    got: dict[str, list[float]] = {}
+
+    def read(topic: str) -> None:
+        try:
+            reader = topic_batches([path], topic, batch_rows=5)
+            got[topic] = [x for b in reader for x in b.column("point").field("x").to_pylist()]
+        except Exception as err:  # noqa: BLE001 - the assertion below shows it
+            got[topic] = [repr(err)]  # type: ignore[list-item]
+
+    threads = [threading.Thread(target=read, args=(t,)) for t in ("/a", "/b")]
+    for thread in threads:
+        thread.start()
+    for thread in threads:
+        thread.join()
+    assert got["/a"] == [float(i) for i in range(3000)]
+    assert got["/b"] == [-float(i) for i in range(3000)]

@@ -56,6 +56,9 @@ if TYPE_CHECKING:  # the stable API: type checkers read these imports, rostools.
         bag_batches as bag_batches,
         bag_table as bag_table,
     )
+    from rostools.bag.tables.sql import (
+        bag_sql as bag_sql,
+    )
     from rostools.errors import (
         DataLossError as DataLossError,
         NotFoundError as NotFoundError,

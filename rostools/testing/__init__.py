@@ -14,6 +14,7 @@ from __future__ import annotations
 
 TYPE_CHECKING = False
 if TYPE_CHECKING:  # the stable names: type checkers read these imports, rostools.lazy too
+    from rostools.testing.bagsql import assert_sql as assert_sql
     from rostools.testing.helpers import (
         assert_message as assert_message,
         assert_topic_rate as assert_topic_rate,

@@ -105,6 +105,7 @@ RECIPES: dict[str, list[str]] = {
     "bag doctor": ["{bag}"],
     "bag attachments": ["{bag}"],
     "bag metadata": ["{bag}"],
+    "bag query": ['SELECT count(*) AS n, avg(x) AS x FROM "/point"', "{bag}"],
     "completion install": ["fish"],
     "doctor": [],
 }

@@ -21,6 +21,9 @@ if TYPE_CHECKING:
 #: Rows per record batch: memory is about this many rows of each bag being exported at once.
 BATCH_ROWS: Final = 65_536
 
+#: What ``lost_data`` writes before the damage it lists.
+LEFT_OUT: Final = "left out what could not be read: "
+
 #: Our pool's progress queue in a worker (``export.py`` sets it); None under Dask.
 _progress_queue: Any = None
 
@@ -79,9 +82,13 @@ def _say_progress(index: int, rows: int) -> None:
 
 
 def bag_columns(pa: Any, batch: pa.RecordBatch, name: str, start_ns: int | None) -> Any:
-    """``batch`` with the bag's name and start time as two more columns."""
+    """``batch`` with the bag's name and start time as two more columns.
+
+    The start time has the type of ``record_time`` (a timestamp in ns), so the two compare.
+    """
     rows = batch.num_rows
-    start = pa.scalar(start_ns, pa.timestamp("ns", tz="UTC"))
+    kind = batch.schema.field("record_time").type
+    start = pa.scalar(start_ns, kind)
     return (
         batch.append_column("bag_name", pa.repeat(pa.scalar(name), rows))
         .append_column("bag_start", pa.repeat(start, rows))
@@ -119,7 +126,10 @@ def export_bag(task: BagTask) -> BagExport:
                 rows += batch.num_rows
                 _say_progress(task.index, batch.num_rows)
         except DataLossError as err:
-            lost.append(f"{path}: {table.topic}: {err}")
+            # The bag's damage, said once for all its tables (each topic's read meets it).
+            what = str(err).partition(LEFT_OUT)[2] or str(err)
+            if f"{path}: {what}" not in lost:
+                lost.append(f"{path}: {what}")
         finally:
             if writer is not None:
                 writer.close()

@@ -13,13 +13,14 @@ from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
+from rostools.bag.formats.model import counted, lost_data
 from rostools.cli import output
 from rostools.cli.bag.options import CopyWindow, ForceOpt, QuietOpt
 from rostools.cli.bag.shared import Progress
 from rostools.cli.common import output_format
 from rostools.cli.declare import command
 from rostools.cli.output import Format, emit
-from rostools.errors import UsageError, one_line
+from rostools.errors import one_line
 
 if TYPE_CHECKING:
     from rostools.bag.tables.export import ExportReport
@@ -62,8 +63,6 @@ def export(
     from rostools.bag.tables.export import export as run_export
 
     fmt = output_format(ctx, None)
-    if out.exists() and not force:
-        raise UsageError(f"{out} exists; refusing to overwrite it", hint="--force replaces it")
     lo, hi = window.bounds(bags)
     progress = Progress("export", fmt, quiet)
     try:
@@ -76,9 +75,7 @@ def export(
         progress.done()
     _report(fmt, report)
     if report.lost:
-        from rostools.bag.formats.model import lost_data
-
-        raise lost_data(f"exported {len(report.bags)} bags", report.lost)
+        raise lost_data(f"exported {counted(len(report.bags), 'bag')}", report.lost)
 
 
 def summary(report: ExportReport) -> dict[str, Any]:
@@ -129,5 +126,6 @@ def _report(fmt: Format, report: ExportReport) -> None:
     tables = len(data["tables"])
     sys.stderr.write(
         f"wrote {data['rows']} rows of {tables} table{'s' * (tables != 1)} in "
-        f"{data['files']} files from {data['bags']} bags to {report.out} ({report.plan.format})\n"
+        f"{counted(data['files'], 'file')} from {counted(data['bags'], 'bag')} to {report.out} "
+        f"({report.plan.format})\n"
     )

@@ -22,7 +22,7 @@ from rostools.bag.tables.layout import bag_key, table_key
 from rostools.errors import NotFoundError, UsageError
 
 #: Seconds between looks at the pool for the progress bar; not a deadline.
-POLL_WAIT: Final = 0.2
+POLL_PERIOD: Final = 0.2
 
 
 @dataclass(frozen=True)
@@ -206,7 +206,7 @@ def _pool(tasks: Sequence[BagTask], workers: int, count: Callable[[int], None]) 
         futures = [pool.submit(export_bag, task) for task in tasks]
         pending = set(futures)
         while pending:
-            _, pending = wait(pending, timeout=POLL_WAIT, return_when=FIRST_COMPLETED)
+            _, pending = wait(pending, timeout=POLL_PERIOD, return_when=FIRST_COMPLETED)
             drain()
         results = [f.result() for f in futures]
     drain()

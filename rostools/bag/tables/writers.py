@@ -45,7 +45,8 @@ def open_table(fmt: str, path: Path, schema: pa.Schema) -> TableWriter:
     if fmt == "parquet":
         import pyarrow.parquet as pq
 
-        return pq.ParquetWriter(str(path), schema, compression="zstd")
+        writer: TableWriter = pq.ParquetWriter(str(path), schema, compression="zstd")
+        return writer
     if fmt == "arrow":
         import pyarrow as pa
 

@@ -242,6 +242,26 @@ def test_csv_and_ndjson_read_back(tmp_path: Path, two_bags: tuple[Path, Path]) -
     assert got == nested
 
 
+def test_start_and_end_cut_at_the_exact_nanosecond(
+    tmp_path: Path, two_bags: tuple[Path, Path]
+) -> None:
+    """As bag filter's: a message recorded exactly at --start or --end is in (seconds as a
+    float, at 1.7e9 s, are hundreds of ns coarse)."""
+    bag = two_bags[0]  # /sample every 10 ms from 1,700,000,000 s, /count 1 ns after each
+    out = tmp_path / "out"
+    done = run_cli("--format", "json", "bag", "export", str(bag), "-o", str(out),
+                   "--start", "0.03", "--end", "0.05")  # fmt: skip
+    assert done.returncode == 0, done.stderr
+    report = json.loads(done.stdout.splitlines()[-1])
+    assert {t["topic"]: t["rows"] for t in report["tables"]} == {"/sample": 3, "/count": 2}
+    filtered = tmp_path / "f.bag"
+    assert run_cli("bag", "filter", str(bag), str(filtered), "--start", "0.03", "--end", "0.05",
+                   "-q").returncode == 0  # fmt: skip
+    from rostools.bag.formats.access import bag_info
+
+    assert bag_info(filtered).message_count == 5
+
+
 def test_bad_input_is_one_line_and_its_exit_code(
     tmp_path: Path, two_bags: tuple[Path, Path]
 ) -> None:
@@ -337,7 +357,7 @@ def test_the_same_export_runs_on_a_dask_cluster(
     prepare_output(out, overwrite=False)
     with (
         distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
-                                 host="127.0.0.1", dashboard_address=None) as cluster,
+                                 host="127.0.0.1", dashboard_address="127.0.0.1:0") as cluster,
         distributed.Client(cluster) as client,
     ):  # fmt: skip
         done = client.gather(client.map(export_bag, plan.tasks))

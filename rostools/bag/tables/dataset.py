@@ -21,6 +21,10 @@ if TYPE_CHECKING:
 #: Rows per record batch: memory is about this many rows of each bag being exported at once.
 BATCH_ROWS: Final = 65_536
 
+#: ``topic_batches`` takes seconds as floats, a few hundred ns coarse at today's times: it is
+#: asked for this much more on each side, and ``_within`` cuts at the exact ns.
+_SLACK_NS: Final = 1_000_000
+
 #: What ``lost_data`` writes before the damage it lists.
 LEFT_OUT: Final = "left out what could not be read: "
 
@@ -117,6 +121,8 @@ def export_bag(task: BagTask) -> BagExport:
         writer = None
         try:
             for batch in _batches(task, table):
+                if task.start_ns is not None or task.end_ns is not None:
+                    batch = _within(pa, batch, task.start_ns, task.end_ns)
                 if batch.num_rows == 0:
                     continue
                 batch = bag_columns(pa, batch, name, start_ns)
@@ -143,11 +149,21 @@ def _batches(task: BagTask, table: TableChoice) -> Any:
     """The record batches of one table of one bag (``topic_batches``, bounded)."""
     from rostools.bag.tables.batches import topic_batches
 
+    start = None if task.start_ns is None else (task.start_ns - _SLACK_NS) / 1e9
+    end = None if task.end_ns is None else (task.end_ns + _SLACK_NS) / 1e9
     return topic_batches(
-        [task.path], table.topic, start=_seconds(task.start_ns), end=_seconds(task.end_ns),
+        [task.path], table.topic, start=start, end=end,
         batch_rows=task.batch_rows, flatten=task.flatten, md5sum=table.md5sum,
     )  # fmt: skip
 
 
-def _seconds(ns: int | None) -> float | None:
-    return None if ns is None else ns / 1e9
+def _within(pa: Any, batch: Any, lo: int | None, hi: int | None) -> Any:
+    """The rows of ``batch`` recorded from ``lo`` to ``hi`` ns, both included, exactly."""
+    import pyarrow.compute as pc
+
+    t = batch.column("record_time").cast(pa.int64())
+    keep = pc.and_(
+        pc.greater_equal(t, lo if lo is not None else t),
+        pc.less_equal(t, hi if hi is not None else t),
+    )
+    return batch.filter(keep)

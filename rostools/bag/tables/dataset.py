@@ -46,6 +46,7 @@ class BagTask:
     """Everything ``export_bag`` needs for one bag: plain values, so it pickles.
 
     ``start_ns``/``end_ns`` bound the record times (absolute ns, None: no bound).
+    ``bag_start_ns`` is the bag's first record time, from its index (None: read it here).
     """
 
     path: str
@@ -57,6 +58,7 @@ class BagTask:
     flatten: bool = False
     batch_rows: int = BATCH_ROWS
     index: int = 0
+    bag_start_ns: int | None = None
 
 
 @dataclass(frozen=True)
@@ -112,7 +114,7 @@ def export_bag(task: BagTask) -> BagExport:
     pa = pyarrow("bag export")
     path = Path(task.path)
     name = path.name
-    start_ns = bag_info(path).start_ns
+    start_ns = task.bag_start_ns
     files: list[WrittenFile] = []
     lost: list[str] = []
     for table in task.tables:
@@ -125,6 +127,8 @@ def export_bag(task: BagTask) -> BagExport:
                     batch = _within(pa, batch, task.start_ns, task.end_ns)
                 if batch.num_rows == 0:
                     continue
+                if start_ns is None:
+                    start_ns = bag_info(path).start_ns
                 batch = bag_columns(pa, batch, name, start_ns)
                 if writer is None:
                     writer = open_table(task.format, target, batch.schema)

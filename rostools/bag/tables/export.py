@@ -84,9 +84,11 @@ def plan_export(
             )
         seen[key] = path
     held: list[dict[tuple[str, str], int]] = []
+    starts: list[int | None] = []
     types: dict[str, str] = {}
     for path in paths:
         info = bag_info(path)
+        starts.append(info.start_ns)
         counts: dict[tuple[str, str], int] = {}
         for conn in info.connections:
             if topics and conn.topic not in topics:
@@ -112,7 +114,7 @@ def plan_export(
             str(path), str(out),
             tuple(TableChoice(t, m, table_key(t, m if t in split_topics else None))
                   for t, m in sorted(counts)),
-            fmt, start_ns, end_ns, flatten, batch_rows, index,
+            fmt, start_ns, end_ns, flatten, batch_rows, index, starts[index],
         )
         for index, (path, counts) in enumerate(zip(paths, held, strict=True))
     )  # fmt: skip

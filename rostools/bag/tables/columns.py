@@ -105,7 +105,8 @@ class RunColumn(Node):
         assert self.run is not None
         table = self.run.table
         if self.base in TIME_CODES:
-            ns = table[self.key + ".s"].astype(np.int64) * _NS + table[self.key + ".n"]
+            pairs = table[self.key]  # (secs, nsecs) last: the wire interleaves them
+            ns = pairs[..., 0].astype(np.int64) * _NS + pairs[..., 1]
             values = pa.array(
                 ns.reshape(-1), self.type if self.length is None else self.type.value_type
             )
@@ -311,10 +312,7 @@ class _Gen(GeneratedCode):
         for key, base, length in self.pending_columns:
             shape: tuple[int, ...] = () if length is None else (length,)
             if base in TIME_CODES:
-                fields += [
-                    (key + ".s", TIME_CODES[base], shape),
-                    (key + ".n", TIME_CODES[base], shape),
-                ]
+                fields.append((key, TIME_CODES[base], (*shape, 2)))
             else:
                 fields.append((key, NUMPY_CODES[base], shape))
         run = Run(fields)

@@ -294,6 +294,25 @@ def test_bad_input_is_one_line_and_its_exit_code(
     assert (out / "notes.txt").read_text() == "mine"
 
 
+def test_a_table_that_cannot_be_read_is_left_out_and_the_rest_written(tmp_path: Path) -> None:
+    bag = tmp_path / "a.bag"
+    with open_writer(bag) as writer:  # a type the bag does not define, sorted first
+        unknown = writer.add_connection("/a_unknown", "nowhere_msgs/Thing", "0" * 32, "")
+        count = writer.add_connection("/count", "std_msgs/Int32", INT32_MD5, "int32 data\n")
+        writer.write(unknown, 1, b"\x01")
+        writer.write(count, 2, struct.pack("<i", 7))
+    out = tmp_path / "out"
+    done = run_cli("bag", "export", str(bag), "-o", str(out), "-j", "1")
+    assert done.returncode == 3, done.stderr
+    assert done.stderr.splitlines()[-1].startswith(
+        "rostools: left out 1 table that could not be read (the rest is written): /a_unknown: "
+        "unknown message type nowhere_msgs/Thing"
+    )
+    assert [p.relative_to(out).as_posix() for p in out.rglob("*.parquet")] == [
+        "topic=count/bag=a/part-0.parquet"
+    ]
+
+
 def test_without_pyarrow_the_line_names_the_extra(tmp_path: Path, cli_env: dict[str, str]) -> None:
     blocker = tmp_path / "block" / "pyarrow"
     blocker.mkdir(parents=True)

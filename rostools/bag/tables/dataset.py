@@ -8,7 +8,7 @@ it writes; the only thing it reports on the way is its progress, to a queue our 
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Final
 
@@ -79,7 +79,8 @@ class BagExport:
     path: str
     files: tuple[WrittenFile, ...] = ()
     notes: tuple[str, ...] = ()
-    lost: tuple[str, ...] = field(default=())
+    lost: tuple[str, ...] = ()
+    skipped: tuple[tuple[str, int], ...] = ()  # (the one line, its exit code)
 
 
 def _say_progress(index: int, rows: int) -> None:
@@ -105,48 +106,58 @@ def export_bag(task: BagTask) -> BagExport:
     """Write each of ``task``'s tables from its bag into the dataset at ``task.out``.
 
     A table with no row in the time range gets no file. What the bag's damage left out is
-    in ``lost`` (the rows that could be read are written all the same).
+    in ``lost``, a table that could not be read (a type the bag does not define, a message
+    that does not fit its type) in ``skipped``: the rows that could be read are written all
+    the same.
     """
-    from rostools.bag.formats.access import bag_info
     from rostools.bag.tables.arrow import pyarrow
-    from rostools.errors import DataLossError
+    from rostools.errors import DataLossError, RostoolsError
 
     pa = pyarrow("bag export")
-    path = Path(task.path)
-    name = path.name
-    start_ns = task.bag_start_ns
     files: list[WrittenFile] = []
     lost: list[str] = []
+    skipped: list[tuple[str, int]] = []
     for table in task.tables:
-        target = part_path(Path(task.out), table.key, bag_key(path), FORMATS[task.format])
-        rows = 0
-        writer = None
         try:
-            for batch in _batches(task, table):
-                if task.start_ns is not None or task.end_ns is not None:
-                    batch = _within(pa, batch, task.start_ns, task.end_ns)
-                if batch.num_rows == 0:
-                    continue
-                if start_ns is None:
-                    start_ns = bag_info(path).start_ns
-                batch = bag_columns(pa, batch, name, start_ns)
-                if writer is None:
-                    writer = open_table(task.format, target, batch.schema)
-                writer.write(batch)
-                rows += batch.num_rows
-                _say_progress(task.index, batch.num_rows)
+            _write_table(pa, task, table, files)
         except DataLossError as err:
             # The bag's damage, said once for all its tables (each topic's read meets it).
-            what = str(err).partition(LEFT_OUT)[2] or str(err)
-            if f"{path}: {what}" not in lost:
-                lost.append(f"{path}: {what}")
-        finally:
-            if writer is not None:
-                writer.close()
+            what = f"{task.path}: {str(err).partition(LEFT_OUT)[2] or err}"
+            if what not in lost:
+                lost.append(what)
+        except RostoolsError as err:
+            skipped.append((str(err), err.exit_code))
+    return BagExport(task.path, tuple(files), (), tuple(lost), tuple(skipped))
+
+
+def _write_table(pa: Any, task: BagTask, table: TableChoice, files: list[WrittenFile]) -> None:
+    """One table of one bag into its file; the file, once opened, is listed in ``files``."""
+    path = Path(task.path)
+    target = part_path(Path(task.out), table.key, bag_key(path), FORMATS[task.format])
+    start_ns = task.bag_start_ns
+    writer = None
+    rows = 0
+    try:
+        for batch in _batches(task, table):
+            if task.start_ns is not None or task.end_ns is not None:
+                batch = _within(pa, batch, task.start_ns, task.end_ns)
+            if batch.num_rows == 0:
+                continue
+            if start_ns is None:
+                from rostools.bag.formats.access import bag_info
+
+                start_ns = bag_info(path).start_ns
+            batch = bag_columns(pa, batch, path.name, start_ns)
+            if writer is None:
+                writer = open_table(task.format, target, batch.schema)
+            writer.write(batch)
+            rows += batch.num_rows
+            _say_progress(task.index, batch.num_rows)
+    finally:
         if writer is not None:
+            writer.close()
             relative = str(target.relative_to(task.out))
             files.append(WrittenFile(table.key, table.topic, table.md5sum, relative, rows))
-    return BagExport(task.path, tuple(files), (), tuple(lost))
 
 
 def _batches(task: BagTask, table: TableChoice) -> Any:

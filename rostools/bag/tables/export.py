@@ -57,6 +57,11 @@ class ExportReport:
         """What damage left out, for every bag."""
         return [line for bag in self.bags for line in bag.lost]
 
+    @property
+    def skipped(self) -> dict[str, int]:
+        """Each table that could not be read: its line (said once) and its exit code."""
+        return {line: code for bag in self.bags for line, code in bag.skipped}
+
 
 def plan_export(
     paths: Sequence[Path],

@@ -20,7 +20,7 @@ from rostools.cli.bag.shared import Progress
 from rostools.cli.common import output_format
 from rostools.cli.declare import command
 from rostools.cli.output import Format, emit
-from rostools.errors import one_line
+from rostools.errors import RostoolsError, one_line
 
 if TYPE_CHECKING:
     from rostools.bag.tables.export import ExportReport
@@ -74,8 +74,22 @@ def export(
     finally:
         progress.done()
     _report(fmt, report)
+    skipped = report.skipped
     if report.lost:
-        raise lost_data(f"exported {counted(len(report.bags), 'bag')}", report.lost)
+        raise lost_data(f"exported {counted(len(report.bags), 'bag')}", [*report.lost, *skipped])
+    if skipped:
+        raise _left_out(skipped)
+
+
+def _left_out(skipped: dict[str, int]) -> RostoolsError:
+    """The error for tables that could not be read: the first one's exit code, every line."""
+    lines = list(skipped)
+    error = RostoolsError(
+        f"left out {counted(len(lines), 'table')} that could not be read (the rest is written): "
+        + "; ".join(lines)
+    )
+    error.exit_code = skipped[lines[0]]
+    return error
 
 
 def summary(report: ExportReport) -> dict[str, Any]:
@@ -104,6 +118,7 @@ def summary(report: ExportReport) -> dict[str, Any]:
         ],
         "notes": [n for bag in report.bags for n in bag.notes],
         "lost": report.lost,
+        "skipped": list(report.skipped),
     }
 
 

@@ -147,8 +147,11 @@ def test_parquet_dataset_reads_back_in_pyarrow_duckdb_and_polars(
     done = run_cli("--format", "json", "bag", "export", *map(str, two_bags), "-o", str(out),
                    "-j", "2")  # fmt: skip
     assert done.returncode == 0, done.stderr
-    report = json.loads(done.stdout.splitlines()[-1])
+    *progress, report = map(json.loads, done.stdout.splitlines())
     assert report["rows"] == 400 and report["files"] == 4 and report["split"] == []
+    # the rows the two processes wrote, counted back as they went
+    assert progress and progress[-1] == {"progress": "export", "done": 400, "total": 400}
+    assert [p["done"] for p in progress] == sorted(p["done"] for p in progress)
     assert {t["path"] for t in report["tables"]} == {"topic=sample", "topic=count"}
     assert {f for t in report["tables"] for f in t["files"]} == {
         f"topic={t}/bag={b}/part-0.parquet" for t in ("sample", "count") for b in ("run-a", "run-b")

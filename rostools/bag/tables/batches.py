@@ -188,7 +188,11 @@ def _batches(
     size = 0
     count = 0
     with stack:
-        for conn, t_ns, data in merged_messages(readers, [topic], *window):
+        if len(readers) == 1:  # one bag is in time order already: no merge to pay for
+            stream = readers[0].messages(topics=[topic], start=window[0], end=window[1])
+        else:
+            stream = merged_messages(readers, [topic], *window)
+        for conn, t_ns, data in stream:
             if conn.md5sum != md5sum:
                 continue
             try:

@@ -209,14 +209,18 @@ def test_a_topic_whose_definition_changes_is_one_table_per_md5sum(tmp_path: Path
            in text.stderr  # fmt: skip
 
 
-def test_csv_and_ndjson_read_back(tmp_path: Path, two_bags: tuple[Path, Path]) -> None:
+def test_arrow_csv_and_ndjson_read_back(tmp_path: Path, two_bags: tuple[Path, Path]) -> None:
     import pyarrow.csv as pcsv
+    import pyarrow.dataset as ds
 
     bag = two_bags[0]
-    for fmt in ("csv", "ndjson"):
+    for fmt in ("arrow", "csv", "ndjson"):
         out = tmp_path / fmt
         done = run_cli("bag", "export", str(bag), "-o", str(out), "--format", fmt, "-t", "/sample")
         assert done.returncode == 0, done.stderr
+    # Arrow IPC files: the schema whole, as Parquet's
+    ipc = ds.dataset(tmp_path / "arrow", format="ipc", partitioning="hive").to_table()
+    assert rows(ipc) == rows(expected(bag, "/sample"))
     # CSV: flattened (implied), arrays as JSON text, bytes as base64, times ISO 8601 in ns
     want = expected(bag, "/sample", flatten=True)
     only_empty = pcsv.ConvertOptions(null_values=[""])  # "nan" is NaN, not pyarrow's null

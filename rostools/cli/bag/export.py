@@ -15,7 +15,7 @@ import typer
 
 from rostools.bag.formats.model import counted, lost_data
 from rostools.cli import output
-from rostools.cli.bag.options import CopyWindow, ForceOpt, QuietOpt
+from rostools.cli.bag.options import CopyWindow, QuietOpt
 from rostools.cli.bag.shared import Progress
 from rostools.cli.common import output_format
 from rostools.cli.declare import command
@@ -53,16 +53,23 @@ def export(
         int | None,
         typer.Option("--jobs", "-j", min=1, help="Bags exported at once (default: every core)."),
     ] = None,
-    force: ForceOpt = False,
+    force: Annotated[
+        bool,
+        typer.Option("--force", "-f", help="Replace an existing OUT that holds only an export."),
+    ] = False,
     quiet: QuietOpt = False,
+    fmt: Annotated[
+        Format | None,
+        typer.Option("-F", help="The summary's format: text, json or yaml.", show_default=False),
+    ] = None,
 ) -> None:
     """Export bags as tables: one per topic, a dataset partitioned by topic and bag.
 
-    The summary follows the global --format (rostools --format json bag export ...).
+    --format is the tables' files; the summary's is -F (or the global --format).
     """
     from rostools.bag.tables.export import export as run_export
 
-    fmt = output_format(ctx, None)
+    fmt = output_format(ctx, fmt)
     lo, hi = window.bounds(bags)
     progress = Progress("export", fmt, quiet)
     try:

@@ -96,10 +96,12 @@ def bag_columns(pa: Any, batch: pa.RecordBatch, name: str, start_ns: int | None)
     rows = batch.num_rows
     kind = batch.schema.field("record_time").type
     start = pa.scalar(start_ns, kind)
-    return (
-        batch.append_column("bag_name", pa.repeat(pa.scalar(name), rows))
-        .append_column("bag_start", pa.repeat(start, rows))
-    )  # fmt: skip
+    schema = batch.schema.append(pa.field("bag_name", pa.string())).append(
+        pa.field("bag_start", kind)
+    )
+    # from_arrays, not append_column: pyarrow 14 (the extra's floor) has no such method
+    columns = [*batch.columns, pa.repeat(pa.scalar(name), rows), pa.repeat(start, rows)]
+    return pa.RecordBatch.from_arrays(columns, schema=schema)
 
 
 def export_bag(task: BagTask) -> BagExport:

@@ -397,3 +397,15 @@ def test_the_same_export_runs_on_a_dask_cluster(
         for bag in two_bags:
             got = table.filter(ds.field("bag") == bag.stem)
             assert rows(got) == rows(expected(bag, topic))
+
+
+@needs_corpus
+def test_a_ros2_mcap_is_refused_before_anything_is_written(tmp_path: Path) -> None:
+    talker = CORPUS / "mcap" / "rosbag2" / "rosbag2_py" / "talker" / "talker.mcap"
+    out = tmp_path / "out"
+    done = run_cli("bag", "export", str(talker), "-o", str(out))
+    assert done.returncode == 1, done.stderr
+    assert len(done.stderr.splitlines()) == 1, done.stderr
+    assert "holds ROS 2 CDR messages" in done.stderr
+    assert "bag export does not support ROS 2 CDR" in done.stderr
+    assert not out.exists()

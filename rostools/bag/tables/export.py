@@ -75,7 +75,7 @@ def plan_export(
     batch_rows: int = dataset.BATCH_ROWS,
 ) -> Plan:
     """One task per bag; missing bags, clashing names and unknown topics refused first."""
-    from rostools.bag.formats.access import bag_info
+    from rostools.bag.formats.access import open_bag, require_ros1
 
     seen: dict[str, Path] = {}
     for path in paths:
@@ -92,7 +92,9 @@ def plan_export(
     starts: list[int | None] = []
     types: dict[str, str] = {}
     for path in paths:
-        info = bag_info(path)
+        with open_bag(path) as reader:  # ROS 2 refused now, before OUT is made
+            require_ros1(reader, "bag export", topics)
+            info = reader.info()
         starts.append(info.start_ns)
         counts: dict[tuple[str, str], int] = {}
         for conn in info.connections:

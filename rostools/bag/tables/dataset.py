@@ -12,14 +12,15 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Final
 
+from rostools.bag.tables.batches import DEFAULT_BATCH_ROWS
 from rostools.bag.tables.layout import bag_key, part_path
 from rostools.bag.tables.writers import FORMATS, open_table
 
 if TYPE_CHECKING:
     import pyarrow as pa
 
-#: Rows per record batch: memory is about this many rows of each bag being exported at once.
-BATCH_ROWS: Final = 65_536
+#: Rows per record batch (``topic_batches``'s): memory is about one batch of each bag under way.
+BATCH_ROWS: Final = DEFAULT_BATCH_ROWS
 
 #: ``topic_batches`` takes seconds as floats, a few hundred ns coarse at today's times: it is
 #: asked for this much more on each side, and ``_within`` cuts at the exact ns.

@@ -182,6 +182,8 @@ def same_less_seq(ros1: Any, ros2: Any, where: str = "") -> Iterator[str]:
     added is not compared (it holds its default); ROS 1's byte (int8) and ROS 2's are equal
     as bytes; a ROS 1 empty message is ROS 2's one-byte placeholder.
     """
+    if isinstance(ros1, list) and ros1 == ros2:
+        return  # the common case, a C comparison (a point cloud's data is a million items)
     if isinstance(ros1, dict):
         if not isinstance(ros2, dict):
             yield f"{where}: {ros1!r} != {ros2!r}"
@@ -212,10 +214,15 @@ def _same_byte(a: Any, b: Any) -> bool:
     return isinstance(a, int) and isinstance(b, int) and abs(a - b) == 256
 
 
+#: Messages per topic decoded on both sides and compared (evenly spread; all, up to this).
+PER_TOPIC = 200
+
+
 def check_output(sources: list[Path], out: Path, *, exclude: Iterable[str] = ()) -> list[str]:
     """What is wrong with ``out`` (a rosbag2 folder we wrote from ``sources``); [] if nothing.
 
-    See the module docstring for what is checked.
+    See the module docstring for what is checked; of a long topic, ``PER_TOPIC`` messages
+    spread over it are decoded and compared, the times of all.
     """
     import yaml
     from mcap.reader import make_reader
@@ -227,7 +234,7 @@ def check_output(sources: list[Path], out: Path, *, exclude: Iterable[str] = ())
     problems: list[str] = []
     skip = set(exclude)
     # The ROS 1 side, decoded by rosbags from each connection's definition.
-    expected: dict[str, list[tuple[int, Any]]] = {}
+    expected: dict[str, list[tuple[int, Any]]] = {}  # (time, (decode, *its arguments))
     for path in sources:
         with open_bag(path) as reader:
             stores: dict[int, Any] = {}
@@ -242,8 +249,8 @@ def check_output(sources: list[Path], out: Path, *, exclude: Iterable[str] = ())
                         ts.register(get_types_from_msg(conn.definition, name))
                     else:  # an empty type (std_msgs/Empty: rosbag writes no text)
                         ts.register(get_types_from_msg("", name))
-                value = _plain(ts.deserialize_ros1(bytes(data), name))
-                expected.setdefault(conn.topic, []).append((t, value))
+                ros1 = (ts.deserialize_ros1, bytes(data), name)
+                expected.setdefault(conn.topic, []).append((t, ros1))
     # Ours, decoded by rosbags from the schemas we wrote.
     types = Ros2Types()
     got: dict[str, list[tuple[int, Any]]] = {}
@@ -251,8 +258,8 @@ def check_output(sources: list[Path], out: Path, *, exclude: Iterable[str] = ())
         for channel in reader.connections:
             types.learn(channel.msgtype, channel.msgdef.data)
         for channel, t, raw in reader.messages():
-            value = _plain(types.decode(channel.msgtype, raw))
-            got.setdefault(channel.topic, []).append((t, value))
+            ros2 = (types.decode, channel.msgtype, bytes(raw))
+            got.setdefault(channel.topic, []).append((t, ros2))
         counts = {c.topic: c.msgcount for c in reader.connections}
     if sorted(got) != sorted(expected):
         problems.append(f"topics {sorted(got)} != {sorted(expected)}")
@@ -262,8 +269,11 @@ def check_output(sources: list[Path], out: Path, *, exclude: Iterable[str] = ())
         if [t for t, _ in mine] != [t for t, _ in wanted]:
             problems.append(f"{topic}: times differ")
             continue
+        step = max(1, len(wanted) // PER_TOPIC)  # the CDR bytes are compared elsewhere
         for i, ((_, a), (_, b)) in enumerate(zip(wanted, mine, strict=True)):
-            problems += [f"{topic}#{i}{d}" for d in same_less_seq(a, b)][:3]
+            if i % step == 0:
+                ros1, ros2 = _plain(a[0](a[1], a[2])), _plain(b[0](b[1], b[2]))
+                problems += [f"{topic}#{i}{d}" for d in same_less_seq(ros1, ros2)][:3]
     # The MCAP, every CRC checked by the mcap package.
     mcaps = list(out.glob("*.mcap"))
     with mcaps[0].open("rb") as f:

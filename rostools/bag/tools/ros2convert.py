@@ -12,8 +12,9 @@ deletes the partial output.
 from __future__ import annotations
 
 import contextlib
-from collections.abc import Collection, Iterator, Sequence
+from collections.abc import Callable, Collection, Iterator, Sequence
 from pathlib import Path
+from typing import Any
 
 from rostools.bag.formats.access import merged_messages, open_bag, require_ros1
 from rostools.bag.formats.base import problems
@@ -63,7 +64,12 @@ def convert_to_ros2(
             mapping.map(conn)  # every refusal before the output exists
         total = sum(r.info().message_count for r in readers)
         writer = Rosbag2Writer(out, mapping=mapping, compression=compression, overwrite=overwrite)
-        stream = merged_messages(readers, topics)
+        # One input needs no merging (a heap step per message)
+        stream = (
+            readers[0].messages(topics=topics)
+            if len(readers) == 1
+            else merged_messages(readers, topics)
+        )
         try:
             read, written, misfits = _pump(writer, stream, progress, total)
         except BaseException:
@@ -93,7 +99,8 @@ def _pump(
     """Convert and write a message stream: (read, written, what did not convert)."""
     from rostools.bag.formats.ros2cdr import ConversionError
 
-    targets: dict[int, Ros2Topic] = {}  # by id: a reader keeps its connections alive
+    # by the connection's id: a reader keeps its connections alive
+    targets: dict[int, tuple[Ros2Topic, Callable[[Any], bytearray]]] = {}
     bad: dict[tuple[str, str], list[int | str]] = {}
     read = written = 0
     store = writer.write_cdr
@@ -103,14 +110,14 @@ def _pump(
             progress(read, total)
         target = targets.get(id(conn))
         if target is None:
-            target = targets[id(conn)] = writer.add_connection(conn)
+            topic = writer.add_connection(conn)
+            target = targets[id(conn)] = (topic, topic.type.convert)
         try:
-            cdr = target.type.convert(data)
+            store(target[0], t, target[1](data))
         except ConversionError as err:
             seen = bad.setdefault((conn.topic, conn.type), [0, str(err)])
             seen[0] = int(seen[0]) + 1
             continue
-        store(target, t, cdr)
         written += 1
     if progress is not None:
         progress(read, total)

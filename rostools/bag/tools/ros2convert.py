@@ -18,6 +18,7 @@ from typing import Any
 
 from rostools.bag.formats.access import merged_messages, open_bag, require_ros1
 from rostools.bag.formats.base import problems
+from rostools.bag.formats.mcap_writer import DEFAULT_CHUNK_SIZE
 from rostools.bag.formats.model import BagUsageError, counted
 from rostools.bag.formats.ordering import RawMessage
 from rostools.bag.formats.ros2types import DEFAULT_DISTRO, Ros2Mapping
@@ -34,6 +35,7 @@ def convert_to_ros2(
     types: str | Path | None = None,
     exclude: Collection[str] = (),
     compression: str = "zstd",
+    chunk_size: int | None = None,
     overwrite: bool = False,
     check_crcs: bool = True,
     progress: Progress | None = None,
@@ -42,7 +44,7 @@ def convert_to_ros2(
 
     ``distro`` picks the ROS 2 types (``ros2types.DISTROS``); ``types`` is a YAML file of
     renames and definitions (see ``ros2types``); ``exclude`` names topics left out.
-    ``compression`` is the MCAP's chunks' (zstd, lz4 or none). Returns what was written;
+    ``compression`` and ``chunk_size`` (bytes) are the MCAP's chunks'. Returns what was written;
     ``report.raise_if_lost()`` raises exit 6 if some input could not be read.
     """
     paths = [Path(sources)] if isinstance(sources, str | Path) else [Path(s) for s in sources]
@@ -63,7 +65,10 @@ def convert_to_ros2(
         for conn in conns:
             mapping.map(conn)  # every refusal before the output exists
         total = sum(r.info().message_count for r in readers)
-        writer = Rosbag2Writer(out, mapping=mapping, compression=compression, overwrite=overwrite)
+        writer = Rosbag2Writer(
+            out, mapping=mapping, compression=compression, overwrite=overwrite,
+            chunk_size=chunk_size or DEFAULT_CHUNK_SIZE,
+        )  # fmt: skip
         # One input needs no merging (a heap step per message)
         stream = (
             readers[0].messages(topics=topics)

@@ -81,7 +81,9 @@ class Rosbag2Writer:
     of that topic is written) and returns the ``Ros2Topic`` to write against; ``write(topic,
     t_ns, ros1_bytes)`` converts and stores one message (``ros2cdr.ConversionError`` if the
     bytes do not fit the type: nothing is stored). ``close`` finishes the MCAP and writes
-    ``metadata.yaml``; leaving a ``with`` block by an exception calls ``abort``.
+    ``metadata.yaml``; leaving a ``with`` block by an exception calls ``abort``. ``stem``
+    names the MCAP in a folder (``STEM_0.mcap``; the folder's name by default): a recorder
+    that renames its folder when done keeps the name it will have.
     """
 
     def __init__(
@@ -93,6 +95,7 @@ class Rosbag2Writer:
         compression: str = "zstd",
         chunk_size: int = DEFAULT_CHUNK_SIZE,
         overwrite: bool = False,
+        stem: str | None = None,
     ) -> None:
         self.mapping = mapping or Ros2Mapping(distro)
         self.distro = self.mapping.distro
@@ -107,7 +110,7 @@ class Rosbag2Writer:
             if not self.path.parent.is_dir():
                 raise BagUsageError(f"{self.path.parent}: no such folder")
             self.path.mkdir(exist_ok=True)
-            self.mcap_path = self.path / f"{self.path.name}_0.mcap"
+            self.mcap_path = self.path / f"{stem or self.path.name}_0.mcap"
         else:
             self.mcap_path = self.path
         try:

@@ -94,7 +94,8 @@ def test_record_to_ros2_keeps_everything_on_sigterm_and_leaves_out_what_does_not
     [
         (["--to", "ros3"], "unknown --to 'ros3'"),
         (["--to", "ros2", "--distro", "hoary"], "unknown ROS 2 distro 'hoary'"),
-        (["--distro", "jazzy"], "--distro is for --to ros2"),
+        (["--distro", "jazzy"], "--distro and --types are for --to ros2"),
+        (["--to", "ros2", "--types", "types.yaml"], "types.yaml is not YAML"),
         (["--to", "ros2", "--split", "--size", "1"], "--split is for .bag and MCAP"),
         (["--to", "ros2", "--bz2"], "--to ros2 writes MCAP"),
         (["--to", "ros2", "-O", "taken"], "taken exists"),
@@ -104,7 +105,33 @@ def test_record_to_ros2_usage_errors(
     cli_env: dict[str, str], tmp_path: Path, args: list[str], says: str
 ) -> None:
     (tmp_path / "taken").mkdir()
+    (tmp_path / "types.yaml").write_text("renames: [unclosed\n")
     done = run_cli("bag", "record", "/x", *args, env=cli_env, cwd=tmp_path)
     assert done.returncode == 2, done.stderr
     assert says in done.stderr and len(done.stderr.strip().splitlines()) <= 2
     assert "Traceback" not in done.stderr
+
+
+def test_record_to_ros2_takes_a_types_file_and_a_count(
+    rostools_master: str, cli_env: dict[str, str], tmp_path: Path
+) -> None:
+    """A rename in ``--types`` gives the type ROS 2 could not name a name; ``-l`` stops it."""
+    (tmp_path / "types" / "my_pkg" / "msg").mkdir(parents=True)
+    (tmp_path / "types" / "my_pkg" / "msg" / "Odd_Name.msg").write_text("int32 x\n")
+    (tmp_path / "rules.yaml").write_text("renames:\n  my_pkg/Odd_Name: my_pkg/msg/OddName\n")
+    env = dict(cli_env, ROSTOOLS_MSG_PATH=str(tmp_path / "types"))
+    pub = start_cli("topic", "pub", "-r", "50", "/odd", "my_pkg/Odd_Name", "x: 3", env=env)
+    try:
+        done = run_cli(
+            "bag", "record", "--to", "ros2", "--types", "rules.yaml", "-O", "odd", "-l", "3",
+            "/odd", env=env, cwd=tmp_path,
+        )  # fmt: skip
+    finally:
+        pub.stop()
+    assert done.returncode == 0, done.stderr
+    from rosbags.rosbag2 import Reader
+
+    with Reader(tmp_path / "odd") as reader:
+        assert [c.msgtype for c in reader.connections] == ["my_pkg/msg/OddName"]
+        raws = [raw for _, _, raw in reader.messages()]
+    assert raws == [b"\x00\x01\x00\x00\x03\x00\x00\x00"] * 3  # CDR: header, then int32 3

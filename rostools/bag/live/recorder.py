@@ -70,8 +70,10 @@ class RecordOptions(LiveOptions):
     #: The name for a file opened at a wall-clock time, when the name holds the date (``-o``,
     #: or no name): each split after the first is named by its own start, as rosbag names it.
     dated: Callable[[float], Path] | None = None
-    #: ``--to ros2`` (format ``ros2``): the ROS 2 distro whose types the messages take.
+    #: ``--to ros2`` (format ``ros2``): the ROS 2 distro whose types the messages take, and
+    #: the user's file of type renames and definitions (``--types``).
     distro: str | None = None
+    types_file: str | None = None
 
     def check(self) -> None:
         """Raise ``UsageError`` for combinations rosbag record refuses."""
@@ -241,7 +243,7 @@ class Recorder(Follower):
         if opts.format == "ros2":
             from rostools.bag.live.ros2file import Ros2Types
 
-            self.ros2 = Ros2Types(opts.distro)
+            self.ros2 = Ros2Types(opts.distro, opts.types_file)
 
     def file_opened(self, path: Path) -> None:
         """A new file is being written (writer thread): announce it on ``begin_write``."""

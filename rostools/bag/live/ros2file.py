@@ -31,10 +31,10 @@ if TYPE_CHECKING:
 class Ros2Types:
     """The ROS 2 forms of the types a recording meets, for one distro (one ``Ros2Mapping``)."""
 
-    def __init__(self, distro: str | None = None) -> None:
+    def __init__(self, distro: str | None = None, rules: str | None = None) -> None:
         from rostools.bag.formats.ros2types import DEFAULT_DISTRO, Ros2Mapping
 
-        self.mapping: Ros2Mapping = Ros2Mapping(distro or DEFAULT_DISTRO)
+        self.mapping: Ros2Mapping = Ros2Mapping(distro or DEFAULT_DISTRO, rules)
 
     def why_not(self, topic: str, header: Mapping[str, str]) -> str:
         """Why a publisher's type cannot be recorded as ROS 2 ("" when it can): mapped now."""

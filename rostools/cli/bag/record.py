@@ -162,13 +162,19 @@ def record(
         str | None,
         typer.Option("--distro", help="--to ros2: whose types (default: the newest LTS)."),
     ] = None,
+    types_file: Annotated[
+        str | None,
+        typer.Option("--types", help="--to ros2: a YAML file of type renames and definitions."),
+    ] = None,
     fmt: FormatOpt = None,
 ) -> None:
     """Record topics to a .bag or MCAP file (rosbag record), or a rosbag2 folder (--to ros2).
 
     Exit 6 on drops, a failed write, or a topic --to ros2 cannot convert.
     """
-    opts = _record_options(topics or [], choice, out, splitting, limit, _target(to, distro, out))
+    target = _target(to, distro, types_file, out)
+    opts = _record_options(topics or [], choice, out, splitting, limit, target)
+    opts.types_file = types_file
     opts.buffer_bytes = max(buffer, 0) * 1024 * 1024
     opts.tcp_nodelay, opts.publish = receiving.tcp_nodelay, publish
     opts.min_space = receiving.min_space_bytes()
@@ -212,13 +218,13 @@ def _check_new_folder(path: Path) -> None:
             raise UsageError(f"{taken} exists; give another name (-O) or remove it")
 
 
-def _target(to: str, distro: str | None, out: OutputFile) -> str | None:
-    """``--to ros2``'s distro ("" for the default), None for ``--to ros1``; checked."""
+def _target(to: str, distro: str | None, types_file: str | None, out: OutputFile) -> str | None:
+    """``--to ros2``'s distro, None for ``--to ros1``; checked, with the types file."""
     if to not in ("ros1", "ros2"):
         raise UsageError(f"unknown --to {to!r} (ros1 or ros2)")
     if to == "ros1":
-        if distro is not None:
-            raise UsageError("--distro is for --to ros2")
+        if distro is not None or types_file is not None:
+            raise UsageError("--distro and --types are for --to ros2")
         return None
     if out.storage not in (None, "mcap") or out.bz2:
         raise UsageError("--to ros2 writes MCAP: --storage bag and --bz2 are for ROS 1 files")
@@ -226,6 +232,10 @@ def _target(to: str, distro: str | None, out: OutputFile) -> str | None:
 
     if distro is not None and distro not in DISTROS:
         raise UsageError(f"unknown ROS 2 distro {distro!r} (use one of {', '.join(DISTROS)})")
+    if types_file is not None:
+        from rostools.bag.formats.ros2types import load_rules
+
+        load_rules(types_file)  # a malformed file is said now, before anything is recorded
     return distro or DEFAULT_DISTRO
 
 

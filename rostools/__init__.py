@@ -18,6 +18,7 @@ if TYPE_CHECKING:  # the stable API: type checkers read these imports, rostools.
     from rostools._api.bags import (
         BagMessage as BagMessage,
         Recording as Recording,
+        convert_to_ros2 as convert_to_ros2,
         read_bag as read_bag,
         record as record,
     )

@@ -51,6 +51,35 @@ def read_bag(path: str | Path, topics: Collection[str] | None = None) -> Iterato
             raise lost_data(f"read {count} messages of {path}", reader.damage)
 
 
+def convert_to_ros2(
+    sources: str | Path | Sequence[str | Path],
+    dst: str | Path,
+    *,
+    distro: str | None = None,
+    types: str | Path | None = None,
+    exclude: Collection[str] = (),
+    compression: str = "zstd",
+    overwrite: bool = False,
+) -> Path:
+    """ROS 1 bags into a rosbag2 folder (``dst.mcap``: the MCAP alone); returns ``dst``.
+
+    As ``rostools bag convert SRC... DST --to ros2``: ``distro`` (default the newest LTS
+    rosbags knows), ``types`` (a YAML file of renames and definitions), ``exclude`` (topics
+    left out). A type with no ROS 2 form is a ``RostoolsError`` naming it, before anything is
+    written; a damaged input is converted as far as it reads, then ``DataLossError`` names
+    what was left out.
+    """
+    from rostools.bag.formats.ros2types import DEFAULT_DISTRO
+    from rostools.bag.tools.ros2convert import convert_to_ros2 as run
+
+    report = run(
+        sources, dst, distro=distro or DEFAULT_DISTRO, types=types, exclude=exclude,
+        compression=compression, overwrite=overwrite,
+    )  # fmt: skip
+    report.raise_if_lost()
+    return report.output
+
+
 class LiveRecorder(NodeTask):
     """A recorder of the live graph on a node of its own, on the API's loop or the caller's.
 

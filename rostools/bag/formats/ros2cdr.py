@@ -272,11 +272,15 @@ class _Gen(GeneratedCode):
 
     def string(self) -> None:
         self.align(4)
-        n = self.count()
+        at = self.off  # the count's place: what is pending is written first, pos not moved
+        self.off = 0
+        self.flush()
+        n = self.fresh("n")
+        self.line(f"{n}, = _u32(buf, pos + {at})")
         self.line(f"out += _p32({n} + 1)")
-        self.line(f"out += buf[pos:pos + {n}]")
+        self.line(f"out += buf[pos + {at + 4}:pos + {at + 4} + {n}]")
         self.line("out.append(0)")
-        self.line(f"pos += {n}")
+        self.line(f"pos += {at + 4} + {n}")
         self.unknown()
 
     def array(self, s: Desc, d: Desc) -> None:
@@ -348,10 +352,10 @@ class _Gen(GeneratedCode):
                 self.line(f"out += {fn}(buf, pos, {k}, {CODES[s]!r}, {CODES[d]!r})")
             self.line(f"pos += {n} * {ss}")
         if size is not None:
-            self.flush()
             if isinstance(k, int):
                 self.literal(bytes((size - k) * es))
             else:
+                self.flush()
                 self.line(f"out += bytes(({size} - {k}) * {es})")
         if kind == ARRAY:  # a fixed length: the offset moved by what it holds
             self.r, self.m = start

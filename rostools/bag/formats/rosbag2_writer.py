@@ -38,7 +38,7 @@ _VERSIONS: Final = {
 _FOREVER_OLD: Final = {"sec": 2147483647, "nsec": 4294967295}
 _FOREVER: Final = {"sec": 9223372036, "nsec": 854775807}
 # rmw's enums, as versions before 9 write them
-_NUMBERS: Final = {"unknown": 4, "reliable": 1, "volatile": 2, "transient_local": 1}
+_NUMBERS: Final = {"unknown": 3, "reliable": 1, "volatile": 2, "transient_local": 1}
 
 
 def qos_profiles(latched: bool, version: int) -> Any:

@@ -73,7 +73,7 @@ KINDS: dict[tuple[str, ...] | str, str] = {
     ("bag", "record", "topics"): "topic",
     ("bag", "to"): "choice:ros1,ros2",
     ("bag", "distro"): "distro",  # the choices, from ros2types when the tree is built
-    ("bag", "types_file"): "files yaml",
+    ("bag", "record", "types_file"): "files yaml",
     ("bag", "snapshot", "topics"): "topic",
     ("bag", "trigger", "topics"): "topic",
 }

@@ -17,7 +17,9 @@ messages per second over the whole process's wall time (start-up included), and 
 process's peak resident memory as the kernel counts it for a reaped child (``wait4``'s
 ``ru_maxrss``: the process and any children it waited for). The input is read once before
 the runs so both find it in the page cache; each output is checked for the message count, then
-deleted. ``ROSTOOLS_BENCH_ROS2_RUNS`` runs each (default 1; the median is reported).
+deleted; ``ROSTOOLS_BENCH_ROS2_OUT`` puts the outputs elsewhere (a tmpfs, to take the disk's
+write speed out of the figures). ``ROSTOOLS_BENCH_ROS2_RUNS`` runs each (default 1; the median
+is reported). Each note gives both processes' CPU seconds beside their wall time.
 """
 
 from __future__ import annotations
@@ -192,10 +194,11 @@ def _bag(kind: str) -> tuple[Path, int]:
 
 @dataclass
 class Run:
-    """One converter's run: wall seconds and peak resident memory in kB."""
+    """One converter's run: wall seconds, peak resident memory in kB, CPU seconds."""
 
     seconds: float
     peak_kb: int
+    cpu: float
 
 
 def _run(argv: Sequence[str]) -> Run:
@@ -211,7 +214,7 @@ def _run(argv: Sequence[str]) -> Run:
     proc.returncode = os.waitstatus_to_exitcode(status)  # reaped here, not by Popen
     if proc.returncode != 0:
         raise RuntimeError(f"{' '.join(argv)} failed ({proc.returncode}): {err.decode()[-800:]}")
-    return Run(elapsed, usage.ru_maxrss)
+    return Run(elapsed, usage.ru_maxrss, usage.ru_utime + usage.ru_stime)
 
 
 def _message_count(folder: Path) -> int:
@@ -244,14 +247,23 @@ def _warm(path: Path) -> None:
 
 def _median(runs: list[Run]) -> Run:
     return Run(
-        statistics.median(r.seconds for r in runs), int(statistics.median(r.peak_kb for r in runs))
+        statistics.median(r.seconds for r in runs),
+        int(statistics.median(r.peak_kb for r in runs)),
+        statistics.median(r.cpu for r in runs),
     )
+
+
+def _out_dir() -> Path:
+    """Where the outputs go: ``ROSTOOLS_BENCH_ROS2_OUT`` (a tmpfs takes the disk out of the
+    figures: 1 GB of images is written as fast as this disk takes it, by either), else BUILD."""
+    given = os.environ.get("ROSTOOLS_BENCH_ROS2_OUT")
+    return Path(given) if given else BUILD
 
 
 def _compare(kind: str, label: str) -> list[Result]:
     bag, messages = _bag(kind)
     distro = _distro()
-    ours_out, theirs_out = BUILD / "out-ours", BUILD / "out-rosbags"
+    ours_out, theirs_out = _out_dir() / "out-ours", _out_dir() / "out-rosbags"
     ours_argv = [*rostools_cmd(), "bag", "convert", str(bag), str(ours_out), "--to", "ros2",
                  "--distro", distro, "-q"]  # fmt: skip
     theirs_argv = [_rosbags_convert(), "--src", str(bag), "--dst", str(theirs_out),
@@ -264,10 +276,11 @@ def _compare(kind: str, label: str) -> list[Result]:
         zstd_runs.append(_converted(ours_argv, ours_out, messages))
     ours, zstd, theirs = _median(ours_runs), _median(zstd_runs), _median(theirs_runs)
     size_mb = bag.stat().st_size / 1e6
+    where = "tmpfs" if os.environ.get("ROSTOOLS_BENCH_ROS2_OUT") else "disk"
     note = (
-        f"{messages:,} messages, {size_mb:,.0f} MB, distro {distro}; whole process, median of "
-        f"{_runs()}; theirs: rosbags-convert --dst-storage mcap --dst-typestore ros2_{distro} "
-        "(its MCAP chunks are not compressed)"
+        f"{messages:,} messages, {size_mb:,.0f} MB, distro {distro}; output to {where}; whole "
+        f"process, median of {_runs()}; theirs: rosbags-convert --dst-storage mcap "
+        f"--dst-typestore ros2_{distro} (its MCAP chunks are not compressed)"
     )
     rate, zstd_rate, their_rate = (messages / r.seconds for r in (ours, zstd, theirs))
     target = f">= {SPEED_GOAL:g}x rosbags-convert"
@@ -279,7 +292,8 @@ def _compare(kind: str, label: str) -> list[Result]:
             their_rate,
             target,
             rate >= SPEED_GOAL * their_rate,
-            note + f"; {ours.seconds:.1f} s vs {theirs.seconds:.1f} s",
+            note + f"; {ours.seconds:.1f} s ({ours.cpu:.1f} s CPU) vs {theirs.seconds:.1f} s "
+            f"({theirs.cpu:.1f} s CPU)",
         ),
         Result(
             f"bag convert --to ros2 (zstd, the default), {label}",
@@ -288,7 +302,8 @@ def _compare(kind: str, label: str) -> list[Result]:
             their_rate,
             target,
             zstd_rate >= SPEED_GOAL * their_rate,
-            note + f"; ours compresses its chunks: {zstd.seconds:.1f} s vs {theirs.seconds:.1f} s",
+            note + f"; ours compresses its chunks: {zstd.seconds:.1f} s ({zstd.cpu:.1f} s CPU) vs "
+            f"{theirs.seconds:.1f} s ({theirs.cpu:.1f} s CPU)",
         ),
         Result(
             f"bag convert --to ros2 -c none, {label}, peak RSS",

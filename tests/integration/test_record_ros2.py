@@ -65,6 +65,8 @@ def test_record_to_ros2_keeps_everything_on_sigterm_and_leaves_out_what_does_not
         wait_for(lambda: subscribed(rostools_master, "/odd", "/rostools_record"), 15, "subscribe")
         inner = tmp_path / "run.active" / "run_0.mcap"
         wait_for(lambda: recorded(inner, "/h") >= 20, 30, "20 on /h on disk", 0.2)
+        # rewritten with each flush: a recorder killed now leaves a folder that says what it holds
+        wait_for(lambda: (inner.parent / "metadata.yaml").exists(), 10, "metadata.yaml", 0.2)
         rec.expect(r"Odd_Name", stderr=True)  # said as soon as it first sends
         rec.signal(signal.SIGTERM)
         out, err = rec.output()

@@ -20,8 +20,10 @@ from tests.support.env import run_cli
 from tests.support.procs import Proc, start_cli, subscribed, wait_for
 
 
-def ros2_messages(folder: Path, distro: str = DEFAULT_DISTRO) -> dict[str, list[Any]]:
-    """Each topic's messages in a rosbag2 folder, as rosbags' reader decodes them."""
+def decoded(folder: Path, distro: str = DEFAULT_DISTRO) -> dict[str, list[Any]]:
+    """Each topic's messages in a rosbag2 folder, as rosbags' reader decodes them; the
+    ``mcap`` package reads the MCAP through, every CRC checked."""
+    from mcap.reader import make_reader
     from rosbags.rosbag2 import Reader
     from rosbags.typesys import Stores, get_typestore
 
@@ -30,6 +32,9 @@ def ros2_messages(folder: Path, distro: str = DEFAULT_DISTRO) -> dict[str, list[
     with Reader(folder) as reader:
         for conn, _, raw in reader.messages():
             found.setdefault(conn.topic, []).append(store.deserialize_cdr(raw, conn.msgtype))
+    with (folder / f"{folder.name}_0.mcap").open("rb") as f:
+        count = sum(1 for _ in make_reader(f, validate_crcs=True).iter_messages())
+    assert count == sum(len(m) for m in found.values())
     return found
 
 
@@ -81,7 +86,7 @@ def test_record_to_ros2_keeps_everything_on_sigterm_and_leaves_out_what_does_not
     summary = json.loads(out)
     assert summary["files"] == ["run"] and list(summary["left_out"]) == ["/odd"]
     assert not (tmp_path / "run.active").exists()
-    got = ros2_messages(tmp_path / "run")
+    got = decoded(tmp_path / "run")
     assert set(got) == {"/h", "/latched"}
     assert len(got["/h"]) == summary["topics"]["/h"]["received"] >= 20  # none lost on SIGTERM
     for msg in got["/h"]:

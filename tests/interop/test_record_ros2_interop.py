@@ -14,7 +14,7 @@ from typing import Any
 import pytest
 
 from tests.conftest import MasterInfo
-from tests.integration.test_record_ros2 import durability, ros2_messages
+from tests.integration.test_record_ros2 import decoded, durability
 from tests.support.bagdata import recorded
 from tests.support.env import needs_ros1
 from tests.support.procs import start_cli, start_ros1_node, wait_for
@@ -57,7 +57,7 @@ def test_record_to_ros2_of_a_rospy_publisher(any_master: MasterInfo, tmp_path: P
     finally:
         pub.stop()
         rec.stop()
-    got = ros2_messages(tmp_path / "mix")
+    got = decoded(tmp_path / "mix")
     for topic, index in (("/imu", imu_index), ("/poly", poly_index)):
         ns = [index(m) for m in got[topic]]
         assert len(ns) >= 20 and ns == list(range(ns[0], ns[0] + len(ns))), topic

@@ -38,7 +38,7 @@ from rostools.node.notice import Notice
 from rostools.node.publisher import TopicPublisher
 
 if TYPE_CHECKING:
-    from rostools.bag.live.ros2file import Ros2File, Ros2Types
+    from rostools.bag.live.ros2file import Ros2Types
 
 log = logging.getLogger(__name__)
 
@@ -93,7 +93,7 @@ class _Writer(threading.Thread):
         super().__init__(name="rostools-bag-writer", daemon=True)
         self.rec = rec
         self.error: BaseException | None = None
-        self.file: BagFile | Ros2File | None = None
+        self.file: BagFile | None = None
         self.index = 0
         self.file_start = 0
         self.written = 0
@@ -112,7 +112,7 @@ class _Writer(threading.Thread):
             if self.error is None:
                 self.error = err
 
-    def _open_file(self, t_ns: int) -> BagFile | Ros2File:
+    def _open_file(self, t_ns: int) -> BagFile:
         opts = self.rec.opts
         base = opts.base if opts.dated is None or not self.index else opts.dated(time.time())
         path = file_name(base, opts.split, self.index)
@@ -120,8 +120,9 @@ class _Writer(threading.Thread):
             from rostools.bag.live.ros2file import Ros2File
 
             assert self.rec.ros2 is not None
-            self.file = Ros2File(path, self.rec.ros2, opts.compression, opts.chunk_size)
-            self.file.unconverted = self.rec.unconverted
+            ros2 = Ros2File(path, self.rec.ros2, opts.compression, opts.chunk_size)
+            ros2.unconverted = self.rec.unconverted
+            self.file = ros2
         else:
             self.file = BagFile(path, opts.format, opts.compression, opts.chunk_size)
         self.file_start = t_ns

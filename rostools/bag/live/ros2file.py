@@ -14,14 +14,13 @@ the mapping is shared, and only the event loop ever makes a new one.
 from __future__ import annotations
 
 import os
-import time
 from collections.abc import Hashable, Mapping
 from pathlib import Path
 from typing import TYPE_CHECKING
 
 from rostools.bag.formats.model import BagUsageError, connection_from_header
 from rostools.bag.formats.sink import Buffer
-from rostools.bag.live.bagfile import FLUSH_PERIOD, active_name
+from rostools.bag.live.bagfile import BagFile, active_name
 
 if TYPE_CHECKING:
     from rostools.bag.formats.ros2types import Ros2Mapping
@@ -45,14 +44,14 @@ class Ros2Types:
         return ""
 
 
-class Ros2File:
+class Ros2File(BagFile):
     """A rosbag2 folder being recorded as ``NAME.active/``; ``close`` completes it as ``NAME/``.
 
-    The same surface as ``BagFile``; ``unconverted`` counts, per topic, the messages whose
+    ``BagFile``'s counts and flush clock; ``unconverted`` counts, per topic, the messages whose
     bytes did not fit their type (left out, and reported as lost).
     """
 
-    def __init__(
+    def __init__(  # BagFile's would open a ROS 1 writer: _started is the rest of it
         self, path: Path, types: Ros2Types, compression: str | None, chunk_size: int | None
     ) -> None:
         from rostools.bag.formats.mcap_writer import DEFAULT_CHUNK_SIZE
@@ -64,19 +63,15 @@ class Ros2File:
             if taken.exists():
                 raise BagUsageError(f"{taken} exists; refusing to overwrite it")
         self.active.mkdir()
-        self.writer = Rosbag2Writer(
+        self.rosbag2 = Rosbag2Writer(
             self.active / f"{path.name}_0.mcap",
             mapping=types.mapping,
             compression=compression or "zstd",
             chunk_size=chunk_size or DEFAULT_CHUNK_SIZE,
         )
-        self.messages = 0
-        self.bytes = 0
-        self.first_ns: int | None = None
-        self.last_ns: int | None = None
         self.unconverted: dict[str, int] = {}
         self._topics: dict[Hashable, Ros2Topic] = {}
-        self._last_flush = time.monotonic()
+        self._started()
 
     def write(
         self, key: Hashable, topic: str, header: Mapping[str, str], t_ns: int, data: Buffer
@@ -87,33 +82,27 @@ class Ros2File:
         channel = self._topics.get(key)
         if channel is None:
             conn = connection_from_header(0, topic, header)
-            channel = self._topics[key] = self.writer.add_connection(conn)
+            channel = self._topics[key] = self.rosbag2.add_connection(conn)
         try:
-            self.writer.write(channel, t_ns, data)
+            self.rosbag2.write(channel, t_ns, data)
         except ConversionError:
             self.unconverted[topic] = self.unconverted.get(topic, 0) + 1
             return
-        self.messages += 1
-        self.bytes += len(data)
-        if self.first_ns is None:
-            self.first_ns = t_ns
-        self.last_ns = t_ns
+        self._written(t_ns, data)
 
-    def flush_if_due(self) -> None:
-        """Hand the MCAP to the OS, and rewrite ``metadata.yaml``, once a ``FLUSH_PERIOD``."""
-        if time.monotonic() - self._last_flush > FLUSH_PERIOD:
-            self.writer.flush()
-            self._write_metadata()
-            self._last_flush = time.monotonic()
+    def _flush(self) -> None:
+        """The MCAP to the OS, and ``metadata.yaml`` rewritten to say what it holds."""
+        self.rosbag2.flush()
+        self._write_metadata()
 
     def _write_metadata(self) -> None:
         target = self.active / "metadata.yaml"
         tmp = target.with_name(target.name + ".tmp")
-        tmp.write_text(self.writer.metadata_yaml(), encoding="utf-8")
+        tmp.write_text(self.rosbag2.metadata_yaml(), encoding="utf-8")
         os.replace(tmp, target)  # a reader never sees half of one
 
     def close(self) -> None:
         """Finish the MCAP, write the metadata and give the folder its name."""
-        self.writer.close()
+        self.rosbag2.close()
         self._write_metadata()
         self.active.replace(self.path)

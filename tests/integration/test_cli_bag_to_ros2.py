@@ -208,3 +208,20 @@ def test_the_api_converts_and_the_oracle_sees_a_difference(
     )
     assert list(same_less_seq({"x": 1.5}, {"x": 1.25})) == [".x: 1.5 != 1.25"]
     assert list(same_less_seq({"x": 1, "D": [1.0]}, {"x": 1})) == [".D: missing in ROS 2"]
+
+
+def test_an_mcap_of_ros1_messages_converts_as_its_bag(bags: list[Path], tmp_path: Path) -> None:
+    mcap = tmp_path / "b.mcap"
+    assert run_cli("bag", "convert", str(bags[1]), str(mcap)).returncode == 0
+    done = run_cli("bag", "convert", str(mcap), str(tmp_path / "from_mcap"), "--to", "ros2")
+    assert done.returncode == 0, done.stderr
+    done = run_cli("bag", "convert", str(bags[1]), str(tmp_path / "from_bag"), "--to", "ros2")
+    assert done.returncode == 0, done.stderr
+    assert ros2_messages(tmp_path / "from_mcap") == ros2_messages(tmp_path / "from_bag")
+    # ROS 2 messages in are not ROS 1: refused in one line, nothing written
+    again = tmp_path / "again"
+    done = run_cli(
+        "bag", "convert", str(tmp_path / "from_bag" / "from_bag_0.mcap"), str(again), "--to", "ros2"
+    )
+    assert done.returncode == 1 and "ROS 2 CDR" in done.stderr and done.stderr.count("\n") == 1
+    assert not again.exists()

@@ -146,6 +146,13 @@ class McapWriter(BagWriter):
         if self._chunk_len >= self.chunk_size:
             self._close_chunk()
 
+    def time_span(self) -> tuple[int, int] | None:
+        """The earliest and latest log time written so far, the open chunk's too (or None)."""
+        start, end = self._start, self._end
+        if self._chunk_len:
+            start, end = min(start, self._chunk_start), max(end, self._chunk_end)
+        return (start, end) if start <= end else None
+
     def sequence(self, channel_id: int) -> int:
         """How many messages a channel has so far (the next message's sequence number)."""
         return self._counts[channel_id]

@@ -131,6 +131,19 @@ def plan(src: Lookup, dst: Lookup, sname: str, dname: str) -> list[tuple[Desc, i
     return chosen
 
 
+def _meet(a: tuple[int, int], b: tuple[int, int]) -> tuple[int, int]:
+    """What two states of knowledge of the offset (``r`` modulo ``m``) both say."""
+    m = min(a[1], b[1])
+    while m > 1 and (a[0] - b[0]) % m:
+        m //= 2
+    return a[0] % m, m
+
+
+def _at(off: int) -> str:
+    """``pos`` moved by ``off`` bytes, as source."""
+    return f"pos + {off}" if off else "pos"
+
+
 def _kind(desc: Desc) -> str:
     """``string``, ``number`` or ``message``: what an element is, for matching two fields."""
     if desc[0] == NAME:
@@ -175,14 +188,15 @@ class _Gen(GeneratedCode):
         if a <= self.m:
             self.literal(bytes(-self.r % a))
             return
-        self.flush()
+        self.flush(move=False)
         self.line(f"out += _Z[(4 - len(out)) & {a - 1}]")
         self.r, self.m = 0, a
 
     def unknown(self) -> None:
         self.r, self.m = 0, 1
 
-    def flush(self) -> None:
+    def flush(self, *, move: bool = True) -> None:
+        """Write what is pending; ``move``: and bring ``pos`` up to ``off``."""
         merged: list[tuple[int, int] | bytes] = []
         for piece in self.pending:
             last = merged[-1] if merged else None
@@ -196,29 +210,51 @@ class _Gen(GeneratedCode):
             if isinstance(piece, bytes):
                 self.line(f"out += {piece!r}")
             else:
-                self.line(f"out += buf[pos + {piece[0]}:pos + {piece[1]}]")
-        if self.off:
-            self.line(f"pos += {self.off}")
-        self.pending, self.off = [], 0
+                self.line(f"out += buf[{_at(piece[0])}:pos + {piece[1]}]")
+        self.pending = []
+        if move:
+            if self.off:
+                self.line(f"pos += {self.off}")
+            self.off = 0
+
+    def move(self, expr: str) -> None:
+        """Write what is pending and move ``pos`` past ``off`` and ``expr`` more bytes."""
+        self.flush(move=False)
+        self.line(f"pos += {self.off} + {expr}" if self.off else f"pos += {expr}")
+        self.off = 0
 
     def count(self) -> str:
-        """Read a ROS 1 count (u32) into a fresh local; ``pos`` passes it."""
-        self.flush()
+        """Read a ROS 1 count (u32) into a fresh local; ``off`` passes it."""
+        self.flush(move=False)
         n = self.fresh("n")
-        self.line(f"{n}, = _u32(buf, pos)")
-        self.line("pos += 4")
+        self.line(f"{n}, = _u32(buf, {_at(self.off)})")
+        self.off += 4
         return n
 
     def loop(self, count: str, body: Callable[[], None]) -> None:
+        """``body`` ``count`` times.
+
+        What is known of the offset at the body's start must hold at every iteration's: the
+        body is generated again, knowing less, until it does.
+        """
         self.flush()
         self.line(f"for _ in range({count}):")
         self.indent += "    "
-        self.unknown()
-        body()
-        self.flush()
-        self.line("pass")
+        entry = state = (self.r, self.m)
+        mark = len(self.lines)
+        while True:
+            del self.lines[mark:]
+            self.r, self.m = state
+            body()
+            self.flush()
+            again = _meet(state, (self.r, self.m))
+            if again == state:
+                break
+            state = again
+        if len(self.lines) == mark:
+            self.line("pass")
         self.indent = self.indent[:-4]
-        self.unknown()
+        self.r, self.m = _meet(entry, (self.r, self.m))  # none, or some iterations
 
     # -- one field: ROS 1 ``s`` in, ROS 2 ``d`` out -------------------------------------
 
@@ -265,22 +301,20 @@ class _Gen(GeneratedCode):
         if s == d or (SIZES[s] == size and "float" not in s + d):
             self.copy(size)
             return
-        self.flush()
-        self.line(f"out += {self.ref(_numbers, 'f')}(buf, pos, 1, {CODES[s]!r}, {CODES[d]!r})")
-        self.line(f"pos += {SIZES[s]}")
+        self.flush(move=False)
+        fn = self.ref(_numbers, "f")
+        self.line(f"out += {fn}(buf, pos + {self.off}, 1, {CODES[s]!r}, {CODES[d]!r})")
+        self.off += SIZES[s]
         self.advance(size)
 
     def string(self) -> None:
         self.align(4)
-        at = self.off  # the count's place: what is pending is written first, pos not moved
-        self.off = 0
-        self.flush()
-        n = self.fresh("n")
-        self.line(f"{n}, = _u32(buf, pos + {at})")
+        n = self.count()
+        at = self.off
         self.line(f"out += _p32({n} + 1)")
-        self.line(f"out += buf[pos + {at + 4}:pos + {at + 4} + {n}]")
+        self.line(f"out += buf[{_at(at)}:{_at(at)} + {n}]")
         self.line("out.append(0)")
-        self.line(f"pos += {at + 4} + {n}")
+        self.move(n)
         self.unknown()
 
     def array(self, s: Desc, d: Desc) -> None:
@@ -304,21 +338,19 @@ class _Gen(GeneratedCode):
             if isinstance(k, int):
                 self.literal(_U32.pack(k))
             else:
-                self.flush()
+                self.flush(move=False)
                 self.line(f"out += _p32({k})")
                 self.advance(4)
         if _kind(dsub) == "number":
             self.numbers(ssub[1][0], dsub[1][0], n, k, bound if d[0] == ARRAY else None, d[0])
             return
-        one = self.conv.element(ssub, dsub)
-        skip = self.conv.skipper(ssub)
-        fill = self.conv.filler(dsub)
-        self.flush()
-        self.line(f"for _ in range({k}): pos = {self.ref(one, 'e')}(buf, pos, out)")
-        if not (isinstance(n, int) and isinstance(k, int) and n == k):
-            self.line(f"for _ in range({n} - {k}): pos = {self.ref(skip, 's')}(buf, pos)")
-        if d[0] == ARRAY and bound:
-            self.line(f"for _ in range({bound} - {k}): {self.ref(fill, 'd')}(out)")
+        self.loop(str(k), lambda: self.field(ssub, dsub))  # inline: no call per element
+        if n != k:
+            skip = self.ref(self.conv.skipper(ssub), "s")
+            self.line(f"for _ in range({n} - {k}): pos = {skip}(buf, pos)")
+        if d[0] == ARRAY and bound and k != bound:
+            fill = self.ref(self.conv.filler(dsub), "d")
+            self.line(f"for _ in range({bound} - {k}): {fill}(out)")
         self.unknown()
 
     def numbers(
@@ -331,7 +363,7 @@ class _Gen(GeneratedCode):
         if kind == ARRAY or (isinstance(k, int) and k):
             self.align(es)
         elif es > 1:  # a sequence aligns to its element only when it is not empty
-            self.flush()
+            self.flush(move=False)
             if self.m >= es:
                 pad = -self.r % es
                 if pad:
@@ -344,18 +376,19 @@ class _Gen(GeneratedCode):
             self.copy(k * es)
             self.off += (n - k) * ss
         else:
-            self.flush()
+            self.flush(move=False)
+            at = self.off
             if same:
-                self.line(f"out += buf[pos:pos + {k} * {es}]")
+                self.line(f"out += buf[pos + {at}:pos + {at} + {k} * {es}]")
             else:
                 fn = self.ref(_numbers, "f")
-                self.line(f"out += {fn}(buf, pos, {k}, {CODES[s]!r}, {CODES[d]!r})")
-            self.line(f"pos += {n} * {ss}")
+                self.line(f"out += {fn}(buf, pos + {at}, {k}, {CODES[s]!r}, {CODES[d]!r})")
+            self.move(f"{n} * {ss}")
         if size is not None:
             if isinstance(k, int):
                 self.literal(bytes((size - k) * es))
             else:
-                self.flush()
+                self.flush(move=False)
                 self.line(f"out += bytes(({size} - {k}) * {es})")
         if kind == ARRAY:  # a fixed length: the offset moved by what it holds
             self.r, self.m = start
@@ -370,8 +403,7 @@ class _Gen(GeneratedCode):
     def skip(self, s: Desc) -> None:
         if s[0] == BASE:
             if s[1][0] == "string":
-                n = self.count()
-                self.line(f"pos += {n}")
+                self.move(self.count())
             else:
                 self.off += SIZES[s[1][0]]
         elif s[0] == NAME:
@@ -381,8 +413,7 @@ class _Gen(GeneratedCode):
             sub = s[1][0]
             n = str(s[1][1]) if s[0] == ARRAY else self.count()
             if sub[0] == BASE and sub[1][0] != "string":
-                self.flush()
-                self.line(f"pos += {n} * {SIZES[sub[1][0]]}")
+                self.move(f"{n} * {SIZES[sub[1][0]]}")
             else:
                 skip = self.conv.skipper(sub)
                 self.flush()
@@ -460,19 +491,6 @@ class Converters:
             gen.line(f"if pos != len(buf): {gen.ref(_mismatch, 'f')}(pos, len(buf))")
             gen.line("return out")
             fn = self._done[key] = gen.compile("convert(buf)", "ros1->cdr", dname, bind=True)
-        return fn
-
-    def element(self, s: Desc, d: Desc) -> Callable[..., Any]:
-        """``f(buf, pos, out) -> pos``: one element of an array (its alignment included)."""
-        key = ("element", repr(s), repr(d))
-        fn = self._done.get(key)
-        if fn is None:
-            gen = _Gen(self)
-            gen.field(s, d)
-            gen.flush()
-            gen.line("return pos")
-            name = d[1] if d[0] == NAME else d[1][0]
-            fn = self._done[key] = gen.compile("one(buf, pos, out)", "ros1->cdr", name, bind=True)
         return fn
 
     def skipper(self, s: Desc) -> Callable[..., Any]:

@@ -21,7 +21,7 @@ from __future__ import annotations
 import contextlib
 import os
 import shutil
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Final
 
@@ -62,16 +62,16 @@ def qos_profiles(latched: bool, version: int) -> Any:
     return _dump([profile]).strip()
 
 
-@dataclass
+@dataclass(frozen=True)
 class Ros2Topic:
-    """One channel of a rosbag2 being written: a topic, its ROS 2 type and its QoS."""
+    """One channel of a rosbag2 being written: a topic, its ROS 2 type and its QoS.
+
+    ``conn`` is the MCAP channel (its ``id`` the channel id); ``type.convert`` the converter.
+    """
 
     conn: Connection
     type: Ros2Type
     latched: bool
-    count: int = 0
-    start: int = field(default=1 << 64)
-    end: int = 0
 
 
 class Rosbag2Writer:
@@ -122,6 +122,8 @@ class Rosbag2Writer:
         self.topics: list[Ros2Topic] = []
         self._by_key: dict[tuple[str, str, bool], Ros2Topic] = {}
         self._closed = False
+        # The MCAP writer's unchecked store: every channel here is one this writer declared.
+        self._store = self._mcap._store
 
     def add_connection(self, conn: Connection) -> Ros2Topic:
         """The channel for a ROS 1 connection, declared on first use (one per topic, type, QoS)."""
@@ -146,27 +148,30 @@ class Rosbag2Writer:
 
     def write(self, topic: Ros2Topic, t_ns: int, data: bytes | bytearray | memoryview) -> None:
         """Convert one ROS 1 message of ``topic`` and store it at ``t_ns``."""
-        self.write_cdr(topic, t_ns, topic.type.convert(data))
+        self._check_open()
+        self._store(topic.conn.id, t_ns, topic.type.convert(data))
 
     def write_cdr(self, topic: Ros2Topic, t_ns: int, cdr: bytes | bytearray | memoryview) -> None:
         """Store one message already in CDR (encapsulation header first)."""
-        self._mcap.write(topic.conn, t_ns, cdr)
-        topic.count += 1
-        if t_ns < topic.start:
-            topic.start = t_ns
-        if t_ns > topic.end:
-            topic.end = t_ns
+        self._check_open()
+        self._store(topic.conn.id, t_ns, cdr)
+
+    def count(self, topic: Ros2Topic) -> int:
+        """Messages written so far on ``topic``."""
+        return self._mcap.sequence(topic.conn.id)
 
     @property
     def message_count(self) -> int:
         """Messages written so far."""
-        return sum(t.count for t in self.topics)
+        return sum(self.count(t) for t in self.topics)
+
+    def _check_open(self) -> None:
+        if self._closed:
+            raise BagUsageError(f"{self.path} is closed")
 
     def metadata(self) -> dict[str, Any]:
         """``rosbag2_bagfile_information`` as it stands (what ``metadata.yaml`` holds)."""
-        counted = [t for t in self.topics if t.count]
-        start = min((t.start for t in counted), default=0)
-        end = max((t.end for t in counted), default=0)
+        start, end = self._mcap.time_span() or (0, 0)
         total = self.message_count
         duration = {"nanoseconds": end - start}
         starting = {"nanoseconds_since_epoch": start}
@@ -179,7 +184,7 @@ class Rosbag2Writer:
             }  # fmt: skip
             if self.version >= 8:
                 meta["type_description_hash"] = t.type.rihs01
-            topics.append({"topic_metadata": meta, "message_count": t.count})
+            topics.append({"topic_metadata": meta, "message_count": self.count(t)})
         info: dict[str, Any] = {
             "version": self.version, "storage_identifier": "mcap", "duration": duration,
             "starting_time": starting, "message_count": total,

@@ -12,11 +12,13 @@ deletes the partial output.
 from __future__ import annotations
 
 import contextlib
-from collections.abc import Collection, Iterator, Sequence
+from collections.abc import Callable, Collection, Iterator, Sequence
 from pathlib import Path
+from typing import Any
 
 from rostools.bag.formats.access import merged_messages, open_bag, require_ros1
 from rostools.bag.formats.base import problems
+from rostools.bag.formats.mcap_writer import DEFAULT_CHUNK_SIZE
 from rostools.bag.formats.model import BagUsageError, counted
 from rostools.bag.formats.ordering import RawMessage
 from rostools.bag.formats.ros2types import DEFAULT_DISTRO, Ros2Mapping
@@ -33,6 +35,7 @@ def convert_to_ros2(
     types: str | Path | None = None,
     exclude: Collection[str] = (),
     compression: str = "zstd",
+    chunk_size: int | None = None,
     overwrite: bool = False,
     check_crcs: bool = True,
     progress: Progress | None = None,
@@ -41,7 +44,7 @@ def convert_to_ros2(
 
     ``distro`` picks the ROS 2 types (``ros2types.DISTROS``); ``types`` is a YAML file of
     renames and definitions (see ``ros2types``); ``exclude`` names topics left out.
-    ``compression`` is the MCAP's chunks' (zstd, lz4 or none). Returns what was written;
+    ``compression`` and ``chunk_size`` (bytes) are the MCAP's chunks'. Returns what was written;
     ``report.raise_if_lost()`` raises exit 6 if some input could not be read.
     """
     paths = [Path(sources)] if isinstance(sources, str | Path) else [Path(s) for s in sources]
@@ -62,8 +65,16 @@ def convert_to_ros2(
         for conn in conns:
             mapping.map(conn)  # every refusal before the output exists
         total = sum(r.info().message_count for r in readers)
-        writer = Rosbag2Writer(out, mapping=mapping, compression=compression, overwrite=overwrite)
-        stream = merged_messages(readers, topics)
+        writer = Rosbag2Writer(
+            out, mapping=mapping, compression=compression, overwrite=overwrite,
+            chunk_size=chunk_size or DEFAULT_CHUNK_SIZE,
+        )  # fmt: skip
+        # One input needs no merging (a heap step per message)
+        stream = (
+            readers[0].messages(topics=topics)
+            if len(readers) == 1
+            else merged_messages(readers, topics)
+        )
         try:
             read, written, misfits = _pump(writer, stream, progress, total)
         except BaseException:
@@ -93,7 +104,8 @@ def _pump(
     """Convert and write a message stream: (read, written, what did not convert)."""
     from rostools.bag.formats.ros2cdr import ConversionError
 
-    targets: dict[int, Ros2Topic] = {}  # by id: a reader keeps its connections alive
+    # by the connection's id: a reader keeps its connections alive
+    targets: dict[int, tuple[Ros2Topic, Callable[[Any], bytearray]]] = {}
     bad: dict[tuple[str, str], list[int | str]] = {}
     read = written = 0
     store = writer.write_cdr
@@ -103,14 +115,14 @@ def _pump(
             progress(read, total)
         target = targets.get(id(conn))
         if target is None:
-            target = targets[id(conn)] = writer.add_connection(conn)
+            topic = writer.add_connection(conn)
+            target = targets[id(conn)] = (topic, topic.type.convert)
         try:
-            cdr = target.type.convert(data)
+            store(target[0], t, target[1](data))
         except ConversionError as err:
             seen = bad.setdefault((conn.topic, conn.type), [0, str(err)])
             seen[0] = int(seen[0]) + 1
             continue
-        store(target, t, cdr)
         written += 1
     if progress is not None:
         progress(read, total)

@@ -59,7 +59,8 @@ def convert(
     if to not in ("ros1", "ros2"):
         raise UsageError(f"--to takes ros1 or ros2, not {to!r}")
     if to == "ros2":
-        _to_ros2(ctx, src, dst, distro, types, exclude or [], how, fmt)
+        size = chunk_size * 1024 if chunk_size else None
+        _to_ros2(ctx, src, dst, distro, types, exclude or [], size, how, fmt)
         return
     given = [n for n, v in (("--distro", distro), ("--types", types), ("-x", exclude)) if v]
     if given:
@@ -81,6 +82,7 @@ def _to_ros2(
     distro: str | None,
     types: Path | None,
     exclude: list[str],
+    chunk_size: int | None,
     how: CopyOutput,
     fmt: FormatOpt,
 ) -> None:
@@ -94,7 +96,7 @@ def _to_ros2(
     def run(progress: Progress) -> CopyReport:
         return convert_to_ros2(
             src, dst, distro=distro or DEFAULT_DISTRO, types=types, exclude=exclude,
-            compression=how.compression or "zstd", overwrite=how.force,
+            compression=how.compression or "zstd", chunk_size=chunk_size, overwrite=how.force,
             check_crcs=not how.no_crc_check, progress=progress,
         )  # fmt: skip
 

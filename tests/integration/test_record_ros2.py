@@ -106,6 +106,7 @@ def test_record_to_ros2_keeps_everything_on_sigterm_and_leaves_out_what_does_not
         (["--to", "ros2", "--split", "--size", "1"], "--split is for .bag and MCAP"),
         (["--to", "ros2", "--bz2"], "--to ros2 writes MCAP"),
         (["--to", "ros2", "-O", "taken"], "taken exists"),
+        (["--to", "ros2", "-O", "run.mcap"], "name it without .mcap"),
     ],
 )
 def test_record_to_ros2_usage_errors(

@@ -213,6 +213,8 @@ def _check_new_folder(path: Path) -> None:
     """``--to ros2`` writes a new folder, as ros2 bag record: an existing one is refused."""
     from rostools.bag.live.bagfile import active_name
 
+    if path.suffix.lower() in (".bag", ".mcap"):
+        raise UsageError(f"--to ros2 records a rosbag2 folder: name it without {path.suffix}")
     for taken in (path, active_name(path)):
         if taken.exists():
             raise UsageError(f"{taken} exists; give another name (-O) or remove it")

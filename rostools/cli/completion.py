@@ -71,6 +71,9 @@ KINDS: dict[tuple[str, ...] | str, str] = {
     ("tf", "target"): "frame",
     ("bag", "topics"): "",
     ("bag", "record", "topics"): "topic",
+    ("bag", "to"): "choice:ros1,ros2",
+    ("bag", "distro"): "distro",  # the choices, from ros2types when the tree is built
+    ("bag", "record", "types_file"): "files yaml",
     ("bag", "snapshot", "topics"): "topic",
     ("bag", "trigger", "topics"): "topic",
 }
@@ -80,6 +83,10 @@ def _kind(group: str, command: str, param: Any) -> str:
     name = param.name or ""
     for key in ((group, command, name), (group, name), name):
         if key in KINDS:
+            if KINDS[key] == "distro":
+                from rostools.bag.formats.ros2types import DISTROS
+
+                return "choice:" + ",".join(DISTROS)
             return KINDS[key]
     choices = getattr(param.type, "choices", None)
     if choices:

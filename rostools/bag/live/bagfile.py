@@ -35,12 +35,16 @@ class BagFile:
         self.path = path
         self.active = active_name(path)
         self.writer = open_writer(self.active, format, compression, chunk_size)
+        self._connections: dict[Hashable, Connection] = {}
+        self._started()
+
+    def _started(self) -> None:
+        """Nothing written yet; the flush clock starts now."""
         self.messages = 0
         self.bytes = 0
         #: The receive times of the first and last message written (ns), once there is one.
         self.first_ns: int | None = None
         self.last_ns: int | None = None
-        self._connections: dict[Hashable, Connection] = {}
         self._last_flush = time.monotonic()
 
     def write(
@@ -51,6 +55,10 @@ class BagFile:
         if conn is None:
             conn = self._connections[key] = self.writer.connection_for(topic, header)
         self.writer.write(conn, t_ns, data)
+        self._written(t_ns, data)
+
+    def _written(self, t_ns: int, data: Buffer) -> None:
+        """Count one message written."""
         self.messages += 1
         self.bytes += len(data)
         if self.first_ns is None:
@@ -60,8 +68,11 @@ class BagFile:
     def flush_if_due(self) -> None:
         """Hand the file to the OS when ``FLUSH_PERIOD`` has passed since the last time."""
         if time.monotonic() - self._last_flush > FLUSH_PERIOD:
-            self.writer.flush()
+            self._flush()
             self._last_flush = time.monotonic()
+
+    def _flush(self) -> None:
+        self.writer.flush()
 
     def close(self) -> None:
         """Finish the file and give it its name."""

@@ -19,7 +19,7 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from rostools.bag.formats.access import file_name
 from rostools.bag.formats.model import ENTRY_OVERHEAD
@@ -34,7 +34,11 @@ from rostools.errors import UsageError
 from rostools.msgs.wellknown import STRING
 from rostools.node.connection import Frame, InboundConnection
 from rostools.node.node import LiveNode
+from rostools.node.notice import Notice
 from rostools.node.publisher import TopicPublisher
+
+if TYPE_CHECKING:
+    from rostools.bag.live.ros2file import Ros2Types
 
 log = logging.getLogger(__name__)
 
@@ -66,11 +70,18 @@ class RecordOptions(LiveOptions):
     #: The name for a file opened at a wall-clock time, when the name holds the date (``-o``,
     #: or no name): each split after the first is named by its own start, as rosbag names it.
     dated: Callable[[float], Path] | None = None
+    #: ``--to ros2`` (format ``ros2``): the ROS 2 distro whose types the messages take, and
+    #: the user's file of type renames and definitions (``--types``).
+    distro: str | None = None
+    types_file: str | None = None
 
     def check(self) -> None:
         """Raise ``UsageError`` for combinations rosbag record refuses."""
         if self.split and self.size is None and self.duration is None:
             raise UsageError("--split needs --size or --duration")
+        if self.format == "ros2" and (self.split or self.repeat_latched):
+            flag = "--split" if self.split else "--repeat-latched"
+            raise UsageError(f"--to ros2 writes one rosbag2 file: {flag} is for .bag and MCAP")
         if self.limit is not None and (self.all or self.regex or not self.topics):
             raise UsageError("a count (-l) needs explicit topics, not -a or -e")
 
@@ -105,7 +116,15 @@ class _Writer(threading.Thread):
         opts = self.rec.opts
         base = opts.base if opts.dated is None or not self.index else opts.dated(time.time())
         path = file_name(base, opts.split, self.index)
-        self.file = BagFile(path, opts.format, opts.compression, opts.chunk_size)
+        if opts.format == "ros2":
+            from rostools.bag.live.ros2file import Ros2File
+
+            assert self.rec.ros2 is not None
+            ros2 = Ros2File(path, self.rec.ros2, opts.compression, opts.chunk_size)
+            ros2.unconverted = self.rec.unconverted
+            self.file = ros2
+        else:
+            self.file = BagFile(path, opts.format, opts.compression, opts.chunk_size)
         self.file_start = t_ns
         self.rec.current_file = self.file.active
         self.rec.file_opened(path)
@@ -215,6 +234,17 @@ class Recorder(Follower):
         self.wake_at = min(WAKE_STEP, opts.buffer_bytes // 4) if opts.buffer_bytes else WAKE_STEP
         self._begin_write: TopicPublisher | None = None
         self._loop: asyncio.AbstractEventLoop | None = None
+        #: ``--to ros2``: why each connection's type cannot be converted ("" when it can),
+        #: decided when it first sends; ``left_out``: each topic refused, and why.
+        self._verdicts: dict[tuple[int, str], str] = {}
+        self.left_out: dict[str, str] = {}
+        #: ``--to ros2``: per topic, messages whose bytes did not fit their type (the writer's).
+        self.unconverted: dict[str, int] = {}
+        self.ros2: Ros2Types | None = None
+        if opts.format == "ros2":
+            from rostools.bag.live.ros2file import Ros2Types
+
+            self.ros2 = Ros2Types(opts.distro, opts.types_file)
 
     def file_opened(self, path: Path) -> None:
         """A new file is being written (writer thread): announce it on ``begin_write``."""
@@ -242,7 +272,7 @@ class Recorder(Follower):
             key = (conn.id, topic)
             if not stats.messages:  # what is recorded, over the master's word (it may be stale)
                 stats.type = header.get("type") or stats.type
-            if self.closing:
+            if self.closing or (self.ros2 is not None and self._refused(topic, conn)):
                 return
             limit = self.opts.limit
             if limit is not None:
@@ -271,6 +301,30 @@ class Recorder(Follower):
                     self.cond.notify()
 
         return on_frames
+
+    def _refused(self, topic: str, conn: InboundConnection) -> bool:
+        """Whether ``--to ros2`` leaves this connection out: its type does not convert.
+
+        Decided once per connection, when it first sends; the first refusal of a topic is
+        said in one line, and ``bag record`` exits 6 at the end.
+        """
+        why = self._verdicts.get((conn.id, topic))
+        if why is None:
+            assert self.ros2 is not None
+            why = self.ros2.why_not(topic, conn.header or {})
+            self._verdicts[conn.id, topic] = why
+            if why and topic not in self.left_out:
+                self.left_out[topic] = why
+                self.done_topics.add(topic)  # a count (-l) does not wait for it
+                kind = (conn.header or {}).get("type", "?")
+                self.node.notify(
+                    Notice(
+                        "topic_left_out",
+                        f"{why}: {topic} is left out of the recording",
+                        {"topic": topic, "type": kind, "reason": why},
+                    )
+                )
+        return bool(why)
 
     def _finished(self) -> bool:
         """A count, a size or a duration without --split, or the writer failed."""

@@ -193,6 +193,13 @@ class OutputFile:
             return Path(f"{given}_{stamp}{ext}"), storage
         return Path(stamp + ext), storage
 
+    def folder(self, now: float | None = None) -> Path:
+        """The rosbag2 folder of ``--to ros2``: ``-O NAME`` is ``NAME``, else dated as ``path``."""
+        if self.output_name is not None and self.output_prefix is None:
+            return Path(self.output_name)
+        name = self.path(now)[0]
+        return name.with_name(name.name.removesuffix(name.suffix))
+
     def chunk_compression(self, storage: str) -> str | None:
         """The chunk compression from ``--bz2``/``--lz4``/``--compression`` (None: default)."""
         from rostools.bag.formats.access import WRITE_COMPRESSIONS

@@ -7,10 +7,7 @@ from typing import TYPE_CHECKING, Annotated
 
 import typer
 
-from rostools.cli.bag.options import (
-    CopyOutput,
-    OutArg,
-)
+from rostools.cli.bag.options import CopyOutput, DistroOpt, OutArg, TypesOpt
 from rostools.cli.bag.shared import copy_command
 from rostools.cli.common import FormatOpt, output_format
 from rostools.cli.declare import command
@@ -27,14 +24,6 @@ ToOpt = Annotated[
         help="ros1: .bag <-> MCAP by the output's name; ros2: a rosbag2 folder (OUT.mcap: "
         "the MCAP alone) that ros2 bag plays.",
     ),
-]
-DistroOpt = Annotated[
-    str | None,
-    typer.Option("--distro", help="--to ros2: the ROS 2 release whose types to write (lyrical)."),
-]
-TypesOpt = Annotated[
-    Path | None,
-    typer.Option("--types", help="--to ros2: a YAML file of type renames and definitions."),
 ]
 ExcludeOpt = Annotated[
     list[str] | None,

@@ -23,6 +23,16 @@ if TYPE_CHECKING:
 
 BagArg = Annotated[Path, typer.Argument(help="A .bag or .mcap file.")]
 OutArg = Annotated[Path, typer.Argument(help="The file to write; its name picks the format.")]
+#: ``--distro`` of the commands that write ROS 2 (``convert`` and ``record`` with ``--to ros2``).
+DistroOpt = Annotated[
+    str | None,
+    typer.Option("--distro", help="--to ros2: the ROS 2 release whose types to write (lyrical)."),
+]
+#: ``--types`` of the commands that write ROS 2: renames and definitions of the user's.
+TypesOpt = Annotated[
+    Path | None,
+    typer.Option("--types", help="--to ros2: a YAML file of type renames and definitions."),
+]
 ForceOpt = Annotated[bool, typer.Option("--force", "-f", help="Overwrite an existing output file.")]
 QuietOpt = Annotated[bool, typer.Option("--quiet", "-q", help="No progress bar.")]
 CompressionOpt = Annotated[

@@ -12,7 +12,14 @@ import typer
 
 from rostools.bag.formats.model import counted
 from rostools.cli import output
-from rostools.cli.bag.options import OutputFile, Receiving, Splitting, TopicOptions
+from rostools.cli.bag.options import (
+    DistroOpt,
+    OutputFile,
+    Receiving,
+    Splitting,
+    TopicOptions,
+    TypesOpt,
+)
 from rostools.cli.bag.shared import human_size
 from rostools.cli.common import FormatOpt, node_session, output_format
 from rostools.cli.declare import command
@@ -158,14 +165,8 @@ def record(
             "--to", help="ros1: a .bag or MCAP file; ros2: a rosbag2 folder (MCAP of CDR)."
         ),
     ] = "ros1",
-    distro: Annotated[
-        str | None,
-        typer.Option("--distro", help="--to ros2: whose types (default: the newest LTS)."),
-    ] = None,
-    types_file: Annotated[
-        str | None,
-        typer.Option("--types", help="--to ros2: a YAML file of type renames and definitions."),
-    ] = None,
+    distro: DistroOpt = None,
+    types_file: TypesOpt = None,
     fmt: FormatOpt = None,
 ) -> None:
     """Record topics to a .bag or MCAP file (rosbag record), or a rosbag2 folder (--to ros2).
@@ -174,7 +175,7 @@ def record(
     """
     target = _target(to, distro, types_file, out)
     opts = _record_options(topics or [], choice, out, splitting, limit, target)
-    opts.types_file = types_file
+    opts.types_file = str(types_file) if types_file is not None else None
     opts.buffer_bytes = max(buffer, 0) * 1024 * 1024
     opts.tcp_nodelay, opts.publish = receiving.tcp_nodelay, publish
     opts.min_space = receiving.min_space_bytes()
@@ -220,7 +221,7 @@ def _check_new_folder(path: Path) -> None:
             raise UsageError(f"{taken} exists; give another name (-O) or remove it")
 
 
-def _target(to: str, distro: str | None, types_file: str | None, out: OutputFile) -> str | None:
+def _target(to: str, distro: str | None, types_file: Path | None, out: OutputFile) -> str | None:
     """``--to ros2``'s distro, None for ``--to ros1``; checked, with the types file."""
     if to not in ("ros1", "ros2"):
         raise UsageError(f"unknown --to {to!r} (ros1 or ros2)")

@@ -37,6 +37,7 @@ MODULES = [
     "benchmarks.bench_rosbridge",
     "benchmarks.bench_log",
     "benchmarks.bench_tf",
+    "benchmarks.bench_tables",
 ]
 
 

@@ -52,6 +52,10 @@ if TYPE_CHECKING:  # the stable API: type checkers read these imports, rostools.
         SnapshotRecorder as SnapshotRecorder,
         snapshot as snapshot,
     )
+    from rostools._api.tables import (
+        bag_batches as bag_batches,
+        bag_table as bag_table,
+    )
     from rostools.errors import (
         DataLossError as DataLossError,
         NotFoundError as NotFoundError,

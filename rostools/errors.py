@@ -106,6 +106,21 @@ class QuietExit(RostoolsError):  # noqa: N818 - not a failure of its own: an end
         self.exit_code = exit_code
 
 
+class MissingExtraError(UsageError):
+    """An optional dependency a feature needs is not installed: exit 2, naming the extra.
+
+    ``MissingExtraError("pyarrow", "arrow")`` reads "pyarrow is not installed: pip install
+    'rostools[arrow]'". Code that needs an extra imports it inside a function and raises this
+    on ``ImportError`` (``bag/tables/arrow.py``: pyarrow; duckdb likewise, extra ``sql``).
+    """
+
+    def __init__(self, module: str, extra: str, *, what: str = "") -> None:
+        needs = f"{what} needs {module}" if what else f"{module} is not installed"
+        super().__init__(f"{needs}: pip install 'rostools[{extra}]'")
+        self.module = module
+        self.extra = extra
+
+
 def cannot_write(path: object, why: str) -> UsageError:
     """An output the user named that cannot be created: exit 2 in every command.
 

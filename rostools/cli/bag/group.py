@@ -10,6 +10,7 @@ from rostools.cli.bag import (
     compress,
     convert,
     doctor,
+    export,
     filter,
     info,
     merge,
@@ -30,7 +31,7 @@ app = typer.Typer(
     help=(
         "Bags (.bag and MCAP): record, play, info, filter, convert, recover, reindex, "
         "compress, decompress, merge, split, cat, plot, snapshot, trigger, doctor, attachments, "
-        "metadata."
+        "metadata, export."
     ),
     no_args_is_help=True,
     add_completion=False,
@@ -39,3 +40,4 @@ add(app, info.info, filter.filter_, convert.convert, compress.compress, compress
 add(app, recover.recover, reindex.reindex, merge.merge, split.split, cat.cat, plot.plot_cmd)
 add(app, play.play, record.record, snapshot.snapshot, trigger.trigger)
 add(app, attachments.attachments, metadata.metadata, doctor.doctor)
+add(app, export.export)

@@ -1,0 +1,153 @@
+"""One bag's part of ``bag export``: its tables, each streamed into one file of the dataset.
+
+``export_bag`` is the unit of work: a function of one picklable ``BagTask`` that returns a
+picklable ``BagExport``, so any pool of processes runs it: ours (``export.py``), or Dask's
+distributed scheduler (``client.map(export_bag, tasks)``). It touches no state but the files
+it writes; the only thing it reports on the way is its progress, to a queue our pool sets.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import TYPE_CHECKING, Any, Final
+
+from rostools.bag.tables.layout import bag_key, part_path
+from rostools.bag.tables.writers import FORMATS, open_table
+
+if TYPE_CHECKING:
+    import pyarrow as pa
+
+#: Rows per record batch: memory is about this many rows of each bag being exported at once.
+BATCH_ROWS: Final = 65_536
+
+#: What ``lost_data`` writes before the damage it lists.
+LEFT_OUT: Final = "left out what could not be read: "
+
+#: Our pool's progress queue in a worker (``export.py`` sets it); None under Dask.
+_progress_queue: Any = None
+
+
+@dataclass(frozen=True)
+class TableChoice:
+    """One table to write from a bag: a topic, the definition (md5sum) and its key."""
+
+    topic: str
+    md5sum: str
+    key: str
+
+
+@dataclass(frozen=True)
+class BagTask:
+    """Everything ``export_bag`` needs for one bag: plain values, so it pickles.
+
+    ``start_ns``/``end_ns`` bound the record times (absolute ns, None: no bound).
+    """
+
+    path: str
+    out: str
+    tables: tuple[TableChoice, ...]
+    format: str = "parquet"
+    start_ns: int | None = None
+    end_ns: int | None = None
+    flatten: bool = False
+    batch_rows: int = BATCH_ROWS
+    index: int = 0
+
+
+@dataclass(frozen=True)
+class WrittenFile:
+    """One file written: the table it belongs to, its path under OUT and its rows."""
+
+    key: str
+    topic: str
+    md5sum: str
+    file: str
+    rows: int
+
+
+@dataclass(frozen=True)
+class BagExport:
+    """What ``export_bag`` did with one bag: its files, and what it could not read."""
+
+    path: str
+    files: tuple[WrittenFile, ...] = ()
+    notes: tuple[str, ...] = ()
+    lost: tuple[str, ...] = field(default=())
+
+
+def _say_progress(index: int, rows: int) -> None:
+    if _progress_queue is not None:
+        _progress_queue.put((index, rows))
+
+
+def bag_columns(pa: Any, batch: pa.RecordBatch, name: str, start_ns: int | None) -> Any:
+    """``batch`` with the bag's name and start time as two more columns.
+
+    The start time has the type of ``record_time`` (a timestamp in ns), so the two compare.
+    """
+    rows = batch.num_rows
+    kind = batch.schema.field("record_time").type
+    start = pa.scalar(start_ns, kind)
+    return (
+        batch.append_column("bag_name", pa.repeat(pa.scalar(name), rows))
+        .append_column("bag_start", pa.repeat(start, rows))
+    )  # fmt: skip
+
+
+def export_bag(task: BagTask) -> BagExport:
+    """Write each of ``task``'s tables from its bag into the dataset at ``task.out``.
+
+    A table with no row in the time range gets no file. What the bag's damage left out is
+    in ``lost`` (the rows that could be read are written all the same).
+    """
+    from rostools.bag.formats.access import bag_info
+    from rostools.bag.tables.arrow import pyarrow
+    from rostools.errors import DataLossError
+
+    pa = pyarrow("bag export")
+    path = Path(task.path)
+    name = path.name
+    start_ns = bag_info(path).start_ns
+    files: list[WrittenFile] = []
+    lost: list[str] = []
+    for table in task.tables:
+        target = part_path(Path(task.out), table.key, bag_key(path), FORMATS[task.format])
+        rows = 0
+        writer = None
+        try:
+            for batch in _batches(task, table):
+                if batch.num_rows == 0:
+                    continue
+                batch = bag_columns(pa, batch, name, start_ns)
+                if writer is None:
+                    writer = open_table(task.format, target, batch.schema)
+                writer.write(batch)
+                rows += batch.num_rows
+                _say_progress(task.index, batch.num_rows)
+        except DataLossError as err:
+            # The bag's damage, said once for all its tables (each topic's read meets it).
+            what = str(err).partition(LEFT_OUT)[2] or str(err)
+            if f"{path}: {what}" not in lost:
+                lost.append(f"{path}: {what}")
+        finally:
+            if writer is not None:
+                writer.close()
+        if writer is not None:
+            relative = str(target.relative_to(task.out))
+            files.append(WrittenFile(table.key, table.topic, table.md5sum, relative, rows))
+    return BagExport(task.path, tuple(files), (), tuple(lost))
+
+
+def _batches(task: BagTask, table: TableChoice) -> Any:
+    """The record batches of one table of one bag (``topic_batches``, bounded)."""
+    from rostools.bag.tables.batches import topic_batches
+
+    return topic_batches(
+        [task.path], table.topic, start=_seconds(task.start_ns), end=_seconds(task.end_ns),
+        batch_rows=task.batch_rows, flatten=task.flatten, md5sum=table.md5sum,
+    )  # fmt: skip
+
+
+def _seconds(ns: int | None) -> float | None:
+    return None if ns is None else ns / 1e9

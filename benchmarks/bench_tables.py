@@ -292,6 +292,7 @@ import csv, json, sys, time
 from bagpy import bagreader
 start = time.perf_counter()
 written = bagreader(sys.argv[1]).message_by_topic(sys.argv[2])
+csv.field_size_limit(sys.maxsize)  # a cloud's points are one cell
 with open(written, newline="") as f:  # a row's quoted cells may span lines
     rows = sum(1 for _ in csv.reader(f)) - 1
 print(json.dumps({"rows": rows, "seconds": time.perf_counter() - start}))
@@ -325,18 +326,22 @@ print(json.dumps({"rows": ds.dataset(sys.argv[1], format="parquet").count_rows()
 # One export function, mapped by Dask's scheduler over the bags: no scheduler of ours.
 DASK_EXPORT = r"""
 import json, sys, time
+from pathlib import Path
 from dask.distributed import Client, LocalCluster
-from rostools.bag.tables.dataset import export_one
-out, bags = sys.argv[1], sys.argv[2:]
+from rostools.bag.tables.dataset import export_bag
+from rostools.bag.tables.export import plan_export, prepare_output
 if __name__ == "__main__":
+    out, bags = Path(sys.argv[1]), [Path(p) for p in sys.argv[2:]]
     up = time.perf_counter()
     with LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
                       dashboard_address=None) as cluster, Client(cluster) as client:
         start = time.perf_counter()
-        futures = client.map(export_one, bags, out=out, format="parquet")
-        client.gather(futures)
+        prepare_output(out, overwrite=True)
+        plan = plan_export(bags, out, fmt="parquet")
+        exported = client.gather(client.map(export_bag, plan.tasks))
         done = time.perf_counter()
-    print(json.dumps({"seconds": done - start, "cluster_start": start - up}))
+    rows = sum(f.rows for bag in exported for f in bag.files)
+    print(json.dumps({"seconds": done - start, "cluster_start": start - up, "rows": rows}))
 """
 
 

@@ -21,7 +21,9 @@ from rostools.msgs.store import TypeStore
 from tests.support.bagdata import INT32_MD5, STRING_MD5
 from tests.support.env import CORPUS, needs_corpus, run_cli
 
-pa = pytest.importorskip("pyarrow", reason="bag export needs pyarrow: pip install 'rostools[arrow]'")
+pa = pytest.importorskip(
+    "pyarrow", reason="bag export needs pyarrow: pip install 'rostools[arrow]'"
+)
 duckdb = pytest.importorskip("duckdb", reason="pip install 'rostools[sql]'")
 
 SAMPLE = "test_msgs/Sample"
@@ -171,8 +173,10 @@ def test_parquet_dataset_reads_back_in_pyarrow_duckdb_and_polars(
             f"SELECT topic, bag, bag_name, count(*) FROM read_parquet('{out}/**/*.parquet', "
             "hive_partitioning = true, union_by_name = true) GROUP BY ALL ORDER BY ALL"
         ).fetchall()
-    assert counts == [("count", "run-a", "run-a.bag", 120), ("count", "run-b", "run-b.mcap", 80),
-                      ("sample", "run-a", "run-a.bag", 120), ("sample", "run-b", "run-b.mcap", 80)]  # fmt: skip
+    assert counts == [
+        ("count", "run-a", "run-a.bag", 120), ("count", "run-b", "run-b.mcap", 80),
+        ("sample", "run-a", "run-a.bag", 120), ("sample", "run-b", "run-b.mcap", 80),
+    ]  # fmt: skip
     polars = pytest.importorskip("polars", reason="pip install polars (the test extra has it)")
     frame = polars.scan_parquet(f"{out}/topic=sample/**/*.parquet", hive_partitioning=True)
     got = frame.filter(polars.col("bag") == "run-b").collect().to_arrow()
@@ -238,7 +242,29 @@ def test_csv_and_ndjson_read_back(tmp_path: Path, two_bags: tuple[Path, Path]) -
     assert got == nested
 
 
-def test_bad_input_is_one_line_and_its_exit_code(tmp_path: Path, two_bags: tuple[Path, Path]) -> None:
+def test_start_and_end_cut_at_the_exact_nanosecond(
+    tmp_path: Path, two_bags: tuple[Path, Path]
+) -> None:
+    """As bag filter's: a message recorded exactly at --start or --end is in (seconds as a
+    float, at 1.7e9 s, are hundreds of ns coarse)."""
+    bag = two_bags[0]  # /sample every 10 ms from 1,700,000,000 s, /count 1 ns after each
+    out = tmp_path / "out"
+    done = run_cli("--format", "json", "bag", "export", str(bag), "-o", str(out),
+                   "--start", "0.03", "--end", "0.05")  # fmt: skip
+    assert done.returncode == 0, done.stderr
+    report = json.loads(done.stdout.splitlines()[-1])
+    assert {t["topic"]: t["rows"] for t in report["tables"]} == {"/sample": 3, "/count": 2}
+    filtered = tmp_path / "f.bag"
+    assert run_cli("bag", "filter", str(bag), str(filtered), "--start", "0.03", "--end", "0.05",
+                   "-q").returncode == 0  # fmt: skip
+    from rostools.bag.formats.access import bag_info
+
+    assert bag_info(filtered).message_count == 5
+
+
+def test_bad_input_is_one_line_and_its_exit_code(
+    tmp_path: Path, two_bags: tuple[Path, Path]
+) -> None:
     bag = str(two_bags[0])
     out = tmp_path / "out"
     cases = [
@@ -314,3 +340,34 @@ def test_a_corpus_bag_reads_back_as_topic_batches(tmp_path: Path) -> None:
         folder = out / f"topic={table.topic[1:].replace('/', '.')}"
         got = pq.read_table(folder / "bag=array_test" / "part-0.parquet")
         assert rows(got) == rows(expected(bag, table.topic)), table.topic
+
+
+def test_the_same_export_runs_on_a_dask_cluster(
+    tmp_path: Path, two_bags: tuple[Path, Path]
+) -> None:
+    """``export_bag`` on Dask's distributed scheduler, as docs/tables.md shows it."""
+    distributed = pytest.importorskip(
+        "dask.distributed", reason="pip install 'dask[distributed]' (the test extra has it)"
+    )
+    from rostools.bag.tables.dataset import export_bag
+    from rostools.bag.tables.export import plan_export, prepare_output
+
+    out = tmp_path / "out"
+    plan = plan_export(list(two_bags), out)
+    prepare_output(out, overwrite=False)
+    with (
+        distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                                 host="127.0.0.1", dashboard_address="127.0.0.1:0") as cluster,
+        distributed.Client(cluster) as client,
+    ):  # fmt: skip
+        done = client.gather(client.map(export_bag, plan.tasks))
+        workers = {p for p in client.run(lambda: __import__("os").getpid()).values()}
+    assert len(workers) == 2
+    assert [r.path for r in done] == [str(b) for b in two_bags] and not any(r.lost for r in done)
+    import pyarrow.dataset as ds
+
+    for topic in ("/sample", "/count"):
+        table = ds.dataset(out / f"topic={topic[1:]}", partitioning="hive").to_table()
+        for bag in two_bags:
+            got = table.filter(ds.field("bag") == bag.stem)
+            assert rows(got) == rows(expected(bag, topic))

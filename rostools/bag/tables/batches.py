@@ -20,7 +20,7 @@ from rostools.bag.formats.model import NS_PER_SEC, Connection, lost_data
 from rostools.bag.tables.arrow import pyarrow
 from rostools.bag.tables.columns import ColumnDecoder, decoder_for
 from rostools.bag.tables.schema import flat_arrays, table_schema
-from rostools.errors import InvalidDataError, NotFoundError, UsageError
+from rostools.errors import InvalidDataError, NotFoundError, RostoolsError, UsageError
 from rostools.msgs import learnt
 from rostools.msgs.codec import DECODE_ERRORS, DecodeError, why_not
 from rostools.msgs.store import TypeStore
@@ -41,7 +41,9 @@ class TopicTable:
     ``name`` is how a caller names it: the topic, or, when the bags hold the topic with more
     than one definition, ``TOPIC@MD5`` (the md5sum's first 8 hex digits), one per definition;
     ``topic_batches(paths, topic, md5sum=md5sum)`` reads it. ``schema`` is the Arrow schema
-    of its batches (nested; ``flatten=True`` gives ``flat_schema`` of it).
+    of its batches (nested; ``flatten=True`` gives ``flat_schema`` of it). A table that cannot
+    be read (a type the bag does not define and no store knows) has no schema and ``error``
+    says why in one line; ``topic_batches`` raises that error.
     """
 
     name: str
@@ -50,6 +52,7 @@ class TopicTable:
     md5sum: str
     schema: Any
     messages: int
+    error: str | None = None
 
 
 def _paths(paths: Paths) -> list[Path]:
@@ -73,8 +76,13 @@ def _readers(
 def _decoder(conns: list[Connection]) -> ColumnDecoder:
     """The column decoder of connections of one md5sum (the first full definition wins)."""
     conn = next((c for c in conns if c.definition.strip()), conns[0])
-    codec = learnt.codec(TypeStore.default(), conn.type, conn.md5sum, conn.definition)
-    return decoder_for(codec, conn.type)
+    try:
+        codec = learnt.codec(TypeStore.default(), conn.type, conn.md5sum, conn.definition)
+        return decoder_for(codec, conn.type)
+    except NotFoundError as err:
+        raise NotFoundError(
+            f"{conn.topic}: {err}; the bag does not define it (ROSTOOLS_MSG_PATH can)"
+        ) from None
 
 
 def _by_md5(
@@ -105,9 +113,13 @@ def table_schemas(paths: Paths, topics: Sequence[str] | None = None) -> list[Top
     tables = []
     for (topic, md5sum), conns in sorted(groups.items(), key=lambda kv: kv[0][0]):
         name = topic if definitions[topic] == 1 else f"{topic}@{md5sum[:8]}"
-        schema = table_schema(_decoder(conns).fields)
+        schema, error = None, None
+        try:
+            schema = table_schema(_decoder(conns).fields)
+        except RostoolsError as err:  # one table that cannot be read does not hide the others
+            error = str(err)
         tables.append(
-            TopicTable(name, topic, conns[0].type, md5sum, schema, counts[(topic, md5sum)])
+            TopicTable(name, topic, conns[0].type, md5sum, schema, counts[(topic, md5sum)], error)
         )
     return tables
 
@@ -176,7 +188,11 @@ def _batches(
     size = 0
     count = 0
     with stack:
-        for conn, t_ns, data in merged_messages(readers, [topic], *window):
+        if len(readers) == 1:  # one bag is in time order already: no merge to pay for
+            stream = readers[0].messages(topics=[topic], start=window[0], end=window[1])
+        else:
+            stream = merged_messages(readers, [topic], *window)
+        for conn, t_ns, data in stream:
             if conn.md5sum != md5sum:
                 continue
             try:

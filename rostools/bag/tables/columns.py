@@ -105,7 +105,8 @@ class RunColumn(Node):
         assert self.run is not None
         table = self.run.table
         if self.base in TIME_CODES:
-            ns = table[self.key + ".s"].astype(np.int64) * _NS + table[self.key + ".n"]
+            pairs = table[self.key]  # (secs, nsecs) last: the wire interleaves them
+            ns = pairs[..., 0].astype(np.int64) * _NS + pairs[..., 1]
             values = pa.array(
                 ns.reshape(-1), self.type if self.length is None else self.type.value_type
             )
@@ -259,7 +260,7 @@ class ColumnDecoder:
         gen = _Gen(self, pa)
         self.root = gen.message(codec.store.msg(type_name), "")
         gen.flush()
-        gen.line(f"if pos > len(buf): {gen.ref(_short, 'f')}()")
+        gen.line(f"if pos > end: {gen.ref(_short, 'f')}()")
         self.fill = gen.compile("fill(buf)", "columns", type_name, bind=True)
         self.fields = list(self.root.type)
 
@@ -287,6 +288,7 @@ class _Gen(GeneratedCode):
         super().__init__()
         self.decoder, self.pa = decoder, pa
         self.lines.append(self.indent + "pos = 0")
+        self.lines.append(self.indent + "end = len(buf)")
         self.pending: list[tuple[str, Any, RunColumn | None]] = []
         self.pending_columns: list[tuple[str, str, int | None]] = []
         self.waiting: dict[str, RunColumn] = {}  # the pending columns, by their key in the run
@@ -311,10 +313,7 @@ class _Gen(GeneratedCode):
         for key, base, length in self.pending_columns:
             shape: tuple[int, ...] = () if length is None else (length,)
             if base in TIME_CODES:
-                fields += [
-                    (key + ".s", TIME_CODES[base], shape),
-                    (key + ".n", TIME_CODES[base], shape),
-                ]
+                fields.append((key, TIME_CODES[base], (*shape, 2)))
             else:
                 fields.append((key, NUMPY_CODES[base], shape))
         run = Run(fields)
@@ -398,7 +397,7 @@ class _Gen(GeneratedCode):
         inner.env, inner.indent, inner.counter = self.env, self.indent + "    ", self.counter + 100
         inner._names = self._names
         element = inner.message(spec, f.name)
-        if not inner.lines[1:] and not inner.pending_columns:  # std_msgs/Empty[]: counts only
+        if not inner.lines[2:] and not inner.pending_columns:  # std_msgs/Empty[]: counts only
             self.line(f"if {n} > {1 << 20}: {self.ref(_short, 'f')}()")
         elif not inner.lines[
             1:
@@ -411,7 +410,7 @@ class _Gen(GeneratedCode):
             inner.flush()
             self.check(n, size)
             self.line(f"for _ in range({n}):")
-            self.lines += inner.lines[1:]
+            self.lines += inner.lines[2:]
         self.counter = inner.counter
         array = MessageArrayColumn(pa, element, f.length)
         self.node(array)
@@ -421,7 +420,7 @@ class _Gen(GeneratedCode):
 
     def read_string(self, add: str) -> None:
         n = self.count()
-        self.line(f"if pos + {n} > len(buf): {self.ref(_short, 'f')}()")
+        self.line(f"if pos + {n} > end: {self.ref(_short, 'f')}()")
         self.line(f"{add}(str(buf[pos:pos + {n}], 'utf-8', 'replace'))")
         self.line(f"pos += {n}")
 
@@ -430,7 +429,7 @@ class _Gen(GeneratedCode):
         if count.isdigit():
             return
         short = self.ref(_short, "f")
-        self.line(f"if {count} * {max(size, 1)} > len(buf) - pos: {short}()")
+        self.line(f"if {count} * {max(size, 1)} > end - pos: {short}()")
 
 
 def decoder_for(codec: Codec, type_name: str) -> ColumnDecoder:

@@ -21,6 +21,10 @@ if TYPE_CHECKING:
 #: Rows per record batch: memory is about this many rows of each bag being exported at once.
 BATCH_ROWS: Final = 65_536
 
+#: ``topic_batches`` takes seconds as floats, a few hundred ns coarse at today's times: it is
+#: asked for this much more on each side, and ``_within`` cuts at the exact ns.
+_SLACK_NS: Final = 1_000_000
+
 #: What ``lost_data`` writes before the damage it lists.
 LEFT_OUT: Final = "left out what could not be read: "
 
@@ -42,6 +46,7 @@ class BagTask:
     """Everything ``export_bag`` needs for one bag: plain values, so it pickles.
 
     ``start_ns``/``end_ns`` bound the record times (absolute ns, None: no bound).
+    ``bag_start_ns`` is the bag's first record time, from its index (None: read it here).
     """
 
     path: str
@@ -53,6 +58,7 @@ class BagTask:
     flatten: bool = False
     batch_rows: int = BATCH_ROWS
     index: int = 0
+    bag_start_ns: int | None = None
 
 
 @dataclass(frozen=True)
@@ -108,7 +114,7 @@ def export_bag(task: BagTask) -> BagExport:
     pa = pyarrow("bag export")
     path = Path(task.path)
     name = path.name
-    start_ns = bag_info(path).start_ns
+    start_ns = task.bag_start_ns
     files: list[WrittenFile] = []
     lost: list[str] = []
     for table in task.tables:
@@ -117,8 +123,12 @@ def export_bag(task: BagTask) -> BagExport:
         writer = None
         try:
             for batch in _batches(task, table):
+                if task.start_ns is not None or task.end_ns is not None:
+                    batch = _within(pa, batch, task.start_ns, task.end_ns)
                 if batch.num_rows == 0:
                     continue
+                if start_ns is None:
+                    start_ns = bag_info(path).start_ns
                 batch = bag_columns(pa, batch, name, start_ns)
                 if writer is None:
                     writer = open_table(task.format, target, batch.schema)
@@ -143,11 +153,21 @@ def _batches(task: BagTask, table: TableChoice) -> Any:
     """The record batches of one table of one bag (``topic_batches``, bounded)."""
     from rostools.bag.tables.batches import topic_batches
 
+    start = None if task.start_ns is None else (task.start_ns - _SLACK_NS) / 1e9
+    end = None if task.end_ns is None else (task.end_ns + _SLACK_NS) / 1e9
     return topic_batches(
-        [task.path], table.topic, start=_seconds(task.start_ns), end=_seconds(task.end_ns),
+        [task.path], table.topic, start=start, end=end,
         batch_rows=task.batch_rows, flatten=task.flatten, md5sum=table.md5sum,
     )  # fmt: skip
 
 
-def _seconds(ns: int | None) -> float | None:
-    return None if ns is None else ns / 1e9
+def _within(pa: Any, batch: Any, lo: int | None, hi: int | None) -> Any:
+    """The rows of ``batch`` recorded from ``lo`` to ``hi`` ns, both included, exactly."""
+    import pyarrow.compute as pc
+
+    t = batch.column("record_time").cast(pa.int64())
+    keep = pc.and_(
+        pc.greater_equal(t, lo if lo is not None else t),
+        pc.less_equal(t, hi if hi is not None else t),
+    )
+    return batch.filter(keep)

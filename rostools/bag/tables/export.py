@@ -19,10 +19,10 @@ from typing import Any, Final
 from rostools.bag.tables import dataset
 from rostools.bag.tables.dataset import BagExport, BagTask, TableChoice, export_bag
 from rostools.bag.tables.layout import bag_key, table_key
-from rostools.errors import NotFoundError, UsageError
+from rostools.errors import NotFoundError, RostoolsError, UsageError
 
 #: Seconds between looks at the pool for the progress bar; not a deadline.
-POLL_WAIT: Final = 0.2
+POLL_PERIOD: Final = 0.2
 
 
 @dataclass(frozen=True)
@@ -84,9 +84,11 @@ def plan_export(
             )
         seen[key] = path
     held: list[dict[tuple[str, str], int]] = []
+    starts: list[int | None] = []
     types: dict[str, str] = {}
     for path in paths:
         info = bag_info(path)
+        starts.append(info.start_ns)
         counts: dict[tuple[str, str], int] = {}
         for conn in info.connections:
             if topics and conn.topic not in topics:
@@ -112,7 +114,7 @@ def plan_export(
             str(path), str(out),
             tuple(TableChoice(t, m, table_key(t, m if t in split_topics else None))
                   for t, m in sorted(counts)),
-            fmt, start_ns, end_ns, flatten, batch_rows, index,
+            fmt, start_ns, end_ns, flatten, batch_rows, index, starts[index],
         )
         for index, (path, counts) in enumerate(zip(paths, held, strict=True))
     )  # fmt: skip
@@ -190,6 +192,7 @@ def _pool(tasks: Sequence[BagTask], workers: int, count: Callable[[int], None]) 
     import multiprocessing
     import queue as queues
     from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
+    from concurrent.futures.process import BrokenProcessPool
 
     context = multiprocessing.get_context("spawn")
     rows = context.Queue()
@@ -201,14 +204,20 @@ def _pool(tasks: Sequence[BagTask], workers: int, count: Callable[[int], None]) 
             except queues.Empty:
                 return
 
-    with ProcessPoolExecutor(workers, context, initializer=_start_worker,
-                             initargs=(rows,)) as pool:  # fmt: skip
-        futures = [pool.submit(export_bag, task) for task in tasks]
-        pending = set(futures)
-        while pending:
-            _, pending = wait(pending, timeout=POLL_WAIT, return_when=FIRST_COMPLETED)
-            drain()
-        results = [f.result() for f in futures]
+    try:
+        with ProcessPoolExecutor(workers, context, initializer=_start_worker,
+                                 initargs=(rows,)) as pool:  # fmt: skip
+            futures = [pool.submit(export_bag, task) for task in tasks]
+            pending = set(futures)
+            while pending:
+                _, pending = wait(pending, timeout=POLL_PERIOD, return_when=FIRST_COMPLETED)
+                drain()
+            results = [f.result() for f in futures]
+    except BrokenProcessPool as err:
+        raise RostoolsError(
+            "bag export: a worker process ended without a word (killed, or out of memory?)",
+            hint="-j 1 exports one bag at a time, in this process",
+        ) from err
     drain()
     return results
 

@@ -8,7 +8,7 @@ the size of the bag. pyarrow is imported when a writer is opened.
   pyarrow.dataset map without copying.
 - CSV: flat columns (``bag export`` flattens for CSV); a column CSV cannot hold (a list, a
   struct left in a list) is JSON text, and bytes (``uint8[]``) are base64. Times are ISO 8601
-  with nanoseconds and ``Z``; durations integer nanoseconds.
+  with nanoseconds (UTC, no zone written); durations integer nanoseconds.
 - NDJSON: one JSON object a line. Times and durations are integer nanoseconds (JSON has no
   time), bytes base64, and NaN and infinities the strings ``"nan"``, ``"inf"``, ``"-inf"``,
   as every JSON rostools writes.
@@ -45,7 +45,8 @@ def open_table(fmt: str, path: Path, schema: pa.Schema) -> TableWriter:
     if fmt == "parquet":
         import pyarrow.parquet as pq
 
-        return pq.ParquetWriter(str(path), schema, compression="zstd")
+        writer: TableWriter = pq.ParquetWriter(str(path), schema, compression="zstd")
+        return writer
     if fmt == "arrow":
         import pyarrow as pa
 

@@ -13,10 +13,12 @@ the full message definitions, so that every peer decodes it. Side by side in one
   the rows it printed by then;
 - the ceiling: ``pyarrow.parquet.write_table`` of the same table, already in memory.
 
-Rows/s, MB/s (message bytes of the topic per second) and peak RSS, the RSS being
-``ru_maxrss`` from ``os.wait4`` on the one process measured (its largest process: workers'
-peaks count, not summed). Then 100 small bags exported with ``-j 1`` and ``-j 2`` and the
-same export function mapped over a Dask ``LocalCluster`` of two worker processes.
+Rows/s, MB/s (message bytes of the topic per second) and memory, both ways: peak RSS
+(``ru_maxrss`` from ``os.wait4`` of the command, run by a small launcher so that it is the
+command's own: its largest process, the bag's mmapped pages included) and peak anonymous
+memory (RssAnon summed over the command's process tree, polled every 20 ms). Then 100 small
+bags exported with ``-j 1`` and ``-j 2`` and the same export function mapped over a Dask
+``LocalCluster`` of two worker processes.
 
 Knobs (environment): ``ROSTOOLS_BENCH_TABLES_MB`` (bag size, default 1000; 100 while
 developing), ``ROSTOOLS_BENCH_TABLES_BAGS`` (default 100), ``ROSTOOLS_BENCH_TABLES_PEER_S``
@@ -28,12 +30,10 @@ from __future__ import annotations
 import json
 import os
 import shutil
-import signal
 import struct
 import subprocess
 import sys
 import tempfile
-import time
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -229,49 +229,105 @@ def _our_python() -> str:
 # -- one measured process ----------------------------------------------------------------------
 
 
+#: Runs the measured command as its own child, so that the command's ``ru_maxrss`` is its own:
+#: a child that Python starts by vfork inherits the starter's peak RSS as a floor (exec records
+#: the old address space's high-water mark), and the benchmark's process holds hundreds of MB.
+#: Meanwhile it sums RssAnon over the command's process tree every 20 ms: the anonymous memory
+#: (the bag's mmapped pages, which RSS counts and the kernel can drop, are not in it).
+LAUNCHER = r"""
+import json, os, signal, sys, time
+report, limit, argv = sys.argv[1], float(sys.argv[2]), sys.argv[3:]
+def tree(pid):
+    pids, todo = [], [pid]
+    while todo:
+        p = todo.pop()
+        pids.append(p)
+        try:
+            for task in os.listdir(f"/proc/{p}/task"):
+                with open(f"/proc/{p}/task/{task}/children") as f:
+                    todo += [int(c) for c in f.read().split()]
+        except OSError:
+            pass
+    return pids
+def anon_kb(pids):
+    total = 0
+    for p in pids:
+        try:
+            with open(f"/proc/{p}/status") as f:
+                total += sum(int(l.split()[1]) for l in f if l.startswith("RssAnon:"))
+        except OSError:
+            pass
+    return total
+start = time.perf_counter()
+pid = os.fork()
+if pid == 0:
+    os.setsid()
+    os.execvp(argv[0], argv)
+stopped, peak = False, 0
+while True:
+    got, status, usage = os.wait4(pid, os.WNOHANG)
+    if got:
+        break
+    peak = max(peak, anon_kb(tree(pid)))
+    if limit > 0 and time.perf_counter() - start > limit:
+        os.killpg(pid, signal.SIGKILL)
+        _, status, usage = os.wait4(pid, 0)
+        stopped = True
+        break
+    time.sleep(0.02)
+with open(report, "w") as f:
+    json.dump({"wall": time.perf_counter() - start, "maxrss_kb": usage.ru_maxrss,
+               "anon_kb": peak, "stopped": stopped,
+               "code": os.waitstatus_to_exitcode(status)}, f)
+"""
+
+
 @dataclass
 class Run:
     """What one process did: wall seconds, peak RSS, its stdout, whether it was stopped."""
 
     wall: float
     rss_mb: float
-    stdout: bytes
+    anon_mb: float
+    lines: int
+    tail: bytes
     stopped: bool
-    returncode: int
 
     def reported(self) -> dict[str, float]:
         """The JSON the measured script printed last: its own count and seconds."""
-        last = self.stdout.decode(errors="replace").strip().splitlines()[-1]
+        last = self.tail.decode(errors="replace").strip().splitlines()[-1]
         return dict(json.loads(last))
 
 
-def _measure(argv: Sequence[str], *, limit: float | None = None, cwd: Path | None = None) -> Run:
-    """Run ``argv`` to its end (or ``limit`` seconds), its rusage taken by ``os.wait4``."""
-    with tempfile.TemporaryFile() as out, tempfile.TemporaryFile() as err:
-        start = time.perf_counter()
-        proc = subprocess.Popen(
-            list(argv), stdout=out, stderr=err, stdin=subprocess.DEVNULL, cwd=cwd,
-            start_new_session=True,
-        )  # fmt: skip
-        stopped = False
-        while True:
-            pid, status, usage = os.wait4(proc.pid, os.WNOHANG)
-            if pid:
-                break
-            if limit is not None and time.perf_counter() - start > limit:
-                os.killpg(proc.pid, signal.SIGKILL)
-                _, status, usage = os.wait4(proc.pid, 0)
-                stopped = True
-                break
-            time.sleep(0.02)
-        wall = time.perf_counter() - start
-        proc.returncode = os.waitstatus_to_exitcode(status)
+def _measure(argv: Sequence[str], *, limit: float | None = None) -> Run:
+    """Run ``argv`` to its end (or ``limit`` seconds) through ``LAUNCHER``.
+
+    Its stdout goes to a file on disk (``rostopic echo -p`` of clouds writes gigabytes): the
+    lines are counted and only the tail is kept.
+    """
+    BUILD.mkdir(parents=True, exist_ok=True)
+    with (
+        tempfile.TemporaryFile(dir=BUILD) as out,
+        tempfile.TemporaryFile(dir=BUILD) as err,
+        tempfile.TemporaryDirectory(dir=BUILD) as tmp,
+    ):
+        report = Path(tmp) / "report.json"
+        launcher = [sys.executable, "-c", LAUNCHER, str(report), str(limit or 0), *argv]
+        subprocess.run(launcher, stdout=out, stderr=err, stdin=subprocess.DEVNULL, check=True)
+        got = json.loads(report.read_text())
+        lines, size = 0, out.seek(0, os.SEEK_END)
         out.seek(0)
+        while chunk := out.read(1 << 20):
+            lines += chunk.count(b"\n")
+        out.seek(max(0, size - 65536))
+        tail = out.read()
         err.seek(0)
-        stdout, stderr = out.read(), err.read()
-    if proc.returncode != 0 and not stopped:
+        stderr = err.read()
+    if got["code"] != 0 and not got["stopped"]:
         raise RuntimeError(f"{' '.join(argv)} failed: {stderr.decode(errors='replace')[-800:]}")
-    return Run(wall, usage.ru_maxrss / 1024, stdout, stopped, proc.returncode)
+    return Run(
+        got["wall"], got["maxrss_kb"] / 1024, got["anon_kb"] / 1024, lines, tail, got["stopped"]
+    )
 
 
 # -- the scripts each side runs ----------------------------------------------------------------
@@ -355,6 +411,7 @@ class Rate:
     rows: int
     seconds: float
     rss_mb: float | None
+    anon_mb: float | None
     how: str
 
     @property
@@ -370,7 +427,7 @@ def _export(python: str, bag: Path, topic: str | None, out: Path) -> Rate:
     run = _measure([*argv, "-t", topic] if topic else argv)
     rows = int(_measure([python, "-c", COUNT_ROWS, str(out)]).reported()["rows"])
     shutil.rmtree(out, ignore_errors=True)
-    return Rate(rows, run.wall, run.rss_mb, "whole process")
+    return Rate(rows, run.wall, run.rss_mb, run.anon_mb, "whole process")
 
 
 _RUNS: dict[tuple[str, ...], Run] = {}
@@ -389,7 +446,8 @@ def _script(python: str | None, code: str, *args: str, whole: bool = True) -> Ra
     run = _RUNS[key]
     got = run.reported()
     seconds = run.wall if whole else float(got["seconds"])
-    return Rate(int(got["rows"]), seconds, run.rss_mb, "whole process" if whole else "in-process")
+    how = "whole process" if whole else "in-process"
+    return Rate(int(got["rows"]), seconds, run.rss_mb, run.anon_mb, how)
 
 
 def _rostopic(bag: Path, topic: str) -> Rate | None:
@@ -399,9 +457,9 @@ def _rostopic(bag: Path, topic: str) -> Rate | None:
     with tempfile.TemporaryDirectory() as home:
         env_argv = ["env", f"ROS_HOME={home}", "rostopic", "echo", "-b", str(bag), "-p", topic]
         run = _measure(env_argv, limit=PEER_SECONDS)
-    rows = max(0, run.stdout.count(b"\n") - 1)  # the first line is the column names
+    rows = max(0, run.lines - 1)  # the first line is the column names
     how = f"stopped after {PEER_SECONDS:.0f} s, rate of the rows printed" if run.stopped else ""
-    return Rate(rows, run.wall, run.rss_mb, how or "whole process")
+    return Rate(rows, run.wall, run.rss_mb, run.anon_mb, how or "whole process")
 
 
 def _bagpy(data: Data, topic: str) -> Rate | None:
@@ -418,6 +476,11 @@ def _bagpy(data: Data, topic: str) -> Rate | None:
     return rate
 
 
+def _load() -> str:
+    """The machine's load, for the note: other work on the two cores moves every figure."""
+    return f"; load average {os.getloadavg()[0]:.1f} on {os.cpu_count()} CPUs"
+
+
 def _rows_for(topic: str, data: Data, ours: Rate, peers: dict[str, Rate | None]) -> list[Result]:
     """rows/s, MB/s and peak RSS of ours beside each peer, for one topic."""
     label = f"{topic} ({'Imu 1 kHz' if topic == IMU else 'PointCloud2 10 Hz, 128 KB'})"
@@ -429,8 +492,10 @@ def _rows_for(topic: str, data: Data, ours: Rate, peers: dict[str, Rate | None])
             ours.per_second >= 10 * theirs.per_second if goal == ">= 10x"
             else ours.per_second > theirs.per_second
         )  # fmt: skip
-        note = f"ours: bag export --format parquet, {ours.how}, {ours.rows} rows; " + (
-            f"theirs: {theirs.how}, {theirs.rows} rows" if theirs else "peer not installed"
+        note = (
+            f"ours: bag export --format parquet, {ours.how}, {ours.rows} rows; "
+            + (f"theirs: {theirs.how}, {theirs.rows} rows" if theirs else "peer not installed")
+            + _load()
         )
         name = f"bag export -> Parquet vs {peer}, {label}"
         their_rate = theirs.per_second if theirs else None
@@ -443,11 +508,23 @@ def _rows_for(topic: str, data: Data, ours: Rate, peers: dict[str, Rate | None])
             None if their_rate is None else their_rate * size, "-", None,
             "message bytes of the topic per second",
         ))  # fmt: skip
-        results.append(Result(
-            f"{name}: peak RSS", "MB", ours.rss_mb or 0.0, theirs.rss_mb if theirs else None,
-            "-", None, "ru_maxrss of os.wait4 on the measured process",
-        ))  # fmt: skip
+        results += _memory_rows(name, ours, theirs)
     return results
+
+
+def _memory_rows(name: str, ours: Rate, theirs: Rate | None) -> list[Result]:
+    return [
+        Result(
+            f"{name}: peak RSS", "MB", ours.rss_mb or 0.0, theirs.rss_mb if theirs else None,
+            "-", None, "ru_maxrss (os.wait4) of the command's largest process; it counts the "
+            "pages of a bag read through mmap, which the kernel may drop",
+        ),
+        Result(
+            f"{name}: peak anonymous memory", "MB", ours.anon_mb or 0.0,
+            theirs.anon_mb if theirs else None, "-", None,
+            "RssAnon summed over the command's process tree, polled every 20 ms",
+        ),
+    ]  # fmt: skip
 
 
 def bench_topics() -> list[Result]:
@@ -507,14 +584,10 @@ def bench_whole_bag() -> list[Result]:
             None,
             "whole process; theirs: both topics one after the other, each in its own process",
         ),
-        Result(
-            f"bag export -> Parquet, whole {size:.0f} MB bag: peak RSS",
-            "MB",
-            ours.rss_mb or 0,
-            max((r.rss_mb or 0) for r in theirs if r) if their_s is not None else None,
-            "bounded (streams batches)",
-            None,
-            "ru_maxrss of os.wait4 on the measured process",
+        *_memory_rows(
+            f"bag export -> Parquet, whole {size:.0f} MB bag vs rosbags-dataframe (/imu/data)",
+            ours,
+            theirs[0],
         ),
     ]
 
@@ -531,6 +604,7 @@ def bench_many_bags() -> list[Result]:
         walls[jobs] = _measure([*argv, "-j", jobs]).wall
     shutil.rmtree(out, ignore_errors=True)
     note = f"{len(bags)} bags of {SMALL_SECONDS} s (Imu 1 kHz, clouds 10 Hz), whole process"
+    note += _load()
     results = [
         Result(
             f"bag export, {len(bags)} bags, -j 2 vs -j 1 (2 cores)",

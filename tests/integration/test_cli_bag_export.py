@@ -147,8 +147,11 @@ def test_parquet_dataset_reads_back_in_pyarrow_duckdb_and_polars(
     done = run_cli("--format", "json", "bag", "export", *map(str, two_bags), "-o", str(out),
                    "-j", "2")  # fmt: skip
     assert done.returncode == 0, done.stderr
-    report = json.loads(done.stdout.splitlines()[-1])
+    *progress, report = map(json.loads, done.stdout.splitlines())
     assert report["rows"] == 400 and report["files"] == 4 and report["split"] == []
+    # the rows the two processes wrote, counted back as they went
+    assert progress and progress[-1] == {"progress": "export", "done": 400, "total": 400}
+    assert [p["done"] for p in progress] == sorted(p["done"] for p in progress)
     assert {t["path"] for t in report["tables"]} == {"topic=sample", "topic=count"}
     assert {f for t in report["tables"] for f in t["files"]} == {
         f"topic={t}/bag={b}/part-0.parquet" for t in ("sample", "count") for b in ("run-a", "run-b")
@@ -206,14 +209,18 @@ def test_a_topic_whose_definition_changes_is_one_table_per_md5sum(tmp_path: Path
            in text.stderr  # fmt: skip
 
 
-def test_csv_and_ndjson_read_back(tmp_path: Path, two_bags: tuple[Path, Path]) -> None:
+def test_arrow_csv_and_ndjson_read_back(tmp_path: Path, two_bags: tuple[Path, Path]) -> None:
     import pyarrow.csv as pcsv
+    import pyarrow.dataset as ds
 
     bag = two_bags[0]
-    for fmt in ("csv", "ndjson"):
+    for fmt in ("arrow", "csv", "ndjson"):
         out = tmp_path / fmt
         done = run_cli("bag", "export", str(bag), "-o", str(out), "--format", fmt, "-t", "/sample")
         assert done.returncode == 0, done.stderr
+    # Arrow IPC files: the schema whole, as Parquet's
+    ipc = ds.dataset(tmp_path / "arrow", format="ipc", partitioning="hive").to_table()
+    assert rows(ipc) == rows(expected(bag, "/sample"))
     # CSV: flattened (implied), arrays as JSON text, bytes as base64, times ISO 8601 in ns
     want = expected(bag, "/sample", flatten=True)
     only_empty = pcsv.ConvertOptions(null_values=[""])  # "nan" is NaN, not pyarrow's null
@@ -294,6 +301,25 @@ def test_bad_input_is_one_line_and_its_exit_code(
     assert (out / "notes.txt").read_text() == "mine"
 
 
+def test_a_table_that_cannot_be_read_is_left_out_and_the_rest_written(tmp_path: Path) -> None:
+    bag = tmp_path / "a.bag"
+    with open_writer(bag) as writer:  # a type the bag does not define, sorted first
+        unknown = writer.add_connection("/a_unknown", "nowhere_msgs/Thing", "0" * 32, "")
+        count = writer.add_connection("/count", "std_msgs/Int32", INT32_MD5, "int32 data\n")
+        writer.write(unknown, 1, b"\x01")
+        writer.write(count, 2, struct.pack("<i", 7))
+    out = tmp_path / "out"
+    done = run_cli("bag", "export", str(bag), "-o", str(out), "-j", "1")
+    assert done.returncode == 3, done.stderr
+    assert done.stderr.splitlines()[-1].startswith(
+        "rostools: left out 1 table that could not be read (the rest is written): /a_unknown: "
+        "unknown message type nowhere_msgs/Thing"
+    )
+    assert [p.relative_to(out).as_posix() for p in out.rglob("*.parquet")] == [
+        "topic=count/bag=a/part-0.parquet"
+    ]
+
+
 def test_without_pyarrow_the_line_names_the_extra(tmp_path: Path, cli_env: dict[str, str]) -> None:
     blocker = tmp_path / "block" / "pyarrow"
     blocker.mkdir(parents=True)
@@ -371,3 +397,15 @@ def test_the_same_export_runs_on_a_dask_cluster(
         for bag in two_bags:
             got = table.filter(ds.field("bag") == bag.stem)
             assert rows(got) == rows(expected(bag, topic))
+
+
+@needs_corpus
+def test_a_ros2_mcap_is_refused_before_anything_is_written(tmp_path: Path) -> None:
+    talker = CORPUS / "mcap" / "rosbag2" / "rosbag2_py" / "talker" / "talker.mcap"
+    out = tmp_path / "out"
+    done = run_cli("bag", "export", str(talker), "-o", str(out))
+    assert done.returncode == 1, done.stderr
+    assert len(done.stderr.splitlines()) == 1, done.stderr
+    assert "holds ROS 2 CDR messages" in done.stderr
+    assert "bag export does not support ROS 2 CDR" in done.stderr
+    assert not out.exists()

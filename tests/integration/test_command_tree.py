@@ -99,6 +99,7 @@ RECIPES: dict[str, list[str]] = {
     "bag play": ["{bag}", "-i", "-d", "0"],
     "bag record": ["/chatter_demo", "-l", "2", "-O", "{tmp}/rec.bag"],
     "bag merge": ["{tmp}/merged.mcap", "{bag}", "{bag}"],
+    "bag export": ["{bag}", "-o", "{tmp}/dataset", "--force"],
     "bag split": ["{bag}", "--count", "100", "-o", "{tmp}/part.bag", "-f"],
     "bag cat": ["{bag}", "-n", "3"],
     "bag plot": ["{bag}", "/point/x", "/count/data"],

@@ -20,6 +20,7 @@ from rostools.bag.formats.model import NS_PER_SEC, Connection, lost_data
 from rostools.bag.tables.arrow import pyarrow
 from rostools.bag.tables.columns import ColumnDecoder, decoder_for
 from rostools.bag.tables.schema import flat_arrays, table_schema
+from rostools.bag.tables.uniform import fill_uniform
 from rostools.errors import InvalidDataError, NotFoundError, RostoolsError, UsageError
 from rostools.msgs import learnt
 from rostools.msgs.codec import DECODE_ERRORS, DecodeError, why_not
@@ -139,8 +140,10 @@ def topic_batches(
     ``start``/``end``: record times in seconds since the epoch, both included. ``md5sum``
     picks one definition of a topic the bags hold with several (``table_schemas`` lists
     them); without it such a topic is a ``UsageError`` naming them. ``flatten``: dotted
-    column names for nested messages (``header.stamp``); arrays stay lists. The bags stay open
-    until the reader is exhausted or closed.
+    column names for nested messages (``header.stamp``); arrays stay lists. Memory stays
+    bounded: a batch is ``batch_rows`` messages or ``BATCH_BYTES`` of them. The bags stay open
+    until the reader is exhausted or closed. Without pyarrow: ``MissingExtraError`` (exit 2)
+    naming ``pip install 'rostools[arrow]'``.
     """
     pa = pyarrow("bag tables")
     if batch_rows < 1:
@@ -183,8 +186,8 @@ def _batches(
     flatten: bool,
 ) -> Iterator[Any]:
     pa = pyarrow()
-    fill = decoder.fill
     times: list[int] = []
+    payloads: list[Any] = []
     size = 0
     count = 0
     with stack:
@@ -195,29 +198,47 @@ def _batches(
         for conn, t_ns, data in stream:
             if conn.md5sum != md5sum:
                 continue
-            try:
-                fill(data)
-            except (DecodeError, *DECODE_ERRORS) as err:
-                decoder.clear()
-                raise InvalidDataError(
-                    f"{topic}: the message recorded at {t_ns / NS_PER_SEC:.9f} is not a"
-                    f" {conn.type}: {why_not(err)}"
-                ) from None
             times.append(t_ns)
+            payloads.append(data)
             size += len(data)
             if len(times) >= batch_rows or size >= BATCH_BYTES:
                 count += len(times)
-                yield _batch(pa, decoder, times, schema, flatten)
-                times, size = [], 0
+                yield _batch(pa, decoder, times, payloads, topic, schema, flatten)
+                times, payloads, size = [], [], 0
         if times:
             count += len(times)
-            yield _batch(pa, decoder, times, schema, flatten)
+            yield _batch(pa, decoder, times, payloads, topic, schema, flatten)
         damage = [d for r in readers for d in r.damage]
         if damage:
             raise lost_data(f"read {count} messages of {topic}", damage)
 
 
-def _batch(pa: Any, decoder: ColumnDecoder, times: list[int], schema: Any, flatten: bool) -> Any:
+def _fill(decoder: ColumnDecoder, times: list[int], payloads: list[Any], topic: str) -> None:
+    """The batch into the decoder's columns: in one go when it can, else message by message."""
+    if fill_uniform(decoder, payloads):
+        return
+    fill = decoder.fill
+    for t_ns, data in zip(times, payloads, strict=True):
+        try:
+            fill(data)
+        except (DecodeError, *DECODE_ERRORS) as err:
+            decoder.clear()
+            raise InvalidDataError(
+                f"{topic}: the message recorded at {t_ns / NS_PER_SEC:.9f} is not a"
+                f" {decoder.type_name}: {why_not(err)}"
+            ) from None
+
+
+def _batch(
+    pa: Any,
+    decoder: ColumnDecoder,
+    times: list[int],
+    payloads: list[Any],
+    topic: str,
+    schema: Any,
+    flatten: bool,
+) -> Any:
+    _fill(decoder, times, payloads, topic)
     arrays = decoder.finish(len(times))
     if flatten:
         arrays = flat_arrays(arrays, decoder.fields)

@@ -20,6 +20,7 @@ from typing import Any
 import numpy as np
 
 from rostools.bag.tables.arrow import pyarrow
+from rostools.errors import InvalidDataError
 from rostools.msgs.codec import BYTE_TYPES, Codec, DecodeError
 from rostools.msgs.codegen import GeneratedCode
 from rostools.msgs.spec import Field, MsgSpec
@@ -130,6 +131,8 @@ class StringColumn(Node):
         self.pa, self.length, self.is_array = pa, length, is_array
         self.values: list[str] = []
         self.counts: list[int] = []
+        #: The batch's strings as one Arrow array, when ``uniform.py`` read them so.
+        self.built: Any = None
         if not is_array:
             self.type = pa.string()
         else:
@@ -137,6 +140,8 @@ class StringColumn(Node):
 
     def finish(self, rows: int) -> Any:
         """The strings, or lists of them."""
+        if self.built is not None:
+            return self.built
         values = self.pa.array(self.values, self.pa.string())
         if not self.is_array:
             return values
@@ -148,23 +153,30 @@ class StringColumn(Node):
         """Forget the batch."""
         self.values.clear()
         self.counts.clear()
+        self.built = None
 
 
 class BytesColumn(Node):
-    """``uint8[]``/``char[]``: Arrow binary."""
+    """``uint8[]``/``char[]``: Arrow binary, its bytes joined once per batch (one copy)."""
 
     def __init__(self, pa: Any) -> None:
         self.pa = pa
         self.type = pa.binary()
-        self.values: list[bytes] = []
+        self.counts: list[int] = []
+        self.parts: list[Any] = []
 
     def finish(self, rows: int) -> Any:
         """The byte strings."""
-        return self.pa.array(self.values, self.type)
+        pa = self.pa
+        data = pa.py_buffer(b"".join(self.parts))
+        return pa.BinaryArray.from_buffers(
+            self.type, rows, [None, _offsets(self.counts).buffers()[1], data]
+        )
 
     def clear(self) -> None:
         """Forget the batch."""
-        self.values.clear()
+        self.counts.clear()
+        self.parts.clear()
 
 
 class VarArrayColumn(Node):
@@ -237,11 +249,18 @@ class MessageArrayColumn(Node):
         self.counts.clear()
 
 
+#: Arrow's lists, strings and binary values of one batch hold at most this many elements or
+#: bytes (their offsets are 32-bit); ``BATCH_BYTES`` keeps batches far below it.
+MAX_OFFSET = (1 << 31) - 1
+
+
 def _offsets(counts: list[int]) -> Any:
     pa = pyarrow()
-    offsets = np.zeros(len(counts) + 1, np.int32)
+    offsets = np.zeros(len(counts) + 1, np.int64)
     np.cumsum(counts, out=offsets[1:])
-    return pa.array(offsets)
+    if offsets[-1] > MAX_OFFSET:  # one message of 2 GiB: refused, not wrapped around
+        raise InvalidDataError(f"an array of {int(offsets[-1])} elements is too long for a table")
+    return pa.array(offsets.astype(np.int32))
 
 
 class ColumnDecoder:
@@ -255,6 +274,7 @@ class ColumnDecoder:
     def __init__(self, codec: Codec, type_name: str) -> None:
         self.pa = pa = pyarrow()
         self.codec = codec
+        self.type_name = type_name
         self.runs: list[Run] = []
         self.nodes: list[Node] = []
         gen = _Gen(self, pa)
@@ -262,6 +282,8 @@ class ColumnDecoder:
         gen.flush()
         gen.line(f"if pos > end: {gen.ref(_short, 'f')}()")
         self.fill = gen.compile("fill(buf)", "columns", type_name, bind=True)
+        #: Runs and strings in wire order when that is all the type holds (``uniform.py``).
+        self.ops = gen.ops
         self.fields = list(self.root.type)
 
     def finish(self, rows: int) -> list[Any]:
@@ -289,7 +311,9 @@ class _Gen(GeneratedCode):
         self.decoder, self.pa = decoder, pa
         self.lines.append(self.indent + "pos = 0")
         self.lines.append(self.indent + "end = len(buf)")
-        self.pending: list[tuple[str, Any, RunColumn | None]] = []
+        #: What the function reads, in order, while it is only runs and strings: (run, its
+        #: size) or (string column, 0). None once it reads an array: no uniform batches then.
+        self.ops: list[tuple[Run | StringColumn, int]] | None = []
         self.pending_columns: list[tuple[str, str, int | None]] = []
         self.waiting: dict[str, RunColumn] = {}  # the pending columns, by their key in the run
         self.size = 0  # bytes pending in the current run
@@ -303,6 +327,8 @@ class _Gen(GeneratedCode):
         if not self.pending_columns:
             return
         run = self._new_run()
+        if self.ops is not None:
+            self.ops.append((run, self.size))
         parts = self.ref(run.parts.append, "a")
         self.line(f"{parts}(buf[pos:pos + {self.size}])")
         self.line(f"pos += {self.size}")
@@ -359,12 +385,15 @@ class _Gen(GeneratedCode):
             if not f.is_array or f.length is not None:
                 return self.fixed(f.base, f.length)
             n = self.count()
+            self.ops = None
             if f.base in BYTE_TYPES:
-                column: Node = self.node(BytesColumn(pa))
-                add = self.ref(column.values.append, "a")  # type: ignore[attr-defined]
-                self.line(f"{add}(bytes(buf[pos:pos + {n}]))")
+                blobs = BytesColumn(pa)
+                self.node(blobs)
+                self.line(f"if pos + {n} > end: {self.ref(_short, 'f')}()")
+                self.line(f"{self.ref(blobs.counts.append, 'a')}({n})")
+                self.line(f"{self.ref(blobs.parts.append, 'a')}(buf[pos:pos + {n}])")
                 self.line(f"pos += {n}")
-                return column
+                return blobs
             var = VarArrayColumn(pa, f.base)
             self.node(var)
             self.line(f"{self.ref(var.counts.append, 'a')}({n})")
@@ -376,6 +405,7 @@ class _Gen(GeneratedCode):
             self.node(strings)
             add = self.ref(strings.values.append, "a")
             if f.is_array:
+                self.ops = None
                 n = str(f.length) if f.length is not None else self.count()
                 self.flush()
                 if f.length is None:
@@ -384,12 +414,15 @@ class _Gen(GeneratedCode):
                 self.line(f"for _ in range({n}):")
                 self.indent += "    "
             self.read_string(add)
+            if self.ops is not None:
+                self.ops.append((strings, 0))
             if f.is_array:
                 self.indent = self.indent[:-4]
             return strings
         spec = self.decoder.codec.store.msg(f.base)
         if not f.is_array:
             return self.message(spec, f.name)
+        self.ops = None
         n = str(f.length) if f.length is not None else self.count()
         self.flush()
         size = self.decoder.codec.min_size(f.base)

@@ -8,18 +8,19 @@ it writes; the only thing it reports on the way is its progress, to a queue our 
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Final
 
+from rostools.bag.tables.batches import DEFAULT_BATCH_ROWS
 from rostools.bag.tables.layout import bag_key, part_path
 from rostools.bag.tables.writers import FORMATS, open_table
 
 if TYPE_CHECKING:
     import pyarrow as pa
 
-#: Rows per record batch: memory is about this many rows of each bag being exported at once.
-BATCH_ROWS: Final = 65_536
+#: Rows per record batch (``topic_batches``'s): memory is about one batch of each bag under way.
+BATCH_ROWS: Final = DEFAULT_BATCH_ROWS
 
 #: ``topic_batches`` takes seconds as floats, a few hundred ns coarse at today's times: it is
 #: asked for this much more on each side, and ``_within`` cuts at the exact ns.
@@ -79,7 +80,8 @@ class BagExport:
     path: str
     files: tuple[WrittenFile, ...] = ()
     notes: tuple[str, ...] = ()
-    lost: tuple[str, ...] = field(default=())
+    lost: tuple[str, ...] = ()
+    skipped: tuple[tuple[str, int], ...] = ()  # (the one line, its exit code)
 
 
 def _say_progress(index: int, rows: int) -> None:
@@ -95,58 +97,70 @@ def bag_columns(pa: Any, batch: pa.RecordBatch, name: str, start_ns: int | None)
     rows = batch.num_rows
     kind = batch.schema.field("record_time").type
     start = pa.scalar(start_ns, kind)
-    return (
-        batch.append_column("bag_name", pa.repeat(pa.scalar(name), rows))
-        .append_column("bag_start", pa.repeat(start, rows))
-    )  # fmt: skip
+    schema = batch.schema.append(pa.field("bag_name", pa.string())).append(
+        pa.field("bag_start", kind)
+    )
+    # from_arrays, not append_column: pyarrow 14 (the extra's floor) has no such method
+    columns = [*batch.columns, pa.repeat(pa.scalar(name), rows), pa.repeat(start, rows)]
+    return pa.RecordBatch.from_arrays(columns, schema=schema)
 
 
 def export_bag(task: BagTask) -> BagExport:
     """Write each of ``task``'s tables from its bag into the dataset at ``task.out``.
 
     A table with no row in the time range gets no file. What the bag's damage left out is
-    in ``lost`` (the rows that could be read are written all the same).
+    in ``lost``, a table that could not be read (a type the bag does not define, a message
+    that does not fit its type) in ``skipped``: the rows that could be read are written all
+    the same.
     """
-    from rostools.bag.formats.access import bag_info
     from rostools.bag.tables.arrow import pyarrow
-    from rostools.errors import DataLossError
+    from rostools.errors import DataLossError, RostoolsError
 
     pa = pyarrow("bag export")
-    path = Path(task.path)
-    name = path.name
-    start_ns = task.bag_start_ns
     files: list[WrittenFile] = []
     lost: list[str] = []
+    skipped: list[tuple[str, int]] = []
     for table in task.tables:
-        target = part_path(Path(task.out), table.key, bag_key(path), FORMATS[task.format])
-        rows = 0
-        writer = None
         try:
-            for batch in _batches(task, table):
-                if task.start_ns is not None or task.end_ns is not None:
-                    batch = _within(pa, batch, task.start_ns, task.end_ns)
-                if batch.num_rows == 0:
-                    continue
-                if start_ns is None:
-                    start_ns = bag_info(path).start_ns
-                batch = bag_columns(pa, batch, name, start_ns)
-                if writer is None:
-                    writer = open_table(task.format, target, batch.schema)
-                writer.write(batch)
-                rows += batch.num_rows
-                _say_progress(task.index, batch.num_rows)
+            _write_table(pa, task, table, files)
         except DataLossError as err:
             # The bag's damage, said once for all its tables (each topic's read meets it).
-            what = str(err).partition(LEFT_OUT)[2] or str(err)
-            if f"{path}: {what}" not in lost:
-                lost.append(f"{path}: {what}")
-        finally:
-            if writer is not None:
-                writer.close()
+            what = f"{task.path}: {str(err).partition(LEFT_OUT)[2] or err}"
+            if what not in lost:
+                lost.append(what)
+        except RostoolsError as err:
+            skipped.append((str(err), err.exit_code))
+    return BagExport(task.path, tuple(files), (), tuple(lost), tuple(skipped))
+
+
+def _write_table(pa: Any, task: BagTask, table: TableChoice, files: list[WrittenFile]) -> None:
+    """One table of one bag into its file; the file, once opened, is listed in ``files``."""
+    path = Path(task.path)
+    target = part_path(Path(task.out), table.key, bag_key(path), FORMATS[task.format])
+    start_ns = task.bag_start_ns
+    writer = None
+    rows = 0
+    try:
+        for batch in _batches(task, table):
+            if task.start_ns is not None or task.end_ns is not None:
+                batch = _within(pa, batch, task.start_ns, task.end_ns)
+            if batch.num_rows == 0:
+                continue
+            if start_ns is None:
+                from rostools.bag.formats.access import bag_info
+
+                start_ns = bag_info(path).start_ns
+            batch = bag_columns(pa, batch, path.name, start_ns)
+            if writer is None:
+                writer = open_table(task.format, target, batch.schema)
+            writer.write(batch)
+            rows += batch.num_rows
+            _say_progress(task.index, batch.num_rows)
+    finally:
         if writer is not None:
+            writer.close()
             relative = str(target.relative_to(task.out))
             files.append(WrittenFile(table.key, table.topic, table.md5sum, relative, rows))
-    return BagExport(task.path, tuple(files), (), tuple(lost))
 
 
 def _batches(task: BagTask, table: TableChoice) -> Any:

@@ -57,6 +57,11 @@ class ExportReport:
         """What damage left out, for every bag."""
         return [line for bag in self.bags for line in bag.lost]
 
+    @property
+    def skipped(self) -> dict[str, int]:
+        """Each table that could not be read: its line (said once) and its exit code."""
+        return {line: code for bag in self.bags for line, code in bag.skipped}
+
 
 def plan_export(
     paths: Sequence[Path],
@@ -70,7 +75,7 @@ def plan_export(
     batch_rows: int = dataset.BATCH_ROWS,
 ) -> Plan:
     """One task per bag; missing bags, clashing names and unknown topics refused first."""
-    from rostools.bag.formats.access import bag_info
+    from rostools.bag.formats.access import open_bag, require_ros1
 
     seen: dict[str, Path] = {}
     for path in paths:
@@ -87,7 +92,9 @@ def plan_export(
     starts: list[int | None] = []
     types: dict[str, str] = {}
     for path in paths:
-        info = bag_info(path)
+        with open_bag(path) as reader:  # ROS 2 refused now, before OUT is made
+            require_ros1(reader, "bag export", topics)
+            info = reader.info()
         starts.append(info.start_ns)
         counts: dict[tuple[str, str], int] = {}
         for conn in info.connections:

@@ -158,7 +158,10 @@ class _Ndjson:
         self.file = path.open("w", encoding="utf-8")
 
     def write(self, batch: pa.RecordBatch) -> None:
-        rows = batch.cast(self.plain).to_pylist()
+        import pyarrow as pa
+
+        # through a table: RecordBatch.cast is pyarrow 16's, the extra allows 14
+        rows = pa.Table.from_batches([batch]).cast(self.plain).to_pylist()
         self.file.write("".join(_dumps(row) + "\n" for row in rows))
 
     def close(self) -> None:

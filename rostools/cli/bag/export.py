@@ -15,12 +15,12 @@ import typer
 
 from rostools.bag.formats.model import counted, lost_data
 from rostools.cli import output
-from rostools.cli.bag.options import CopyWindow, ForceOpt, QuietOpt
+from rostools.cli.bag.options import CopyWindow, QuietOpt
 from rostools.cli.bag.shared import Progress
 from rostools.cli.common import output_format
 from rostools.cli.declare import command
 from rostools.cli.output import Format, emit
-from rostools.errors import one_line
+from rostools.errors import RostoolsError, one_line
 
 if TYPE_CHECKING:
     from rostools.bag.tables.export import ExportReport
@@ -53,16 +53,23 @@ def export(
         int | None,
         typer.Option("--jobs", "-j", min=1, help="Bags exported at once (default: every core)."),
     ] = None,
-    force: ForceOpt = False,
+    force: Annotated[
+        bool,
+        typer.Option("--force", "-f", help="Replace an existing OUT that holds only an export."),
+    ] = False,
     quiet: QuietOpt = False,
+    fmt: Annotated[
+        Format | None,
+        typer.Option("-F", help="The summary's format: text, json or yaml.", show_default=False),
+    ] = None,
 ) -> None:
     """Export bags as tables: one per topic, a dataset partitioned by topic and bag.
 
-    The summary follows the global --format (rostools --format json bag export ...).
+    --format is the tables' files; the summary's is -F (or the global --format).
     """
     from rostools.bag.tables.export import export as run_export
 
-    fmt = output_format(ctx, None)
+    fmt = output_format(ctx, fmt)
     lo, hi = window.bounds(bags)
     progress = Progress("export", fmt, quiet)
     try:
@@ -74,8 +81,22 @@ def export(
     finally:
         progress.done()
     _report(fmt, report)
+    skipped = report.skipped
     if report.lost:
-        raise lost_data(f"exported {counted(len(report.bags), 'bag')}", report.lost)
+        raise lost_data(f"exported {counted(len(report.bags), 'bag')}", [*report.lost, *skipped])
+    if skipped:
+        raise _left_out(skipped)
+
+
+def _left_out(skipped: dict[str, int]) -> RostoolsError:
+    """The error for tables that could not be read: the first one's exit code, every line."""
+    lines = list(skipped)
+    error = RostoolsError(
+        f"left out {counted(len(lines), 'table')} that could not be read (the rest is written): "
+        + "; ".join(lines)
+    )
+    error.exit_code = skipped[lines[0]]
+    return error
 
 
 def summary(report: ExportReport) -> dict[str, Any]:
@@ -104,6 +125,7 @@ def summary(report: ExportReport) -> dict[str, Any]:
         ],
         "notes": [n for bag in report.bags for n in bag.notes],
         "lost": report.lost,
+        "skipped": list(report.skipped),
     }
 
 

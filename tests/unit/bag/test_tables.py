@@ -7,6 +7,7 @@ from __future__ import annotations
 import subprocess
 import sys
 from pathlib import Path
+from typing import Any
 
 import pytest
 
@@ -210,3 +211,94 @@ def test_the_synthetic_store_is_what_the_bag_defines(synthetic: Path) -> None:
     # the bag's own definition is what the tables read: rostools' store has no tabletest types
     assert not TypeStore.default().has_msg(EVERYTHING)
     assert synthetic_store().has_msg(EVERYTHING)
+
+
+def _odometry_bag(path: Path, frames: list[bytes]) -> list[Any]:
+    store = TypeStore.default()
+    codec = Codec.of(store)
+    odom = codec.message_class("nav_msgs/Odometry")
+    sent = []
+    with open_writer(path) as writer:
+        conn = writer.add_connection(
+            "/odom", "nav_msgs/Odometry", store.md5("nav_msgs/Odometry"),
+            store.full_text("nav_msgs/Odometry"),
+        )  # fmt: skip
+        for i, frame in enumerate(frames):
+            msg = odom()
+            msg.header.seq, msg.header.stamp.secs, msg.header.frame_id = i, i, frame
+            msg.child_frame_id = "base_link"
+            msg.pose.pose.position.x = i / 3
+            msg.twist.covariance = [float(i)] * 36
+            writer.write(conn, (i + 1) * 1_000_000_000, codec.serialize(msg))
+            sent.append(msg)
+    return sent
+
+
+def test_a_batch_of_one_layout_reads_as_the_codec_decodes(tmp_path: Path) -> None:
+    # batches of 3: one layout; a frame_id of another length; one that is not UTF-8
+    frames = [b"odom"] * 3 + [b"odom", b"map", b"odom"] + [b"odom", b"o\xffom", b"odom"] + [b""] * 3
+    sent = _odometry_bag(tmp_path / "odom.bag", frames)
+    table = rostools.bag_table(tmp_path / "odom.bag", "/odom")
+    by_batches = pa.Table.from_batches(
+        list(topic_batches([tmp_path / "odom.bag"], "/odom", batch_rows=3))
+    )
+    assert by_batches.equals(table)
+    rows = plain_rows(table)
+    assert [r["header"]["frame_id"] for r in rows] == [f.decode("utf-8", "replace") for f in frames]
+    assert [r["header"]["seq"] for r in rows] == list(range(12))
+    assert [r["pose"]["pose"]["position"]["x"] for r in rows] == [
+        m.pose.pose.position.x for m in sent
+    ]
+    assert [r["twist"]["covariance"] for r in rows] == [list(m.twist.covariance) for m in sent]
+    assert {r["child_frame_id"] for r in rows} == {"base_link"}
+
+
+def test_uniform_batches_are_read_in_one_go_and_others_are_not(tmp_path: Path) -> None:
+    from rostools.bag.formats.access import open_bag
+    from rostools.bag.tables.batches import _decoder
+    from rostools.bag.tables.uniform import fill_uniform
+
+    _odometry_bag(tmp_path / "odom.bag", [b"odom", b"odom", b"map", b"o\xffom"])
+    with open_bag(tmp_path / "odom.bag") as reader:
+        payloads = [bytes(d) for _, _, d in reader.messages()]
+        decoder = _decoder(list(reader.connections))
+    assert fill_uniform(decoder, payloads[:2])
+    decoder.clear()
+    assert not fill_uniform(decoder, payloads[1:3])  # two sizes
+    assert not fill_uniform(decoder, [payloads[0], payloads[3]])  # same size, not UTF-8
+    assert not fill_uniform(decoder, [payloads[0] + b"\x00"] * 2)  # bytes after the message
+    assert decoder.finish(0)[0].to_pylist() == []  # and nothing was filled by the refusals
+
+
+def test_a_damaged_bag_gives_what_reads_then_says_what_it_lost(tmp_path: Path) -> None:
+    from rostools.errors import DataLossError
+
+    store = TypeStore.default()
+    codec = Codec.of(store)
+    point = codec.message_class("geometry_msgs/Point")
+    path = tmp_path / "cut.mcap"
+    with open_writer(path, compression="none", chunk_size=1000) as writer:
+        conn = writer.add_connection(
+            "/p", "geometry_msgs/Point", store.md5("geometry_msgs/Point"), POINT
+        )
+        for i in range(200):
+            writer.write(conn, (i + 1) * 1_000_000, codec.serialize(point(x=float(i), y=1234.5)))
+    raw = bytearray(path.read_bytes())
+    middle = raw.index(codec.serialize(point(x=100.0, y=1234.5)))
+    raw[middle + 20] ^= 0xFF  # in a chunk: its CRC no longer holds, so the chunk is left out
+    path.write_bytes(bytes(raw))
+    got: list[float] = []
+    with pytest.raises(DataLossError, match=r"^read 1\d\d messages of /p, but left out") as caught:
+        for batch in topic_batches([path], "/p", batch_rows=50):
+            got += batch.column("x").to_pylist()
+    assert caught.value.exit_code == 6
+    assert 150 < len(got) < 200 and 100.0 not in got  # one chunk's messages, and only those
+    assert got == sorted(set(got)) and got[:50] == [float(i) for i in range(50)]
+
+
+def test_an_array_past_arrows_offsets_is_refused_not_wrapped() -> None:
+    from rostools.bag.tables.columns import MAX_OFFSET, _offsets
+
+    assert _offsets([MAX_OFFSET - 1, 1]).to_pylist() == [0, MAX_OFFSET - 1, MAX_OFFSET]
+    with pytest.raises(InvalidDataError, match=r"^an array of 2147483648 elements is too long"):
+        _offsets([MAX_OFFSET, 1])

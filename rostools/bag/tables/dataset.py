@@ -79,7 +79,6 @@ class BagExport:
 
     path: str
     files: tuple[WrittenFile, ...] = ()
-    notes: tuple[str, ...] = ()
     lost: tuple[str, ...] = ()
     skipped: tuple[tuple[str, int], ...] = ()  # (the one line, its exit code)
 
@@ -130,7 +129,7 @@ def export_bag(task: BagTask) -> BagExport:
                 lost.append(what)
         except RostoolsError as err:
             skipped.append((str(err), err.exit_code))
-    return BagExport(task.path, tuple(files), (), tuple(lost), tuple(skipped))
+    return BagExport(task.path, tuple(files), tuple(lost), tuple(skipped))
 
 
 def _write_table(pa: Any, task: BagTask, table: TableChoice, files: list[WrittenFile]) -> None:

@@ -123,7 +123,6 @@ def summary(report: ExportReport) -> dict[str, Any]:
             {"topic": s.topic, "tables": [{"md5sum": m, "path": f"topic={k}"} for m, k in s.tables]}
             for s in report.plan.splits
         ],
-        "notes": [n for bag in report.bags for n in bag.notes],
         "lost": report.lost,
         "skipped": list(report.skipped),
     }
@@ -143,8 +142,6 @@ def _report(fmt: Format, report: ExportReport) -> None:
             f"note: {one_line(split.topic)} changes definition between the bags: "
             f"one table for each md5sum, {keys}\n"
         )
-    for note in data["notes"]:
-        sys.stderr.write(f"note: {one_line(note)}\n")
     tables = len(data["tables"])
     sys.stderr.write(
         f"wrote {data['rows']} rows of {tables} table{'s' * (tables != 1)} in "

@@ -18,7 +18,7 @@ from rostools.bag.formats.access import merged_messages, open_bag, require_ros1
 from rostools.bag.formats.base import BagReader
 from rostools.bag.formats.model import NS_PER_SEC, Connection, lost_data
 from rostools.bag.tables.arrow import pyarrow
-from rostools.bag.tables.columns import ColumnDecoder, decoder_for
+from rostools.bag.tables.columns import ColumnDecoder
 from rostools.bag.tables.schema import flat_arrays, table_schema
 from rostools.bag.tables.uniform import fill_uniform
 from rostools.errors import InvalidDataError, NotFoundError, RostoolsError, UsageError
@@ -79,7 +79,7 @@ def _decoder(conns: list[Connection]) -> ColumnDecoder:
     conn = next((c for c in conns if c.definition.strip()), conns[0])
     try:
         codec = learnt.codec(TypeStore.default(), conn.type, conn.md5sum, conn.definition)
-        return decoder_for(codec, conn.type)
+        return ColumnDecoder(codec, conn.type)  # a stream's own: its columns are its state
     except NotFoundError as err:
         raise NotFoundError(
             f"{conn.topic}: {err}; the bag does not define it (ROSTOOLS_MSG_PATH can)"

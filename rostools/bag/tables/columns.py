@@ -268,7 +268,8 @@ class ColumnDecoder:
 
     ``fill(buf)`` appends one message's fields (raises on bytes that do not fit); ``finish(n)``
     gives the arrays of the ``n`` messages filled since the last ``clear``; ``fields`` are the
-    top-level Arrow fields, in the message's order.
+    top-level Arrow fields, in the message's order. One per stream: its columns are its own,
+    so two streams of one type (two views DuckDB scans on two threads) never share them.
     """
 
     def __init__(self, codec: Codec, type_name: str) -> None:
@@ -465,13 +466,4 @@ class _Gen(GeneratedCode):
         self.line(f"if {count} * {max(size, 1)} > end - pos: {short}()")
 
 
-def decoder_for(codec: Codec, type_name: str) -> ColumnDecoder:
-    """The column decoder of ``type_name`` (one per codec and type, built on first use)."""
-    table: dict[str, ColumnDecoder] = codec.store.cache.setdefault("columns", {})
-    found = table.get(type_name)
-    if found is None:
-        found = table[type_name] = ColumnDecoder(codec, type_name)
-    return found
-
-
-__all__: Sequence[str] = ("ColumnDecoder", "arrow_scalar", "decoder_for")
+__all__: Sequence[str] = ("ColumnDecoder", "arrow_scalar")

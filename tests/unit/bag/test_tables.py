@@ -302,3 +302,45 @@ def test_an_array_past_arrows_offsets_is_refused_not_wrapped() -> None:
     assert _offsets([MAX_OFFSET - 1, 1]).to_pylist() == [0, MAX_OFFSET - 1, MAX_OFFSET]
     with pytest.raises(InvalidDataError, match=r"^an array of 2147483648 elements is too long"):
         _offsets([MAX_OFFSET, 1])
+
+
+def test_two_tables_of_one_type_read_at_once_keep_their_own_rows(tmp_path: Path) -> None:
+    # DuckDB scans the views of a query on threads of its own: two topics of one type at once
+    import threading
+
+    store = TypeStore.default()
+    codec = Codec.of(store)
+    stamped = codec.message_class("geometry_msgs/PointStamped")
+    path = tmp_path / "two.bag"
+    with open_writer(path) as writer:
+        conns = [
+            writer.add_connection(
+                topic,
+                "geometry_msgs/PointStamped",
+                store.md5("geometry_msgs/PointStamped"),
+                store.full_text("geometry_msgs/PointStamped"),
+            )
+            for topic in ("/a", "/b")
+        ]
+        for i in range(3000):
+            for sign, conn in zip((1.0, -1.0), conns, strict=True):
+                msg = stamped()
+                msg.point.x = sign * i
+                msg.header.frame_id = "f" * (i % 3)  # layouts differ: message by message
+                writer.write(conn, (i + 1) * 1_000_000, codec.serialize(msg))
+    got: dict[str, list[float]] = {}
+
+    def read(topic: str) -> None:
+        try:
+            reader = topic_batches([path], topic, batch_rows=5)
+            got[topic] = [x for b in reader for x in b.column("point").field("x").to_pylist()]
+        except Exception as err:  # noqa: BLE001 - the assertion below shows it
+            got[topic] = [repr(err)]  # type: ignore[list-item]
+
+    threads = [threading.Thread(target=read, args=(t,)) for t in ("/a", "/b")]
+    for thread in threads:
+        thread.start()
+    for thread in threads:
+        thread.join()
+    assert got["/a"] == [float(i) for i in range(3000)]
+    assert got["/b"] == [-float(i) for i in range(3000)]

@@ -190,7 +190,7 @@ def _data() -> Data:
 
 
 def _small_bags() -> list[Path]:
-    folder = BUILD / f"many-{BAG_COUNT}"
+    folder = BUILD / f"many-{BAG_COUNT}x{SMALL_SECONDS}s"
     return [_write_bag(folder / f"run{i:03d}.bag", SMALL_SECONDS, seed=i) for i in range(BAG_COUNT)]
 
 

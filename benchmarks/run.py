@@ -38,6 +38,7 @@ MODULES = [
     "benchmarks.bench_log",
     "benchmarks.bench_tf",
     "benchmarks.bench_ros2",
+    "benchmarks.bench_tables",
 ]
 
 

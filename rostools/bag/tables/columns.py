@@ -207,14 +207,22 @@ class VarArrayColumn(Node):
         self.parts.clear()
 
 
+#: The one member of an empty message nested in another (``std_msgs/Empty``), always 0, as
+#: ROS 2 defines every empty type: Parquet cannot store a struct of no fields, nor DuckDB 1.x
+#: read one.
+EMPTY_MEMBER = "structure_needs_at_least_one_member"
+
+
 class StructColumn(Node):
     """A message: one column per field, at one level of rows."""
 
-    def __init__(self, pa: Any, names: list[str], children: list[Node]) -> None:
+    def __init__(self, pa: Any, names: list[str], children: list[Node], nested: bool) -> None:
         self.pa, self.names, self.children = pa, names, children
-        self.type = pa.struct(
-            [pa.field(n, c.type, nullable=False) for n, c in zip(names, children, strict=True)]
-        )
+        fields = [pa.field(n, c.type, nullable=False) for n, c in zip(names, children, strict=True)]
+        self.placeholder = nested and not children
+        if self.placeholder:
+            fields = [pa.field(EMPTY_MEMBER, pa.uint8(), nullable=False)]
+        self.type = pa.struct(fields)
 
     def arrays(self, rows: int) -> list[Any]:
         """One array per field."""
@@ -222,7 +230,10 @@ class StructColumn(Node):
 
     def finish(self, rows: int) -> Any:
         """The struct array."""
-        if not self.children:  # an empty message (std_msgs/Empty): a struct of no fields
+        if self.placeholder:
+            zeros = self.pa.array(np.zeros(rows, np.uint8))
+            return self.pa.StructArray.from_arrays([zeros], fields=list(self.type))
+        if not self.children:  # the message itself is empty: rows of no fields
             return self.pa.array([{}] * rows, self.type)
         return self.pa.StructArray.from_arrays(self.arrays(rows), fields=list(self.type))
 
@@ -378,7 +389,7 @@ class _Gen(GeneratedCode):
         for f in spec.fields:
             names.append(f.name)
             children.append(self.field(f))
-        return StructColumn(self.pa, names, children)
+        return StructColumn(self.pa, names, children, nested=bool(path))
 
     def field(self, f: Field) -> Node:
         pa = self.pa

@@ -14,6 +14,7 @@ import pytest
 import rostools
 from rostools.bag.formats.access import open_writer
 from rostools.bag.tables.batches import table_schemas, topic_batches
+from rostools.bag.tables.columns import EMPTY_MEMBER
 from rostools.errors import InvalidDataError, MissingExtraError, NotFoundError, UsageError
 from rostools.msgs.codec import Codec
 from rostools.msgs.store import TypeStore
@@ -56,7 +57,8 @@ def test_the_schema_follows_the_type_mapping(synthetic: Path) -> None:
     assert inner.field("points").type.value_type == point
     assert types["inners"].value_type == inner and types["fixed_inners"].list_size == 2
     assert types["points"].value_type == point and types["fixed_points"].list_size == 2
-    assert types["nothing"] == pa.struct([])
+    # Parquet holds no struct of no fields, nor does DuckDB 1.x read one: ROS 2's one member
+    assert types["nothing"] == pa.struct([pa.field(EMPTY_MEMBER, pa.uint8(), nullable=False)])
     (nothing,) = [t for t in table_schemas([synthetic]) if t.topic == "/nothing"]
     assert nothing.schema.names == ["record_time"]
 
@@ -121,6 +123,19 @@ def test_duckdb_reads_header_stamp_from_the_nested_struct(synthetic: Path) -> No
         'SELECT epoch_ns(header.stamp) AS s, len(inners) AS n FROM "/every" ORDER BY record_time'
     ).fetchall()
     assert found == [(0, 0), (((1 << 32) - 1) * 10**9 + 999_999_999, 3), (1_700_000_000 * 10**9, 1)]
+
+
+def test_a_nested_empty_message_goes_into_parquet(synthetic: Path, tmp_path: Path) -> None:
+    # the defect: `bag export` of a type holding std_msgs/Empty-like fields was an internal
+    # error ("Cannot write struct type 'nothing' with no child field to Parquet"), and a 0-byte
+    # file left behind; DuckDB 1.5 (Python 3.10's) refused the same table
+    import pyarrow.parquet as pq
+
+    table = rostools.bag_table(synthetic, "/every")
+    pq.write_table(table, tmp_path / "every.parquet")
+    back = pq.read_table(tmp_path / "every.parquet")
+    assert back.column("nothing").to_pylist() == [{EMPTY_MEMBER: 0}] * 3
+    assert back.column("nothings").to_pylist() == table.column("nothings").to_pylist()
 
 
 def _two_definitions(tmp_path: Path) -> list[Path]:

@@ -18,6 +18,7 @@ from pathlib import Path
 import pytest
 
 from tests.support.env import ROOT
+from tests.support.load import scaled
 from tests.support.procs import wait_for
 
 # the release check's stand-in: says it ran, then exits with $RELEASE (or is stopped)
@@ -85,7 +86,7 @@ def test_the_release_log_is_shown_and_removed(
     tree, env = _tree(tmp_path)
     env |= {"SUITE": str(suite), "RELEASE": str(release), "RELEASE_TAKES": "0.5"}
     done = subprocess.run(
-        [str(tree / ".ci" / "run")], env=env, capture_output=True, text=True, timeout=60,
+        [str(tree / ".ci" / "run")], env=env, capture_output=True, text=True, timeout=scaled(60),
         check=False,
     )  # fmt: skip
     assert done.returncode == code, done.stdout + done.stderr
@@ -113,7 +114,9 @@ def test_ctrl_c_stops_the_release_check_and_still_shows_its_log(tmp_path: Path) 
         marks = tmp_path / "marks"
         wait_for(lambda: (marks / "suite").exists() and (marks / "release").exists(), 30, "both")
         os.killpg(run.pid, signal.SIGINT)  # a terminal's Ctrl-C: the script and the suite
-        out, _ = run.communicate(timeout=30)
+        # a guard against a hang, scaled: the release check runs this at nice 10 beside the
+        # suite, and under load 30 s ran out (seen with two busy loops on the 2 cores)
+        out, _ = run.communicate(timeout=scaled(30))
     finally:
         if run.poll() is None:
             os.killpg(run.pid, signal.SIGKILL)

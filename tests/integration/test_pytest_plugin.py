@@ -34,7 +34,8 @@ def _check_and_leave(name, ros_master, ros_node):
     ros_node.publish(f"/left_by_{name}", {"data": name}, "std_msgs/String")
     rostools.set_param(f"/left_by_{name}", 1)
     assert rostools.get_param(f"/left_by_{name}") == 1
-    row = [name, os.environ.get("PYTEST_XDIST_WORKER", "-"), ros_master.uri]
+    # a master is known by its /run_id: its port may be handed out again once it has stopped
+    row = [name, os.environ.get("PYTEST_XDIST_WORKER", "-"), rostools.get_param("/run_id")]
     with open(os.environ["SEEN_FILE"], "a") as f:
         f.write(json.dumps(row) + "\\n")
 
@@ -57,7 +58,7 @@ def test_each_test_has_its_own_master(
     before = os.environ.get("ROS_MASTER_URI")
     pytester.makepyfile(test_isolation=ISOLATION)
     pytester.runpytest_inprocess("-p", "no:cacheprovider").assert_outcomes(passed=4)
-    assert len({uri for _, _, uri in _seen(str(seen))}) == 4
+    assert len({run_id for _, _, run_id in _seen(str(seen))}) == 4
     assert os.environ.get("ROS_MASTER_URI") == before  # restored after each test
 
 
@@ -71,7 +72,7 @@ def test_isolation_holds_under_xdist(
     result.assert_outcomes(passed=4)
     rows = _seen(str(seen))
     assert {worker for _, worker, _ in rows} == {"gw0", "gw1"}
-    assert len({uri for _, _, uri in rows}) == 4
+    assert len({run_id for _, _, run_id in rows}) == 4
 
 
 def test_the_module_marker_shares_one_master_and_helpers_measure(

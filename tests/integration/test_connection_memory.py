@@ -48,6 +48,8 @@ def rss_mb(pid: int) -> float:
 def tcpros_port(master_uri: str, node: str, topic: str) -> int:
     """The TCPROS port of ``node``, which publishes ``topic``."""
     master = xmlrpc.client.ServerProxy(master_uri)
+    # the core answers before its /rosout has registered: wait for the node, not the master
+    wait_for(lambda: master.lookupNode("/t", node)[0] == 1, 30, f"{node} registered")
     api = master.lookupNode("/t", node)[2]
     _, _, (_, _, port) = xmlrpc.client.ServerProxy(api).requestTopic("/t", topic, [["TCPROS"]])
     return int(port)

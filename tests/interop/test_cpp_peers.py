@@ -219,6 +219,17 @@ def test_sub_count_prints_strings(run: Peers) -> None:
     assert summary["type"] == "std_msgs/String"
 
 
+def test_sub_count_stops_at_its_count_under_a_fast_publisher(run: Peers) -> None:
+    # Unpaced, several messages wait in the callback queue at once: a subscriber that empties
+    # the queue before checking --count overshoots it.
+    sub = run.start("sub_count", "/fast", "--count", "5", "--print", "--timeout", "30")
+    sub.expect("^ready")
+    # expect() drains its stdout from here on: a full pipe would block the talker.
+    run.start("talker", "/fast", "--rate", "20000").expect("^ready")
+    summary = result(sub)
+    assert summary["received"] == 5 and summary["reason"] == "count"
+
+
 def test_pub_rate_1khz_and_sub_count_agree(run: Peers) -> None:
     sub = run.start("sub_count", "/rate_1k", "--count", "2000", "--timeout", "60")
     sub.expect("^ready")

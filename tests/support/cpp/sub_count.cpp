@@ -39,8 +39,12 @@ struct Tally {
   peer::Clock::time_point first, last;
   double t_first = 0;
   bool print = false;
+  uint64_t limit = 0;  // --count; 0 for none
 
-  void count(uint64_t size) {
+  // Whether the message is counted: callAvailable runs every queued callback at once, and
+  // those past --count must not be.
+  bool count(uint64_t size) {
+    if (limit > 0 && received >= limit) return false;
     last = peer::Clock::now();
     if (received == 0) {
       first = last;
@@ -48,6 +52,7 @@ struct Tally {
     }
     ++received;
     bytes += size;
+    return true;
   }
 };
 
@@ -60,15 +65,15 @@ void on_typed(const boost::shared_ptr<const M>& msg) {
 }
 
 void on_string(const std_msgs::String::ConstPtr& msg) {
-  tally.count(ros::serialization::serializationLength(*msg));
-  if (tally.print) peer::say("got " + msg->data);
+  if (tally.count(ros::serialization::serializationLength(*msg)) && tally.print) {
+    peer::say("got " + msg->data);
+  }
 }
 
 #if HAVE_TOPIC_TOOLS
 void on_any(const topic_tools::ShapeShifter::ConstPtr& msg) {
-  tally.count(msg->size());
   seen_type = msg->getDataType();
-  if (tally.print && seen_type == "std_msgs/String") {
+  if (tally.count(msg->size()) && tally.print && seen_type == "std_msgs/String") {
     peer::say("got " + msg->instantiate<std_msgs::String>()->data);
   }
 }
@@ -94,6 +99,7 @@ int main(int argc, char** argv) {
   // benchmark must see the transport's losses, not this program's.
   const auto queue = uint32_t(args.number("--queue", 100000));
   tally.print = args.flag("--print");
+  tally.limit = count;
   const auto hints = ros::TransportHints().tcpNoDelay(args.flag("--tcp-nodelay"));
   const std::set<std::string> types = {"std_msgs/String", "sensor_msgs/Image",
                                        HAVE_TOPIC_TOOLS ? "any" : "std_msgs/String"};

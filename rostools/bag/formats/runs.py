@@ -183,7 +183,7 @@ def runs_of(messages: Iterator[tuple[Connection, int, memoryview]]) -> Iterator[
 
 
 class ChunkReader(Protocol):
-    """What ``bag_runs`` needs of a ``.bag`` reader: ``Bag1Reader``, whose chunks are ``Bag1Chunk``."""
+    """What ``bag_runs`` needs of a ``.bag`` reader (``Bag1Reader``, its chunks ``Bag1Chunk``)."""
 
     chunks: list[Any]
 

@@ -13,6 +13,7 @@ then a walk), which says what was wrong: so both ways give the same messages.
 
 from __future__ import annotations
 
+import functools
 import itertools
 import struct
 from collections.abc import Iterator, Mapping, Sequence
@@ -38,6 +39,7 @@ class Irregular(Exception):  # noqa: N818 - not an error: the careful reader tak
     """The chunk is not as rosbag writes one; read it entry by entry."""
 
 
+@functools.lru_cache(maxsize=1024)
 def _layouts(conn_id: int) -> np.ndarray:
     """The 34 bytes a message record of ``conn_id`` starts with in rosbag's two layouts."""
     conn = b"\t\x00\x00\x00conn=" + struct.pack("<I", conn_id)
@@ -70,8 +72,9 @@ def chunk_arrays(
             continue
         entries = np.frombuffer(raw, _ENTRY)
         pos = entries["off"].astype(np.int64) + base
-        if int(pos.max()) + _HEAD > end:
-            raise Irregular("an entry points past the chunk")
+        # Rising offsets: no two entries at one record (a record is of one connection).
+        if int(pos[-1]) + _HEAD > end or (len(pos) > 1 and not (np.diff(pos) > 0).all()):
+            raise Irregular("the entries do not point at records one for one, in order")
         heads = data[pos[:, None] + _SPAN]
         layouts = _layouts(conn_id)
         if not (heads[:, :34] == layouts[0]).all() and not (heads[:, :34] == layouts[1]).all():
@@ -88,9 +91,9 @@ def chunk_arrays(
     if not parts:
         empty = np.zeros(0, np.int64)
         return empty, empty, empty
+    if len(parts) == 1 and (np.diff(parts[0][0]) >= 0).all():
+        return parts[0][0], parts[0][2], parts[0][3]  # in time order already
     times, ranks, starts, lengths = (np.concatenate(column) for column in zip(*parts, strict=True))
-    if len(np.unique(starts)) != len(starts):
-        raise Irregular("two index entries point at one record")
     order = np.lexsort((starts, ranks, times))
     return times[order], starts[order], lengths[order]
 

@@ -32,8 +32,10 @@ from rostools.msgs.store import TypeStore
 #: Messages per record batch unless the caller says (Arrow's engines like batches of 10^4-10^6).
 DEFAULT_BATCH_ROWS: Final = 65536
 #: A batch ends once its messages hold this many bytes, whatever ``batch_rows`` says: what
-#: bounds memory with big messages (point clouds, images).
-BATCH_BYTES: Final = 64 << 20
+#: bounds memory with big messages (point clouds, images). Under glibc's largest mmap
+#: threshold (32 MiB), so a batch's buffers are reused, not mapped afresh and faulted in: 64
+#: MiB batches took half again as long to export point clouds.
+BATCH_BYTES: Final = 16 << 20
 
 Paths = Sequence[str | Path] | str | Path
 

@@ -395,3 +395,20 @@ def test_two_tables_of_one_type_read_at_once_keep_their_own_rows(tmp_path: Path)
         thread.join()
     assert got["/a"] == [float(i) for i in range(3000)]
     assert got["/b"] == [-float(i) for i in range(3000)]
+
+
+def test_batches_end_at_batch_rows_or_at_the_message_that_reaches_batch_bytes(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    from rostools.bag.formats.runs import Run
+    from rostools.bag.tables import batches
+
+    monkeypatch.setattr(batches, "BATCH_BYTES", 100)
+    sizes = [10] * 25 + [95, 3, 200, 1, 1, 1]
+    data = [memoryview(bytes(n)) for n in sizes]
+    runs = [Run(np.arange(a, b), data[a:b]) for a, b in ((0, 7), (7, 26), (26, 31))]
+    cut = [[int(t) for part in parts for t in part.times] for parts in batches._cut(runs, 8)]
+    # 8 rows three times; then 10 + 95 reaches 100, 3 + 200 passes it, and the rest
+    assert cut == [
+        list(range(0, 8)), list(range(8, 16)), list(range(16, 24)), [24, 25], [26, 27], [28, 29, 30]
+    ]  # fmt: skip

@@ -33,6 +33,9 @@ _HEAD = 46  # bytes of a 38-byte-header message record before its data
 _SPAN = np.arange(_HEAD, dtype=np.int64)
 _NS = np.uint64(1_000_000_000)
 _LOW = np.uint64(0xFFFFFFFF)
+#: Messages of at most this size are copied out with their record headers, in one pass, for
+#: ``Run.rows`` (what fixed-layout types are: Imu, Odometry; bigger ones are not read so).
+ROW_BYTES = 4096
 
 
 class Irregular(Exception):  # noqa: N818 - not an error: the careful reader takes the chunk
@@ -55,8 +58,11 @@ def chunk_arrays(
     records: Sequence[tuple[int, memoryview]],
     counts: Mapping[int, int],
     wanted: Mapping[int, tuple[int, Connection]],
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(times ns, data starts, data lengths) of the wanted messages of a chunk, in time order.
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray | None]:
+    """(times ns, data starts, data lengths, rows) of the wanted messages of a chunk.
+
+    In time order; ``rows`` their bytes as one 2-D array when they share a size of at most
+    ``ROW_BYTES``, else None.
 
     ``buf[base:end]`` holds the chunk's records, ``records`` are its index records and
     ``counts`` its chunk info's messages per connection. Ties in time go by the connection's
@@ -67,6 +73,7 @@ def chunk_arrays(
         raise Irregular("the index records are not those of the chunk info")
     data = np.frombuffer(buf, np.uint8)
     parts: list[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]] = []
+    blocks: list[np.ndarray | None] = []
     for conn_id, raw in records:
         if conn_id not in wanted or not len(raw):
             continue
@@ -75,7 +82,15 @@ def chunk_arrays(
         # Rising offsets: no two entries at one record (a record is of one connection).
         if int(pos[-1]) + _HEAD > end or (len(pos) > 1 and not (np.diff(pos) > 0).all()):
             raise Irregular("the entries do not point at records one for one, in order")
-        heads = data[pos[:, None] + _SPAN]
+        # The records with the first one's size, when small: one strided copy per stretch of
+        # records a step apart, headers and data at once.
+        size = int.from_bytes(buf[int(pos[0]) + 42 : int(pos[0]) + _HEAD], "little")
+        block = None
+        if size <= ROW_BYTES and int(pos[-1]) + _HEAD + size <= end:
+            block = _gather(data, pos, _HEAD + size)
+            heads = block[:, :_HEAD]
+        else:
+            heads = data[pos[:, None] + _SPAN]
         layouts = _layouts(conn_id)
         if not (heads[:, :34] == layouts[0]).all() and not (heads[:, :34] == layouts[1]).all():
             raise Irregular("a record is not laid out as rosbag writes them")
@@ -88,14 +103,21 @@ def chunk_arrays(
         times = ((stamps & _LOW) * _NS + (stamps >> np.uint64(32))).astype(np.int64)
         rank = np.full(len(times), wanted[conn_id][0], np.int64)
         parts.append((times, rank, starts, lengths))
+        blocks.append(block[:, _HEAD:] if block is not None and (lengths == size).all() else None)
     if not parts:
         empty = np.zeros(0, np.int64)
-        return empty, empty, empty
+        return empty, empty, empty, None
     if len(parts) == 1 and (np.diff(parts[0][0]) >= 0).all():
-        return parts[0][0], parts[0][2], parts[0][3]  # in time order already
+        return parts[0][0], parts[0][2], parts[0][3], blocks[0]  # in time order already
     times, ranks, starts, lengths = (np.concatenate(column) for column in zip(*parts, strict=True))
     order = np.lexsort((starts, ranks, times))
-    return times[order], starts[order], lengths[order]
+    rows: np.ndarray | None = None
+    if (
+        all(b is not None for b in blocks)
+        and len({b.shape[1] for b in blocks if b is not None}) == 1
+    ):
+        rows = np.concatenate(blocks)[order]  # type: ignore[arg-type]
+    return times[order], starts[order], lengths[order], rows
 
 
 #: Messages per run when a run is cut from a stream of messages.
@@ -116,9 +138,11 @@ class Run:
         buf: Any = None,
         starts: np.ndarray | None = None,
         lengths: np.ndarray | None = None,
+        rows: np.ndarray | None = None,
     ) -> None:
         self.times, self._data, self.buf = times, data, buf
         self.starts, self.lengths = starts, lengths
+        self._rows = rows  # the bytes as one 2-D array, when the reader copied them out so
 
     def __len__(self) -> int:
         return len(self.times)
@@ -145,10 +169,13 @@ class Run:
             part.lengths = None if self.lengths is None else self.lengths[i:j]
             return part
         assert self.starts is not None and self.lengths is not None
-        return Run(self.times[i:j], None, self.buf, self.starts[i:j], self.lengths[i:j])
+        rows = None if self._rows is None else self._rows[i:j]
+        return Run(self.times[i:j], None, self.buf, self.starts[i:j], self.lengths[i:j], rows)
 
     def rows(self, size: int) -> np.ndarray | None:
         """The messages as one ``(count, size)`` byte array, or None if one is not ``size``."""
+        if self._rows is not None and self._rows.shape[1] == size:
+            return self._rows
         if len(self) and (self.sizes() != size).any():
             return None
         if self.starts is None:
@@ -164,10 +191,8 @@ def _gather(data: np.ndarray, starts: np.ndarray, size: int) -> np.ndarray:
     steps = np.diff(starts)
     # Where the step changes: each stretch between two is one strided copy.
     cuts = np.flatnonzero(steps[1:] != steps[:-1]) + 1
-    if len(cuts) > len(starts) // 8:  # no stretches to speak of: one message at a time
-        for k, at in enumerate(starts.tolist()):
-            out[k] = data[at : at + size]
-        return out
+    if len(cuts) > len(starts) // 8:  # no stretches to speak of: an index per byte
+        return data[starts[:, None] + np.arange(size)]
     bounds = [0, *cuts.tolist(), len(steps)]
     for a, b in itertools.pairwise(bounds):
         if b > a:
@@ -238,7 +263,7 @@ def _chunk_run(
     try:
         buf, base, end = reader.chunk_data(chunk)
         records = list(reader.index_records(chunk))
-        times, starts, lengths = chunk_arrays(buf, base, end, records, chunk.counts, wanted)
+        times, starts, lengths, rows = chunk_arrays(buf, base, end, records, chunk.counts, wanted)
     except (BagFormatError, Irregular):
         return None
     if len(times):
@@ -253,4 +278,5 @@ def _chunk_run(
             return None
         keep = slice(np.searchsorted(times, lo), np.searchsorted(times, hi, side="right"))
         times, starts, lengths = times[keep], starts[keep], lengths[keep]
-    return Run(times, None, buf, starts, lengths)
+        rows = None if rows is None else rows[keep]
+    return Run(times, None, buf, starts, lengths, rows)

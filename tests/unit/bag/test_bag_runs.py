@@ -22,16 +22,21 @@ Read = tuple[list[tuple[int, bytes]], list[str], list[str]] | str
 
 
 def _read(path: Path, bulk: bool, topics: set[str] | None, window: tuple[Any, Any]) -> Read:
-    """(messages, notes, damage) of one way of reading, or the one line it failed with."""
+    """(messages, notes, damage) of one way of reading, or the one line it failed with.
+
+    The chunk-at-a-time way also gives its messages as one array when they share a size.
+    """
     try:
         with open_bag(path) as reader:
             chosen = [c for c in reader.connections if topics is None or c.topic in topics]
             if bulk:
-                got = [
-                    (int(t), bytes(d))
-                    for run in reader.runs(chosen, *window)
-                    for t, d in zip(run.times, run.data(), strict=True)
-                ]
+                got: list[tuple[int, bytes]] = []
+                for run in reader.runs(chosen, *window):
+                    data = [bytes(d) for d in run.data()]
+                    got += zip(run.times.tolist(), data, strict=True)
+                    rows = run.rows(len(data[0]))  # copied out with the headers, or now
+                    if rows is not None:
+                        assert [r.tobytes() for r in rows] == data
             else:
                 got = [(t, bytes(d)) for _, t, d in reader.messages(None, *window, chosen)]
             return got, list(reader.notes), list(reader.damage)

@@ -18,6 +18,7 @@ the size of the bag. pyarrow is imported when a writer is opened.
 from __future__ import annotations
 
 import base64
+import functools
 import json
 import math
 import queue
@@ -51,7 +52,9 @@ def open_table(fmt: str, path: Path, schema: pa.Schema) -> TableWriter:
         import pyarrow.parquet as pq
 
         text = _string_columns(schema)
-        return Behind(pq.ParquetWriter(str(path), schema, compression="zstd", use_dictionary=text))
+        return Behind(
+            pq.ParquetWriter(str(path), schema, compression="zstd", use_dictionary=list(text))
+        )
     if fmt == "arrow":
         import pyarrow as pa
 
@@ -61,7 +64,8 @@ def open_table(fmt: str, path: Path, schema: pa.Schema) -> TableWriter:
     return _Ndjson(path, schema)
 
 
-def _string_columns(schema: pa.Schema) -> list[str]:
+@functools.lru_cache(maxsize=64)  # a schema per topic, met again in every bag
+def _string_columns(schema: pa.Schema) -> tuple[str, ...]:
     """The Parquet paths of ``schema``'s string columns: the ones a dictionary is for.
 
     Frame ids, names and labels repeat; numbers rarely do, and trying a dictionary for each
@@ -73,26 +77,28 @@ def _string_columns(schema: pa.Schema) -> list[str]:
     sink = pa.BufferOutputStream()
     pq.ParquetWriter(sink, schema).close()  # the schema alone, as Parquet lays it out
     columns = pq.ParquetFile(pa.BufferReader(sink.getvalue())).schema
-    return [
+    return tuple(
         c.path for c in map(columns.column, range(len(columns))) if c.logical_type.type == "STRING"
-    ]
+    )
 
 
 class Behind:
-    """A writer run on a thread of its own, a batch or two behind the caller.
+    """A writer run on a thread of its own, a batch behind the caller.
 
     Parquet's encoding and compression run in C++ without the GIL: on a thread they overlap
-    the decoding of the next batch (the export's other half). An error of the writer is
-    raised once, by the next ``write`` or by ``close``; the batches after it are dropped.
+    the decoding of the next batch (the export's other half). The thread starts with a
+    table's second batch: a table of one batch, as most of a small bag's are, is written on
+    the caller's thread, at no cost of a thread. An error of the writer is raised once, by the
+    next ``write`` or by ``close``; the batches after it are dropped.
     """
 
     def __init__(self, writer: TableWriter) -> None:
         self.writer = writer
+        self.first: pa.RecordBatch | None = None  # held until a second comes, or the close
         self.queue: queue.Queue[Any] = queue.Queue(maxsize=BEHIND_BATCHES)
+        self.thread: threading.Thread | None = None
         self.error: BaseException | None = None
         self.told = False  # the error was raised to the caller once
-        self.thread = threading.Thread(target=self._run, name="table-writer", daemon=True)
-        self.thread.start()
 
     def _run(self) -> None:
         while (batch := self.queue.get()) is not None:
@@ -110,14 +116,25 @@ class Behind:
     def write(self, batch: pa.RecordBatch) -> None:
         """Queue ``batch`` (waits while ``BEHIND_BATCHES`` are queued)."""
         self._raise()
+        if self.thread is None:
+            if self.first is None:
+                self.first = batch
+                return
+            self.thread = threading.Thread(target=self._run, name="table-writer", daemon=True)
+            self.thread.start()
+            self.queue.put(self.first)
+            self.first = None
         self.queue.put(batch)
 
     def close(self) -> None:
         """Write what is queued, then finish the file."""
-        self.queue.put(None)
-        self.thread.join()
         try:
-            self._raise()
+            if self.thread is not None:
+                self.queue.put(None)
+                self.thread.join()
+                self._raise()
+            elif self.first is not None:
+                self.writer.write(self.first)
         finally:
             self.writer.close()
 

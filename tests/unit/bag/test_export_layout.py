@@ -70,3 +70,13 @@ def test_a_writer_behind_raises_its_error_on_the_callers_thread_and_still_closes
         finally:
             writer.close()  # as export's does: it raises the error only if no write did
     assert inner.written == [0] and inner.closed
+
+
+def test_a_table_of_one_batch_is_written_without_a_thread() -> None:
+    from rostools.bag.tables.writers import Behind
+
+    inner = _Failing()
+    writer = Behind(inner)  # type: ignore[arg-type]
+    writer.write("only")  # type: ignore[arg-type]
+    writer.close()
+    assert writer.thread is None and inner.written == ["only"] and inner.closed

@@ -19,10 +19,11 @@ section's (``crc32_combine``).
 
 from __future__ import annotations
 
+import struct
 from array import array
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Iterable, Mapping
 from pathlib import Path
-from typing import Final
+from typing import Any, Final
 
 from rostools.bag.formats import mcap_format as fmt
 from rostools.bag.formats.base import BagWriter
@@ -42,6 +43,12 @@ _MSG = fmt.MESSAGE_PREFIX
 _Chunk = bytes | bytearray | memoryview
 #: Compresses a chunk's records, given in pieces, into pieces of the stored bytes.
 _Compress = Callable[[list[_Chunk]], list[_Chunk]]
+#: Takes the open chunk's buffer and a big run of bytes (``buf[start:end]``) by reference;
+#: gives the buffer to go on with.
+Cut = Callable[[bytearray, _Chunk, int, int], bytearray]
+#: Appends one message's bytes to the open chunk (``store_stream``).
+Append = Callable[[Any, bytearray, int, Cut], bytearray]
+_BLANK: Final = bytes(_MSG.size)
 
 
 class McapWriter(BagWriter):
@@ -145,6 +152,100 @@ class McapWriter(BagWriter):
         self._chunk_len = offset + 31 + size
         if self._chunk_len >= self.chunk_size:
             self._close_chunk()
+
+    def store_stream(
+        self,
+        stream: Iterable[tuple[object, int, _Chunk]],
+        route: Callable[[Any], tuple[int, Append]],
+        *,
+        skip: type[Exception] | tuple[type[Exception], ...] = (),
+        on_skip: Callable[[Any, Exception], None] | None = None,
+    ) -> tuple[int, int]:
+        """Store ``(key, log time ns, data)`` messages, each appended by its key's function:
+        (messages read, messages stored).
+
+        ``route(key)``, asked once per key (known by identity: the caller keeps keys alive),
+        gives the channel id and ``append(data, out, b, cut) -> out`` (the contract of
+        ``ros2cdr.Converters.appender``): the message's bytes go straight into the open chunk,
+        no buffer per message, and a big run of them by reference (``cut``). A message whose
+        ``append`` raises one of ``skip`` is taken back out and given to ``on_skip``. Any other
+        exception leaves the writer to be aborted.
+        """
+        self._check_open()
+        routes: dict[int, tuple[int, Append, object]] = {}
+        pack_into = _MSG.pack_into
+        limit = self.chunk_size
+        counts = self._counts
+        small = self._chunk_small
+        pieces = self._chunk_pieces
+        index = self._index
+        pb = self._chunk_len - len(small)  # bytes of the open chunk held in ``pieces``
+        first, last, unsorted = self._chunk_start, self._chunk_end, self._unsorted
+        read = stored = 0
+        t = 0
+
+        def cut(out: bytearray, buf: _Chunk, start: int, end: int) -> bytearray:
+            nonlocal pb
+            view = frozen(memoryview(buf)[start:end])
+            pieces.append(out)
+            pieces.append(view)
+            pb += len(out) + len(view)
+            return bytearray()
+
+        def sync() -> None:
+            self._chunk_small, self._chunk_pieces, self._index = small, pieces, index
+            self._chunk_len = pb + len(small)
+            self._chunk_start, self._chunk_end, self._unsorted = first, last, unsorted
+
+        try:
+            for key, t, data in stream:
+                read += 1
+                found = routes.get(id(key))
+                if found is None:
+                    found = routes[id(key)] = (*route(key), key)
+                at = len(small)
+                off = pb + at
+                small += _BLANK  # the record's head, packed once its length is known
+                try:
+                    out = found[1](data, small, at + 35, cut)
+                except skip as err:
+                    if pb + at != off:  # a cut in this message: take it back
+                        del pieces[next(i for i, p in enumerate(pieces) if p is small) :]
+                        pb = off - at
+                    del small[at:]
+                    if on_skip is not None:
+                        on_skip(key, err)
+                    continue
+                cid = found[0]
+                seq = counts[cid]
+                counts[cid] = seq + 1
+                size = pb + len(out) - off - 31  # ``pb`` grew by what was cut
+                pack_into(small, at, 5, 22 + size, cid, seq & 0xFFFFFFFF, t, t)
+                small = out
+                entries = index.get(cid)
+                if entries is None:
+                    entries = index[cid] = array("Q")
+                entries.append(t)
+                entries.append(off)
+                if not off:
+                    first = last = t
+                elif t >= last:
+                    last = t
+                else:
+                    unsorted = True  # message indexes get sorted when the chunk closes
+                    if t < first:
+                        first = t
+                stored += 1
+                if pb + len(small) >= limit:
+                    sync()
+                    self._close_chunk()
+                    small, pieces, index = self._chunk_small, self._chunk_pieces, self._index
+                    pb, unsorted = 0, False
+        except struct.error:
+            raise BagUsageError(f"time {t} ns does not fit an MCAP file") from None
+        finally:
+            sync()
+        return read, stored
 
     def time_span(self) -> tuple[int, int] | None:
         """The earliest and latest log time written so far, the open chunk's too (or None)."""

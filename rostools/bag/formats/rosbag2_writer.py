@@ -21,6 +21,7 @@ from __future__ import annotations
 import contextlib
 import os
 import shutil
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Final
@@ -158,6 +159,28 @@ class Rosbag2Writer:
         """Store one message already in CDR (encapsulation header first)."""
         self._check_open()
         self._store(topic.conn.id, t_ns, cdr)
+
+    def write_stream(
+        self,
+        stream: Iterable[tuple[Connection, int, bytes | bytearray | memoryview]],
+        on_misfit: Callable[[Connection, Exception], None],
+    ) -> tuple[int, int]:
+        """Convert and store ROS 1 messages ``(connection, t_ns, bytes)``: (read, written).
+
+        The fast way in (``McapWriter.store_stream``: each message converted straight into
+        the open chunk). A message whose bytes do not fit its type is left out and given to
+        ``on_misfit`` with its ``ros2cdr.ConversionError``. The caller keeps the connections
+        alive (they are known by identity).
+        """
+        from rostools.bag.formats.ros2cdr import ConversionError
+
+        self._check_open()
+
+        def route(conn: Connection) -> tuple[int, Any]:
+            topic = self.add_connection(conn)
+            return topic.conn.id, topic.type.append
+
+        return self._mcap.store_stream(stream, route, skip=ConversionError, on_skip=on_misfit)
 
     def count(self, topic: Ros2Topic) -> int:
         """Messages written so far on ``topic``."""

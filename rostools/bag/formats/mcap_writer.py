@@ -85,6 +85,8 @@ class McapWriter(BagWriter):
         self._chunk_len = 0
         self._chunk_start = 0
         self._chunk_end = 0
+        # Per channel, the open chunk's (log time, offset) pairs: emptied, not replaced, when
+        # a chunk closes (``store_stream`` keeps them at hand).
         self._index: dict[int, array[int]] = {}
         self._unsorted = False
         self._chunk_indexes: list[fmt.ChunkIndex] = []
@@ -172,59 +174,54 @@ class McapWriter(BagWriter):
         exception leaves the writer to be aborted.
         """
         self._check_open()
-        routes: dict[int, tuple[int, Append, object]] = {}
+        routes: dict[int, tuple[int, Append, array[int]]] = {}
+        keys = []  # alive while their ids are in ``routes``
         pack_into = _MSG.pack_into
+        blank = _BLANK
         limit = self.chunk_size
         counts = self._counts
+        before = sum(counts)
         small = self._chunk_small
-        pieces = self._chunk_pieces
         index = self._index
-        pb = self._chunk_len - len(small)  # bytes of the open chunk held in ``pieces``
+        cut = self._cut
+        pb = self._chunk_len - len(small)  # bytes of the open chunk in ``_chunk_pieces``
         first, last, unsorted = self._chunk_start, self._chunk_end, self._unsorted
-        read = stored = 0
-        t = 0
-
-        def cut(out: bytearray, buf: _Chunk, start: int, end: int) -> bytearray:
-            nonlocal pb
-            view = frozen(memoryview(buf)[start:end])
-            pieces.append(out)
-            pieces.append(view)
-            pb += len(out) + len(view)
-            return bytearray()
-
-        def sync() -> None:
-            self._chunk_small, self._chunk_pieces, self._index = small, pieces, index
-            self._chunk_len = pb + len(small)
-            self._chunk_start, self._chunk_end, self._unsorted = first, last, unsorted
-
+        skipped = t = 0
+        # No closures: the loop's variables stay plain locals, the fastest kind.
         try:
             for key, t, data in stream:
-                read += 1
                 found = routes.get(id(key))
                 if found is None:
-                    found = routes[id(key)] = (*route(key), key)
+                    cid, append = route(key)
+                    entries = index.get(cid)
+                    if entries is None:
+                        entries = index[cid] = array("Q")
+                    found = routes[id(key)] = (cid, append, entries)
+                    keys.append(key)
+                cid, append, entries = found
                 at = len(small)
                 off = pb + at
-                small += _BLANK  # the record's head, packed once its length is known
+                small += blank  # the record's head, packed once its length is known
                 try:
-                    out = found[1](data, small, at + 35, cut)
+                    out = append(data, small, at + 35, cut)
                 except skip as err:
-                    if pb + at != off:  # a cut in this message: take it back
-                        del pieces[next(i for i, p in enumerate(pieces) if p is small) :]
-                        pb = off - at
+                    pieces = self._chunk_pieces
+                    for i, piece in enumerate(pieces):
+                        if piece is small:  # a cut in this message: take it back
+                            del pieces[i:]
+                            break
                     del small[at:]
+                    skipped += 1
                     if on_skip is not None:
                         on_skip(key, err)
                     continue
-                cid = found[0]
+                if out is not small:  # a big run went by reference
+                    pb = sum(map(len, self._chunk_pieces))
                 seq = counts[cid]
                 counts[cid] = seq + 1
-                size = pb + len(out) - off - 31  # ``pb`` grew by what was cut
-                pack_into(small, at, 5, 22 + size, cid, seq & 0xFFFFFFFF, t, t)
+                # the record's length: 22 + the data's (``pb`` grew by what was cut)
+                pack_into(small, at, 5, pb + len(out) - off - 9, cid, seq & 0xFFFFFFFF, t, t)
                 small = out
-                entries = index.get(cid)
-                if entries is None:
-                    entries = index[cid] = array("Q")
                 entries.append(t)
                 entries.append(off)
                 if not off:
@@ -235,17 +232,25 @@ class McapWriter(BagWriter):
                     unsorted = True  # message indexes get sorted when the chunk closes
                     if t < first:
                         first = t
-                stored += 1
                 if pb + len(small) >= limit:
-                    sync()
+                    self._chunk_small, self._chunk_len = small, pb + len(small)
+                    self._chunk_start, self._chunk_end, self._unsorted = first, last, unsorted
                     self._close_chunk()
-                    small, pieces, index = self._chunk_small, self._chunk_pieces, self._index
-                    pb, unsorted = 0, False
+                    small, pb, unsorted = self._chunk_small, 0, False
         except struct.error:
             raise BagUsageError(f"time {t} ns does not fit an MCAP file") from None
         finally:
-            sync()
-        return read, stored
+            self._chunk_small, self._chunk_len = small, pb + len(small)
+            self._chunk_start, self._chunk_end, self._unsorted = first, last, unsorted
+        stored = sum(counts) - before
+        return stored + skipped, stored
+
+    def _cut(self, out: bytearray, buf: _Chunk, start: int, end: int) -> bytearray:
+        """``store_stream``'s ``cut``: ``out`` and ``buf[start:end]`` join the open chunk's
+        pieces (the run by reference, if it cannot change); a new buffer goes on."""
+        self._chunk_pieces.append(out)
+        self._chunk_pieces.append(frozen(memoryview(buf)[start:end]))
+        return bytearray()
 
     def time_span(self) -> tuple[int, int] | None:
         """The earliest and latest log time written so far, the open chunk's too (or None)."""
@@ -402,7 +407,7 @@ class McapWriter(BagWriter):
         index_start = sink.tell()
         offsets: dict[int, int] = {}
         if packed is None:
-            packed = {cid: self._packed_index(cid) for cid in self._index}
+            packed = {cid: self._packed_index(cid) for cid, e in self._index.items() if e}
         for cid in sorted(packed):
             offsets[cid] = sink.tell()
             self._write(fmt.encode_message_index(cid, packed[cid]))
@@ -422,7 +427,8 @@ class McapWriter(BagWriter):
         self._chunk_small = bytearray()
         self._chunk_pieces = []
         self._chunk_len = 0
-        self._index = {}
+        for entries in self._index.values():
+            del entries[:]
         self._unsorted = False
         sink.flush()
 

@@ -163,8 +163,7 @@ class McapWriter(BagWriter):
         skip: type[Exception] | tuple[type[Exception], ...] = (),
         on_skip: Callable[[Any, Exception], None] | None = None,
     ) -> tuple[int, int]:
-        """Store ``(key, log time ns, data)`` messages, each appended by its key's function:
-        (messages read, messages stored).
+        """Store ``(key, log time ns, data)`` messages: (messages read, messages stored).
 
         ``route(key)``, asked once per key (known by identity: the caller keeps keys alive),
         gives the channel id and ``append(data, out, b, cut) -> out`` (the contract of
@@ -246,8 +245,10 @@ class McapWriter(BagWriter):
         return stored + skipped, stored
 
     def _cut(self, out: bytearray, buf: _Chunk, start: int, end: int) -> bytearray:
-        """``store_stream``'s ``cut``: ``out`` and ``buf[start:end]`` join the open chunk's
-        pieces (the run by reference, if it cannot change); a new buffer goes on."""
+        """``store_stream``'s ``cut``: ``out`` and ``buf[start:end]`` join the chunk's pieces.
+
+        The run goes by reference if it cannot change; the message goes on in a new buffer.
+        """
         self._chunk_pieces.append(out)
         self._chunk_pieces.append(frozen(memoryview(buf)[start:end]))
         return bytearray()

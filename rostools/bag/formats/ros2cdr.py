@@ -418,6 +418,7 @@ class _Gen(GeneratedCode):
         self.line(f"if {c} >= _BIG and {at} + {c} <= len(buf):")
         self.line(f"    b -= len(out) + {c}")
         self.line(f"    out = cut(out, buf, {at}, {at} + {c})")
+        self.line("    b += len(out)")  # what the new buffer starts with
         self.line("else:")
         self.line(f"    out += buf[{at}:{at} + {c}]")
 

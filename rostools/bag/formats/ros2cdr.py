@@ -51,6 +51,7 @@ HEADER = "std_msgs/msg/Header"
 ENCAPSULATION = b"\x00\x01\x00\x00"  # CDR, little-endian, no options
 _U32 = struct.Struct("<I")
 _ZEROS = tuple(bytes(n) for n in range(8))
+_NUL_PADS = tuple(bytes(n + 1) for n in range(8))  # a string's NUL, then n bytes of padding
 #: What a generated converter raises on input shorter than its counts say.
 _SHORT = (struct.error, IndexError, ValueError, OverflowError, MemoryError)
 
@@ -407,6 +408,23 @@ class _Gen(GeneratedCode):
         else:
             self.unknown()
 
+    def nul_and_pad(self) -> None:
+        """A string's NUL and the padding after it appended at once (one step less)."""
+        lines = self.lines
+        pad = f"out += _Z[({self.base} - len(out)) & "
+        for i in range(len(lines) - 2, 0, -1):
+            nul = lines[i - 1]
+            if not nul.endswith("out.append(0)"):
+                continue
+            indent = nul[: -len("out.append(0)")]
+            moved = lines[i].startswith(indent + "pos += ")
+            j = i + 1 if moved else i
+            if j < len(lines) and lines[j].startswith(indent + pad):
+                mask = lines[j][len(indent + pad) :]
+                merged = f"{indent}out += _N[({self.base} - 1 - len(out)) & {mask}"
+                lines[i - 1 : j + 1] = [lines[i], merged] if moved else [merged]
+        self.env.setdefault("_N", _NUL_PADS)
+
     def run(self, at: str, size: str) -> None:
         """``size`` bytes from ``at`` as they are; in an appender, a big run by reference.
 
@@ -527,6 +545,7 @@ class Converters:
             gen.line(f"    {gen.ref(_mismatch, 'f')}(len(buf) + 1, len(buf))")
             gen.line(f"if pos != len(buf): {gen.ref(_mismatch, 'f')}(pos, len(buf))")
             gen.line("return out")
+            gen.nul_and_pad()
             signature = "append(buf, out, b, cut)" if into else "convert(buf)"
             fn = gen.compile(signature, "ros1->cdr", dname, bind=True)
             self._done[key] = fn

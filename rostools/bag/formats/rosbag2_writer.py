@@ -30,6 +30,7 @@ from rostools.bag.formats import mcap_format as fmt
 from rostools.bag.formats.mcap_writer import DEFAULT_CHUNK_SIZE, McapWriter
 from rostools.bag.formats.model import BagUsageError, Connection
 from rostools.bag.formats.ros2types import DEFAULT_DISTRO, Ros2Mapping, Ros2Type
+from rostools.bag.formats.sink import BIG_PAYLOAD as BIG
 
 METADATA_FILE: Final = "metadata.yaml"
 _VERSIONS: Final = {
@@ -153,7 +154,10 @@ class Rosbag2Writer:
     def write(self, topic: Ros2Topic, t_ns: int, data: bytes | bytearray | memoryview) -> None:
         """Convert one ROS 1 message of ``topic`` and store it at ``t_ns``."""
         self._check_open()
-        self._store(topic.conn.id, t_ns, topic.type.convert(data))
+        cdr = topic.type.convert(data)
+        # Fresh and never changed again: a big one goes by reference (a read-only view of it)
+        # rather than copied as a caller's reusable buffer would be.
+        self._store(topic.conn.id, t_ns, memoryview(cdr).toreadonly() if len(cdr) >= BIG else cdr)
 
     def write_cdr(self, topic: Ros2Topic, t_ns: int, cdr: bytes | bytearray | memoryview) -> None:
         """Store one message already in CDR (encapsulation header first)."""

@@ -120,3 +120,30 @@ def test_the_appender_cuts_big_runs_only_and_keeps_the_alignment() -> None:
             assert cuts[-1] == (5, 5 + size)
             whole = bytes(out[5:]) + data[5 : 5 + size] + bytes(result[3:])
             assert whole == bytes(plain(data))
+
+
+def test_a_big_message_written_one_by_one_is_its_cdr(tmp_path: Path) -> None:
+    """``Rosbag2Writer.write`` (``bag record --to ros2``) passes a big CDR by reference."""
+    from mcap.reader import make_reader
+
+    from rostools.bag.formats.rosbag2_writer import Rosbag2Writer
+    from rostools.msgs.store import TypeStore
+
+    store = TypeStore.default()
+    conn = Connection(
+        id=0, topic="/img", type="sensor_msgs/Image", md5sum=store.md5("sensor_msgs/Image"),
+        definition=store.full_text("sensor_msgs/Image"),
+    )  # fmt: skip
+    size = BIG_PAYLOAD * 2
+    head = struct.pack("<3I", 1, 2, 3) + struct.pack("<I", 3) + b"cam" + struct.pack("<II", 2, 3)
+    data = head + struct.pack("<I", 4) + b"rgb8" + struct.pack("<BII", 0, 9, size)
+    data += bytes(k & 0xFF for k in range(size))
+    path = tmp_path / "one.mcap"
+    with Rosbag2Writer(path) as writer:
+        topic = writer.add_connection(conn)
+        writer.write(topic, 5, data)
+        with pytest.raises(ConversionError):  # short: refused, nothing stored
+            writer.write(topic, 6, data[: len(data) // 2])
+    with path.open("rb") as f:
+        got = [m.data for _, _, m in make_reader(f, validate_crcs=True).iter_messages()]
+    assert got == [bytes(topic.type.convert(data))]

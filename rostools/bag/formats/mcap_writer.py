@@ -10,6 +10,10 @@ channels, statistics and chunk indexes plus summary offsets. Schemas and channel
 the chunks as soon as they are declared, and every chunk goes to the OS when it closes, so a
 killed writer leaves everything but the open chunk recoverable.
 
+``store_stream`` stores a whole stream in one loop, each message's bytes appended straight
+into the open chunk by a function of the caller's (``bag convert --to ros2``'s converters):
+a message costs its conversion, a record head and two index numbers.
+
 Every CRC the format has is written: each chunk's (over its uncompressed records), the data
 section's (in DataEnd) and the summary's (in the footer), so ``bag doctor`` and other readers
 can tell a flipped bit. They cost one pass of ``crc32`` (zlib-ng's, ``mcap_format``) over

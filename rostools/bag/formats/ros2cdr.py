@@ -3,7 +3,9 @@
 As the codec does for ROS 1 (``msgs/codec.py``), each type gets the Python source of one
 function, compiled once (``msgs.codegen.GeneratedCode``): no Python object per message. The
 function walks the ROS 1 bytes and appends the CDR (little-endian, XCDR1 as ROS 2 writes it)
-to a ``bytearray`` that starts with the encapsulation header ``00 01 00 00``:
+to a ``bytearray`` that starts with the encapsulation header ``00 01 00 00`` (an *appender*,
+the same function over a given buffer, lets ``bag convert --to ros2`` write into the MCAP's
+open chunk, a big byte run such as an image's passed on by reference):
 
 - runs of fixed-size fields are copied as slices of the input, with the padding CDR wants
   between them: where the output's offset is known at generation time (modulo 8, 4 or 2) the

@@ -24,11 +24,12 @@ from __future__ import annotations
 
 import struct
 from bisect import bisect_left
-from collections.abc import Collection, Iterator, Mapping
+from collections.abc import Collection, Iterable, Iterator, Mapping
 from dataclasses import dataclass, field
 from functools import partial
 from operator import attrgetter
 from pathlib import Path
+from typing import Any
 
 from rostools.bag.formats import rosbag1_format as fmt
 from rostools.bag.formats.base import MAX_TIME_NS, BagReader, Forgetting, map_file, release
@@ -642,6 +643,15 @@ class Bag1Reader(BagReader):
             and (not wanted.keys().isdisjoint(chunk.counts) or not self._lists_truly(chunk))
         ]
         return blocks
+
+    def runs(
+        self, connections: Iterable[Connection], start: int | None = None, end: int | None = None
+    ) -> Iterator[Any]:
+        """``messages`` of ``connections`` a chunk at a time (``runs``)."""
+        from rostools.bag.formats.runs import bag_runs
+
+        lo, hi = 0 if start is None else start, MAX_TIME_NS if end is None else end
+        return bag_runs(self, self.wanted(None, connections), lo, hi)
 
     def _lists_truly(self, chunk: Bag1Chunk) -> bool:
         """Whether a chunk's index records are of the connections its chunk info lists."""

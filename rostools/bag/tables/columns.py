@@ -19,7 +19,7 @@ from typing import Any
 
 import numpy as np
 
-from rostools.bag.tables.arrow import pyarrow
+from rostools.bag.tables.arrow import MAX_OFFSET, from_numpy, pyarrow, string_array
 from rostools.errors import InvalidDataError
 from rostools.msgs.codec import BYTE_TYPES, Codec, DecodeError
 from rostools.msgs.codegen import GeneratedCode
@@ -108,8 +108,8 @@ class RunColumn(Node):
         if self.base in TIME_CODES:
             pairs = table[self.key]  # (secs, nsecs) last: the wire interleaves them
             ns = pairs[..., 0].astype(np.int64) * _NS + pairs[..., 1]
-            values = pa.array(
-                ns.reshape(-1), self.type if self.length is None else self.type.value_type
+            values = from_numpy(
+                pa, ns.reshape(-1), self.type if self.length is None else self.type.value_type
             )
         else:
             column = table[self.key]
@@ -118,7 +118,7 @@ class RunColumn(Node):
                 return pa.FixedSizeBinaryArray.from_buffers(
                     self.type, rows, [None, pa.py_buffer(data)]
                 )
-            values = pa.array(np.ascontiguousarray(column).reshape(-1))
+            values = from_numpy(pa, column.reshape(-1), arrow_scalar(pa, self.base))
         if self.length is None:
             return values
         return pa.FixedSizeListArray.from_arrays(values, self.length)
@@ -142,7 +142,7 @@ class StringColumn(Node):
         """The strings, or lists of them."""
         if self.built is not None:
             return self.built
-        values = self.pa.array(self.values, self.pa.string())
+        values = string_array(self.pa, self.values)
         if not self.is_array:
             return values
         if self.length is not None:
@@ -198,7 +198,7 @@ class VarArrayColumn(Node):
         raw = np.frombuffer(b"".join(self.parts), self.dtype)
         if self.base in TIME_CODES:
             raw = raw["s"].astype(np.int64) * _NS + raw["n"]
-        values = self.pa.array(raw, self.type.value_type)
+        values = from_numpy(self.pa, raw, self.type.value_type)
         return self.pa.ListArray.from_arrays(_offsets(self.counts), values)
 
     def clear(self) -> None:
@@ -231,7 +231,7 @@ class StructColumn(Node):
     def finish(self, rows: int) -> Any:
         """The struct array."""
         if self.placeholder:
-            zeros = self.pa.array(np.zeros(rows, np.uint8))
+            zeros = from_numpy(self.pa, np.zeros(rows, np.uint8))
             return self.pa.StructArray.from_arrays([zeros], fields=list(self.type))
         if not self.children:  # the message itself is empty: rows of no fields
             return self.pa.array([{}] * rows, self.type)
@@ -260,18 +260,13 @@ class MessageArrayColumn(Node):
         self.counts.clear()
 
 
-#: Arrow's lists, strings and binary values of one batch hold at most this many elements or
-#: bytes (their offsets are 32-bit); ``BATCH_BYTES`` keeps batches far below it.
-MAX_OFFSET = (1 << 31) - 1
-
-
 def _offsets(counts: list[int]) -> Any:
     pa = pyarrow()
     offsets = np.zeros(len(counts) + 1, np.int64)
     np.cumsum(counts, out=offsets[1:])
     if offsets[-1] > MAX_OFFSET:  # one message of 2 GiB: refused, not wrapped around
         raise InvalidDataError(f"an array of {int(offsets[-1])} elements is too long for a table")
-    return pa.array(offsets.astype(np.int32))
+    return from_numpy(pa, offsets.astype(np.int32))
 
 
 class ColumnDecoder:

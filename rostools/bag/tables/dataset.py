@@ -12,6 +12,9 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Final
 
+import numpy as np
+
+from rostools.bag.tables.arrow import from_numpy, repeated_string
 from rostools.bag.tables.batches import DEFAULT_BATCH_ROWS
 from rostools.bag.tables.layout import bag_key, part_path
 from rostools.bag.tables.writers import FORMATS, open_table
@@ -95,12 +98,12 @@ def bag_columns(pa: Any, batch: pa.RecordBatch, name: str, start_ns: int | None)
     """
     rows = batch.num_rows
     kind = batch.schema.field("record_time").type
-    start = pa.scalar(start_ns, kind)
     schema = batch.schema.append(pa.field("bag_name", pa.string())).append(
         pa.field("bag_start", kind)
     )
+    starts = from_numpy(pa, np.full(rows, start_ns, np.int64), kind)
     # from_arrays, not append_column: pyarrow 14 (the extra's floor) has no such method
-    columns = [*batch.columns, pa.repeat(pa.scalar(name), rows), pa.repeat(start, rows)]
+    columns = [*batch.columns, repeated_string(pa, name, rows), starts]
     return pa.RecordBatch.from_arrays(columns, schema=schema)
 
 

@@ -15,21 +15,26 @@ from typing import Any
 
 import numpy as np
 
+from rostools.bag.formats import runs
 from rostools.bag.tables.columns import ColumnDecoder, Run, StringColumn
 
 
-def fill_uniform(decoder: ColumnDecoder, payloads: list[Any]) -> bool:
-    """Fill ``decoder``'s columns with the batch ``payloads`` if they share one layout.
+def fill_uniform(decoder: ColumnDecoder, parts: list[runs.Run]) -> bool:
+    """Fill ``decoder``'s columns with the batch of messages ``parts`` if they share one layout.
 
     False (and nothing filled) when the type or the batch does not allow it.
     """
     ops = decoder.ops
-    if not ops or not payloads:
+    if not ops or not parts or not len(parts[0]):
         return False
-    size = len(payloads[0])
-    if any(len(p) != size for p in payloads):
-        return False
-    rows = np.frombuffer(b"".join(payloads), np.uint8).reshape(len(payloads), size)
+    size = int(parts[0].sizes()[0])
+    blocks = []
+    for part in parts:
+        block = part.rows(size)
+        if block is None:
+            return False
+        blocks.append(block)
+    rows = blocks[0] if len(blocks) == 1 else np.concatenate(blocks)
     pieces: list[tuple[Run | StringColumn, Any]] = []
     pos = 0
     for op, width in ops:

@@ -1,9 +1,11 @@
-"""Where ``bag export`` puts each table: the reversible key of a topic or bag (issue 38)."""
+"""Where ``bag export`` puts each table: the reversible key of a topic or bag (issue 38); its
+writer on a thread of its own."""
 
 from __future__ import annotations
 
 from pathlib import Path
 
+import pytest
 from hypothesis import given, strategies as st
 
 from rostools.bag.tables.layout import bag_key, part_path, table_key, topic_key, topic_of_key
@@ -38,3 +40,33 @@ def test_a_bag_key_is_its_stem_escaped() -> None:
     assert part_path(Path("out"), "imu", "a", "parquet") == Path(
         "out/topic=imu/bag=a/part-0.parquet"
     )
+
+
+class _Failing:
+    """A table writer whose second write fails."""
+
+    def __init__(self) -> None:
+        self.written: list[object] = []
+        self.closed = False
+
+    def write(self, batch: object) -> None:
+        if self.written:
+            raise OSError("disk full")
+        self.written.append(batch)
+
+    def close(self) -> None:
+        self.closed = True
+
+
+def test_a_writer_behind_raises_its_error_on_the_callers_thread_and_still_closes() -> None:
+    from rostools.bag.tables.writers import Behind
+
+    inner = _Failing()
+    writer = Behind(inner)  # type: ignore[arg-type]
+    with pytest.raises(OSError, match="disk full"):
+        try:
+            for batch in range(100):  # the error comes back by a later write, or by close
+                writer.write(batch)  # type: ignore[arg-type]
+        finally:
+            writer.close()  # as export's does: it raises the error only if no write did
+    assert inner.written == [0] and inner.closed

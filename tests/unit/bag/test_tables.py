@@ -9,6 +9,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 import pytest
 
 import rostools
@@ -210,6 +211,37 @@ def test_the_api_loads_no_pyarrow_until_a_table_is_read() -> None:
     assert done.stdout.strip() == "False"
 
 
+def test_an_export_of_every_type_loads_no_pandas(synthetic: Path, tmp_path: Path) -> None:
+    # pa.array and pa.scalar import pandas to inspect what they are given: half a second of
+    # an export's start-up when pandas is installed.
+    code = (
+        "import sys; from pathlib import Path; from rostools.bag.tables.export import export;"
+        f"export([Path({str(synthetic)!r})], Path({str(tmp_path / 'out')!r}), jobs=1);"
+        "print('pandas' in sys.modules)"
+    )
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert done.stdout.strip() == "False"
+    assert list((tmp_path / "out").rglob("*.parquet"))
+
+
+def test_parquet_keeps_dictionaries_for_strings_only(synthetic: Path, tmp_path: Path) -> None:
+    import pyarrow.parquet as pq
+
+    from rostools.bag.tables.export import export
+
+    export([synthetic], tmp_path / "out", jobs=1)
+    parts = list((tmp_path / "out").rglob("*.parquet"))
+    assert parts
+    for part in parts:
+        meta = pq.ParquetFile(part).metadata
+        chunks = [meta.row_group(0).column(i) for i in range(meta.num_columns)]
+        with_dictionary = {c.path_in_schema for c in chunks if c.dictionary_page_offset}
+        strings = {c.path for c in map(meta.schema.column, range(meta.num_columns))
+                   if c.logical_type.type == "STRING"}  # fmt: skip
+        assert "bag_name" in strings
+        assert with_dictionary == strings
+
+
 def test_ros2_mcap_is_refused_in_one_line(tmp_path: Path) -> None:
     from rostools.bag.formats import mcap_format as fmt
     from rostools.bag.formats.model import UnsupportedBagError
@@ -270,18 +302,22 @@ def test_a_batch_of_one_layout_reads_as_the_codec_decodes(tmp_path: Path) -> Non
 
 def test_uniform_batches_are_read_in_one_go_and_others_are_not(tmp_path: Path) -> None:
     from rostools.bag.formats.access import open_bag
+    from rostools.bag.formats.runs import Run
     from rostools.bag.tables.batches import _decoder
     from rostools.bag.tables.uniform import fill_uniform
+
+    def runs(*batch: bytes) -> list[Run]:  # a batch as it comes: in runs, here one a message
+        return [Run(np.zeros(1, np.int64), [memoryview(data)]) for data in batch]
 
     _odometry_bag(tmp_path / "odom.bag", [b"odom", b"odom", b"map", b"o\xffom"])
     with open_bag(tmp_path / "odom.bag") as reader:
         payloads = [bytes(d) for _, _, d in reader.messages()]
         decoder = _decoder(list(reader.connections))
-    assert fill_uniform(decoder, payloads[:2])
+    assert fill_uniform(decoder, runs(*payloads[:2]))
     decoder.clear()
-    assert not fill_uniform(decoder, payloads[1:3])  # two sizes
-    assert not fill_uniform(decoder, [payloads[0], payloads[3]])  # same size, not UTF-8
-    assert not fill_uniform(decoder, [payloads[0] + b"\x00"] * 2)  # bytes after the message
+    assert not fill_uniform(decoder, runs(*payloads[1:3]))  # two sizes
+    assert not fill_uniform(decoder, runs(payloads[0], payloads[3]))  # same size, not UTF-8
+    assert not fill_uniform(decoder, runs(payloads[0] + b"\x00", payloads[0] + b"\x00"))
     assert decoder.finish(0)[0].to_pylist() == []  # and nothing was filled by the refusals
 
 
@@ -359,3 +395,20 @@ def test_two_tables_of_one_type_read_at_once_keep_their_own_rows(tmp_path: Path)
         thread.join()
     assert got["/a"] == [float(i) for i in range(3000)]
     assert got["/b"] == [-float(i) for i in range(3000)]
+
+
+def test_batches_end_at_batch_rows_or_at_the_message_that_reaches_batch_bytes(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    from rostools.bag.formats.runs import Run
+    from rostools.bag.tables import batches
+
+    monkeypatch.setattr(batches, "BATCH_BYTES", 100)
+    sizes = [10] * 25 + [95, 3, 200, 1, 1, 1]
+    data = [memoryview(bytes(n)) for n in sizes]
+    runs = [Run(np.arange(a, b), data[a:b]) for a, b in ((0, 7), (7, 26), (26, 31))]
+    cut = [[int(t) for part in parts for t in part.times] for parts in batches._cut(runs, 8)]
+    # 8 rows three times; then 10 + 95 reaches 100, 3 + 200 passes it, and the rest
+    assert cut == [
+        list(range(0, 8)), list(range(8, 16)), list(range(16, 24)), [24, 25], [26, 27], [28, 29, 30]
+    ]  # fmt: skip

@@ -147,3 +147,37 @@ def test_a_big_message_written_one_by_one_is_its_cdr(tmp_path: Path) -> None:
     with path.open("rb") as f:
         got = [m.data for _, _, m in make_reader(f, validate_crcs=True).iter_messages()]
     assert got == [bytes(topic.type.convert(data))]
+
+
+def test_the_collector_runs_less_often_while_converting_and_as_before_after(
+    tmp_path: Path,
+) -> None:
+    import gc
+
+    from rostools.bag.tools import ros2convert
+    from tests.support.ros2conv import synthetic_bag
+
+    bag = tmp_path / "in.bag"
+    synthetic_bag(bag, count=2)
+    before = gc.get_threshold()
+    seen: list[tuple[int, int, int]] = []
+    pump = ros2convert._pump
+
+    def spy(*args: Any) -> Any:
+        seen.append(gc.get_threshold())
+        if len(seen) > 1:
+            raise KeyboardInterrupt  # a conversion stopped half way restores them too
+        return pump(*args)
+
+    ros2convert._pump = spy  # type: ignore[assignment]
+    try:
+        report = ros2convert.convert_to_ros2(bag, tmp_path / "out")
+        assert report.messages_written == report.messages_read > 0
+        assert gc.get_threshold() == before
+        with pytest.raises(KeyboardInterrupt):
+            ros2convert.convert_to_ros2(bag, tmp_path / "stopped")
+        assert not (tmp_path / "stopped").exists()
+    finally:
+        ros2convert._pump = pump
+    assert [t[0] for t in seen] == [ros2convert.GC_THRESHOLD] * 2
+    assert gc.get_threshold() == before

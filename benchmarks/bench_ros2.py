@@ -19,7 +19,8 @@ process's peak resident memory as the kernel counts it for a reaped child (``wai
 the runs so both find it in the page cache; each output is checked for the message count, then
 deleted; ``ROSTOOLS_BENCH_ROS2_OUT`` puts the outputs elsewhere (a tmpfs, to take the disk's
 write speed out of the figures). ``ROSTOOLS_BENCH_ROS2_RUNS`` runs each (default 1; the median
-is reported). Each note gives both processes' CPU seconds beside their wall time.
+is reported). Each note gives both processes' CPU seconds beside their wall time. A plain
+``cp`` of the input to the same place, timed the same way, is the floor beside each bag.
 """
 
 from __future__ import annotations
@@ -238,6 +239,15 @@ def _converted(argv: Sequence[str], out: Path, messages: int) -> Run:
         shutil.rmtree(out, ignore_errors=True)
 
 
+def _copied(src: Path, dst: Path) -> Run:
+    """A plain ``cp`` of the input to where the outputs go: what copying the bytes costs."""
+    dst.unlink(missing_ok=True)
+    try:
+        return _run(["cp", str(src), str(dst)])
+    finally:
+        dst.unlink(missing_ok=True)
+
+
 def _warm(path: Path) -> None:
     """Read the input once, so that neither converter pays for the disk and the other not."""
     with path.open("rb") as f:
@@ -269,12 +279,14 @@ def _compare(kind: str, label: str) -> list[Result]:
     theirs_argv = [_rosbags_convert(), "--src", str(bag), "--dst", str(theirs_out),
                    "--dst-storage", "mcap", "--dst-typestore", f"ros2_{distro}"]  # fmt: skip
     _warm(bag)
-    ours_runs, zstd_runs, theirs_runs = [], [], []
+    ours_runs, zstd_runs, theirs_runs, cp_runs = [], [], [], []
     for _ in range(_runs()):  # interleaved, so that drift hits both alike
         ours_runs.append(_converted([*ours_argv, "-c", "none"], ours_out, messages))
         theirs_runs.append(_converted(theirs_argv, theirs_out, messages))
         zstd_runs.append(_converted(ours_argv, ours_out, messages))
+        cp_runs.append(_copied(bag, _out_dir() / "out-cp.bag"))
     ours, zstd, theirs = _median(ours_runs), _median(zstd_runs), _median(theirs_runs)
+    cp = _median(cp_runs)
     size_mb = bag.stat().st_size / 1e6
     where = "tmpfs" if os.environ.get("ROSTOOLS_BENCH_ROS2_OUT") else "disk"
     note = (
@@ -304,6 +316,17 @@ def _compare(kind: str, label: str) -> list[Result]:
             zstd_rate >= SPEED_GOAL * their_rate,
             note + f"; ours compresses its chunks: {zstd.seconds:.1f} s ({zstd.cpu:.1f} s CPU) vs "
             f"{theirs.seconds:.1f} s ({theirs.cpu:.1f} s CPU)",
+        ),
+        Result(
+            f"bag convert --to ros2 -c none, {label}, beside cp",
+            "msgs/s",
+            rate,
+            messages / cp.seconds,
+            "the floor: cp of the input to the same place",
+            None,
+            note + f"; ours {ours.seconds:.2f} s ({ours.cpu:.2f} s CPU), cp {cp.seconds:.2f} s "
+            f"({cp.cpu:.2f} s CPU), rosbags-convert {theirs.seconds:.2f} s ({theirs.cpu:.2f} s "
+            "CPU); the messages/s cp's time would give",
         ),
         Result(
             f"bag convert --to ros2 -c none, {label}, peak RSS",

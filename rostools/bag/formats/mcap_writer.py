@@ -10,6 +10,10 @@ channels, statistics and chunk indexes plus summary offsets. Schemas and channel
 the chunks as soon as they are declared, and every chunk goes to the OS when it closes, so a
 killed writer leaves everything but the open chunk recoverable.
 
+``store_stream`` stores a whole stream in one loop, each message's bytes appended straight
+into the open chunk by a function of the caller's (``bag convert --to ros2``'s converters):
+a message costs its conversion, a record head and two index numbers.
+
 Every CRC the format has is written: each chunk's (over its uncompressed records), the data
 section's (in DataEnd) and the summary's (in the footer), so ``bag doctor`` and other readers
 can tell a flipped bit. They cost one pass of ``crc32`` (zlib-ng's, ``mcap_format``) over
@@ -19,10 +23,11 @@ section's (``crc32_combine``).
 
 from __future__ import annotations
 
+import struct
 from array import array
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Iterable, Mapping
 from pathlib import Path
-from typing import Final
+from typing import Any, Final
 
 from rostools.bag.formats import mcap_format as fmt
 from rostools.bag.formats.base import BagWriter
@@ -42,6 +47,12 @@ _MSG = fmt.MESSAGE_PREFIX
 _Chunk = bytes | bytearray | memoryview
 #: Compresses a chunk's records, given in pieces, into pieces of the stored bytes.
 _Compress = Callable[[list[_Chunk]], list[_Chunk]]
+#: Takes the open chunk's buffer and a big run of bytes (``buf[start:end]``) by reference;
+#: gives the buffer to go on with.
+Cut = Callable[[bytearray, _Chunk, int, int], bytearray]
+#: Appends one message's bytes to the open chunk (``store_stream``).
+Append = Callable[[Any, bytearray, int, Cut], bytearray]
+_BLANK: Final = bytes(_MSG.size)
 
 
 class McapWriter(BagWriter):
@@ -78,6 +89,8 @@ class McapWriter(BagWriter):
         self._chunk_len = 0
         self._chunk_start = 0
         self._chunk_end = 0
+        # Per channel, the open chunk's (log time, offset) pairs: emptied, not replaced, when
+        # a chunk closes (``store_stream`` keeps them at hand).
         self._index: dict[int, array[int]] = {}
         self._unsorted = False
         self._chunk_indexes: list[fmt.ChunkIndex] = []
@@ -145,6 +158,104 @@ class McapWriter(BagWriter):
         self._chunk_len = offset + 31 + size
         if self._chunk_len >= self.chunk_size:
             self._close_chunk()
+
+    def store_stream(
+        self,
+        stream: Iterable[tuple[object, int, _Chunk]],
+        route: Callable[[Any], tuple[int, Append]],
+        *,
+        skip: type[Exception] | tuple[type[Exception], ...] = (),
+        on_skip: Callable[[Any, Exception], None] | None = None,
+    ) -> tuple[int, int]:
+        """Store ``(key, log time ns, data)`` messages: (messages read, messages stored).
+
+        ``route(key)``, asked once per key (known by identity: the caller keeps keys alive),
+        gives the channel id and ``append(data, out, b, cut) -> out`` (the contract of
+        ``ros2cdr.Converters.appender``): the message's bytes go straight into the open chunk,
+        no buffer per message, and a big run of them by reference (``cut``). A message whose
+        ``append`` raises one of ``skip`` is taken back out and given to ``on_skip``. Any other
+        exception leaves the writer to be aborted.
+        """
+        self._check_open()
+        routes: dict[int, tuple[int, Append, array[int]]] = {}
+        keys = []  # alive while their ids are in ``routes``
+        pack_into = _MSG.pack_into
+        blank = _BLANK
+        limit = self.chunk_size
+        counts = self._counts
+        before = sum(counts)
+        small = self._chunk_small
+        index = self._index
+        cut = self._cut
+        pb = self._chunk_len - len(small)  # bytes of the open chunk in ``_chunk_pieces``
+        first, last, unsorted = self._chunk_start, self._chunk_end, self._unsorted
+        skipped = t = 0
+        # No closures: the loop's variables stay plain locals, the fastest kind.
+        try:
+            for key, t, data in stream:
+                found = routes.get(id(key))
+                if found is None:
+                    cid, append = route(key)
+                    entries = index.get(cid)
+                    if entries is None:
+                        entries = index[cid] = array("Q")
+                    found = routes[id(key)] = (cid, append, entries)
+                    keys.append(key)
+                cid, append, entries = found
+                at = len(small)
+                off = pb + at
+                small += blank  # the record's head, packed once its length is known
+                try:
+                    out = append(data, small, at + 35, cut)
+                except skip as err:
+                    pieces = self._chunk_pieces
+                    for i, piece in enumerate(pieces):
+                        if piece is small:  # a cut in this message: take it back
+                            del pieces[i:]
+                            break
+                    del small[at:]
+                    skipped += 1
+                    if on_skip is not None:
+                        on_skip(key, err)
+                    continue
+                if out is not small:  # a big run went by reference
+                    pb = sum(map(len, self._chunk_pieces))
+                seq = counts[cid]
+                counts[cid] = seq + 1
+                # the record's length: 22 + the data's (``pb`` grew by what was cut)
+                pack_into(small, at, 5, pb + len(out) - off - 9, cid, seq & 0xFFFFFFFF, t, t)
+                small = out
+                entries.append(t)
+                entries.append(off)
+                if not off:
+                    first = last = t
+                elif t >= last:
+                    last = t
+                else:
+                    unsorted = True  # message indexes get sorted when the chunk closes
+                    if t < first:
+                        first = t
+                if pb + len(small) >= limit:
+                    self._chunk_small, self._chunk_len = small, pb + len(small)
+                    self._chunk_start, self._chunk_end, self._unsorted = first, last, unsorted
+                    self._close_chunk()
+                    small, pb, unsorted = self._chunk_small, 0, False
+        except struct.error:
+            raise BagUsageError(f"time {t} ns does not fit an MCAP file") from None
+        finally:
+            self._chunk_small, self._chunk_len = small, pb + len(small)
+            self._chunk_start, self._chunk_end, self._unsorted = first, last, unsorted
+        stored = sum(counts) - before
+        return stored + skipped, stored
+
+    def _cut(self, out: bytearray, buf: _Chunk, start: int, end: int) -> bytearray:
+        """``store_stream``'s ``cut``: ``out`` and ``buf[start:end]`` join the chunk's pieces.
+
+        The run goes by reference if it cannot change; the message goes on in a new buffer.
+        """
+        self._chunk_pieces.append(out)
+        self._chunk_pieces.append(frozen(memoryview(buf)[start:end]))
+        return bytearray()
 
     def time_span(self) -> tuple[int, int] | None:
         """The earliest and latest log time written so far, the open chunk's too (or None)."""
@@ -301,7 +412,7 @@ class McapWriter(BagWriter):
         index_start = sink.tell()
         offsets: dict[int, int] = {}
         if packed is None:
-            packed = {cid: self._packed_index(cid) for cid in self._index}
+            packed = {cid: self._packed_index(cid) for cid, e in self._index.items() if e}
         for cid in sorted(packed):
             offsets[cid] = sink.tell()
             self._write(fmt.encode_message_index(cid, packed[cid]))
@@ -321,7 +432,8 @@ class McapWriter(BagWriter):
         self._chunk_small = bytearray()
         self._chunk_pieces = []
         self._chunk_len = 0
-        self._index = {}
+        for entries in self._index.values():
+            del entries[:]
         self._unsorted = False
         sink.flush()
 

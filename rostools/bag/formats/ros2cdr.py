@@ -3,7 +3,9 @@
 As the codec does for ROS 1 (``msgs/codec.py``), each type gets the Python source of one
 function, compiled once (``msgs.codegen.GeneratedCode``): no Python object per message. The
 function walks the ROS 1 bytes and appends the CDR (little-endian, XCDR1 as ROS 2 writes it)
-to a ``bytearray`` that starts with the encapsulation header ``00 01 00 00``:
+to a ``bytearray`` that starts with the encapsulation header ``00 01 00 00`` (an *appender*,
+the same function over a given buffer, lets ``bag convert --to ros2`` write into the MCAP's
+open chunk, a big byte run such as an image's passed on by reference):
 
 - runs of fixed-size fields are copied as slices of the input, with the padding CDR wants
   between them: where the output's offset is known at generation time (modulo 8, 4 or 2) the
@@ -30,6 +32,7 @@ import struct
 from collections.abc import Callable, Sequence
 from typing import Any
 
+from rostools.bag.formats.sink import BIG_PAYLOAD
 from rostools.errors import InvalidDataError
 from rostools.msgs.codegen import GeneratedCode
 
@@ -50,6 +53,7 @@ HEADER = "std_msgs/msg/Header"
 ENCAPSULATION = b"\x00\x01\x00\x00"  # CDR, little-endian, no options
 _U32 = struct.Struct("<I")
 _ZEROS = tuple(bytes(n) for n in range(8))
+_NUL_PADS = tuple(bytes(n + 1) for n in range(8))  # a string's NUL, then n bytes of padding
 #: What a generated converter raises on input shorter than its counts say.
 _SHORT = (struct.error, IndexError, ValueError, OverflowError, MemoryError)
 
@@ -159,9 +163,15 @@ class _Gen(GeneratedCode):
     ``pos`` or literal bytes; ``off``: how far ``pos`` has moved since it was last written.
     """
 
-    def __init__(self, conv: Converters, r: int = 0, m: int = 1) -> None:
-        super().__init__({"_Z": _ZEROS, "_u32": _U32.unpack_from, "_p32": _U32.pack})
+    def __init__(self, conv: Converters, r: int = 0, m: int = 1, *, into: bool = False) -> None:
+        super().__init__(
+            {"_Z": _ZEROS, "_u32": _U32.unpack_from, "_p32": _U32.pack, "_BIG": BIG_PAYLOAD}
+        )
         self.conv = conv
+        self.into = into
+        # Where the CDR starts in ``out``, modulo 8: 4 past the header of a fresh ``out``;
+        # an appender is told (``b``), and moves it when a big run leaves ``out``.
+        self.base = "b" if into else "4"
         self.r, self.m = r, m
         self.pending: list[tuple[int, int] | bytes] = []
         self.off = 0
@@ -189,7 +199,7 @@ class _Gen(GeneratedCode):
             self.literal(bytes(-self.r % a))
             return
         self.flush(move=False)
-        self.line(f"out += _Z[(4 - len(out)) & {a - 1}]")
+        self.line(f"out += _Z[({self.base} - len(out)) & {a - 1}]")
         self.r, self.m = 0, a
 
     def unknown(self) -> None:
@@ -350,7 +360,7 @@ class _Gen(GeneratedCode):
             self.line(f"for _ in range({n} - {k}): pos = {skip}(buf, pos)")
         if d[0] == ARRAY and bound and k != bound:
             fill = self.ref(self.conv.filler(dsub), "d")
-            self.line(f"for _ in range({bound} - {k}): {fill}(out)")
+            self.line(f"for _ in range({bound} - {k}): {fill}(out, {self.base})")
         self.unknown()
 
     def numbers(
@@ -369,7 +379,7 @@ class _Gen(GeneratedCode):
                 if pad:
                     self.line(f"if {k}: out += {bytes(pad)!r}")
             else:
-                self.line(f"if {k}: out += _Z[(4 - len(out)) & {es - 1}]")
+                self.line(f"if {k}: out += _Z[({self.base} - len(out)) & {es - 1}]")
         start = (self.r, self.m)
         if static and same:
             assert isinstance(n, int) and isinstance(k, int)
@@ -378,7 +388,9 @@ class _Gen(GeneratedCode):
         else:
             self.flush(move=False)
             at = self.off
-            if same:
+            if same and self.into:
+                self.run(f"pos + {at}", f"{k} * {es}")
+            elif same:
                 self.line(f"out += buf[pos + {at}:pos + {at} + {k} * {es}]")
             else:
                 fn = self.ref(_numbers, "f")
@@ -397,6 +409,38 @@ class _Gen(GeneratedCode):
             self.r, self.m = 0, min(es, 4)
         else:
             self.unknown()
+
+    def nul_and_pad(self) -> None:
+        """A string's NUL and the padding after it appended at once (one step less)."""
+        lines = self.lines
+        pad = f"out += _Z[({self.base} - len(out)) & "
+        for i in range(len(lines) - 2, 0, -1):
+            nul = lines[i - 1]
+            if not nul.endswith("out.append(0)"):
+                continue
+            indent = nul[: -len("out.append(0)")]
+            moved = lines[i].startswith(indent + "pos += ")
+            j = i + 1 if moved else i
+            if j < len(lines) and lines[j].startswith(indent + pad):
+                mask = lines[j][len(indent + pad) :]
+                merged = f"{indent}out += _N[({self.base} - 1 - len(out)) & {mask}"
+                lines[i - 1 : j + 1] = [lines[i], merged] if moved else [merged]
+        self.env.setdefault("_N", _NUL_PADS)
+
+    def run(self, at: str, size: str) -> None:
+        """``size`` bytes from ``at`` as they are; in an appender, a big run by reference.
+
+        ``cut(out, buf, start, end)`` takes ``out`` and the run and gives the ``out`` to go on
+        with (``McapWriter.store_stream``): an image is never copied by Python.
+        """
+        c = self.fresh("c")
+        self.line(f"{c} = {size}")
+        self.line(f"if {c} >= _BIG and {at} + {c} <= len(buf):")
+        self.line(f"    b -= len(out) + {c}")
+        self.line(f"    out = cut(out, buf, {at}, {at} + {c})")
+        self.line("    b += len(out)")  # what the new buffer starts with
+        self.line("else:")
+        self.line(f"    out += buf[{at}:{at} + {c}]")
 
     # -- fields ROS 2 does not have: skipped; fields ROS 1 did not have: defaults ------
 
@@ -474,12 +518,25 @@ class Converters:
 
     def converter(self, sname: str, dname: str) -> Callable[[Any], bytearray]:
         """The CDR (encapsulation header first) of one ROS 1 message of ``sname``."""
-        key = ("top", sname, dname)
+        return self._top(sname, dname, into=False)
+
+    def appender(self, sname: str, dname: str) -> Callable[..., bytearray]:
+        """``f(buf, out, b, cut) -> out``: ``converter``'s bytes appended to ``out``.
+
+        ``b`` is ``len(out) + 4`` (where the CDR will start, past its header); a run of at
+        least ``sink.BIG_PAYLOAD`` bytes copied as it is goes to ``cut(out, buf, start, end)``,
+        whose result the rest is appended to (and returned). On ``ConversionError``, ``out``
+        holds part of the message: the caller cuts it off.
+        """
+        return self._top(sname, dname, into=True)
+
+    def _top(self, sname: str, dname: str, *, into: bool) -> Callable[..., bytearray]:
+        key = ("into" if into else "top", sname, dname)
         fn = self._done.get(key)
         if fn is None:
             self.check(sname, dname)
-            gen = _Gen(self, 0, 8)
-            gen.line(f"out = bytearray({ENCAPSULATION!r})")
+            gen = _Gen(self, 0, 8, into=into)
+            gen.line(f"out += {ENCAPSULATION!r}" if into else f"out = bytearray({ENCAPSULATION!r})")
             gen.line("pos = 0")
             gen.line("try:")  # free until raised (3.11): short input is one error, named
             gen.indent += "    "
@@ -490,7 +547,10 @@ class Converters:
             gen.line(f"    {gen.ref(_mismatch, 'f')}(len(buf) + 1, len(buf))")
             gen.line(f"if pos != len(buf): {gen.ref(_mismatch, 'f')}(pos, len(buf))")
             gen.line("return out")
-            fn = self._done[key] = gen.compile("convert(buf)", "ros1->cdr", dname, bind=True)
+            gen.nul_and_pad()
+            signature = "append(buf, out, b, cut)" if into else "convert(buf)"
+            fn = gen.compile(signature, "ros1->cdr", dname, bind=True)
+            self._done[key] = fn
         return fn
 
     def skipper(self, s: Desc) -> Callable[..., Any]:
@@ -507,15 +567,16 @@ class Converters:
         return fn
 
     def filler(self, d: Desc) -> Callable[..., Any]:
-        """``f(out)``: one ROS 2 element's default appended."""
+        """``f(out, b)``: one ROS 2 element's default appended (``b``: ``appender``'s)."""
         key = ("default", repr(d))
         fn = self._done.get(key)
         if fn is None:
             gen = _Gen(self)
+            gen.base = "b"  # the caller's
             gen.line("buf = b''")
             gen.line("pos = 0")
             gen.default(d)
             gen.flush()
             name = d[1] if d[0] == NAME else d[1][0]
-            fn = self._done[key] = gen.compile("fill(out)", "cdr default", name, bind=True)
+            fn = self._done[key] = gen.compile("fill(out, b)", "cdr default", name, bind=True)
         return fn

@@ -74,6 +74,7 @@ class Ros2Type:
     ``convert(ros1_bytes) -> bytearray`` gives the CDR of one message (encapsulation header
     first); it raises ``ros2cdr.ConversionError`` on bytes that do not fit the ROS 1 type.
     ``rihs01`` is the type description hash (``RIHS01_...``) Iron and later record.
+    ``append`` is the same conversion appending to a buffer (``ros2cdr.Converters.appender``).
     """
 
     ros1: str
@@ -81,6 +82,7 @@ class Ros2Type:
     schema: str
     rihs01: str
     convert: Any
+    append: Any = None
 
 
 def load_rules(path: str | Path) -> tuple[dict[str, str], dict[str, str]]:
@@ -188,8 +190,10 @@ class Ros2Mapping:
             convert = self.converters.converter(top, dst)
         except ReorderedFieldsError as err:
             raise UnmappableTypeError(f"{conn.type} (on {conn.topic}): {err}") from None
+        append = self.converters.appender(top, dst)
         schema, _ = self.store.generate_msgdef(dst, ros_version=2)
-        result = Ros2Type(conn.type, dst, schema, self.store.hash_rihs01(dst), convert)
+        rihs01 = self.store.hash_rihs01(dst)
+        result = Ros2Type(conn.type, dst, schema, rihs01, convert, append)
         self._done[key] = result
         return result
 

@@ -21,6 +21,7 @@ from __future__ import annotations
 import contextlib
 import os
 import shutil
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Final
@@ -29,6 +30,7 @@ from rostools.bag.formats import mcap_format as fmt
 from rostools.bag.formats.mcap_writer import DEFAULT_CHUNK_SIZE, McapWriter
 from rostools.bag.formats.model import BagUsageError, Connection
 from rostools.bag.formats.ros2types import DEFAULT_DISTRO, Ros2Mapping, Ros2Type
+from rostools.bag.formats.sink import BIG_PAYLOAD as BIG
 
 METADATA_FILE: Final = "metadata.yaml"
 _VERSIONS: Final = {
@@ -152,12 +154,37 @@ class Rosbag2Writer:
     def write(self, topic: Ros2Topic, t_ns: int, data: bytes | bytearray | memoryview) -> None:
         """Convert one ROS 1 message of ``topic`` and store it at ``t_ns``."""
         self._check_open()
-        self._store(topic.conn.id, t_ns, topic.type.convert(data))
+        cdr = topic.type.convert(data)
+        # Fresh and never changed again: a big one goes by reference (a read-only view of it)
+        # rather than copied as a caller's reusable buffer would be.
+        self._store(topic.conn.id, t_ns, memoryview(cdr).toreadonly() if len(cdr) >= BIG else cdr)
 
     def write_cdr(self, topic: Ros2Topic, t_ns: int, cdr: bytes | bytearray | memoryview) -> None:
         """Store one message already in CDR (encapsulation header first)."""
         self._check_open()
         self._store(topic.conn.id, t_ns, cdr)
+
+    def write_stream(
+        self,
+        stream: Iterable[tuple[Connection, int, bytes | bytearray | memoryview]],
+        on_misfit: Callable[[Connection, Exception], None],
+    ) -> tuple[int, int]:
+        """Convert and store ROS 1 messages ``(connection, t_ns, bytes)``: (read, written).
+
+        The fast way in (``McapWriter.store_stream``: each message converted straight into
+        the open chunk). A message whose bytes do not fit its type is left out and given to
+        ``on_misfit`` with its ``ros2cdr.ConversionError``. The caller keeps the connections
+        alive (they are known by identity).
+        """
+        from rostools.bag.formats.ros2cdr import ConversionError
+
+        self._check_open()
+
+        def route(conn: Connection) -> tuple[int, Any]:
+            topic = self.add_connection(conn)
+            return topic.conn.id, topic.type.append
+
+        return self._mcap.store_stream(stream, route, skip=ConversionError, on_skip=on_misfit)
 
     def count(self, topic: Ros2Topic) -> int:
         """Messages written so far on ``topic``."""

@@ -464,11 +464,13 @@ def test_the_snapshot_summary_gives_the_type_buffered_not_the_masters(
 PACE_TIMES = [100 * 10**9 + b * 490_000_000 + i * 10_000_000 for b in range(8) for i in range(15)]
 #: Per-message error allowed at the 90th percentile, and on the whole span. Here, idle, a
 #: message is delivered within about 1 ms of its time (docs/benchmarks.md: p99 0.36 ms); under the
-#: suite's load (another engineer's tests, load 15 on 2 cores) a delivery is now and then
-#: tens of ms late. Each message is scheduled on one clock from the start, so lateness does
-#: not add up; the 10% latest are left out of the percentile. A player that ignored -r, or
-#: spaced messages evenly, would be off by hundreds of ms.
-PACE_P90 = 0.06
+#: suite's load (another engineer's tests, load 15 on 2 cores; or the suite's own six
+#: workers, which the run's load factor, measured before they start, does not see) a delivery
+#: is now and then tens of ms late: 69 ms at the 90th percentile once in CI. Each message is
+#: scheduled on one clock from the start, so lateness does not add up; the 10% latest are
+#: left out of the percentile. A player that spaced messages evenly would be 220 ms off at the
+#: 90th percentile, one that ignored -r 4 2.6 s.
+PACE_P90 = 0.11
 PACE_SPAN = 0.1
 
 

@@ -37,7 +37,7 @@ _HEAD = 46  # bytes of such a record before its data
 
 
 @functools.lru_cache(maxsize=1024)
-def _prefixes(conn_id: int) -> tuple[bytes, bytes]:
+def record_prefixes(conn_id: int) -> tuple[bytes, bytes]:
     """The 34 bytes a message record of ``conn_id`` starts with, in both of rosbag's layouts.
 
     Its C++ writer sorts the fields (conn, op, time); its Python writer writes op, conn, time.
@@ -117,7 +117,7 @@ def checked_entries(
         if conn_id not in wanted:
             continue
         rank, conn = wanted[conn_id]
-        expected, other = _prefixes(conn_id)
+        expected, other = record_prefixes(conn_id)
         last = -1
         for traw, off in ENTRY.iter_unpack(raw):
             p = base + off

@@ -15,9 +15,7 @@ from __future__ import annotations
 
 import functools
 import itertools
-import struct
 from collections.abc import Iterator, Mapping, Sequence
-from itertools import islice
 from typing import Any, Protocol
 
 import numpy as np
@@ -26,6 +24,7 @@ from numpy.lib.stride_tricks import as_strided
 from rostools.bag.formats import rosbag1_format as fmt
 from rostools.bag.formats.model import BagFormatError, Connection
 from rostools.bag.formats.ordering import Block, ordered
+from rostools.bag.formats.rosbag1_index import record_prefixes
 
 #: An index entry: its time as the u64 a time field reads as (secs | nsecs << 32), its offset.
 _ENTRY = np.dtype([("t", "<u8"), ("off", "<u4")])
@@ -45,10 +44,7 @@ class Irregular(Exception):  # noqa: N818 - not an error: the careful reader tak
 @functools.lru_cache(maxsize=1024)
 def _layouts(conn_id: int) -> np.ndarray:
     """The 34 bytes a message record of ``conn_id`` starts with in rosbag's two layouts."""
-    conn = b"\t\x00\x00\x00conn=" + struct.pack("<I", conn_id)
-    op, time = b"\x04\x00\x00\x00op=\x02", b"\r\x00\x00\x00time="
-    both = b"&\x00\x00\x00" + conn + op + time + b"&\x00\x00\x00" + op + conn + time
-    return np.frombuffer(both, np.uint8).reshape(2, 34)
+    return np.frombuffer(b"".join(record_prefixes(conn_id)), np.uint8).reshape(2, 34)
 
 
 def chunk_arrays(
@@ -206,7 +202,7 @@ def _gather(data: np.ndarray, starts: np.ndarray, size: int) -> np.ndarray:
 
 def runs_of(messages: Iterator[tuple[Connection, int, memoryview]]) -> Iterator[Run]:
     """A message stream cut into runs of ``RUN_MESSAGES``."""
-    while batch := list(islice(messages, RUN_MESSAGES)):
+    while batch := list(itertools.islice(messages, RUN_MESSAGES)):
         yield Run(np.array([m[1] for m in batch], np.int64), [m[2] for m in batch])
 
 
